@@ -1,0 +1,1 @@
+//! Camera path files (docs/path-format.md): one pose per line.

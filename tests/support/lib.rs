@@ -1,0 +1,2 @@
+//! Support code shared by the cross-crate integration tests (tests/) and
+//! benches (benches/): scene builders and reference computations.

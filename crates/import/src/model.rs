@@ -1,0 +1,45 @@
+//! The imported model: a flat list of triangle-mesh objects in f64 world
+//! coordinates, keeping only what rendering needs.
+
+use glam::{DVec3, Vec3};
+
+/// One object: a mesh-primitive instance (glTF) or a group/object (OBJ),
+/// with every node transform already applied.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Object {
+    /// Human-readable name for messages and stats (e.g. "Pipe.003#prim0").
+    pub name: String,
+    /// World-space positions (f64, so models far from the origin keep precision).
+    pub positions: Vec<DVec3>,
+    /// Unit normals, one per position (computed, area-weighted, when the file has none).
+    pub normals: Vec<Vec3>,
+    /// Triangle list: 3 indices per triangle, each `< positions.len()`.
+    /// Degenerate (zero-area) triangles have been dropped.
+    pub indices: Vec<u32>,
+    /// Base colour, linear RGBA in 0..=1.
+    pub colour: [f32; 4],
+    /// Per-vertex colours (linear RGBA), when the file has them; overrides `colour`.
+    pub vertex_colours: Option<Vec<[f32; 4]>>,
+}
+
+impl Object {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// What an import skipped or fixed, for the summary line users see.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImportStats {
+    pub triangles: u64,
+    pub degenerate_triangles_dropped: u64,
+    /// Point and line primitives skipped (glTF modes POINTS, LINES, ...).
+    pub skipped_primitives: u64,
+    pub warnings: Vec<String>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Model {
+    pub objects: Vec<Object>,
+    pub stats: ImportStats,
+}

@@ -8,8 +8,10 @@
 //! This crate knows nothing about GPUs or threads.
 
 mod aabb;
+mod mesh;
 pub mod path;
 mod skeleton;
 
 pub use aabb::Aabb;
+pub use mesh::{Colours, LodMesh};
 pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};

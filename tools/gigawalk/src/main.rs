@@ -3,6 +3,7 @@
 
 mod generate;
 mod info;
+mod preprocess;
 
 use clap::{Parser, Subcommand};
 
@@ -19,6 +20,8 @@ enum Command {
     Info(info::Args),
     /// Generate a procedural test scene (glTF binary) and optionally a camera path through it
     Generate(generate::Args),
+    /// Turn a glTF/OBJ model into a scene file: partition, cluster, AABB hierarchy, HLODs
+    Preprocess(preprocess::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -33,6 +36,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Generate(a) => generate::run(a),
+        Command::Preprocess(a) => preprocess::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,0 +1,1 @@
+//! Deterministic procedural test scenes as glTF 2.0 binaries.

@@ -5,13 +5,28 @@
 //! (the `.gwk` scene file, spec in docs/scene-format.md), and
 //! [`path::CameraPath`] (camera path files, docs/path-format.md).
 //!
+//! Writing a scene: [`SceneWriter::create`], then [`SceneWriter::add_lod`]
+//! for every LOD (a node's LODs consecutively, finest first), then
+//! [`SceneWriter::finish`] with the nodes and provenance. Reading:
+//! [`SceneReader::open`] loads and validates the skeleton only;
+//! [`SceneReader::read_lod`] reads one LOD's geometry on demand.
+//!
 //! This crate knows nothing about GPUs or threads.
 
 mod aabb;
+mod error;
+mod format;
 mod mesh;
 pub mod path;
+mod read;
 mod skeleton;
+mod validate;
+mod write;
 
 pub use aabb::Aabb;
-pub use mesh::{Colours, LodMesh};
+pub use error::{ReadError, ReadErrorKind, WriteError};
+pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
+pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};
+pub use read::{ReadAt, SceneReader, SectionInfo};
 pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};
+pub use write::{SceneWriter, WriteSummary};

@@ -35,3 +35,82 @@ impl LodMesh {
         self.positions.len()
     }
 }
+
+/// Octahedral encoding of a unit vector into two snorm16 values (Cigolle et
+/// al. 2014, "A Survey of Efficient Representations for Independent Unit
+/// Vectors"). Non-finite or zero vectors encode as +Z.
+pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
+    let [x, y, z] = n;
+    let l1 = x.abs() + y.abs() + z.abs();
+    if !(l1.is_finite() && l1 > 0.0) {
+        return [0, 0];
+    }
+    let (mut u, mut v) = (x / l1, y / l1);
+    if z < 0.0 {
+        let (pu, pv) = (u, v);
+        u = (1.0 - pv.abs()) * sign_not_zero(pu);
+        v = (1.0 - pu.abs()) * sign_not_zero(pv);
+    }
+    let q = |a: f32| (a.clamp(-1.0, 1.0) * 32767.0).round() as i16;
+    [q(u), q(v)]
+}
+
+/// Inverse of [`encode_normal`]: a unit vector.
+pub fn decode_normal(e: [i16; 2]) -> [f32; 3] {
+    let u = (e[0] as f32 / 32767.0).clamp(-1.0, 1.0);
+    let v = (e[1] as f32 / 32767.0).clamp(-1.0, 1.0);
+    let z = 1.0 - u.abs() - v.abs();
+    let (x, y) = if z < 0.0 {
+        (
+            (1.0 - v.abs()) * sign_not_zero(u),
+            (1.0 - u.abs()) * sign_not_zero(v),
+        )
+    } else {
+        (u, v)
+    };
+    let len = (x * x + y * y + z * z).sqrt();
+    [x / len, y / len, z / len]
+}
+
+fn sign_not_zero(a: f32) -> f32 {
+    if a >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normals_round_trip_within_1e4() {
+        let mut worst = 0.0f32;
+        for i in 0..2000 {
+            // A spiral over the sphere, both hemispheres and the poles.
+            let t = i as f32 / 1999.0;
+            let z = 1.0 - 2.0 * t;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = i as f32 * 2.399_963;
+            let n = [r * a.cos(), r * a.sin(), z];
+            let d = decode_normal(encode_normal(n));
+            let err =
+                ((d[0] - n[0]).powi(2) + (d[1] - n[1]).powi(2) + (d[2] - n[2]).powi(2)).sqrt();
+            worst = worst.max(err);
+        }
+        assert!(worst < 1e-4, "worst normal error {worst}");
+    }
+
+    #[test]
+    fn degenerate_normals_encode_as_plus_z() {
+        assert_eq!(
+            decode_normal(encode_normal([0.0, 0.0, 0.0])),
+            [0.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            decode_normal(encode_normal([f32::NAN, 0.0, 1.0])),
+            [0.0, 0.0, 1.0]
+        );
+    }
+}

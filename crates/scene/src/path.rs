@@ -61,9 +61,17 @@ pub enum PathParseError {
         text: String,
     },
     #[error("line {line}: field {field} is not finite ({value})")]
-    NotFinite { line: usize, field: usize, value: f64 },
+    NotFinite {
+        line: usize,
+        field: usize,
+        value: f64,
+    },
     #[error("line {line}: time {time} does not increase (previous pose at {previous})")]
-    NonIncreasingTime { line: usize, time: f64, previous: f64 },
+    NonIncreasingTime {
+        line: usize,
+        time: f64,
+        previous: f64,
+    },
     #[error("line {line}: quaternion length {length} is not close to 1 (tolerance {QUAT_NORM_TOLERANCE})")]
     BadQuaternion { line: usize, length: f64 },
     #[error("line {line}: vertical field of view {fovy_deg} degrees is outside (0, 180)")]

@@ -123,7 +123,11 @@ impl Skeleton {
         let mut depth = vec![0u32; self.nodes.len()];
         let mut max = 0;
         for (i, n) in self.nodes.iter().enumerate() {
-            let d = if n.parent == NO_NODE { 1 } else { depth[n.parent as usize] + 1 };
+            let d = if n.parent == NO_NODE {
+                1
+            } else {
+                depth[n.parent as usize] + 1
+            };
             depth[i] = d;
             max = max.max(d);
         }

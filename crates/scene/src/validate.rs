@@ -1,0 +1,200 @@
+//! Structural validation of a skeleton, shared by the reader (before any
+//! use) and the writer (before the file is renamed into place).
+
+use crate::error::ReadErrorKind;
+use crate::format::{geometry_len, LOD_LEN, NODE_LEN};
+use crate::{Skeleton, NO_NODE};
+
+/// Where the skeleton's records and the geometry live in the file, so that
+/// errors can name byte offsets.
+#[derive(Clone, Copy, Debug)]
+pub struct Layout {
+    pub nodes_at: u64,
+    pub lods_at: u64,
+    pub geometry_at: u64,
+    pub geometry_len: u64,
+}
+
+/// Checks every invariant of docs/scene-format.md that does not need the
+/// geometry bytes. Returns the owning node of every LOD.
+pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
+    let n_nodes = s.nodes.len() as u64;
+    let n_lods = s.lods.len() as u64;
+    let node_err = |i: usize, detail: String| ReadErrorKind::Node {
+        node: i as u32,
+        offset: at.nodes_at + i as u64 * NODE_LEN as u64,
+        detail,
+    };
+    let scene_err = |detail: String| ReadErrorKind::Corrupt {
+        section: "SCNE".into(),
+        offset: 0,
+        detail,
+    };
+    if s.nodes.is_empty() {
+        return Err(scene_err("the scene has no nodes".into()));
+    }
+    if !s.origin.is_finite() {
+        return Err(scene_err(format!("origin {} is not finite", s.origin)));
+    }
+    if !s.bounds.is_valid() {
+        return Err(scene_err(format!(
+            "bounds {:?} are not a finite box",
+            s.bounds
+        )));
+    }
+    if !s.bounds.contains_box(&s.nodes[0].bounds) {
+        return Err(scene_err(
+            "scene bounds do not contain the root's box".into(),
+        ));
+    }
+
+    let mut lod_owner = vec![NO_NODE; s.lods.len()];
+    for (i, n) in s.nodes.iter().enumerate() {
+        if !n.bounds.is_valid() {
+            return Err(node_err(
+                i,
+                format!("box {:?} is not a finite box", n.bounds),
+            ));
+        }
+        if i == 0 {
+            if n.parent != NO_NODE {
+                return Err(node_err(i, "the root has a parent".into()));
+            }
+        } else {
+            let p = n.parent as usize;
+            if n.parent == NO_NODE || p >= i {
+                return Err(node_err(
+                    i,
+                    format!("parent {} must be an earlier node", n.parent as i64),
+                ));
+            }
+            if !s.nodes[p].children().contains(&(i as u32)) {
+                return Err(node_err(
+                    i,
+                    format!("is not among the children of its parent {p}"),
+                ));
+            }
+        }
+        if n.child_count > 0 {
+            let end = n.first_child as u64 + n.child_count as u64;
+            if n.first_child as usize <= i || end > n_nodes {
+                return Err(node_err(
+                    i,
+                    format!(
+                        "children {}..{end} must be later nodes below {n_nodes}",
+                        n.first_child
+                    ),
+                ));
+            }
+            for c in n.children() {
+                let child = &s.nodes[c as usize];
+                if child.parent as usize != i {
+                    return Err(node_err(
+                        c as usize,
+                        format!("is a child of {i} but names parent {}", child.parent),
+                    ));
+                }
+                if !n.bounds.contains_box(&child.bounds) {
+                    return Err(node_err(
+                        c as usize,
+                        format!("box is not inside its parent {i}'s box"),
+                    ));
+                }
+            }
+        } else if n.lod_count == 0 {
+            return Err(node_err(i, "is a leaf without geometry (no LODs)".into()));
+        }
+        let lod_end = n.first_lod as u64 + n.lod_count as u64;
+        if lod_end > n_lods {
+            return Err(node_err(
+                i,
+                format!(
+                    "LODs {}..{lod_end} are beyond the {n_lods} LODs",
+                    n.first_lod
+                ),
+            ));
+        }
+        for l in n.lods() {
+            if lod_owner[l] != NO_NODE {
+                return Err(node_err(
+                    i,
+                    format!("LOD {l} already belongs to node {}", lod_owner[l]),
+                ));
+            }
+            lod_owner[l] = i as u32;
+        }
+    }
+
+    let geom_end = at.geometry_at + at.geometry_len;
+    // Finest error of the nearest ancestor that has LODs (inf if none).
+    let mut bound = vec![f32::INFINITY; s.nodes.len()];
+    for (li, l) in s.lods.iter().enumerate() {
+        let node = lod_owner[li];
+        let lod_err = |detail: String| ReadErrorKind::Lod {
+            lod: li as u32,
+            node,
+            offset: at.lods_at + li as u64 * LOD_LEN as u64,
+            detail,
+        };
+        if node == NO_NODE {
+            return Err(lod_err("belongs to no node".into()));
+        }
+        if !(l.error.is_finite() && l.error >= 0.0) {
+            return Err(lod_err(format!(
+                "error {} is not a finite non-negative number",
+                l.error
+            )));
+        }
+        if !l.origin.is_finite() {
+            return Err(lod_err(format!("origin {} is not finite", l.origin)));
+        }
+        if l.triangles == 0 || l.vertices == 0 {
+            return Err(lod_err("has no triangles or no vertices".into()));
+        }
+        if l.len != geometry_len(l) {
+            return Err(lod_err(format!(
+                "geometry length {} does not match {} vertices and {} triangles ({} bytes)",
+                l.len,
+                l.vertices,
+                l.triangles,
+                geometry_len(l)
+            )));
+        }
+        if l.offset < at.geometry_at || l.offset.checked_add(l.len).is_none_or(|e| e > geom_end) {
+            return Err(lod_err(format!(
+                "geometry bytes {}..+{} lie outside the GEOM section {}..{geom_end}",
+                l.offset, l.len, at.geometry_at
+            )));
+        }
+    }
+    for (i, n) in s.nodes.iter().enumerate() {
+        let lods = &s.lods[n.lods()];
+        for w in lods.windows(2) {
+            if w[1].error < w[0].error {
+                return Err(node_err(
+                    i,
+                    format!(
+                        "LOD errors must not decrease from finest to coarsest ({} then {})",
+                        w[0].error, w[1].error
+                    ),
+                ));
+            }
+        }
+        let inherited = if i == 0 {
+            f32::INFINITY
+        } else {
+            bound[n.parent as usize]
+        };
+        bound[i] = match lods.first() {
+            Some(finest) if finest.error > inherited => {
+                return Err(node_err(i, format!(
+                    "finest LOD error {} exceeds its ancestor's {inherited}: errors must not decrease from child to parent",
+                    finest.error
+                )))
+            }
+            Some(finest) => finest.error,
+            None => inherited,
+        };
+    }
+    Ok(lod_owner)
+}

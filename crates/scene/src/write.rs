@@ -1,0 +1,368 @@
+//! The scene file writer: geometry is streamed to a temporary file as LODs
+//! are added, the skeleton is written and validated at the end, and only
+//! then is the file renamed into place, so an interrupted or failed write
+//! never leaves a file that looks valid.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use glam::{DVec3, Vec3};
+
+use crate::error::WriteError;
+use crate::format::{self, Header, Put, TocEntry};
+use crate::mesh::encode_normal;
+use crate::validate::{validate, Layout};
+use crate::{Aabb, Colours, IndexFormat, LodInfo, LodMesh, Node, Provenance, Skeleton};
+
+/// What [`SceneWriter::finish`] wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WriteSummary {
+    pub bytes: u64,
+    pub nodes: usize,
+    pub lods: usize,
+    /// Bytes of each section, by tag, in file order.
+    pub sections: Vec<(String, u64)>,
+}
+
+/// Writes a `.gwk` scene file. See the crate docs for the order of calls.
+pub struct SceneWriter {
+    path: PathBuf,
+    out: BufWriter<tempfile::NamedTempFile>,
+    pos: u64,
+    geometry_crc: crc32fast::Hasher,
+    lods: Vec<LodInfo>,
+    /// World bounds of each LOD's geometry exactly as stored.
+    lod_bounds: Vec<Aabb>,
+}
+
+impl SceneWriter {
+    /// Creates a temporary file beside `path`; nothing at `path` changes
+    /// until [`SceneWriter::finish`] succeeds. Dropping the writer before
+    /// that removes the temporary file.
+    pub fn create(path: &Path) -> Result<SceneWriter, WriteError> {
+        let io_err = |source| WriteError::Io {
+            path: path.display().to_string(),
+            source,
+        };
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let tmp = tempfile::Builder::new()
+            .prefix(".gigawalk-")
+            .suffix(".tmp")
+            .tempfile_in(dir)
+            .map_err(io_err)?;
+        let mut out = BufWriter::with_capacity(1 << 20, tmp);
+        // The header is written last, when the TOC's place is known.
+        out.write_all(&[0u8; format::HEADER_LEN]).map_err(io_err)?;
+        Ok(SceneWriter {
+            path: path.to_path_buf(),
+            out,
+            pos: format::HEADER_LEN as u64,
+            geometry_crc: crc32fast::Hasher::new(),
+            lods: Vec::new(),
+            lod_bounds: Vec::new(),
+        })
+    }
+
+    fn io_err(&self, source: io::Error) -> WriteError {
+        WriteError::Io {
+            path: self.path.display().to_string(),
+            source,
+        }
+    }
+
+    /// Appends one LOD's geometry and returns its index in the LOD table.
+    /// A node's LODs must be added consecutively, finest first. Positions
+    /// are re-centred on the LOD's box centre; `error` is the object-space
+    /// error in model units.
+    pub fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
+        let lod = self.lods.len() as u32;
+        let (info, bounds, blob) =
+            encode_lod(mesh, error).map_err(|detail| WriteError::BadMesh { lod, detail })?;
+        let info = LodInfo {
+            offset: self.pos,
+            ..info
+        };
+        self.geometry_crc.update(&blob);
+        self.out.write_all(&blob).map_err(|e| self.io_err(e))?;
+        self.pos += blob.len() as u64;
+        self.lods.push(info);
+        self.lod_bounds.push(bounds);
+        Ok(lod)
+    }
+
+    /// Writes hierarchy, LOD table and provenance, validates the whole
+    /// skeleton, syncs, and renames over the destination path.
+    ///
+    /// Node boxes are grown to contain the geometry exactly as stored (f32
+    /// offsets round), and then each parent to contain its children, so
+    /// readers can check containment exactly. A box that would have to grow
+    /// by more than rounding is the caller's bug and an error.
+    pub fn finish(
+        mut self,
+        mut nodes: Vec<Node>,
+        provenance: Provenance,
+    ) -> Result<WriteSummary, WriteError> {
+        grow_boxes(&mut nodes, &self.lod_bounds)?;
+        let geometry_at = format::HEADER_LEN as u64;
+        let geometry_len = self.pos - geometry_at;
+        let bounds = nodes.first().map(|n| n.bounds).unwrap_or(Aabb::EMPTY);
+        let skeleton = Skeleton {
+            origin: if bounds.is_valid() {
+                bounds.center()
+            } else {
+                DVec3::ZERO
+            },
+            bounds,
+            nodes,
+            lods: std::mem::take(&mut self.lods),
+            provenance,
+        };
+
+        let mut toc = vec![TocEntry {
+            tag: format::TAG_GEOMETRY,
+            flags: 0,
+            offset: geometry_at,
+            len: geometry_len,
+            crc: self.geometry_crc.clone().finalize(),
+        }];
+        let mut sections: Vec<([u8; 4], Vec<u8>)> = Vec::new();
+        let mut p = Put::default();
+        format::encode_scene(
+            &mut p,
+            skeleton.origin,
+            &skeleton.bounds,
+            skeleton.nodes.len() as u32,
+            skeleton.lods.len() as u32,
+        );
+        sections.push((format::TAG_SCENE, p.0));
+        let mut p = Put::default();
+        skeleton
+            .nodes
+            .iter()
+            .for_each(|n| format::encode_node(&mut p, n));
+        sections.push((format::TAG_NODES, p.0));
+        let mut p = Put::default();
+        skeleton
+            .lods
+            .iter()
+            .for_each(|l| format::encode_lod(&mut p, l));
+        sections.push((format::TAG_LODS, p.0));
+        let meta = serde_json::to_vec_pretty(&skeleton.provenance).expect("provenance serialises");
+        sections.push((format::TAG_META, meta));
+
+        for (tag, bytes) in &sections {
+            self.pad_to_alignment()?;
+            toc.push(TocEntry {
+                tag: *tag,
+                flags: 0,
+                offset: self.pos,
+                len: bytes.len() as u64,
+                crc: crc32fast::hash(bytes),
+            });
+            self.out.write_all(bytes).map_err(|e| self.io_err(e))?;
+            self.pos += bytes.len() as u64;
+        }
+        let at = |tag| {
+            toc.iter()
+                .find(|e| e.tag == tag)
+                .expect("section written")
+                .offset
+        };
+        let layout = Layout {
+            nodes_at: at(format::TAG_NODES),
+            lods_at: at(format::TAG_LODS),
+            geometry_at,
+            geometry_len,
+        };
+        validate(&skeleton, &layout).map_err(WriteError::Invalid)?;
+
+        self.pad_to_alignment()?;
+        let toc_offset = self.pos;
+        let mut p = Put::default();
+        toc.iter().for_each(|e| e.encode(&mut p));
+        self.out.write_all(&p.0).map_err(|e| self.io_err(e))?;
+        self.pos += p.0.len() as u64;
+        let header = Header {
+            major: format::MAJOR,
+            minor: format::MINOR,
+            toc_count: toc.len() as u32,
+            toc_offset,
+            file_len: self.pos,
+            toc_crc: crc32fast::hash(&p.0),
+        };
+        let bytes = self.pos;
+        self.out
+            .seek(SeekFrom::Start(0))
+            .map_err(|e| self.io_err(e))?;
+        self.out
+            .write_all(&header.encode())
+            .map_err(|e| self.io_err(e))?;
+        let path = self.path.clone();
+        let io_err = |source| WriteError::Io {
+            path: path.display().to_string(),
+            source,
+        };
+        let tmp = self.out.into_inner().map_err(|e| io_err(e.into_error()))?;
+        tmp.as_file().sync_all().map_err(io_err)?;
+        tmp.persist(&path).map_err(|e| io_err(e.error))?;
+        // Make the rename itself durable where the platform allows.
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            let _ = File::open(dir).and_then(|d| d.sync_all());
+        }
+        Ok(WriteSummary {
+            bytes,
+            nodes: skeleton.nodes.len(),
+            lods: skeleton.lods.len(),
+            sections: toc
+                .iter()
+                .map(|e| (format::section_name(e.tag), e.len))
+                .collect(),
+        })
+    }
+
+    fn pad_to_alignment(&mut self) -> Result<(), WriteError> {
+        let pad = format::align_up(self.pos, format::SECTION_ALIGN) - self.pos;
+        self.out
+            .write_all(&[0u8; 8][..pad as usize])
+            .map_err(|e| self.io_err(e))?;
+        self.pos += pad;
+        Ok(())
+    }
+}
+
+/// Checks and encodes one LOD: its record (offset left 0), the world
+/// bounds of the stored geometry, and the blob.
+fn encode_lod(mesh: &LodMesh, error: f32) -> Result<(LodInfo, Aabb, Vec<u8>), String> {
+    let nv = mesh.positions.len();
+    if mesh.indices.is_empty() || mesh.indices.len() % 3 != 0 {
+        return Err(format!(
+            "{} indices is not a positive multiple of 3",
+            mesh.indices.len()
+        ));
+    }
+    if nv == 0 || nv > u32::MAX as usize || mesh.indices.len() / 3 > u32::MAX as usize {
+        return Err(format!("{nv} vertices is out of range"));
+    }
+    if mesh.normals.len() != nv {
+        return Err(format!("{} normals for {nv} positions", mesh.normals.len()));
+    }
+    if let Colours::PerVertex(c) = &mesh.colours {
+        if c.len() != nv {
+            return Err(format!("{} colours for {nv} positions", c.len()));
+        }
+    }
+    if !(error.is_finite() && error >= 0.0) {
+        return Err(format!("error {error} is not a finite non-negative number"));
+    }
+    if let Some((i, &v)) = mesh
+        .indices
+        .iter()
+        .enumerate()
+        .find(|(_, &v)| v as usize >= nv)
+    {
+        return Err(format!("index {i} is {v}, beyond the {nv} vertices"));
+    }
+    let world = |p: [f32; 3]| mesh.origin + Vec3::from(p).as_dvec3();
+    if let Some(i) = mesh.positions.iter().position(|&p| !world(p).is_finite()) {
+        return Err(format!("vertex {i} position is not finite"));
+    }
+    let origin = Aabb::from_points(mesh.positions.iter().map(|&p| world(p))).center();
+    let stored: Vec<[f32; 3]> = mesh
+        .positions
+        .iter()
+        .map(|&p| (world(p) - origin).as_vec3().to_array())
+        .collect();
+    let bounds = Aabb::from_points(stored.iter().map(|&p| origin + Vec3::from(p).as_dvec3()));
+
+    // A per-vertex colour list that is one colour is stored as that colour.
+    let uniform_colour = match &mesh.colours {
+        Colours::Uniform(c) => Some(*c),
+        Colours::PerVertex(c) if c.iter().all(|x| *x == c[0]) => Some(c[0]),
+        Colours::PerVertex(_) => None,
+    };
+    let info = LodInfo {
+        error,
+        triangles: (mesh.indices.len() / 3) as u32,
+        vertices: nv as u32,
+        origin,
+        index_format: IndexFormat::for_vertex_count(nv as u32),
+        uniform_colour,
+        offset: 0,
+        len: 0,
+        checksum: 0,
+    };
+    let mut p = Put(Vec::with_capacity(format::geometry_len(&info) as usize));
+    for v in &stored {
+        v.iter().for_each(|&c| p.f32(c));
+    }
+    for &n in &mesh.normals {
+        let [u, v] = encode_normal(n);
+        p.u16(u as u16);
+        p.u16(v as u16);
+    }
+    if let (None, Colours::PerVertex(c)) = (uniform_colour, &mesh.colours) {
+        c.iter().for_each(|c| p.bytes(c));
+    }
+    match info.index_format {
+        IndexFormat::U16 => mesh.indices.iter().for_each(|&i| p.u16(i as u16)),
+        IndexFormat::U32 => mesh.indices.iter().for_each(|&i| p.u32(i)),
+    }
+    let len = format::geometry_len(&info);
+    p.zeros(len as usize - p.0.len());
+    let info = LodInfo {
+        len,
+        checksum: crc32fast::hash(&p.0),
+        ..info
+    };
+    Ok((info, bounds, p.0))
+}
+
+/// Grows node boxes by f32 rounding so they contain their stored geometry
+/// and their children exactly. Children have larger indices than parents,
+/// so one backward pass suffices.
+fn grow_boxes(nodes: &mut [Node], lod_bounds: &[Aabb]) -> Result<(), WriteError> {
+    for i in (0..nodes.len()).rev() {
+        let n = nodes[i];
+        let mut b = n.bounds;
+        for l in n.lods() {
+            let g = lod_bounds.get(l).ok_or_else(|| {
+                WriteError::Invalid(crate::error::ReadErrorKind::Node {
+                    node: i as u32,
+                    offset: 0,
+                    detail: format!("LOD {l} was never added"),
+                })
+            })?;
+            b = b.union(g);
+        }
+        for c in n.children() {
+            if let Some(child) = nodes.get(c as usize) {
+                b = b.union(&child.bounds);
+            }
+        }
+        if b != n.bounds {
+            // Allow growth by f32 rounding of offsets within the box (a few
+            // ulps of its extent), plus f64 rounding of its coordinates.
+            let magnitude = b.min.abs().max(b.max.abs());
+            let allowed = DVec3::splat(b.extent().max_element() * 1e-6)
+                + magnitude * 1e-15
+                + DVec3::splat(1e-12);
+            let grown = (n.bounds.min - b.min).max(b.max - n.bounds.max);
+            if !n.bounds.is_valid() || grown.cmpgt(allowed).any() {
+                return Err(WriteError::Invalid(crate::error::ReadErrorKind::Node {
+                    node: i as u32,
+                    offset: 0,
+                    detail: format!(
+                        "box {:?} does not contain its geometry and children {:?}",
+                        n.bounds, b
+                    ),
+                }));
+            }
+            nodes[i].bounds = b;
+        }
+    }
+    Ok(())
+}

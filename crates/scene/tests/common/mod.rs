@@ -1,0 +1,129 @@
+//! Hand-built scenes for the scene-file tests.
+
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use gigawalk_scene::{
+    Aabb, Colours, LodMesh, Node, Provenance, SceneWriter, WriteSummary, NO_NODE,
+};
+use glam::DVec3;
+
+/// A closed box mesh (8 vertices, 12 triangles) spanning `b`, positions
+/// relative to `b.min` so far-away boxes keep their precision.
+pub fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {
+    let e = b.extent().as_vec3();
+    let positions: Vec<[f32; 3]> = (0..8)
+        .map(|i| {
+            [
+                if i & 1 != 0 { e.x } else { 0.0 },
+                if i & 2 != 0 { e.y } else { 0.0 },
+                if i & 4 != 0 { e.z } else { 0.0 },
+            ]
+        })
+        .collect();
+    let normals = positions
+        .iter()
+        .map(|p| {
+            let v = glam::Vec3::from(*p) - e * 0.5;
+            v.normalize_or(glam::Vec3::Z).to_array()
+        })
+        .collect();
+    #[rustfmt::skip]
+    let indices = vec![
+        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+        2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5,
+    ];
+    LodMesh {
+        origin: b.min,
+        positions,
+        normals,
+        colours: Colours::Uniform(colour),
+        indices,
+    }
+}
+
+/// A tree described by each node's parent (parents before children, node 0
+/// the root, children of one parent consecutive) and each leaf's box. Inner
+/// nodes get the union of their children and one coarse LOD (a box) whose
+/// error is `inner_error(depth)`.
+pub struct TreeSpec {
+    pub parents: Vec<u32>,
+    pub leaf_boxes: Vec<Option<Aabb>>,
+}
+
+pub fn chain(depth: usize) -> TreeSpec {
+    let parents = (0..depth)
+        .map(|i| if i == 0 { NO_NODE } else { i as u32 - 1 })
+        .collect();
+    let mut leaf_boxes = vec![None; depth];
+    leaf_boxes[depth - 1] = Some(Aabb::new(DVec3::ZERO, DVec3::ONE));
+    TreeSpec {
+        parents,
+        leaf_boxes,
+    }
+}
+
+pub fn wide(children: usize, offset: DVec3) -> TreeSpec {
+    let mut parents = vec![NO_NODE];
+    let mut leaf_boxes = vec![None];
+    for i in 0..children {
+        parents.push(0);
+        let min = offset + DVec3::new(i as f64 * 2.0, (i % 7) as f64, 0.5 * (i % 3) as f64);
+        leaf_boxes.push(Some(Aabb::new(min, min + DVec3::new(1.0, 0.5, 0.25))));
+    }
+    TreeSpec {
+        parents,
+        leaf_boxes,
+    }
+}
+
+/// Writes the tree: leaves get two LODs (a box, error 0; the same box,
+/// error 0.5), inner nodes one LOD (their box, error 1 + height).
+pub fn write_tree(path: &Path, spec: &TreeSpec) -> WriteSummary {
+    let n = spec.parents.len();
+    let mut bounds: Vec<Aabb> = spec
+        .leaf_boxes
+        .iter()
+        .map(|b| b.unwrap_or(Aabb::EMPTY))
+        .collect();
+    let mut height = vec![0u32; n];
+    for i in (1..n).rev() {
+        let p = spec.parents[i] as usize;
+        bounds[p] = bounds[p].union(&bounds[i]);
+        height[p] = height[p].max(height[i] + 1);
+    }
+    let mut w = SceneWriter::create(path).expect("create");
+    let mut nodes = Vec::with_capacity(n);
+    for i in 0..n {
+        let colour = [(i % 251) as u8, 100, 200, 255];
+        let first_lod = if spec.leaf_boxes[i].is_some() {
+            let a = w.add_lod(&box_mesh(&bounds[i], colour), 0.0).unwrap();
+            w.add_lod(&box_mesh(&bounds[i], colour), 0.5).unwrap();
+            a
+        } else {
+            w.add_lod(&box_mesh(&bounds[i], colour), 1.0 + height[i] as f32)
+                .unwrap()
+        };
+        let children: Vec<u32> = (0..n as u32)
+            .filter(|&c| spec.parents[c as usize] == i as u32)
+            .collect();
+        nodes.push(Node {
+            bounds: bounds[i],
+            parent: spec.parents[i],
+            first_child: children.first().copied().unwrap_or(0),
+            child_count: children.len() as u32,
+            first_lod,
+            lod_count: if spec.leaf_boxes[i].is_some() { 2 } else { 1 },
+        });
+    }
+    let mut provenance = Provenance {
+        source: "hand-built".into(),
+        tool: "scene tests".into(),
+        ..Default::default()
+    };
+    provenance
+        .parameters
+        .insert("nodes".into(), (n as u64).into());
+    w.finish(nodes, provenance).expect("finish")
+}

@@ -1,0 +1,81 @@
+//! Summary figures of a scene file, for `gigawalk info` and reports.
+
+use serde::Serialize;
+
+use crate::{Provenance, SceneReader, NO_NODE};
+
+/// What a scene file holds, in numbers. Serialised as `gigawalk info --json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneStats {
+    pub format_version: String,
+    pub file_bytes: u64,
+    pub nodes: usize,
+    pub leaves: usize,
+    pub depth: u32,
+    /// The most LODs any node has.
+    pub max_lods_per_node: usize,
+    /// Triangles of the original geometry (every leaf's finest LOD).
+    pub triangles: u64,
+    /// Sum over leaves of the triangles of their k-th LOD (a leaf with
+    /// fewer levels counts its coarsest): the scene drawn from leaves only
+    /// at level k.
+    pub leaf_triangles_per_level: Vec<u64>,
+    /// Sum over nodes at tree depth d (root = 0) of their finest LOD's
+    /// triangles: the scene drawn as a cut through the tree at depth d.
+    pub hlod_triangles_per_depth: Vec<u64>,
+    pub bounds_min: [f64; 3],
+    pub bounds_max: [f64; 3],
+    pub origin: [f64; 3],
+    /// Bytes of each section, by name, in file order.
+    pub sections: Vec<(String, u64)>,
+    /// Whole file size divided by the original triangle count.
+    pub bytes_per_triangle: f64,
+    pub provenance: Provenance,
+}
+
+impl SceneStats {
+    pub fn of<R: crate::ReadAt>(r: &SceneReader<R>) -> SceneStats {
+        let s = r.skeleton();
+        let max_lods = s.nodes.iter().map(|n| n.lod_count as usize).max().unwrap_or(0);
+        let mut per_level = vec![0u64; max_lods];
+        for leaf in s.leaves() {
+            let lods = s.node_lods(leaf);
+            for (k, slot) in per_level.iter_mut().enumerate() {
+                if let Some(l) = lods.get(k).or(lods.last()) {
+                    *slot += l.triangles as u64;
+                }
+            }
+        }
+        let mut depth = vec![0usize; s.nodes.len()];
+        let mut per_depth: Vec<u64> = Vec::new();
+        for (i, n) in s.nodes.iter().enumerate() {
+            if n.parent != NO_NODE {
+                depth[i] = depth[n.parent as usize] + 1;
+            }
+            if per_depth.len() <= depth[i] {
+                per_depth.resize(depth[i] + 1, 0);
+            }
+            // A node without LODs is drawn through its children.
+            per_depth[depth[i]] += s.node_lods(i as u32).first().map_or(0, |l| l.triangles as u64);
+        }
+        let triangles = s.finest_triangles();
+        let (major, minor) = r.version();
+        SceneStats {
+            format_version: format!("{major}.{minor}"),
+            file_bytes: r.file_len(),
+            nodes: s.nodes.len(),
+            leaves: s.leaves().count(),
+            depth: s.depth(),
+            max_lods_per_node: max_lods,
+            triangles,
+            leaf_triangles_per_level: per_level,
+            hlod_triangles_per_depth: per_depth,
+            bounds_min: s.bounds.min.to_array(),
+            bounds_max: s.bounds.max.to_array(),
+            origin: s.origin.to_array(),
+            sections: r.sections().iter().map(|x| (x.name.clone(), x.len)).collect(),
+            bytes_per_triangle: r.file_len() as f64 / triangles.max(1) as f64,
+            provenance: s.provenance.clone(),
+        }
+    }
+}

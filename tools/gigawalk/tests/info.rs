@@ -1,0 +1,118 @@
+//! `gigawalk info` end to end: text, JSON, --verify, and bad input.
+
+use std::process::Command;
+
+use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneWriter, NO_NODE};
+use glam::DVec3;
+
+fn gigawalk(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+/// Root with two leaf triangles; each leaf has LODs of 2 and 1 triangles.
+fn write_scene(path: &std::path::Path) {
+    let tri = |x: f32, n: usize| LodMesh {
+        origin: DVec3::ZERO,
+        positions: (0..n + 2)
+            .map(|i| [x + i as f32, (i % 2) as f32, 0.0])
+            .collect(),
+        normals: vec![[0.0, 0.0, 1.0]; n + 2],
+        colours: Colours::Uniform([200, 10, 10, 255]),
+        indices: (0..n as u32).flat_map(|i| [i, i + 1, i + 2]).collect(),
+    };
+    let mut w = SceneWriter::create(path).unwrap();
+    w.add_lod(&tri(0.0, 1), 3.0).unwrap(); // root HLOD
+    w.add_lod(&tri(0.0, 2), 0.0).unwrap();
+    w.add_lod(&tri(0.0, 1), 1.0).unwrap();
+    w.add_lod(&tri(10.0, 2), 0.0).unwrap();
+    w.add_lod(&tri(10.0, 1), 1.0).unwrap();
+    let b = |x: f64| Aabb::new(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 3.0, 1.0, 0.0));
+    let nodes = vec![
+        Node {
+            bounds: b(0.0).union(&b(10.0)),
+            parent: NO_NODE,
+            first_child: 1,
+            child_count: 2,
+            first_lod: 0,
+            lod_count: 1,
+        },
+        Node {
+            bounds: b(0.0),
+            parent: 0,
+            first_child: 0,
+            child_count: 0,
+            first_lod: 1,
+            lod_count: 2,
+        },
+        Node {
+            bounds: b(10.0),
+            parent: 0,
+            first_child: 0,
+            child_count: 0,
+            first_lod: 3,
+            lod_count: 2,
+        },
+    ];
+    let mut p = Provenance {
+        source: "hand.glb".into(),
+        tool: "test".into(),
+        ..Default::default()
+    };
+    p.parameters.insert("t1".into(), 1000.into());
+    w.finish(nodes, p).unwrap();
+}
+
+#[test]
+fn info_text_and_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    write_scene(&path);
+    let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--verify"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("triangles   4\n"), "{out}");
+    assert!(
+        out.contains("nodes       3 (2 leaves, depth 2, up to 2 LODs per node)"),
+        "{out}"
+    );
+    assert!(out.contains("source    hand.glb"), "{out}");
+
+    let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["nodes"], 3);
+    assert_eq!(v["triangles"], 4);
+    assert_eq!(v["leaf_triangles_per_level"], serde_json::json!([4, 2]));
+    assert_eq!(v["hlod_triangles_per_depth"], serde_json::json!([1, 4]));
+    assert_eq!(v["provenance"]["parameters"]["t1"], 1000);
+    let bpt = v["bytes_per_triangle"].as_f64().unwrap();
+    assert_eq!(bpt, std::fs::metadata(&path).unwrap().len() as f64 / 4.0);
+}
+
+#[test]
+fn info_on_bad_input_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("junk.gwk");
+    std::fs::write(
+        &path,
+        b"this is not a scene file, just some words that go on for a while",
+    )
+    .unwrap();
+    let (ok, _, err) = gigawalk(&["info", path.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        err.contains("junk.gwk") && err.contains("not a gigawalk scene file"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+
+    let (ok, _, err) = gigawalk(&["info", "/nonexistent/x.gwk"]);
+    assert!(!ok && err.contains("/nonexistent/x.gwk"), "{err}");
+}

@@ -1,0 +1,356 @@
+//! The hierarchical Z-buffer (HZB): a pyramid of farthest depths built from
+//! the occluder pass's depth readback (GigaWalk Section 5.1.2, after Greene
+//! et al. 1993), with the approximate variants of Section 5.3.
+//!
+//! Depth convention: reversed Z. The input is the GPU depth readback,
+//! row-major f32, row 0 = top of the image, 1 at the near plane and 0 at
+//! infinity (the clear value). *Farther is smaller*, so each HZB cell stores
+//! the minimum of the texels it covers.
+//!
+//! Level 0 is the image itself; level k+1 has `ceil(w/2) x ceil(h/2)` cells of
+//! level k. Cell `(x, y)` of level k covers exactly the base pixels
+//! `[x 2^k, (x+1) 2^k) x [y 2^k, (y+1) 2^k)` clipped to the image, for any
+//! size (odd and non-power-of-two included): a border cell of an odd-sized
+//! level covers its one or two real children only.
+
+use rayon::prelude::*;
+
+/// How a 2x2 block of full-resolution texels becomes one level-1 cell.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Reduction {
+    /// The farthest (minimum) depth: conservative.
+    #[default]
+    Farthest,
+    /// The n-th farthest of the 4 texels, n in 1..=4 (1 = `Farthest`):
+    /// approximate, "aggressive" culling that ignores holes of up to n-1
+    /// pixels per 2x2 block (GigaWalk Section 5.3, after Greene 2001). Only
+    /// the level 0 -> 1 step uses it; level 0 itself stays exact and higher
+    /// levels take the farthest of level 1. Border cells of odd-sized images
+    /// repeat their edge texels, which makes them a little more conservative.
+    NthFarthest(u8),
+}
+
+/// Why an HZB could not be built.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum HzbError {
+    #[error("depth image is empty ({width}x{height})")]
+    Empty { width: u32, height: u32 },
+    #[error("depth image of {width}x{height} needs {expected} values, got {got}")]
+    SizeMismatch {
+        width: u32,
+        height: u32,
+        expected: usize,
+        got: usize,
+    },
+    #[error("n-th farthest reduction needs n in 1..=4, got {0}")]
+    BadN(u8),
+}
+
+/// One level of the pyramid.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HzbLevel {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, row 0 = top.
+    pub data: Vec<f32>,
+}
+
+/// A hierarchical Z-buffer; see the module docs for the depth convention.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Hzb {
+    levels: Vec<HzbLevel>,
+}
+
+/// Rows per rayon task: small enough to split 1080 rows over a few cores,
+/// large enough that task overhead stays well under the per-row work.
+const ROWS_PER_TASK: usize = 8;
+
+impl Hzb {
+    /// An empty HZB, to be filled by [`Hzb::rebuild`].
+    pub fn new() -> Self {
+        Hzb::default()
+    }
+
+    /// Builds the pyramid of a `width x height` depth image.
+    pub fn build(
+        width: u32,
+        height: u32,
+        depth: &[f32],
+        reduction: Reduction,
+    ) -> Result<Self, HzbError> {
+        let mut hzb = Hzb::new();
+        hzb.rebuild(width, height, depth, reduction)?;
+        Ok(hzb)
+    }
+
+    /// Rebuilds in place, reusing the allocations of the previous frame.
+    /// Parallel across rows on rayon's pool.
+    pub fn rebuild(
+        &mut self,
+        width: u32,
+        height: u32,
+        depth: &[f32],
+        reduction: Reduction,
+    ) -> Result<(), HzbError> {
+        if width == 0 || height == 0 {
+            return Err(HzbError::Empty { width, height });
+        }
+        let expected = width as usize * height as usize;
+        if depth.len() != expected {
+            return Err(HzbError::SizeMismatch {
+                width,
+                height,
+                expected,
+                got: depth.len(),
+            });
+        }
+        if let Reduction::NthFarthest(n) = reduction {
+            if !(1..=4).contains(&n) {
+                return Err(HzbError::BadN(n));
+            }
+        }
+
+        // Level sizes: halve (rounding up) until 1x1.
+        let mut sizes = vec![(width, height)];
+        while let Some(&(w, h)) = sizes.last() {
+            if w == 1 && h == 1 {
+                break;
+            }
+            sizes.push((w.div_ceil(2), h.div_ceil(2)));
+        }
+        self.levels.resize_with(sizes.len(), HzbLevel::default);
+        for (level, &(w, h)) in self.levels.iter_mut().zip(&sizes) {
+            level.width = w;
+            level.height = h;
+            level.data.resize(w as usize * h as usize, 0.0);
+        }
+
+        if self.levels.len() == 1 {
+            self.levels[0].data.copy_from_slice(depth);
+            return Ok(());
+        }
+        // Level 0 (a copy) and level 1 in one pass over the input, so the
+        // 8 MB of a 1080p image are read once.
+        let (l0, rest) = self.levels.split_at_mut(1);
+        let l0 = &mut l0[0];
+        let l1 = &mut rest[0];
+        let w = width as usize;
+        let w1 = l1.width as usize;
+        l1.data
+            .par_chunks_mut(w1)
+            .zip(l0.data.par_chunks_mut(2 * w))
+            .zip(depth.par_chunks(2 * w))
+            .with_min_len(ROWS_PER_TASK)
+            .for_each(|((out, copy), src)| {
+                copy.copy_from_slice(src);
+                let (r0, r1) = src.split_at(w.min(src.len()));
+                let r1 = if r1.is_empty() { r0 } else { r1 };
+                match reduction {
+                    Reduction::Farthest => reduce_row(r0, r1, out),
+                    Reduction::NthFarthest(n) => reduce_row_nth(r0, r1, out, n as usize),
+                }
+            });
+        for k in 1..self.levels.len() - 1 {
+            let (lo, hi) = self.levels.split_at_mut(k + 1);
+            let src = &lo[k];
+            let dst = &mut hi[0];
+            let sw = src.width as usize;
+            dst.data
+                .par_chunks_mut(dst.width as usize)
+                .zip(src.data.par_chunks(2 * sw))
+                .with_min_len(ROWS_PER_TASK)
+                .for_each(|(out, src)| {
+                    let (r0, r1) = src.split_at(sw.min(src.len()));
+                    let r1 = if r1.is_empty() { r0 } else { r1 };
+                    reduce_row(r0, r1, out);
+                });
+        }
+        Ok(())
+    }
+
+    /// Width of level 0 (the depth image) in pixels; 0 before the first build.
+    pub fn width(&self) -> u32 {
+        self.levels.first().map_or(0, |l| l.width)
+    }
+
+    /// Height of level 0 (the depth image) in pixels; 0 before the first build.
+    pub fn height(&self) -> u32 {
+        self.levels.first().map_or(0, |l| l.height)
+    }
+
+    pub fn levels(&self) -> &[HzbLevel] {
+        &self.levels
+    }
+
+    /// The farthest stored depth over the level-0 pixel rectangle
+    /// `[x0, x1] x [y0, y1]` (inclusive, `x0 <= x1 < width`,
+    /// `y0 <= y1 < height`), read from the finest level where the rectangle
+    /// spans at most 2x2 cells. Those cells cover every pixel of the
+    /// rectangle, so the answer is never nearer than any of them.
+    pub fn farthest_in_rect(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> f32 {
+        debug_assert!(x0 <= x1 && x1 < self.width() && y0 <= y1 && y1 < self.height());
+        // 2^k >= span guarantees at most 2 cells per axis; one level finer
+        // may also do, and is tighter.
+        let span = (x1 - x0).max(y1 - y0) + 1;
+        let mut k = (u32::BITS - (span - 1).leading_zeros()).saturating_sub(1);
+        if (x1 >> k) - (x0 >> k) > 1 || (y1 >> k) - (y0 >> k) > 1 {
+            k += 1;
+        }
+        let k = (k as usize).min(self.levels.len() - 1);
+        let level = &self.levels[k];
+        let lw = level.width as usize;
+        let (cx0, cx1) = ((x0 >> k) as usize, (x1 >> k) as usize);
+        let (cy0, cy1) = ((y0 >> k) as usize, (y1 >> k) as usize);
+        let d = &level.data;
+        let a = farther(d[cy0 * lw + cx0], d[cy0 * lw + cx1]);
+        let b = farther(d[cy1 * lw + cx0], d[cy1 * lw + cx1]);
+        farther(a, b)
+    }
+}
+
+/// Reversed Z: the farther of two depths is the smaller. Written as a plain
+/// comparison so it compiles to a packed min.
+#[inline(always)]
+fn farther(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// One output row from two input rows (equal when the input has an odd last
+/// row): each cell the farthest of its 2x2 block, the last cell of an odd
+/// width covering one column.
+#[inline]
+fn reduce_row(r0: &[f32], r1: &[f32], out: &mut [f32]) {
+    let pairs = r0.len() / 2;
+    for ((o, a), b) in out[..pairs]
+        .iter_mut()
+        .zip(r0.chunks_exact(2))
+        .zip(r1.chunks_exact(2))
+    {
+        *o = farther(farther(a[0], b[0]), farther(a[1], b[1]));
+    }
+    if r0.len() % 2 == 1 {
+        let last = r0.len() - 1;
+        out[pairs] = farther(r0[last], r1[last]);
+    }
+}
+
+/// [`reduce_row`] keeping the n-th farthest (n-th smallest) of each block.
+fn reduce_row_nth(r0: &[f32], r1: &[f32], out: &mut [f32], n: usize) {
+    let w = r0.len();
+    for (x, o) in out.iter_mut().enumerate() {
+        let (c0, c1) = (2 * x, (2 * x + 1).min(w - 1));
+        let mut v = [r0[c0], r0[c1], r1[c0], r1[c1]];
+        // total_cmp: NaN sorts last (nearest), never panics.
+        v.sort_unstable_by(f32::total_cmp);
+        *o = v[n - 1];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn brute_farthest(w: u32, d: &[f32], x0: u32, y0: u32, x1: u32, y1: u32) -> f32 {
+        let mut m = f32::INFINITY;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                m = m.min(d[(y * w + x) as usize]);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn one_pixel_image_has_one_level() {
+        let hzb = Hzb::build(1, 1, &[0.5], Reduction::Farthest).unwrap();
+        assert_eq!(hzb.levels().len(), 1);
+        assert_eq!(hzb.farthest_in_rect(0, 0, 0, 0), 0.5);
+    }
+
+    #[test]
+    fn empty_and_mismatched_images_are_errors() {
+        assert_eq!(
+            Hzb::build(0, 3, &[], Reduction::Farthest),
+            Err(HzbError::Empty {
+                width: 0,
+                height: 3
+            })
+        );
+        assert!(matches!(
+            Hzb::build(2, 2, &[0.0; 3], Reduction::Farthest),
+            Err(HzbError::SizeMismatch { got: 3, .. })
+        ));
+        assert_eq!(
+            Hzb::build(1, 1, &[0.0], Reduction::NthFarthest(5)),
+            Err(HzbError::BadN(5))
+        );
+    }
+
+    #[test]
+    fn odd_sizes_halve_rounding_up() {
+        let hzb = Hzb::build(5, 3, &[1.0; 15], Reduction::Farthest).unwrap();
+        let sizes: Vec<_> = hzb.levels().iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, [(5, 3), (3, 2), (2, 1), (1, 1)]);
+    }
+
+    #[test]
+    fn single_far_pixel_reaches_the_top() {
+        let (w, h) = (7u32, 5u32);
+        let mut d = vec![0.9; (w * h) as usize];
+        d[(4 * w + 6) as usize] = 0.1; // bottom-right corner, a border cell at every level
+        let hzb = Hzb::build(w, h, &d, Reduction::Farthest).unwrap();
+        assert_eq!(hzb.levels().last().unwrap().data, [0.1]);
+        assert_eq!(hzb.farthest_in_rect(0, 0, 6, 4), 0.1);
+        assert_eq!(hzb.farthest_in_rect(0, 0, 5, 3), 0.9);
+    }
+
+    #[test]
+    fn rect_queries_match_brute_force_on_every_rect() {
+        for (w, h) in [(1, 9), (9, 1), (6, 5), (13, 11), (16, 16)] {
+            let d: Vec<f32> = (0..w * h)
+                .map(|i| ((i * 7919 + 13) % 101) as f32 / 100.0)
+                .collect();
+            let hzb = Hzb::build(w, h, &d, Reduction::Farthest).unwrap();
+            for y0 in 0..h {
+                for y1 in y0..h {
+                    for x0 in 0..w {
+                        for x1 in x0..w {
+                            let got = hzb.farthest_in_rect(x0, y0, x1, y1);
+                            let want = brute_farthest(w, &d, x0, y0, x1, y1);
+                            // Never nearer than the true farthest.
+                            assert!(got <= want, "{w}x{h} rect {x0},{y0}..{x1},{y1}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn nth_farthest_ignores_one_pixel_hole() {
+        let d = [0.0, 0.8, 0.9, 0.7];
+        let far = Hzb::build(2, 2, &d, Reduction::Farthest).unwrap();
+        let second = Hzb::build(2, 2, &d, Reduction::NthFarthest(2)).unwrap();
+        assert_eq!(far.levels()[1].data, [0.0]);
+        assert_eq!(second.levels()[1].data, [0.7]);
+        let first = Hzb::build(2, 2, &d, Reduction::NthFarthest(1)).unwrap();
+        assert_eq!(first, far);
+    }
+
+    #[test]
+    fn rebuild_reuses_and_resizes() {
+        let mut hzb = Hzb::new();
+        assert_eq!(hzb.width(), 0);
+        hzb.rebuild(8, 8, &[0.5; 64], Reduction::Farthest).unwrap();
+        assert_eq!(hzb.levels().len(), 4);
+        hzb.rebuild(3, 1, &[0.1, 0.2, 0.3], Reduction::Farthest)
+            .unwrap();
+        let sizes: Vec<_> = hzb.levels().iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, [(3, 1), (2, 1), (1, 1)]);
+        assert_eq!(hzb.levels()[1].data, [0.1, 0.3]);
+    }
+}

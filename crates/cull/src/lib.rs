@@ -1,0 +1,49 @@
+//! gigawalk's culling core: everything the scene-traversal-and-culling stage
+//! (STC, GigaWalk Section 5.1.2) computes, on the CPU.
+//!
+//! Main types: [`Camera`] (f64 pose, reversed-Z infinite-far projection,
+//! camera-relative f32 matrices), [`CullView`] (one frame's camera and
+//! viewport prepared for culling), [`Frustum`], [`Hzb`] (the hierarchical
+//! Z-buffer), [`OcclusionTest`] with [`HzbOcclusion`] (the conservative
+//! box-vs-HZB test), [`select_lod`] (LOD by pixel error) and
+//! [`Traverser`] (Algorithm 5.2, emitting [`DrawItem`]s to a [`DrawSink`]).
+//!
+//! # Depth convention
+//!
+//! Reversed Z with an infinite far plane: NDC depth = near / view distance,
+//! 1 at the near plane, tending to 0 at infinity; depth buffers clear to 0.
+//! **The farthest value is the minimum**, so the HZB stores minima and a box
+//! is occluded when its nearest (largest) depth is below the farthest
+//! (smallest) stored depth over its footprint; ties are visible. The depth
+//! image is the GPU readback as is: row-major f32, row 0 = top, pixel
+//! `(x, y)` centred at NDC `((x + 0.5) / w * 2 - 1, 1 - (y + 0.5) / h * 2)`.
+//! docs/culling.md has the details.
+//!
+//! # Precision
+//!
+//! Positions are f64. Every box is made camera-relative in f64 before any
+//! f32 math, and rounded outward when it becomes f32; the box tests add
+//! slack for their own rounding, so a box is culled only when the math is
+//! sure. A scene 10^7 units from the origin culls like the same scene at
+//! the origin.
+//!
+//! This crate knows nothing about GPUs and starts no threads of its own
+//! (HZB building uses rayon's pool inside the call).
+
+mod camera;
+mod frustum;
+mod hzb;
+pub mod lod;
+mod occlusion;
+mod traverse;
+mod view;
+
+pub use camera::{Camera, Viewport};
+pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
+pub use hzb::{Hzb, HzbError, HzbLevel, Reduction};
+pub use lod::select_lod;
+pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK};
+pub use traverse::{
+    reselect_lods, traverse, DrawItem, DrawSink, TraversalOptions, TraversalStats, Traverser,
+};
+pub use view::{BoxProjection, CullView, RelBox};

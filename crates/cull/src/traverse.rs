@@ -1,0 +1,589 @@
+//! Scene traversal with culling and LOD selection (GigaWalk Algorithm 5.2),
+//! and the LOD re-selection the occluder pass runs on an older frame's list.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use gigawalk_scene::Skeleton;
+
+use crate::lod::{distance_to_rel_box, select_lod};
+use crate::{Containment, CullView, OcclusionTest, PlaneMask, ALL_PLANES};
+
+/// Traversal settings; the modes of GigaWalk Table 2 are combinations of
+/// `occlusion` and `hlod` (VFC: neither, tolerance 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraversalOptions {
+    /// Test nodes against the occlusion test (off for the first frames,
+    /// before any occluder depth exists).
+    pub occlusion: bool,
+    /// Stop at inner nodes whose HLOD is acceptable; off = always refine to
+    /// the leaves.
+    pub hlod: bool,
+    /// Largest acceptable screen-space error in pixels. 0 = full detail:
+    /// always refine to the leaves and draw their finest LOD.
+    pub pixel_tolerance: f64,
+}
+
+impl Default for TraversalOptions {
+    fn default() -> Self {
+        TraversalOptions {
+            occlusion: true,
+            hlod: true,
+            pixel_tolerance: 1.0,
+        }
+    }
+}
+
+/// One node to draw and which of its LODs (0 = finest; the LodInfo is
+/// `skeleton.lods[node.first_lod + lod]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DrawItem {
+    pub node: u32,
+    pub lod: u32,
+}
+
+/// Receives draw items as traversal finds them, so the runtime can stream
+/// them into a queue. Any `FnMut(DrawItem)` is a sink.
+pub trait DrawSink {
+    fn draw(&mut self, item: DrawItem);
+}
+
+impl<F: FnMut(DrawItem)> DrawSink for F {
+    fn draw(&mut self, item: DrawItem) {
+        self(item)
+    }
+}
+
+/// What one traversal did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Nodes taken off the front-to-back queue and tested.
+    pub visited: u64,
+    pub frustum_culled: u64,
+    pub occlusion_culled: u64,
+    pub drawn_nodes: u64,
+    pub drawn_triangles: u64,
+}
+
+/// A queued node, ordered nearest first.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    distance: f64,
+    node: u32,
+    mask: PlaneMask,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Entry {
+    /// Reversed, so `BinaryHeap` (a max-heap) pops the nearest; ties go to
+    /// the lower node index, so the order is deterministic.
+    fn cmp(&self, o: &Self) -> Ordering {
+        o.distance
+            .total_cmp(&self.distance)
+            .then(o.node.cmp(&self.node))
+    }
+}
+
+/// What to do with a node that survived culling.
+enum Choice {
+    Draw(u32),
+    Refine,
+    Skip,
+}
+
+/// The one LOD rule, shared by traversal and re-selection so both pick the
+/// same LODs for the same camera (the condition for conservative culling,
+/// GigaWalk Section 5.3).
+fn choose(
+    skeleton: &Skeleton,
+    node: u32,
+    distance: f64,
+    view: &CullView,
+    o: &TraversalOptions,
+) -> Choice {
+    let n = &skeleton.nodes[node as usize];
+    let lods = skeleton.lods.get(n.lods()).unwrap_or(&[]);
+    let full_detail = o.pixel_tolerance.is_nan() || o.pixel_tolerance <= 0.0;
+    if n.is_leaf() {
+        if lods.is_empty() {
+            return Choice::Skip;
+        }
+        if full_detail {
+            return Choice::Draw(0);
+        }
+        let l = select_lod(lods, distance, view.pixels_per_radian, o.pixel_tolerance);
+        // Too coarse even at its finest: draw the finest, there is no finer.
+        return Choice::Draw(l.unwrap_or(0) as u32);
+    }
+    if o.hlod && !full_detail {
+        if let Some(l) = select_lod(lods, distance, view.pixels_per_radian, o.pixel_tolerance) {
+            return Choice::Draw(l as u32);
+        }
+    }
+    Choice::Refine
+}
+
+/// Traverses a skeleton for one view; keeps its queue between calls so a
+/// frame allocates nothing once warm.
+#[derive(Debug, Default)]
+pub struct Traverser {
+    heap: BinaryHeap<Entry>,
+}
+
+impl Traverser {
+    pub fn new() -> Self {
+        Traverser::default()
+    }
+
+    /// GigaWalk Algorithm 5.2: visits nodes front to back (by distance from
+    /// the eye to the nearest point of the node's box; a child is never
+    /// nearer than its parent, so the emitted items come out in
+    /// non-decreasing distance). A node is dropped when outside the frustum
+    /// or occluded; emitted with its LOD when that LOD's pixel error is
+    /// acceptable (always for a leaf, at its finest when nothing is);
+    /// otherwise its children are queued.
+    ///
+    /// A malformed skeleton (child or LOD ranges out of bounds, children
+    /// not after their parent) never panics: the bad references are skipped.
+    pub fn traverse<O, S>(
+        &mut self,
+        skeleton: &Skeleton,
+        view: &CullView,
+        occlusion: &O,
+        options: &TraversalOptions,
+        sink: &mut S,
+    ) -> TraversalStats
+    where
+        O: OcclusionTest + ?Sized,
+        S: DrawSink + ?Sized,
+    {
+        let mut stats = TraversalStats::default();
+        self.heap.clear();
+        if skeleton.nodes.is_empty() {
+            return stats;
+        }
+        self.push(skeleton, view, 0, ALL_PLANES);
+        while let Some(Entry {
+            distance,
+            node,
+            mask,
+        }) = self.heap.pop()
+        {
+            stats.visited += 1;
+            let n = &skeleton.nodes[node as usize];
+            let (min, max) = view.rel_f64(&n.bounds);
+            let (containment, child_mask) = if mask == 0 {
+                (Containment::Inside, 0)
+            } else {
+                view.frustum.test(min, max, mask)
+            };
+            if containment == Containment::Outside {
+                stats.frustum_culled += 1;
+                continue;
+            }
+            if options.occlusion && !occlusion.is_visible(view, &crate::RelBox::from_f64(min, max))
+            {
+                stats.occlusion_culled += 1;
+                continue;
+            }
+            match choose(skeleton, node, distance, view, options) {
+                Choice::Draw(lod) => {
+                    stats.drawn_nodes += 1;
+                    let l = skeleton.lods.get(n.first_lod as usize + lod as usize);
+                    stats.drawn_triangles += l.map_or(0, |l| l.triangles as u64);
+                    sink.draw(DrawItem { node, lod });
+                }
+                Choice::Refine => {
+                    for child in n.children() {
+                        if child > node && (child as usize) < skeleton.nodes.len() {
+                            self.push(skeleton, view, child, child_mask);
+                        }
+                    }
+                }
+                Choice::Skip => {}
+            }
+        }
+        stats
+    }
+
+    fn push(&mut self, skeleton: &Skeleton, view: &CullView, node: u32, mask: PlaneMask) {
+        let (min, max) = view.rel_f64(&skeleton.nodes[node as usize].bounds);
+        self.heap.push(Entry {
+            distance: distance_to_rel_box(min, max),
+            node,
+            mask,
+        });
+    }
+}
+
+/// [`Traverser::traverse`] with a fresh queue.
+pub fn traverse<O, S>(
+    skeleton: &Skeleton,
+    view: &CullView,
+    occlusion: &O,
+    options: &TraversalOptions,
+    sink: &mut S,
+) -> TraversalStats
+where
+    O: OcclusionTest + ?Sized,
+    S: DrawSink + ?Sized,
+{
+    Traverser::new().traverse(skeleton, view, occlusion, options, sink)
+}
+
+/// Re-selects LODs of an older frame's draw list for a new view: the
+/// occluder pass of frame i draws frame i-2's visible nodes with LODs chosen
+/// for camera i (GigaWalk Algorithm 5.1, Section 5.2).
+///
+/// Each node gets the LOD traversal would give it for this view. A node
+/// whose own LOD is no longer acceptable (the camera came closer) is
+/// replaced by its descendants down to the cut traversal would draw, so the
+/// occluders are always geometry of this frame's LOD cut, never a stand-in
+/// nearer than it (conservative mode, GigaWalk Section 5.3). Nodes outside
+/// the new frustum are dropped: they cannot write depth. Returns how many
+/// items went to the sink.
+pub fn reselect_lods<S: DrawSink + ?Sized>(
+    skeleton: &Skeleton,
+    view: &CullView,
+    options: &TraversalOptions,
+    items: &[DrawItem],
+    sink: &mut S,
+) -> usize {
+    let mut count = 0;
+    let mut stack = Vec::new();
+    for item in items {
+        if (item.node as usize) >= skeleton.nodes.len() {
+            continue;
+        }
+        stack.push(item.node);
+        while let Some(node) = stack.pop() {
+            let n = &skeleton.nodes[node as usize];
+            let (min, max) = view.rel_f64(&n.bounds);
+            if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
+                continue;
+            }
+            match choose(skeleton, node, distance_to_rel_box(min, max), view, options) {
+                Choice::Draw(lod) => {
+                    count += 1;
+                    sink.draw(DrawItem { node, lod });
+                }
+                Choice::Refine => stack.extend(
+                    n.children()
+                        .filter(|&c| c > node && (c as usize) < skeleton.nodes.len()),
+                ),
+                Choice::Skip => {}
+            }
+        }
+    }
+    count
+}
+
+#[cfg(test)]
+mod tests {
+    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, NO_NODE};
+    use glam::DVec3;
+
+    use super::*;
+    use crate::{Camera, NoOcclusion, RelBox, Viewport};
+
+    /// A node for [`tree`]: its box, its children (indices, contiguous and
+    /// after it) and its LOD errors (finest first; triangles = 1000 >> level).
+    struct N {
+        bounds: Aabb,
+        children: std::ops::Range<u32>,
+        errors: Vec<f32>,
+    }
+
+    fn n(min: [f64; 3], max: [f64; 3], children: std::ops::Range<u32>, errors: &[f32]) -> N {
+        N {
+            bounds: Aabb::new(DVec3::from(min), DVec3::from(max)),
+            children,
+            errors: errors.to_vec(),
+        }
+    }
+
+    fn tree(spec: Vec<N>) -> Skeleton {
+        let mut nodes = Vec::new();
+        let mut lods = Vec::new();
+        let mut parents = vec![NO_NODE; spec.len()];
+        for (i, s) in spec.iter().enumerate() {
+            for c in s.children.clone() {
+                parents[c as usize] = i as u32;
+            }
+        }
+        for (i, s) in spec.iter().enumerate() {
+            nodes.push(Node {
+                bounds: s.bounds,
+                parent: parents[i],
+                first_child: s.children.start,
+                child_count: s.children.len() as u32,
+                first_lod: lods.len() as u32,
+                lod_count: s.errors.len() as u32,
+            });
+            for (level, &error) in s.errors.iter().enumerate() {
+                lods.push(LodInfo {
+                    error,
+                    triangles: 1000 >> level,
+                    vertices: 0,
+                    origin: DVec3::ZERO,
+                    index_format: IndexFormat::U16,
+                    uniform_colour: None,
+                    offset: 0,
+                    len: 0,
+                    checksum: 0,
+                });
+            }
+        }
+        let bounds = nodes.first().map_or(Aabb::EMPTY, |n: &Node| n.bounds);
+        Skeleton {
+            origin: DVec3::ZERO,
+            bounds,
+            nodes,
+            lods,
+            provenance: Provenance::default(),
+        }
+    }
+
+    /// 90 degree square view from `eye` down -Z, 100x100 pixels: pixel error
+    /// = error x 50 / distance.
+    fn view_from(eye: [f64; 3]) -> CullView {
+        let eye = DVec3::from(eye);
+        CullView::new(
+            Camera::look_at(eye, eye + DVec3::NEG_Z, 90f64.to_radians(), 1.0, 0.1),
+            Viewport::new(100, 100),
+        )
+    }
+
+    fn run(s: &Skeleton, view: &CullView, o: TraversalOptions) -> (Vec<DrawItem>, TraversalStats) {
+        let mut items = Vec::new();
+        let stats = traverse(s, view, &NoOcclusion, &o, &mut |i| items.push(i));
+        (items, stats)
+    }
+
+    /// Root (HLOD errors 0.125, 1) over two leaves (0, 0.0625) side by side
+    /// at z -10..-12. Binary fractions keep the pixel errors exact.
+    fn two_leaves() -> Skeleton {
+        tree(vec![
+            n([-2.0, -1.0, -12.0], [2.0, 1.0, -10.0], 1..3, &[0.125, 1.0]),
+            n(
+                [-2.0, -1.0, -12.0],
+                [-0.5, 1.0, -10.0],
+                0..0,
+                &[0.0, 0.0625],
+            ),
+            n([0.5, -1.0, -12.0], [2.0, 1.0, -10.0], 0..0, &[0.0, 0.0625]),
+        ])
+    }
+
+    #[test]
+    fn empty_skeleton_visits_nothing() {
+        let (items, stats) = run(
+            &tree(vec![]),
+            &view_from([0.0; 3]),
+            TraversalOptions::default(),
+        );
+        assert!(items.is_empty());
+        assert_eq!(stats, TraversalStats::default());
+    }
+
+    #[test]
+    fn acceptable_hlod_is_emitted_and_children_not_visited() {
+        // Distance 10: root's errors are 0.625 and 5 pixels; tolerance 1 takes level 0.
+        let (items, stats) = run(
+            &two_leaves(),
+            &view_from([0.0; 3]),
+            TraversalOptions::default(),
+        );
+        assert_eq!(items, [DrawItem { node: 0, lod: 0 }]);
+        assert_eq!(stats.visited, 1);
+        assert_eq!((stats.drawn_nodes, stats.drawn_triangles), (1, 1000));
+    }
+
+    #[test]
+    fn coarser_hlod_when_farther() {
+        // Distance 100: root's coarse level is 0.5 pixels.
+        let (items, _) = run(
+            &two_leaves(),
+            &view_from([0.0, 0.0, 90.0]),
+            TraversalOptions::default(),
+        );
+        assert_eq!(items, [DrawItem { node: 0, lod: 1 }]);
+    }
+
+    #[test]
+    fn unacceptable_hlod_refines_to_leaves() {
+        // Tolerance 0.5: root (0.625 pixels at best) refines; leaves' level 1 is 0.3125.
+        let o = TraversalOptions {
+            pixel_tolerance: 0.5,
+            ..Default::default()
+        };
+        let (items, stats) = run(&two_leaves(), &view_from([0.0; 3]), o);
+        assert_eq!(stats.visited, 3);
+        assert_eq!(items.len(), 2);
+        assert!(items.iter().all(|i| i.lod == 1 && i.node != 0));
+        assert_eq!(stats.drawn_triangles, 1000);
+    }
+
+    #[test]
+    fn hlod_off_always_refines() {
+        let o = TraversalOptions {
+            hlod: false,
+            ..Default::default()
+        };
+        let (items, _) = run(&two_leaves(), &view_from([0.0; 3]), o);
+        assert_eq!(items.len(), 2);
+        assert!(items.iter().all(|i| i.node != 0));
+    }
+
+    #[test]
+    fn zero_tolerance_draws_finest_leaves() {
+        let o = TraversalOptions {
+            pixel_tolerance: 0.0,
+            ..Default::default()
+        };
+        let (items, stats) = run(&two_leaves(), &view_from([0.0, 0.0, 1e6]), o);
+        assert_eq!(items.len(), 2);
+        assert!(items.iter().all(|i| i.lod == 0 && i.node != 0));
+        assert_eq!(stats.drawn_triangles, 2000);
+    }
+
+    #[test]
+    fn eye_inside_refines_and_leaf_gets_finest() {
+        let (items, _) = run(
+            &two_leaves(),
+            &view_from([-1.0, 0.0, -11.0]),
+            TraversalOptions::default(),
+        );
+        // The eye is in the root and in leaf 1: both refine, so leaf 1 draws
+        // its finest and the root is not drawn.
+        assert!(items.contains(&DrawItem { node: 1, lod: 0 }));
+        assert!(!items.iter().any(|i| i.node == 0));
+    }
+
+    #[test]
+    fn inner_node_without_lods_refines() {
+        let s = tree(vec![
+            n([-1.0, -1.0, -12.0], [1.0, 1.0, -10.0], 1..2, &[]),
+            n([-1.0, -1.0, -12.0], [1.0, 1.0, -10.0], 0..0, &[0.0]),
+        ]);
+        let (items, _) = run(&s, &view_from([0.0; 3]), TraversalOptions::default());
+        assert_eq!(items, [DrawItem { node: 1, lod: 0 }]);
+    }
+
+    #[test]
+    fn order_is_front_to_back() {
+        // Five leaves along the view axis, stored in scrambled distance order.
+        let zs = [30.0, 10.0, 50.0, 20.0, 40.0];
+        let mut spec = vec![n([-1.0, -1.0, -51.0], [1.0, 1.0, -10.0], 1..6, &[])];
+        for z in zs {
+            spec.push(n([-1.0, -1.0, -z - 1.0], [1.0, 1.0, -z], 0..0, &[0.0]));
+        }
+        let (items, stats) = run(
+            &tree(spec),
+            &view_from([0.0; 3]),
+            TraversalOptions::default(),
+        );
+        let order: Vec<u32> = items.iter().map(|i| i.node).collect();
+        assert_eq!(order, [2, 4, 1, 5, 3]);
+        assert_eq!(stats.visited, 6);
+    }
+
+    #[test]
+    fn frustum_culled_nodes_are_counted_and_not_refined() {
+        let s = tree(vec![
+            n([-2.0, -1.0, -12.0], [30.0, 1.0, -10.0], 1..3, &[]),
+            n([-2.0, -1.0, -12.0], [-0.5, 1.0, -10.0], 0..0, &[0.0]),
+            // Right of the x = -z plane (x > 12 at z -12).
+            n([20.0, -1.0, -12.0], [30.0, 1.0, -10.0], 3..4, &[]),
+            n([20.0, -1.0, -12.0], [30.0, 1.0, -10.0], 0..0, &[0.0]),
+        ]);
+        let (items, stats) = run(&s, &view_from([0.0; 3]), TraversalOptions::default());
+        assert_eq!(items, [DrawItem { node: 1, lod: 0 }]);
+        assert_eq!((stats.visited, stats.frustum_culled), (3, 1));
+    }
+
+    /// Culls every box whose nearest point is beyond a distance: any
+    /// occlusion method plugs in through the trait.
+    struct FarWall(f32);
+    impl OcclusionTest for FarWall {
+        fn is_visible(&self, _: &CullView, b: &RelBox) -> bool {
+            -b.max.z < self.0
+        }
+    }
+
+    #[test]
+    fn occlusion_test_plugs_in() {
+        let zs = [10.0, 20.0, 30.0];
+        let mut spec = vec![n([-1.0, -1.0, -31.0], [1.0, 1.0, -10.0], 1..4, &[])];
+        for z in zs {
+            spec.push(n([-1.0, -1.0, -z - 1.0], [1.0, 1.0, -z], 0..0, &[0.0]));
+        }
+        let s = tree(spec);
+        let view = view_from([0.0; 3]);
+        let mut items = Vec::new();
+        let o = TraversalOptions::default();
+        let stats = traverse(&s, &view, &FarWall(25.0), &o, &mut |i| items.push(i));
+        assert_eq!(items.len(), 2);
+        assert_eq!(stats.occlusion_culled, 1);
+        let off = TraversalOptions {
+            occlusion: false,
+            ..o
+        };
+        let stats = traverse(&s, &view, &FarWall(25.0), &off, &mut |_| {});
+        assert_eq!((stats.occlusion_culled, stats.drawn_nodes), (0, 3));
+    }
+
+    #[test]
+    fn malformed_skeleton_does_not_panic() {
+        let mut s = two_leaves();
+        s.nodes[0].child_count = 7; // children past the end
+        s.nodes[1].lod_count = 99; // LODs past the end
+        s.nodes[2].first_child = 0; // a cycle back to the root
+        s.nodes[2].child_count = 1;
+        let o = TraversalOptions {
+            pixel_tolerance: 0.5,
+            ..Default::default()
+        };
+        // Root refines; node 1 has no readable LOD; node 2 (now inner) draws
+        // its HLOD and its "child" is ignored.
+        let (items, _) = run(&s, &view_from([0.0; 3]), o);
+        assert_eq!(items, [DrawItem { node: 2, lod: 1 }]);
+    }
+
+    #[test]
+    fn reselect_keeps_acceptable_and_expands_closer() {
+        let s = two_leaves();
+        let far = view_from([0.0, 0.0, 90.0]);
+        let o = TraversalOptions::default();
+        let (items, _) = run(&s, &far, o);
+        assert_eq!(items, [DrawItem { node: 0, lod: 1 }]);
+        // Same camera: same LOD.
+        let mut same = Vec::new();
+        reselect_lods(&s, &far, &o, &items, &mut |i| same.push(i));
+        assert_eq!(same, items);
+        // Closer (distance 10): root level 0 is 0.625 pixels, acceptable.
+        let mut near = Vec::new();
+        reselect_lods(&s, &view_from([0.0; 3]), &o, &items, &mut |i| near.push(i));
+        assert_eq!(near, [DrawItem { node: 0, lod: 0 }]);
+        // Closer still (distance 2): the root refines into its two leaves,
+        // exactly what traversal draws for that camera.
+        let close = view_from([0.0, 0.0, -8.0]);
+        let mut expanded = Vec::new();
+        reselect_lods(&s, &close, &o, &items, &mut |i| expanded.push(i));
+        let (mut drawn, _) = run(&s, &close, o);
+        expanded.sort_by_key(|i| i.node);
+        drawn.sort_by_key(|i| i.node);
+        assert_eq!(expanded, drawn);
+        assert_eq!(expanded.len(), 2);
+    }
+}

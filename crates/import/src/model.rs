@@ -43,3 +43,26 @@ pub struct Model {
     pub objects: Vec<Object>,
     pub stats: ImportStats,
 }
+
+impl ImportStats {
+    /// The one line users see after an import.
+    pub fn summary(&self, objects: usize) -> String {
+        let mut s = format!("{} triangles in {} objects", self.triangles, objects);
+        if self.degenerate_triangles_dropped > 0 {
+            s += &format!(
+                ", {} degenerate triangles dropped",
+                self.degenerate_triangles_dropped
+            );
+        }
+        if self.skipped_primitives > 0 {
+            s += &format!(
+                ", {} point/line primitives skipped",
+                self.skipped_primitives
+            );
+        }
+        if !self.warnings.is_empty() {
+            s += &format!(", {} warnings", self.warnings.len());
+        }
+        s
+    }
+}

@@ -1,0 +1,71 @@
+//! The one error type of an import: every variant names the file and, where
+//! it applies, the object (mesh/primitive or OBJ group) and the index.
+
+/// Why a model could not be imported. `object` reads like
+/// `mesh "Pipe" (mesh 3) primitive 0` for glTF and `group "valve" (line 12)`
+/// for OBJ.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}: unsupported file type (expected .gltf, .glb or .obj)")]
+    UnsupportedFormat { file: String },
+    #[error("{file}: malformed glTF: {message}")]
+    MalformedGltf { file: String, message: String },
+    #[error("{file}: buffer {buffer} ({uri}): {reason}")]
+    MissingBuffer {
+        file: String,
+        buffer: usize,
+        uri: String,
+        reason: String,
+    },
+    #[error("{file}: buffer {buffer} holds {actual} bytes but declares {declared}")]
+    BufferTooShort {
+        file: String,
+        buffer: usize,
+        declared: usize,
+        actual: usize,
+    },
+    #[error("{file}: node {node}: {reason}")]
+    BadNode {
+        file: String,
+        node: usize,
+        reason: String,
+    },
+    #[error("{file}: {object}: accessor {accessor} ({semantic}): {reason}")]
+    BadAccessor {
+        file: String,
+        object: String,
+        accessor: usize,
+        semantic: &'static str,
+        reason: String,
+    },
+    #[error("{file}: {object}: index {value} at position {position} is out of range ({vertices} vertices)")]
+    IndexOutOfRange {
+        file: String,
+        object: String,
+        position: usize,
+        value: i64,
+        vertices: usize,
+    },
+    #[error("{file}: {object}: vertex {vertex} has a non-finite position {position:?}")]
+    NonFinitePosition {
+        file: String,
+        object: String,
+        vertex: usize,
+        position: [f64; 3],
+    },
+    #[error("{file}: {object}: empty mesh ({reason})")]
+    EmptyMesh {
+        file: String,
+        object: String,
+        reason: String,
+    },
+    #[error("{file}: malformed OBJ: {message}")]
+    MalformedObj { file: String, message: String },
+    #[error("{file}: no triangles to import")]
+    NoGeometry { file: String },
+}

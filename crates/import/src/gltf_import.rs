@@ -1,0 +1,633 @@
+//! glTF 2.0 (.gltf with external or data: buffers, .glb) import: flatten
+//! the node hierarchy in f64, one object per mesh-primitive instance.
+//!
+//! The `gltf` crate parses and validates the document, but it stores node
+//! transforms as f32, which loses centimetres 10^7 units from the origin; so
+//! node transforms are read again as f64 from the raw JSON. Accessors are
+//! read here, with every offset bounds-checked, rather than with the crate's
+//! reader, so that a lying file gives an error instead of a panic.
+
+use std::path::Path;
+
+use base64::Engine as _;
+use glam::{DMat3, DMat4, DQuat, DVec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use gltf::Semantic;
+use serde::Deserialize;
+
+use crate::error::ImportError;
+use crate::model::{ImportStats, Model};
+use crate::triangles::{finish, RawObject};
+
+/// Imports glTF from memory, JSON or binary (.glb, recognised by its magic).
+/// `name` appears in error messages. External buffers (file URIs) are
+/// resolved against `base_dir`; with `None` they are an error.
+pub fn import_gltf_bytes(
+    bytes: &[u8],
+    name: &str,
+    base_dir: Option<&Path>,
+) -> Result<Model, ImportError> {
+    import_gltf(bytes, name, base_dir)
+}
+
+/// Imports a binary glTF (.glb) held in memory; external buffers are an error.
+pub fn import_glb_bytes(bytes: &[u8], name: &str) -> Result<Model, ImportError> {
+    import_gltf(bytes, name, None)
+}
+
+/// Node transform fields, as f64. Unknown fields are ignored.
+#[derive(Deserialize)]
+struct RawNode {
+    matrix: Option<[f64; 16]>,
+    translation: Option<[f64; 3]>,
+    rotation: Option<[f64; 4]>,
+    scale: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+struct RawRoot {
+    #[serde(default)]
+    nodes: Vec<RawNode>,
+}
+
+/// At most this many validation messages go into an error: a fuzzed file can
+/// produce thousands, and the first few say what is wrong.
+const MAX_VALIDATION_MESSAGES: usize = 5;
+
+pub(crate) fn import_gltf(
+    bytes: &[u8],
+    file: &str,
+    base_dir: Option<&Path>,
+) -> Result<Model, ImportError> {
+    let malformed = |message: String| ImportError::MalformedGltf {
+        file: file.to_owned(),
+        message,
+    };
+    let glb;
+    let (json_bytes, blob): (&[u8], Option<&[u8]>) = if bytes.starts_with(b"glTF") {
+        glb = gltf::Glb::from_slice(bytes).map_err(|e| malformed(format!("{e}")))?;
+        (&glb.json[..], glb.bin.as_deref())
+    } else {
+        (bytes, None)
+    };
+    let root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json_bytes)
+        .map_err(|e| malformed(format!("{e}")))?;
+    let doc = gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let mut m = String::new();
+            for (path, err) in errors.iter().take(MAX_VALIDATION_MESSAGES) {
+                m += &format!("{path}: {err}; ");
+            }
+            if errors.len() > MAX_VALIDATION_MESSAGES {
+                m += &format!("and {} more", errors.len() - MAX_VALIDATION_MESSAGES);
+            }
+            malformed(m.trim_end_matches("; ").to_owned())
+        }
+        other => malformed(format!("{other}")),
+    })?;
+    let raw: RawRoot = serde_json::from_slice(json_bytes)
+        .map_err(|e| malformed(format!("node transforms: {e}")))?;
+    if raw.nodes.len() != doc.nodes().len() {
+        return Err(malformed("node list could not be re-read as f64".into()));
+    }
+
+    let buffers = load_buffers(&doc, blob, file, base_dir)?;
+    let mut stats = ImportStats::default();
+    let mut objects = Vec::new();
+
+    // Roots: the default scene, else the first, else every parentless node.
+    let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+        None => {
+            let mut has_parent = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    has_parent[c.index()] = true;
+                }
+            }
+            (0..has_parent.len()).filter(|&i| !has_parent[i]).collect()
+        }
+    };
+
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut visited = vec![false; nodes.len()];
+    // Depth-first in file order; a node reached twice (a cycle, or two
+    // parents, both invalid glTF) is an error rather than endless recursion.
+    let mut stack: Vec<(usize, DMat4)> =
+        roots.iter().rev().map(|&i| (i, DMat4::IDENTITY)).collect();
+    while let Some((ni, parent)) = stack.pop() {
+        if visited[ni] {
+            return Err(ImportError::BadNode {
+                file: file.to_owned(),
+                node: ni,
+                reason: "reached twice: the node hierarchy has a cycle or a node with two parents"
+                    .into(),
+            });
+        }
+        visited[ni] = true;
+        let world = parent * local_transform(&raw.nodes[ni], ni, file)?;
+        let node = &nodes[ni];
+        for c in node.children().collect::<Vec<_>>().iter().rev() {
+            stack.push((c.index(), world));
+        }
+        let Some(mesh) = node.mesh() else { continue };
+        for prim in mesh.primitives() {
+            if let Some(raw_obj) =
+                read_primitive(node, &mesh, &prim, &world, &buffers, file, &mut stats)?
+            {
+                if let Some(o) = finish(raw_obj, &mut stats) {
+                    objects.push(o);
+                }
+            }
+        }
+    }
+    if objects.is_empty() {
+        return Err(ImportError::NoGeometry {
+            file: file.to_owned(),
+        });
+    }
+    Ok(Model { objects, stats })
+}
+
+fn local_transform(n: &RawNode, index: usize, file: &str) -> Result<DMat4, ImportError> {
+    let bad = |reason: &str| ImportError::BadNode {
+        file: file.to_owned(),
+        node: index,
+        reason: reason.to_owned(),
+    };
+    let m = if let Some(m) = n.matrix {
+        DMat4::from_cols_array(&m)
+    } else {
+        let t = DVec3::from_array(n.translation.unwrap_or([0.0; 3]));
+        let r = n.rotation.unwrap_or([0.0, 0.0, 0.0, 1.0]);
+        let q = DQuat::from_array(r);
+        let len = q.length();
+        if !(len.is_finite() && len > 0.0) {
+            return Err(bad("rotation quaternion cannot be normalised"));
+        }
+        let s = DVec3::from_array(n.scale.unwrap_or([1.0; 3]));
+        DMat4::from_scale_rotation_translation(s, q / len, t)
+    };
+    if !m.is_finite() {
+        return Err(bad("transform is not finite"));
+    }
+    Ok(m)
+}
+
+fn load_buffers<'a>(
+    doc: &gltf::Document,
+    blob: Option<&'a [u8]>,
+    file: &str,
+    base_dir: Option<&Path>,
+) -> Result<Vec<std::borrow::Cow<'a, [u8]>>, ImportError> {
+    let mut out = Vec::new();
+    for buffer in doc.buffers() {
+        let missing = |uri: &str, reason: String| ImportError::MissingBuffer {
+            file: file.to_owned(),
+            buffer: buffer.index(),
+            uri: uri.to_owned(),
+            reason,
+        };
+        let data: std::borrow::Cow<[u8]> = match buffer.source() {
+            gltf::buffer::Source::Bin => match blob {
+                Some(b) => std::borrow::Cow::Borrowed(b),
+                None => return Err(missing("GLB BIN chunk", "the file has no BIN chunk".into())),
+            },
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (_, payload) = rest.split_once(";base64,").ok_or_else(|| {
+                        missing("data: URI", "only base64 data URIs are supported".into())
+                    })?;
+                    let decoded = base64::engine::general_purpose::STANDARD
+                        .decode(payload)
+                        .map_err(|e| missing("data: URI", format!("bad base64: {e}")))?;
+                    std::borrow::Cow::Owned(decoded)
+                } else if uri.contains("://") {
+                    return Err(missing(
+                        uri,
+                        "only relative file URIs and data: URIs are supported".into(),
+                    ));
+                } else {
+                    let Some(dir) = base_dir else {
+                        return Err(missing(
+                            uri,
+                            "external buffers need a file path, not bytes".into(),
+                        ));
+                    };
+                    let path = dir.join(percent_decode(uri));
+                    let bytes = std::fs::read(&path).map_err(|e| {
+                        missing(uri, format!("cannot read {}: {e}", path.display()))
+                    })?;
+                    std::borrow::Cow::Owned(bytes)
+                }
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(ImportError::BufferTooShort {
+                file: file.to_owned(),
+                buffer: buffer.index(),
+                declared: buffer.length(),
+                actual: data.len(),
+            });
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// `%XX` escapes in relative URIs (spaces in file names are common).
+fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push(h * 16 + l);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn object_label(node: &gltf::Node, mesh: &gltf::Mesh, prim: usize) -> String {
+    let node_name = node
+        .name()
+        .map(|n| format!("node \"{n}\" ({})", node.index()));
+    let mesh_name = match mesh.name() {
+        Some(n) => format!("mesh \"{n}\" ({})", mesh.index()),
+        None => format!("mesh {}", mesh.index()),
+    };
+    match node_name {
+        Some(n) => format!("{n} {mesh_name} primitive {prim}"),
+        None => format!("node {} {mesh_name} primitive {prim}", node.index()),
+    }
+}
+
+fn read_primitive(
+    node: &gltf::Node,
+    mesh: &gltf::Mesh,
+    prim: &gltf::Primitive,
+    world: &DMat4,
+    buffers: &[std::borrow::Cow<[u8]>],
+    file: &str,
+    stats: &mut ImportStats,
+) -> Result<Option<RawObject>, ImportError> {
+    let object = object_label(node, mesh, prim.index());
+    match prim.mode() {
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => {
+            stats.skipped_primitives += 1;
+            return Ok(None);
+        }
+    }
+    let empty = |reason: &str| ImportError::EmptyMesh {
+        file: file.to_owned(),
+        object: object.clone(),
+        reason: reason.to_owned(),
+    };
+    let pos_acc = prim
+        .get(&Semantic::Positions)
+        .ok_or_else(|| empty("no POSITION attribute"))?;
+    let local = read_floats(&pos_acc, 3, buffers, file, &object, "POSITION")?;
+    let n = local.len() / 3;
+    if n == 0 {
+        return Err(empty("no vertices"));
+    }
+    let mut positions = Vec::with_capacity(n);
+    for v in 0..n {
+        let p = DVec3::new(
+            local[3 * v] as f64,
+            local[3 * v + 1] as f64,
+            local[3 * v + 2] as f64,
+        );
+        let w = world.transform_point3(p);
+        if !p.is_finite() || !w.is_finite() {
+            return Err(ImportError::NonFinitePosition {
+                file: file.to_owned(),
+                object,
+                vertex: v,
+                position: if p.is_finite() {
+                    w.to_array()
+                } else {
+                    p.to_array()
+                },
+            });
+        }
+        positions.push(w);
+    }
+
+    let normals = match prim.get(&Semantic::Normals) {
+        Some(acc) => {
+            let raw = read_floats(&acc, 3, buffers, file, &object, "NORMAL")?;
+            if raw.len() / 3 != n {
+                return Err(bad_accessor(
+                    file,
+                    &object,
+                    &acc,
+                    "NORMAL",
+                    format!("{} normals for {n} positions", raw.len() / 3),
+                ));
+            }
+            let nm = DMat3::from_mat4(*world).inverse().transpose();
+            Some(
+                raw.chunks_exact(3)
+                    .map(|c| nm * DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
+                    .collect(),
+            )
+        }
+        None => None,
+    };
+
+    let vertex_colours = match prim.get(&Semantic::Colors(0)) {
+        Some(acc) => {
+            let dims = acc.dimensions().multiplicity();
+            if dims != 3 && dims != 4 {
+                return Err(bad_accessor(
+                    file,
+                    &object,
+                    &acc,
+                    "COLOR_0",
+                    "must be VEC3 or VEC4".into(),
+                ));
+            }
+            let raw = read_floats(&acc, dims, buffers, file, &object, "COLOR_0")?;
+            if raw.len() / dims != n {
+                return Err(bad_accessor(
+                    file,
+                    &object,
+                    &acc,
+                    "COLOR_0",
+                    format!("{} colours for {n} positions", raw.len() / dims),
+                ));
+            }
+            Some(
+                raw.chunks_exact(dims)
+                    .map(|c| [c[0], c[1], c[2], if dims == 4 { c[3] } else { 1.0 }])
+                    .collect(),
+            )
+        }
+        None => None,
+    };
+
+    let source: Vec<u32> = match prim.indices() {
+        Some(acc) => read_indices(&acc, buffers, file, &object)?,
+        None => (0..n as u32).collect(),
+    };
+    for (position, &value) in source.iter().enumerate() {
+        if value as usize >= n {
+            return Err(ImportError::IndexOutOfRange {
+                file: file.to_owned(),
+                object,
+                position,
+                value: value as i64,
+                vertices: n,
+            });
+        }
+    }
+    let mut indices = to_triangle_list(prim.mode(), &source);
+    if indices.is_empty() {
+        return Err(empty("no triangles"));
+    }
+    // A mirroring transform turns counter-clockwise front faces clockwise.
+    if world.determinant() < 0.0 {
+        for t in indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+    }
+    let colour = prim.material().pbr_metallic_roughness().base_color_factor();
+    Ok(Some(RawObject {
+        name: object,
+        positions,
+        normals,
+        indices,
+        colour,
+        vertex_colours,
+    }))
+}
+
+/// Strips alternate winding so every triangle keeps the strip's
+/// orientation (glTF 2.0 spec, section 3.7.2.1).
+fn to_triangle_list(mode: Mode, s: &[u32]) -> Vec<u32> {
+    match mode {
+        Mode::Triangles => s[..s.len() / 3 * 3].to_vec(),
+        Mode::TriangleStrip => {
+            let mut out = Vec::with_capacity(s.len().saturating_sub(2) * 3);
+            for i in 0..s.len().saturating_sub(2) {
+                if i % 2 == 0 {
+                    out.extend_from_slice(&[s[i], s[i + 1], s[i + 2]]);
+                } else {
+                    out.extend_from_slice(&[s[i + 1], s[i], s[i + 2]]);
+                }
+            }
+            out
+        }
+        Mode::TriangleFan => {
+            let mut out = Vec::with_capacity(s.len().saturating_sub(2) * 3);
+            for i in 1..s.len().saturating_sub(1) {
+                out.extend_from_slice(&[s[0], s[i], s[i + 1]]);
+            }
+            out
+        }
+        _ => Vec::new(),
+    }
+}
+
+fn bad_accessor(
+    file: &str,
+    object: &str,
+    acc: &gltf::Accessor,
+    semantic: &'static str,
+    reason: String,
+) -> ImportError {
+    ImportError::BadAccessor {
+        file: file.to_owned(),
+        object: object.to_owned(),
+        accessor: acc.index(),
+        semantic,
+        reason,
+    }
+}
+
+/// The bytes of an accessor's elements, bounds-checked: `(data, stride,
+/// element size)` with `data[k * stride..][..element size]` in range for
+/// every element `k < count`.
+fn accessor_bytes<'b>(
+    acc: &gltf::Accessor,
+    buffers: &'b [std::borrow::Cow<[u8]>],
+    file: &str,
+    object: &str,
+    semantic: &'static str,
+) -> Result<(&'b [u8], usize, usize), ImportError> {
+    let bad = |reason: String| bad_accessor(file, object, acc, semantic, reason);
+    if acc.sparse().is_some() {
+        return Err(bad("sparse accessors are not supported".into()));
+    }
+    let view = acc
+        .view()
+        .ok_or_else(|| bad("no bufferView (all-zero accessors are not supported)".into()))?;
+    let buffer = &buffers[view.buffer().index()];
+    let view_bytes = view
+        .offset()
+        .checked_add(view.length())
+        .and_then(|end| buffer.get(view.offset()..end))
+        .ok_or_else(|| {
+            bad(format!(
+                "bufferView {} runs past the end of its buffer",
+                view.index()
+            ))
+        })?;
+    let elem = acc.data_type().size() * acc.dimensions().multiplicity();
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(bad(format!(
+            "byteStride {stride} is smaller than an element ({elem} bytes)"
+        )));
+    }
+    let count = acc.count();
+    if count == 0 {
+        return Ok((&[], stride, elem));
+    }
+    let needed = (count - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(elem))
+        .and_then(|x| x.checked_add(acc.offset()));
+    match needed {
+        Some(end) if end <= view_bytes.len() => Ok((&view_bytes[acc.offset()..end], stride, elem)),
+        _ => Err(bad(format!(
+            "{count} elements at offset {} do not fit in bufferView {} ({} bytes)",
+            acc.offset(),
+            view.index(),
+            view_bytes.len()
+        ))),
+    }
+}
+
+/// Reads a float (or normalised integer) accessor of `dims` components per
+/// element into a flat f32 list.
+fn read_floats(
+    acc: &gltf::Accessor,
+    dims: usize,
+    buffers: &[std::borrow::Cow<[u8]>],
+    file: &str,
+    object: &str,
+    semantic: &'static str,
+) -> Result<Vec<f32>, ImportError> {
+    if acc.dimensions().multiplicity() != dims
+        || matches!(
+            acc.dimensions(),
+            Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4
+        )
+    {
+        return Err(bad_accessor(
+            file,
+            object,
+            acc,
+            semantic,
+            format!("expected {dims} components, found {:?}", acc.dimensions()),
+        ));
+    }
+    let (data, stride, elem) = accessor_bytes(acc, buffers, file, object, semantic)?;
+    let count = acc.count();
+    let dt = acc.data_type();
+    let cs = dt.size();
+    let norm = acc.normalized();
+    let mut out = Vec::with_capacity(count * dims);
+    for k in 0..count {
+        let e = &data[k * stride..k * stride + elem];
+        for c in 0..dims {
+            let b = &e[c * cs..(c + 1) * cs];
+            // Normalised integers map to [0, 1] or [-1, 1] (glTF 2.0 spec, 3.11).
+            let v = match dt {
+                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                DataType::U8 if norm => b[0] as f32 / 255.0,
+                DataType::U8 => b[0] as f32,
+                DataType::I8 if norm => (b[0] as i8 as f32 / 127.0).max(-1.0),
+                DataType::I8 => b[0] as i8 as f32,
+                DataType::U16 if norm => u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
+                DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as f32,
+                DataType::I16 if norm => {
+                    (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0)
+                }
+                DataType::I16 => i16::from_le_bytes([b[0], b[1]]) as f32,
+                DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+            };
+            out.push(v);
+        }
+    }
+    Ok(out)
+}
+
+fn read_indices(
+    acc: &gltf::Accessor,
+    buffers: &[std::borrow::Cow<[u8]>],
+    file: &str,
+    object: &str,
+) -> Result<Vec<u32>, ImportError> {
+    if acc.dimensions() != Dimensions::Scalar
+        || !matches!(
+            acc.data_type(),
+            DataType::U8 | DataType::U16 | DataType::U32
+        )
+    {
+        return Err(bad_accessor(
+            file,
+            object,
+            acc,
+            "indices",
+            "must be unsigned integer scalars".into(),
+        ));
+    }
+    let (data, stride, _) = accessor_bytes(acc, buffers, file, object, "indices")?;
+    let count = acc.count();
+    let mut out = Vec::with_capacity(count);
+    for k in 0..count {
+        let b = &data[k * stride..];
+        out.push(match acc.data_type() {
+            DataType::U8 => b[0] as u32,
+            DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,
+            _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strip_keeps_orientation() {
+        assert_eq!(
+            to_triangle_list(Mode::TriangleStrip, &[0, 1, 2, 3]),
+            vec![0, 1, 2, 2, 1, 3]
+        );
+    }
+
+    #[test]
+    fn fan_pivots_on_first_vertex() {
+        assert_eq!(
+            to_triangle_list(Mode::TriangleFan, &[0, 1, 2, 3]),
+            vec![0, 1, 2, 0, 2, 3]
+        );
+    }
+
+    #[test]
+    fn too_short_strip_is_empty() {
+        assert!(to_triangle_list(Mode::TriangleStrip, &[0, 1]).is_empty());
+        assert!(to_triangle_list(Mode::TriangleFan, &[]).is_empty());
+    }
+
+    #[test]
+    fn percent_escapes_decode() {
+        assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
+        assert_eq!(percent_decode("50%"), "50%");
+        assert_eq!(percent_decode("x%2"), "x%2");
+    }
+}

@@ -1,0 +1,371 @@
+//! gigawalk's preprocessor (GigaWalk Section 4): an imported [`Model`] in,
+//! a scene file out.
+//!
+//! Main items: [`preprocess`] (the whole pipeline into a scene file),
+//! [`build`] (the same into any [`LodSink`]), [`Params`] (every knob, with
+//! the paper's defaults), [`Stats`] (what a run did), [`Progress`] (how a
+//! caller watches it). The pipeline, one file per step:
+//!
+//! 1. input checks ([`parts`]): bad indices or NaN are errors, degenerate
+//!    triangles are dropped and counted;
+//! 2. Partition-I ([`partition`], Section 4.2.1);
+//! 3. clustering ([`cluster`], Section 4.2.2);
+//! 4. Partition-II ([`partition`] again, Section 4.2.3);
+//! 5. the AABB hierarchy ([`hierarchy`], Section 4.2.4);
+//! 6. LODs and HLODs ([`hlod`], Section 4.3), streamed to the sink
+//!    bottom-up so only one batch of nodes' geometry is in memory.
+//!
+//! The library draws no progress bars and prints nothing; the CLI does.
+//! Results depend only on the model and parameters, never on the number
+//! of threads.
+
+pub mod cluster;
+pub mod hierarchy;
+pub mod hlod;
+pub mod params;
+pub mod partition;
+pub mod parts;
+pub mod stats;
+#[cfg(test)]
+mod test_models;
+
+use std::path::Path;
+use std::time::Instant;
+
+use gigawalk_import::Model;
+use gigawalk_scene::{Aabb, LodMesh, Node, Provenance, SceneWriter, WriteError};
+use rayon::prelude::*;
+
+pub use params::{ParamError, Params, Resolved};
+pub use parts::InputError;
+pub use stats::Stats;
+
+use crate::cluster::ClusterParams;
+use crate::hlod::{ChainParams, Lod};
+use crate::partition::{SplitAt, SplitRule};
+use crate::parts::{Part, Piece};
+
+/// The pipeline's phases, in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    Check,
+    PartitionI,
+    Cluster,
+    PartitionII,
+    Hierarchy,
+    Hlod,
+    Write,
+}
+
+impl Phase {
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Check => "check",
+            Phase::PartitionI => "partition-I",
+            Phase::Cluster => "cluster",
+            Phase::PartitionII => "partition-II",
+            Phase::Hierarchy => "hierarchy",
+            Phase::Hlod => "hlod",
+            Phase::Write => "write",
+        }
+    }
+}
+
+/// Watches a run. Called from worker threads, hence `Sync`; every method
+/// has a do-nothing default.
+pub trait Progress: Sync {
+    /// A phase begins; `total` is in the phase's own units (triangles for
+    /// partitioning, nodes for HLODs), 0 when unknown.
+    fn start(&self, _phase: Phase, _total: u64) {}
+    /// `n` more units of the current phase are done.
+    fn advance(&self, _n: u64) {}
+    /// The current phase ended after `seconds`.
+    fn finish(&self, _phase: Phase, _seconds: f64) {}
+}
+
+/// A [`Progress`] that ignores everything.
+pub struct NoProgress;
+impl Progress for NoProgress {}
+
+/// Where LODs go as they are made: a scene file, or memory in tests.
+pub trait LodSink {
+    type Error: std::error::Error + Send + Sync + 'static;
+    /// Stores one LOD; returns its index. A node's LODs arrive
+    /// consecutively, finest first.
+    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error>;
+}
+
+impl LodSink for SceneWriter {
+    type Error = WriteError;
+    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
+        SceneWriter::add_lod(self, mesh, error)
+    }
+}
+
+/// Why a preprocess failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PreprocessError {
+    #[error(transparent)]
+    Params(#[from] ParamError),
+    #[error(transparent)]
+    Input(#[from] InputError),
+    #[error("cannot write the scene file")]
+    Write(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// The hierarchy and the run's statistics; the LODs are in the sink.
+#[derive(Clone, Debug)]
+pub struct Built {
+    pub nodes: Vec<Node>,
+    pub stats: Stats,
+}
+
+/// How many nodes' LODs are made in parallel before they are handed to
+/// the sink: enough to keep every core busy, few enough that their
+/// geometry (at most t2 triangles each, twice over for the chain) stays a
+/// small fraction of the input.
+const HLOD_BATCH: usize = 256;
+
+/// Runs the whole pipeline into `output` (atomically: nothing appears at
+/// `output` unless everything succeeds). `source` names the input for the
+/// file's provenance.
+pub fn preprocess(
+    model: &Model,
+    params: &Params,
+    output: &Path,
+    source: &str,
+    progress: &dyn Progress,
+) -> Result<Stats, PreprocessError> {
+    params.validate()?;
+    // On any error below, dropping the writer removes its temporary file.
+    let mut writer = SceneWriter::create(output).map_err(|e| PreprocessError::Write(e.into()))?;
+    let mut built = build(model, params, &mut writer, progress)?;
+    let t = Instant::now();
+    progress.start(Phase::Write, 0);
+    let mut parameters = params.to_json();
+    if let Some(r) = &built.stats.resolved {
+        if let Ok(serde_json::Value::Object(m)) = serde_json::to_value(r) {
+            parameters.insert("resolved_in_model_units".into(), serde_json::Value::Object(m));
+        }
+    }
+    let provenance = Provenance {
+        source: source.to_string(),
+        tool: format!("gigawalk-preprocess {}", env!("CARGO_PKG_VERSION")),
+        parameters,
+    };
+    let summary = writer.finish(built.nodes, provenance).map_err(|e| PreprocessError::Write(e.into()))?;
+    let secs = t.elapsed().as_secs_f64();
+    progress.finish(Phase::Write, secs);
+    let stats = &mut built.stats;
+    stats.phase_seconds.push((Phase::Write.name().into(), secs));
+    stats.output_bytes = summary.bytes;
+    stats.finish();
+    Ok(built.stats)
+}
+
+/// Runs the pipeline, handing every LOD to `sink`; returns the nodes (with
+/// LOD indices from the sink) and the statistics.
+pub fn build<S: LodSink>(
+    model: &Model,
+    params: &Params,
+    sink: &mut S,
+    progress: &dyn Progress,
+) -> Result<Built, PreprocessError> {
+    params.validate()?;
+    let mut stats = Stats { raw_input_bytes: stats::raw_input_bytes(model), ..Default::default() };
+    let mut clock = PhaseClock::new(progress);
+
+    // 1. Input checks.
+    clock.start(Phase::Check, 0);
+    let (parts, dropped) = parts::initial_parts(model)?;
+    stats.degenerate_dropped = dropped;
+    stats.triangles = parts.iter().map(|p| p.triangles as u64).sum();
+    stats.input_triangles = stats.triangles + dropped;
+    stats.objects_init = parts.len();
+    let scene = parts.iter().fold(Aabb::EMPTY, |a, p| a.union(&p.bounds));
+    let resolved = params.resolve(&scene);
+    clock.finish(&mut stats);
+
+    // 2. Partition-I (Section 4.2.1): split at the box middle.
+    clock.start(Phase::PartitionI, stats.triangles);
+    let rule1 = SplitRule { max_triangles: resolved.t1, max_diagonal: resolved.s1, max_aspect: resolved.r1, at: SplitAt::Midpoint };
+    let parts = partition::partition(model, parts, &rule1, &|n| progress.advance(n));
+    stats.objects_part1 = parts.len();
+    clock.finish(&mut stats);
+
+    // 3. Clustering (Section 4.2.2).
+    clock.start(Phase::Cluster, 0);
+    let max_dim = parts.iter().map(|p| p.bounds.extent().max_element()).fold(0.0, f64::max);
+    let resolved = resolved.with_d(params, max_dim);
+    let boxes: Vec<Aabb> = parts.iter().map(|p| p.bounds).collect();
+    let cp = ClusterParams { d: resolved.d, v: resolved.v, k: resolved.k, min_extent: resolved.min_extent };
+    let (clusters, edges) = cluster::cluster(&boxes, &cp);
+    stats.cluster_edges = edges;
+    let parts = merge_clusters(parts, &clusters);
+    stats.objects_clust = parts.len();
+    clock.finish(&mut stats);
+
+    // 4. Partition-II (Section 4.2.3): split about the centre of mass.
+    clock.start(Phase::PartitionII, stats.triangles);
+    let rule2 = SplitRule { max_triangles: resolved.t2, max_diagonal: resolved.s2, max_aspect: resolved.r2, at: SplitAt::CentreOfMass };
+    let parts = partition::partition(model, parts, &rule2, &|n| progress.advance(n));
+    stats.objects_part2 = parts.len();
+    clock.finish(&mut stats);
+
+    // 5. The AABB hierarchy (Section 4.2.4).
+    clock.start(Phase::Hierarchy, 0);
+    let boxes: Vec<Aabb> = parts.iter().map(|p| p.bounds).collect();
+    let tree = hierarchy::build(&boxes);
+    stats.nodes = tree.len();
+    stats.leaves = tree.iter().filter(|n| n.object.is_some()).count();
+    stats.depth = tree.iter().map(|n| n.depth).max().unwrap_or(0);
+    clock.finish(&mut stats);
+
+    // 6. LODs and HLODs (Section 4.3), bottom-up.
+    clock.start(Phase::Hlod, tree.len() as u64);
+    let chain = ChainParams { ratio: params.lod_ratio, floor: params.lod_floor as usize };
+    let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
+    let mut coarse: Vec<Option<Lod>> = vec![None; tree.len()];
+    let mut emit = |ni: usize, lods: Vec<(LodMesh, f32)>, per_level: &mut Vec<u64>| -> Result<(), PreprocessError> {
+        let mut first = None;
+        for (k, (mesh, error)) in lods.iter().enumerate() {
+            let i = sink.add_lod(mesh, *error).map_err(|e| PreprocessError::Write(e.into()))?;
+            first.get_or_insert(i);
+            if per_level.len() <= k {
+                per_level.push(0);
+            }
+            per_level[k] += mesh.triangle_count() as u64;
+        }
+        lod_ranges[ni] = (first.unwrap_or(0), lods.len() as u32);
+        Ok(())
+    };
+    let leaves: Vec<usize> = (0..tree.len()).filter(|&i| tree[i].object.is_some()).collect();
+    for batch in leaves.chunks(HLOD_BATCH) {
+        let made: Vec<(Vec<(LodMesh, f32)>, Lod)> = batch
+            .par_iter()
+            .map(|&ni| {
+                let node = &tree[ni];
+                let part = &parts[node.object.unwrap_or_default() as usize];
+                let mesh = hlod::leaf_mesh(model, part, node.bounds.center());
+                finish_chain(hlod::leaf_lods(mesh, &chain))
+            })
+            .collect();
+        for (&ni, (lods, c)) in batch.iter().zip(made) {
+            emit(ni, lods, &mut stats.leaf_lod_triangles)?;
+            coarse[ni] = Some(c);
+        }
+        progress.advance(batch.len() as u64);
+    }
+    drop(parts);
+    // Inner nodes deepest first, so every child is done before its parent.
+    let mut inner: Vec<usize> = (0..tree.len()).filter(|&i| tree[i].object.is_none()).collect();
+    inner.sort_by_key(|&i| (std::cmp::Reverse(tree[i].depth), i));
+    let mut at = 0;
+    while at < inner.len() {
+        let depth = tree[inner[at]].depth;
+        let level_end = at + inner[at..].iter().take_while(|&&i| tree[i].depth == depth).count();
+        for batch in inner[at..level_end].chunks(HLOD_BATCH) {
+            let made: Vec<(Vec<(LodMesh, f32)>, Lod)> = batch
+                .par_iter()
+                .map(|&ni| {
+                    let node = &tree[ni];
+                    let children: Vec<&Lod> = (node.first_child..node.first_child + node.child_count)
+                        .filter_map(|c| coarse[c as usize].as_ref())
+                        .collect();
+                    finish_chain(hlod::inner_lods(&children, node.bounds.center(), &chain))
+                })
+                .collect();
+            for (&ni, (lods, c)) in batch.iter().zip(made) {
+                emit(ni, lods, &mut stats.inner_lod_triangles)?;
+                let node = &tree[ni];
+                for ch in node.first_child..node.first_child + node.child_count {
+                    coarse[ch as usize] = None;
+                }
+                coarse[ni] = Some(c);
+            }
+            progress.advance(batch.len() as u64);
+        }
+        at = level_end;
+    }
+    stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
+    clock.finish(&mut stats);
+
+    let nodes = tree
+        .iter()
+        .zip(&lod_ranges)
+        .map(|(n, &(first_lod, lod_count))| Node {
+            bounds: n.bounds,
+            parent: n.parent,
+            first_child: n.first_child,
+            child_count: n.child_count,
+            first_lod,
+            lod_count,
+        })
+        .collect();
+    stats.resolved = Some(resolved);
+    Ok(Built { nodes, stats })
+}
+
+/// The scene-file form of every level, and the coarsest level kept for the
+/// parent's HLODs.
+fn finish_chain(mut lods: Vec<Lod>) -> (Vec<(LodMesh, f32)>, Lod) {
+    let out = lods.iter().map(|l| (l.mesh.to_lod_mesh(), l.error)).collect();
+    let coarsest = lods.pop().unwrap_or(Lod { mesh: Default::default(), error: 0.0 });
+    (out, coarsest)
+}
+
+/// One part per cluster: the union of its members' pieces, per object.
+fn merge_clusters(parts: Vec<Part>, clusters: &[Vec<u32>]) -> Vec<Part> {
+    let mut slots: Vec<Option<Part>> = parts.into_iter().map(Some).collect();
+    let groups: Vec<Vec<Part>> = clusters
+        .iter()
+        .map(|c| c.iter().filter_map(|&i| slots[i as usize].take()).collect())
+        .collect();
+    groups
+        .into_par_iter()
+        .map(|mut g| {
+            if g.len() == 1 {
+                return g.pop().unwrap_or_else(|| unreachable!());
+            }
+            let bounds = g.iter().fold(Aabb::EMPTY, |a, p| a.union(&p.bounds));
+            let triangles = g.iter().map(|p| p.triangles).sum();
+            let mut pieces: Vec<Piece> = g.into_iter().flat_map(|p| p.pieces).collect();
+            pieces.sort_by_key(|p| p.object);
+            let mut merged: Vec<Piece> = Vec::with_capacity(pieces.len());
+            for p in pieces {
+                match merged.last_mut() {
+                    Some(m) if m.object == p.object => m.triangles.extend(p.triangles),
+                    _ => merged.push(p),
+                }
+            }
+            for m in &mut merged {
+                m.triangles.sort_unstable();
+            }
+            Part { pieces: merged, bounds, triangles }
+        })
+        .collect()
+}
+
+/// Times phases and reports them to the progress watcher and the stats.
+struct PhaseClock<'a> {
+    progress: &'a dyn Progress,
+    phase: Phase,
+    started: Instant,
+}
+
+impl<'a> PhaseClock<'a> {
+    fn new(progress: &'a dyn Progress) -> Self {
+        PhaseClock { progress, phase: Phase::Check, started: Instant::now() }
+    }
+    fn start(&mut self, phase: Phase, total: u64) {
+        self.phase = phase;
+        self.started = Instant::now();
+        self.progress.start(phase, total);
+    }
+    fn finish(&mut self, stats: &mut Stats) {
+        let secs = self.started.elapsed().as_secs_f64();
+        self.progress.finish(self.phase, secs);
+        tracing::info!(phase = self.phase.name(), seconds = secs, "phase done");
+        stats.phase_seconds.push((self.phase.name().into(), secs));
+    }
+}

@@ -1,0 +1,246 @@
+//! The preprocessor's parameters: the paper's values (GigaWalk Section 6.3.1)
+//! expressed relative to the model, and their resolution into model units.
+
+use gigawalk_scene::Aabb;
+use serde_json::{json, Map, Value};
+
+/// Every knob of the preprocess. Sizes are fractions of a model measure so
+/// that the same defaults work on a model in millimetres or in kilometres;
+/// [`Params::resolve`] turns them into model units for one model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Partition-I triangle threshold t1 (Section 4.2.1, 6.3.1: 1000).
+    /// An object is split only when it has more triangles than this.
+    pub t1: u32,
+    /// Partition-I size threshold s1 as a fraction of the model size, the
+    /// diagonal of the scene's bounding box (6.3.1: 0.1 x model dimension).
+    pub s1: f64,
+    /// Partition-I aspect-ratio threshold r1: largest over smallest box
+    /// dimension (6.3.1: 2.5). Unitless.
+    pub r1: f64,
+    /// Clustering edge threshold D as a fraction of the largest box
+    /// dimension of any object entering clustering (Section 4.2.2, 6.3.1:
+    /// D = 0.1 x max bounding box dimension). Objects farther apart than D
+    /// share no edge.
+    pub d: f64,
+    /// Maximum cluster volume V as a fraction of the scene box volume
+    /// (6.3.1: V = 1e-3 x total scene bounding box volume).
+    pub v: f64,
+    /// Felzenszwalb-Huttenlocher constant K (6.3.1: 1500), in thousandths of
+    /// D. The criterion compares an edge weight w (a length, at most D) with
+    /// I(C) + K/|C|, so K must be a length; the paper's bare 1500 would be
+    /// 1500 model units, which in a model measured in metres lets every edge
+    /// through and in one measured in kilometres none. Measured in D/1000,
+    /// K = 1500 means a lone object accepts any neighbour (K/1 = 1.5 D > w),
+    /// and a cluster of n objects accepts an edge only when it is within
+    /// 1.5 D / n of its largest internal gap: the bias toward clusters of
+    /// cardinality O(K) that Section 4.2.2 asks for, at every model scale.
+    pub k: f64,
+    /// Partition-II triangle threshold as a multiple of t1 (Section 4.2.3,
+    /// 6.3.1: t2 = 10 t1).
+    pub t2_factor: f64,
+    /// Partition-II size threshold as a multiple of s1 (6.3.1: s2 = 2 s1).
+    pub s2_factor: f64,
+    /// Partition-II aspect threshold as a multiple of r1 (6.3.1: r2 = 0.5 r1).
+    pub r2_factor: f64,
+    /// Each LOD aims for this fraction of the previous level's triangles
+    /// (Section 4.3 leaves the ratio open; halving keeps the chain's total
+    /// at about twice the finest level).
+    pub lod_ratio: f64,
+    /// A LOD chain stops once a level has at most this many triangles: below
+    /// a few dozen triangles a node costs more to traverse than to draw.
+    pub lod_floor: u32,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            t1: 1000,
+            s1: 0.1,
+            r1: 2.5,
+            d: 0.1,
+            v: 1e-3,
+            k: 1500.0,
+            t2_factor: 10.0,
+            s2_factor: 2.0,
+            r2_factor: 0.5,
+            lod_ratio: 0.5,
+            lod_floor: 64,
+        }
+    }
+}
+
+/// A parameter out of its valid range.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("parameter {name} = {value} is invalid: {why}")]
+pub struct ParamError {
+    pub name: &'static str,
+    pub value: f64,
+    pub why: &'static str,
+}
+
+impl Params {
+    /// Checks every parameter's range; the CLI reports the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let positive = |name, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ParamError { name, value, why: "must be a finite number above 0" })
+            }
+        };
+        if self.t1 == 0 {
+            return Err(ParamError { name: "t1", value: 0.0, why: "must be at least 1" });
+        }
+        positive("s1", self.s1)?;
+        positive("r1", self.r1)?;
+        if self.r1 < 1.0 {
+            return Err(ParamError { name: "r1", value: self.r1, why: "an aspect ratio is at least 1" });
+        }
+        positive("d", self.d)?;
+        positive("v", self.v)?;
+        positive("k", self.k)?;
+        positive("t2-factor", self.t2_factor)?;
+        positive("s2-factor", self.s2_factor)?;
+        positive("r2-factor", self.r2_factor)?;
+        if self.r1 * self.r2_factor < 1.0 {
+            return Err(ParamError {
+                name: "r2-factor",
+                value: self.r2_factor,
+                why: "r1 x r2-factor must be at least 1 (an aspect ratio is at least 1)",
+            });
+        }
+        if !(self.lod_ratio > 0.0 && self.lod_ratio < 1.0) {
+            return Err(ParamError { name: "lod-ratio", value: self.lod_ratio, why: "must be between 0 and 1" });
+        }
+        if self.lod_floor == 0 {
+            return Err(ParamError { name: "lod-floor", value: 0.0, why: "must be at least 1" });
+        }
+        Ok(())
+    }
+
+    /// The Partition-I thresholds and the scene measures everything scales
+    /// with. D depends on the objects after Partition-I, so it is resolved
+    /// later by [`Resolved::with_d`].
+    pub fn resolve(&self, scene: &Aabb) -> Resolved {
+        let extent = scene.extent();
+        let model_size = scene.diagonal();
+        // A flat scene (a city with no height, a single plate) has zero
+        // volume; measuring every box with a small minimum thickness keeps
+        // the volume cap meaningful there.
+        let min_extent = 1e-3 * extent.max_element();
+        let scene_volume = padded_volume(scene, min_extent);
+        let t1 = self.t1 as usize;
+        let s1 = self.s1 * model_size;
+        Resolved {
+            model_size,
+            scene_volume,
+            min_extent,
+            t1,
+            s1,
+            r1: self.r1,
+            d: 0.0,
+            v: self.v * scene_volume,
+            k: 0.0,
+            t2: (self.t2_factor * t1 as f64).round().max(1.0) as usize,
+            s2: self.s2_factor * s1,
+            r2: self.r2_factor * self.r1,
+        }
+    }
+
+    /// The parameters as given, for the scene file's provenance.
+    pub fn to_json(&self) -> Map<String, Value> {
+        let v = json!({
+            "t1": self.t1,
+            "s1_fraction_of_model_diagonal": self.s1,
+            "r1": self.r1,
+            "d_fraction_of_max_object_dimension": self.d,
+            "v_fraction_of_scene_volume": self.v,
+            "k_in_thousandths_of_d": self.k,
+            "t2_factor": self.t2_factor,
+            "s2_factor": self.s2_factor,
+            "r2_factor": self.r2_factor,
+            "lod_ratio": self.lod_ratio,
+            "lod_floor": self.lod_floor,
+        });
+        match v {
+            Value::Object(m) => m,
+            _ => unreachable!("json! of an object literal is an object"),
+        }
+    }
+}
+
+/// Parameters in model units for one model.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Resolved {
+    /// Diagonal of the scene box.
+    pub model_size: f64,
+    /// Volume of the scene box, each side at least `min_extent`.
+    pub scene_volume: f64,
+    /// Thinnest side a box is given when measuring its volume.
+    pub min_extent: f64,
+    pub t1: usize,
+    pub s1: f64,
+    pub r1: f64,
+    pub d: f64,
+    pub v: f64,
+    /// K as a length: K x D / 1000.
+    pub k: f64,
+    pub t2: usize,
+    pub s2: f64,
+    pub r2: f64,
+}
+
+impl Resolved {
+    /// Fills in D (and K, measured in D/1000) from the largest box dimension
+    /// of the objects entering clustering.
+    pub fn with_d(mut self, params: &Params, max_object_dimension: f64) -> Self {
+        self.d = params.d * max_object_dimension;
+        self.k = params.k * self.d / 1000.0;
+        self
+    }
+}
+
+/// Volume of a box whose every side is at least `min_extent`.
+pub fn padded_volume(b: &Aabb, min_extent: f64) -> f64 {
+    let e = b.extent().max(glam::DVec3::splat(min_extent));
+    e.x * e.y * e.z
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn defaults_are_valid_and_scale_with_the_model() {
+        let p = Params::default();
+        p.validate().unwrap();
+        let small = p.resolve(&Aabb::new(DVec3::ZERO, DVec3::splat(1.0)));
+        let big = p.resolve(&Aabb::new(DVec3::ZERO, DVec3::splat(1000.0)));
+        assert!((big.s1 / small.s1 - 1000.0).abs() < 1e-9);
+        assert!((big.v / small.v - 1e9).abs() < 1e-3);
+        assert_eq!(small.t2, 10_000);
+        assert!((small.r2 - 1.25).abs() < 1e-12);
+        let small = small.with_d(&p, 0.5);
+        assert!((small.d - 0.05).abs() < 1e-12);
+        assert!((small.k - 1.5 * small.d).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let p = Params { s1: -1.0, ..Params::default() };
+        assert_eq!(p.validate().unwrap_err().name, "s1");
+        let p = Params { lod_ratio: 1.0, ..Params::default() };
+        assert_eq!(p.validate().unwrap_err().name, "lod-ratio");
+        let p = Params { v: f64::NAN, ..Params::default() };
+        assert_eq!(p.validate().unwrap_err().name, "v");
+    }
+
+    #[test]
+    fn flat_scene_has_a_volume() {
+        let r = Params::default().resolve(&Aabb::new(DVec3::ZERO, DVec3::new(100.0, 0.0, 100.0)));
+        assert!(r.scene_volume > 0.0);
+        assert!(r.v > 0.0);
+    }
+}

@@ -1,0 +1,124 @@
+//! What a preprocess run did: object counts after each step (the paper's
+//! Table 1 columns), the hierarchy's shape, triangles per LOD level, sizes
+//! and times. Printed as a table and written as JSON by the CLI.
+
+use std::fmt::Write as _;
+
+use gigawalk_import::Model;
+
+use crate::params::Resolved;
+
+/// Statistics of one run. Times are seconds.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    /// Triangles in the model as given.
+    pub input_triangles: u64,
+    /// Degenerate triangles dropped (repeated vertex or zero area).
+    pub degenerate_dropped: u64,
+    /// Triangles kept: exactly the triangles of the leaves' finest LODs.
+    pub triangles: u64,
+    /// Table 1, "Init": objects with at least one triangle.
+    pub objects_init: usize,
+    /// Table 1, "Part-I": objects after Partition-I.
+    pub objects_part1: usize,
+    /// Table 1, "Clust": objects after clustering.
+    pub objects_clust: usize,
+    /// Table 1, "Part-II": objects after Partition-II (the leaves).
+    pub objects_part2: usize,
+    /// Edges of the clustering graph.
+    pub cluster_edges: usize,
+    pub nodes: usize,
+    pub leaves: usize,
+    /// Levels on the longest root-to-leaf path (1 for a lone root).
+    pub depth: u32,
+    pub lods: usize,
+    /// Triangles of the leaves' k-th LODs, summed over leaves, by k.
+    pub leaf_lod_triangles: Vec<u64>,
+    /// Triangles of the inner nodes' k-th HLODs, summed over nodes, by k.
+    pub inner_lod_triangles: Vec<u64>,
+    /// Geometry of the input as glTF stores it: f32 positions and normals,
+    /// f32 RGBA vertex colours when present, u32 indices.
+    pub raw_input_bytes: u64,
+    /// Size of the scene file written; 0 when nothing was written.
+    pub output_bytes: u64,
+    /// `output_bytes / raw_input_bytes`.
+    pub output_ratio: f64,
+    /// `output_bytes / triangles`.
+    pub bytes_per_triangle: f64,
+    /// Seconds per phase, in pipeline order.
+    pub phase_seconds: Vec<(String, f64)>,
+    pub total_seconds: f64,
+    /// Triangles kept per second of total time.
+    pub triangles_per_second: f64,
+    /// Peak resident memory of the process (Linux VmHWM), when known.
+    pub peak_memory_bytes: Option<u64>,
+    /// The thresholds in model units.
+    pub resolved: Option<Resolved>,
+}
+
+/// The raw size of a model's geometry (see [`Stats::raw_input_bytes`]).
+pub fn raw_input_bytes(model: &Model) -> u64 {
+    model
+        .objects
+        .iter()
+        .map(|o| {
+            let v = o.positions.len() as u64;
+            let colours = if o.vertex_colours.is_some() { 16 * v } else { 0 };
+            24 * v + colours + 4 * o.indices.len() as u64
+        })
+        .sum()
+}
+
+/// Peak resident set size of this process, from /proc (Linux only).
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+impl Stats {
+    /// Fills the derived ratios from the counts and times.
+    pub fn finish(&mut self) {
+        self.total_seconds = self.phase_seconds.iter().map(|(_, s)| s).sum();
+        if self.total_seconds > 0.0 {
+            self.triangles_per_second = self.triangles as f64 / self.total_seconds;
+        }
+        if self.raw_input_bytes > 0 {
+            self.output_ratio = self.output_bytes as f64 / self.raw_input_bytes as f64;
+        }
+        if self.triangles > 0 {
+            self.bytes_per_triangle = self.output_bytes as f64 / self.triangles as f64;
+        }
+        self.peak_memory_bytes = peak_memory_bytes();
+    }
+
+    /// A plain-text table for people.
+    pub fn table(&self) -> String {
+        let mut s = String::new();
+        let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        let _ = writeln!(s, "triangles         {} kept, {} degenerate dropped", self.triangles, self.degenerate_dropped);
+        let _ = writeln!(s, "objects           Init {}  Part-I {}  Clust {}  Part-II {}", self.objects_init, self.objects_part1, self.objects_clust, self.objects_part2);
+        let _ = writeln!(s, "clustering graph  {} edges", self.cluster_edges);
+        let _ = writeln!(s, "hierarchy         {} nodes, {} leaves, depth {}, {} LODs", self.nodes, self.leaves, self.depth, self.lods);
+        let list = |v: &[u64]| v.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(" / ");
+        let _ = writeln!(s, "leaf LODs (tris)  {}", list(&self.leaf_lod_triangles));
+        let _ = writeln!(s, "HLODs (tris)      {}", list(&self.inner_lod_triangles));
+        let _ = writeln!(
+            s,
+            "size              {:.1} MiB out / {:.1} MiB raw input = {:.2}x, {:.1} bytes per triangle",
+            mib(self.output_bytes),
+            mib(self.raw_input_bytes),
+            self.output_ratio,
+            self.bytes_per_triangle
+        );
+        for (name, secs) in &self.phase_seconds {
+            let _ = writeln!(s, "time {name:<13}{secs:>9.3} s");
+        }
+        let _ = writeln!(s, "time total        {:>9.3} s  ({:.0} triangles/s)", self.total_seconds, self.triangles_per_second);
+        if let Some(p) = self.peak_memory_bytes {
+            let _ = writeln!(s, "peak memory       {:.1} MiB", mib(p));
+        }
+        s
+    }
+}

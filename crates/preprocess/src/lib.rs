@@ -28,6 +28,9 @@ pub mod parts;
 pub mod stats;
 #[cfg(test)]
 mod test_models;
+#[cfg(test)]
+mod tests;
+pub mod verify;
 
 use std::path::Path;
 use std::time::Instant;

@@ -1,0 +1,152 @@
+//! End-to-end checks of the pipeline on hand-built models, into memory and
+//! into scene files.
+
+use std::convert::Infallible;
+
+use gigawalk_import::{Model, Object};
+use gigawalk_scene::{LodMesh, SceneReader};
+use glam::DVec3;
+
+use crate::partition::{SplitAt, SplitRule};
+use crate::test_models::{box_object, grid_object, pipe_object};
+use crate::verify::verify;
+use crate::{build, preprocess, Built, LodSink, NoProgress, Params, PreprocessError};
+
+#[derive(Default)]
+struct MemorySink(Vec<(LodMesh, f32)>);
+
+impl LodSink for MemorySink {
+    type Error = Infallible;
+    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Infallible> {
+        self.0.push((mesh.clone(), error));
+        Ok(self.0.len() as u32 - 1)
+    }
+}
+
+/// A small "plant": a long pipe run, a bumpy floor, a cluster of boxes and
+/// a far-off group of boxes.
+fn small_plant() -> Model {
+    let mut objects: Vec<Object> = vec![
+        pipe_object(DVec3::new(0.0, 2.0, 0.0), 80.0, 0.5, 400, 12),
+        grid_object(DVec3::new(0.0, 0.0, -10.0), 40.0, 60, 0.2),
+    ];
+    for i in 0..40 {
+        let min = DVec3::new((i % 8) as f64 * 1.2, 0.0, (i / 8) as f64 * 1.2);
+        objects.push(box_object(min, min + DVec3::ONE));
+    }
+    for i in 0..10 {
+        let min = DVec3::new(70.0 + i as f64 * 1.5, 0.0, 30.0);
+        objects.push(box_object(min, min + DVec3::splat(0.8)));
+    }
+    Model { objects, ..Default::default() }
+}
+
+fn small_params() -> Params {
+    Params { t1: 500, ..Params::default() }
+}
+
+fn build_in_memory(model: &Model, params: &Params) -> (Built, MemorySink) {
+    let mut sink = MemorySink::default();
+    let built = build(model, params, &mut sink, &NoProgress).unwrap();
+    (built, sink)
+}
+
+fn part2_rule(built: &Built) -> SplitRule {
+    let r = built.stats.resolved.as_ref().unwrap();
+    SplitRule { max_triangles: r.t2, max_diagonal: r.s2, max_aspect: r.r2, at: SplitAt::CentreOfMass }
+}
+
+#[test]
+fn small_plant_meets_every_property() {
+    let model = small_plant();
+    let (built, sink) = build_in_memory(&model, &small_params());
+    let errors: Vec<f32> = sink.0.iter().map(|l| l.1).collect();
+    let v = verify(&model, &built.nodes, &errors, &mut |i| sink.0[i as usize].0.clone(), Some(&part2_rule(&built))).unwrap();
+    let s = &built.stats;
+    assert_eq!(v.matched_triangles as u64, s.triangles);
+    assert_eq!(s.triangles, 9600 + 7200 + 50 * 12);
+    assert_eq!(s.objects_init, 52);
+    assert!(s.objects_part1 > s.objects_init, "{s:?}");
+    assert!(s.objects_clust < s.objects_part1, "{s:?}");
+    assert_eq!(v.leaves, s.objects_part2);
+    assert!(s.leaf_lod_triangles.len() >= 3, "{:?}", s.leaf_lod_triangles);
+    assert!(!s.inner_lod_triangles.is_empty());
+}
+
+#[test]
+fn single_triangle_model() {
+    let o = Object {
+        name: "tri".into(),
+        positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+        normals: vec![glam::Vec3::Z; 3],
+        indices: vec![0, 1, 2],
+        colour: [1.0, 0.0, 0.0, 1.0],
+        vertex_colours: None,
+    };
+    let model = Model { objects: vec![o], ..Default::default() };
+    let (built, sink) = build_in_memory(&model, &Params::default());
+    assert_eq!(built.nodes.len(), 1);
+    assert_eq!(sink.0.len(), 1);
+    assert_eq!(sink.0[0].1, 0.0);
+}
+
+#[test]
+fn scene_far_from_origin_verifies() {
+    let mut model = small_plant();
+    for o in &mut model.objects {
+        for p in &mut o.positions {
+            *p += DVec3::new(1e7, -3e6, 2e7);
+        }
+    }
+    let (built, sink) = build_in_memory(&model, &small_params());
+    let errors: Vec<f32> = sink.0.iter().map(|l| l.1).collect();
+    verify(&model, &built.nodes, &errors, &mut |i| sink.0[i as usize].0.clone(), Some(&part2_rule(&built))).unwrap();
+}
+
+#[test]
+fn scene_file_round_trips_and_verifies() {
+    let model = small_plant();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("plant.gwk");
+    let stats = preprocess(&model, &small_params(), &path, "small_plant", &NoProgress).unwrap();
+    assert_eq!(stats.output_bytes, std::fs::metadata(&path).unwrap().len());
+    let reader = SceneReader::open(&path).unwrap();
+    let sk = reader.skeleton();
+    assert_eq!(sk.finest_triangles(), stats.triangles);
+    assert_eq!(sk.provenance.source, "small_plant");
+    assert_eq!(sk.provenance.parameters["t1"], 500);
+    let errors: Vec<f32> = sk.lods.iter().map(|l| l.error).collect();
+    verify(&model, &sk.nodes, &errors, &mut |i| reader.read_lod(i).unwrap(), None).unwrap();
+}
+
+#[test]
+fn same_input_gives_identical_bytes_with_one_thread_or_many() {
+    let model = small_plant();
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, threads: usize| {
+        let path = dir.path().join(name);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| preprocess(&model, &small_params(), &path, "m", &NoProgress)).unwrap();
+        std::fs::read(&path).unwrap()
+    };
+    let a = run("a.gwk", 1);
+    let b = run("b.gwk", 4);
+    let c = run("c.gwk", 4);
+    assert!(a == b, "1 thread and 4 threads differ");
+    assert!(b == c, "two 4-thread runs differ");
+}
+
+#[test]
+fn bad_input_leaves_no_file() {
+    let mut model = small_plant();
+    model.objects[3].indices[5] = 999;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.gwk");
+    let e = preprocess(&model, &Params::default(), &path, "m", &NoProgress).unwrap_err();
+    assert!(matches!(e, PreprocessError::Input(_)), "{e}");
+    assert!(e.to_string().contains("object 3"), "{e}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    let e = preprocess(&small_plant(), &Params { r1: 0.5, ..Params::default() }, &path, "m", &NoProgress).unwrap_err();
+    assert!(matches!(e, PreprocessError::Params(_)), "{e}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

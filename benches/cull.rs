@@ -1,0 +1,3 @@
+//! Criterion benches of the culling core (being written).
+
+fn main() {}

@@ -1,0 +1,58 @@
+//! Brute-force property: the HZB occlusion test never culls a box that
+//! would show a pixel, on thousands of random scenes and image sizes.
+
+mod cull_common;
+
+use cull_common::{check_no_false_culls, random_scene, Tally};
+use rand::rngs::SmallRng;
+use rand::{RngExt, SeedableRng};
+
+fn run(
+    seeds: std::ops::Range<u64>,
+    size: impl Fn(&mut SmallRng) -> (u32, u32),
+    tests: usize,
+) -> Tally {
+    let mut total = Tally::default();
+    for seed in seeds {
+        let mut rng = SmallRng::seed_from_u64(seed);
+        let (w, h) = size(&mut rng);
+        let scene = random_scene(&mut rng, w, h, tests);
+        let (_, t) = check_no_false_culls(&scene, &format!("seed {seed}"));
+        total.tested += t.tested;
+        total.culled += t.culled;
+    }
+    total
+}
+
+#[test]
+fn no_false_culls_on_small_images() {
+    // 1x1 up to 64x64, odd and even: every footprint/level corner case.
+    let t = run(
+        0..3000,
+        |r| (r.random_range(1..=64), r.random_range(1..=64)),
+        24,
+    );
+    // The property must not hold vacuously: plenty of boxes are culled.
+    assert!(t.culled * 10 > t.tested, "{t:?}");
+}
+
+#[test]
+fn no_false_culls_on_medium_images() {
+    let t = run(
+        10_000..10_200,
+        |r| (r.random_range(65..=400), r.random_range(65..=400)),
+        40,
+    );
+    assert!(t.culled * 10 > t.tested, "{t:?}");
+}
+
+#[test]
+fn no_false_culls_on_large_images() {
+    // Up to about 2000x1100, non-power-of-two sizes.
+    let t = run(
+        20_000..20_004,
+        |r| (r.random_range(1000..=2000) | 1, r.random_range(500..=1100)),
+        200,
+    );
+    assert!(t.culled > 0, "{t:?}");
+}

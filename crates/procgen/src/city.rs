@@ -165,6 +165,14 @@ pub(crate) fn build(generator: String, target: u64, rng: &mut Rng) -> (GlbBuilde
         }
         b.object("streets", "sidewalks", PAVEMENT, m);
     }
+    // Sidewalks along the city's outer edge.
+    let mut m = Mesh::default();
+    let sw = STREET * 0.5 - ROAD_HALF;
+    m.aabox(Vec3::ZERO, Vec3::new(w, 0.15, sw));
+    m.aabox(Vec3::new(0.0, 0.0, d - sw), Vec3::new(w, 0.15, d));
+    m.aabox(Vec3::new(0.0, 0.0, sw), Vec3::new(sw, 0.15, d - sw));
+    m.aabox(Vec3::new(w - sw, 0.0, sw), Vec3::new(w, 0.15, d - sw));
+    b.object("streets", "sidewalks", PAVEMENT, m);
 
     // Buildings: each block cut into 2-3 x 2-3 lots; heights grow toward
     // the city centre so the skyline varies and tall walls occlude far.

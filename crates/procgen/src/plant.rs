@@ -323,7 +323,12 @@ pub(crate) fn build(generator: String, target: u64, rng: &mut Rng) -> (GlbBuilde
         let top = p.a + (p.b - p.a) * t;
         let r = (p.r * 0.5).max(0.05);
         let side = if rng.chance(0.5) { 1.0 } else { -1.0 };
-        let lateral = p.aisle + side * rng.rangef(3.5, 6.0);
+        let mut lateral = p.aisle + side * rng.rangef(3.5, 6.0);
+        let extent = if (p.b - p.a).z.abs() > 0.0 { w } else { d };
+        if lateral < 0.5 || lateral > extent - 0.5 {
+            // Edge aisle: branch inward, never through the outer wall.
+            lateral = 2.0 * p.aisle - lateral;
+        }
         let along_z = (p.b - p.a).z.abs() > 0.0;
         let out = if along_z {
             Vec3::new(lateral, top.y, top.z)

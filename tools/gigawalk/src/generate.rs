@@ -1,8 +1,119 @@
-//! `gigawalk generate`: procedural test scenes (work in progress, issue 3).
+//! `gigawalk generate`: procedural test scenes (glTF binary) and camera
+//! paths through them; the work is in gigawalk-procgen.
+
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use gigawalk_procgen::{generate, Kind, DEFAULT_POSES};
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scene kind: plant (industrial plant, the paper's Power Plant), city
+    /// (blocks of tall buildings, street furniture) or forest (many small
+    /// occluders, deep visibility)
+    #[arg(value_parser = parse_kind)]
+    kind: Kind,
+    /// Triangles to generate, approximately (the summary says exactly how
+    /// many); accepts suffixes k and M, e.g. 500k, 2M
+    #[arg(long, default_value = "1M", value_parser = parse_count)]
+    triangles: u64,
+    /// Random seed: the same seed and triangle count give a byte-identical file
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output glTF binary (.glb), written atomically
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write a camera path walking through the scene (docs/path-format.md)
+    #[arg(long)]
+    path: Option<PathBuf>,
+    /// Number of poses in the camera path, at 10 poses per second
+    #[arg(long, default_value_t = DEFAULT_POSES)]
+    poses: usize,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`gigawalk generate` is not implemented yet")
+fn parse_kind(s: &str) -> Result<Kind, String> {
+    s.parse()
+}
+
+/// `1000`, `500k`, `2M`, `1.5M`.
+fn parse_count(s: &str) -> Result<u64, String> {
+    let (num, mul) = match s.as_bytes().last() {
+        Some(b'k' | b'K') => (&s[..s.len() - 1], 1e3),
+        Some(b'm' | b'M') => (&s[..s.len() - 1], 1e6),
+        _ => (s, 1.0),
+    };
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("{s:?} is not a count (e.g. 250000, 500k, 2M)"))?;
+    if !(v.is_finite() && v >= 1.0) || v * mul > 4e9 {
+        return Err(format!("{s:?} is out of range (1 to 4000M)"));
+    }
+    Ok((v * mul).round() as u64)
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let g = generate(args.kind, args.triangles, args.seed, args.poses);
+    let dir = match args.output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir)
+        .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    let bytes = {
+        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        let n = g
+            .write_glb(&mut w)
+            .with_context(|| format!("cannot write {}", args.output.display()))?;
+        w.flush()
+            .with_context(|| format!("cannot write {}", args.output.display()))?;
+        n
+    };
+    tmp.persist(&args.output)
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    if let Some(p) = &args.path {
+        g.path
+            .write(p)
+            .with_context(|| format!("cannot write camera path {}", p.display()))?;
+    }
+    let r = &g.report;
+    let (lo, hi) = (r.bounds.min, r.bounds.max);
+    println!(
+        "{}: {} {} triangles, {} objects, bounds [{:.1} {:.1} {:.1}]..[{:.1} {:.1} {:.1}], {:.1} MB{}, {:.2} s",
+        args.output.display(),
+        args.kind.name(),
+        r.triangles,
+        r.objects,
+        lo.x,
+        lo.y,
+        lo.z,
+        hi.x,
+        hi.y,
+        hi.z,
+        bytes as f64 / 1e6,
+        match &args.path {
+            Some(p) => format!(", path {} ({} poses)", p.display(), g.path.poses.len()),
+            None => String::new(),
+        },
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_count;
+
+    #[test]
+    fn counts_with_suffixes() {
+        assert_eq!(parse_count("1000"), Ok(1000));
+        assert_eq!(parse_count("500k"), Ok(500_000));
+        assert_eq!(parse_count("2M"), Ok(2_000_000));
+        assert_eq!(parse_count("1.5m"), Ok(1_500_000));
+        assert!(parse_count("lots").is_err());
+        assert!(parse_count("0").is_err());
+        assert!(parse_count("-5k").is_err());
+    }
 }

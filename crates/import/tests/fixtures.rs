@@ -111,7 +111,10 @@ fn degenerate_triangles_dropped_and_counted() {
     let m = ok("degenerate.gltf");
     assert_eq!(m.objects[0].triangle_count(), 1);
     assert_eq!(m.stats.degenerate_triangles_dropped, 1);
-    assert!(m.stats.summary(1).contains("1 degenerate triangles dropped"));
+    assert!(m
+        .stats
+        .summary(1)
+        .contains("1 degenerate triangles dropped"));
 }
 
 #[test]
@@ -142,7 +145,10 @@ fn nan_vertex() {
         "nan_vertex.gltf",
         &["nan_vertex.gltf", "mesh \"m\"", "vertex 1", "non-finite"],
     );
-    assert!(matches!(e, ImportError::NonFinitePosition { vertex: 1, .. }));
+    assert!(matches!(
+        e,
+        ImportError::NonFinitePosition { vertex: 1, .. }
+    ));
 }
 
 #[test]

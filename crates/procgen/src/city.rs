@@ -261,7 +261,7 @@ pub(crate) fn build(generator: String, target: u64, rng: &mut Rng) -> (GlbBuilde
             };
         }
         if mesh == f.can {
-            yaw += rng.range(0.0, 6.28);
+            yaw += rng.range(0.0, std::f64::consts::TAU);
         }
         let name = if mesh == f.car { "car" } else { "furniture" };
         b.instance(

@@ -394,7 +394,7 @@ pub(crate) fn build(generator: String, target: u64, rng: &mut Rng) -> (GlbBuilde
         let q = DQuat::from_rotation_arc(DVec3::Y, axis.as_dvec3());
         let left = target - b.triangles();
         if left >= valve && rng.chance(0.1) {
-            let q2 = q * DQuat::from_rotation_y(rng.range(0.0, 6.28));
+            let q2 = q * DQuat::from_rotation_y(rng.range(0.0, std::f64::consts::TAU));
             b.instance(
                 "parts",
                 "valve",

@@ -89,6 +89,7 @@ impl Mesh {
     /// Tube (cylinder or frustum) from `a` (radius `r0`) to `b` (radius
     /// `r1 > 0`), `segments` around and `sections` along, with optional flat
     /// caps: `2 * segments * sections` side triangles plus `segments` per cap.
+    #[allow(clippy::too_many_arguments)] // a tube is naturally described by its 7 numbers
     pub fn tube(
         &mut self,
         a: Vec3,

@@ -42,7 +42,7 @@ pub fn walk(grid: &Grid, rng: &mut Rng, poses: usize) -> CameraPath {
     let mut prev = at;
     let mut pos = node_pos(at);
     let mut target = next_node(at, prev, nx, nz, rng);
-    let mut speed = WALK_SPEED;
+    let mut speed = WALK_SPEED * rng.range(0.85, 1.15);
     let d = node_pos(target) - pos;
     let mut yaw = heading(d).unwrap_or(0.0);
     let mut pause = 0.0f64;

@@ -1,0 +1,24 @@
+//! gigawalk's GPU side, the only crate that names wgpu.
+//!
+//! Main types: [`GpuContext`] (one device; [`open_devices`] opens the two
+//! the pipeline uses), [`HostGeometry`] / [`ResidentGeometry`] (the scene's
+//! geometry in a few large buffers per device, behind the [`Residency`]
+//! trait), [`DepthPass`] (OR: occluder depth, read back for the HZB) and
+//! [`VisiblePass`] (RVG: colour + depth of the visible set, drawn in
+//! chunks). Every draw is camera-relative: a pass gets the camera position
+//! in f64 and each LOD's origin minus it, rounded once to f32.
+//!
+//! Conventions: reversed-Z with an infinite far plane (depth 1 at the near
+//! plane, 0 at infinity; clear to 0, keep the greater); images read back
+//! row-major with row 0 at the top.
+
+mod context;
+mod passes;
+mod residency;
+pub mod shader_types;
+
+pub use context::{devices_or_skip, open_devices, GpuContext, GpuError};
+pub use passes::{
+    DepthImage, DepthPass, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
+};
+pub use residency::{HostGeometry, LodRange, Residency, ResidentGeometry};

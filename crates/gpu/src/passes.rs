@@ -1,0 +1,555 @@
+//! The two render passes: OR (depth of the occluders, read back for the
+//! HZB) and RVG (colour + depth of the visible set, to an offscreen target
+//! or a window). Both draw a list of LODs camera-relatively.
+
+use glam::{DVec3, Mat4, Vec3};
+
+use crate::residency::{LodRange, Residency};
+use crate::shader_types::{self, DrawInstance, FrameUniforms};
+use crate::{GpuContext, GpuError};
+
+/// What a pass needs to know about the camera. `view_proj` has no
+/// translation: positions are made camera-relative per draw, in f64.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub eye: DVec3,
+    pub view_proj: Mat4,
+    /// Direction the camera looks (the head light's direction).
+    pub forward: Vec3,
+}
+
+/// A depth image as read back: row-major, row 0 at the top, reversed-Z
+/// (1 at the near plane, 0 = nothing drawn / infinitely far).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthImage {
+    pub width: u32,
+    pub height: u32,
+    pub depth: Vec<f32>,
+}
+
+/// A colour image (sRGB RGBA8, row 0 at the top) with its depth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameImage {
+    pub colour: Vec<u8>,
+    pub depth: DepthImage,
+}
+
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// Reversed-Z: clear to 0 (infinitely far), keep the greater depth.
+const DEPTH_COMPARE: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+
+/// Uniforms, per-draw instance data and the draw loop shared by both passes.
+struct Drawer {
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    layout: wgpu::PipelineLayout,
+    instances: wgpu::Buffer,
+    /// Instances already used this frame (chunks append).
+    used: u64,
+}
+
+impl Drawer {
+    fn new(ctx: &GpuContext, label: &str) -> Drawer {
+        let d = &ctx.device;
+        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let uniforms = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout: &bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            }],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        Drawer {
+            uniforms,
+            bind_group,
+            layout,
+            instances: instance_buffer(ctx, 1024),
+            used: 0,
+        }
+    }
+
+    fn begin(&mut self, ctx: &GpuContext, view: &View, flat: bool) {
+        let u = FrameUniforms {
+            view_proj: view.view_proj.to_cols_array_2d(),
+            light_dir: view
+                .forward
+                .normalize_or(Vec3::NEG_Z)
+                .extend(0.0)
+                .to_array(),
+            params: [0.25, if flat { 1.0 } else { 0.0 }, 0.0, 0.0],
+        };
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        self.used = 0;
+    }
+
+    /// Writes this chunk's instance data; returns the draws with their instance index.
+    fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &View,
+        residency: &dyn Residency,
+        lods: &[u32],
+    ) -> Vec<(LodRange, u32)> {
+        let draws: Vec<LodRange> = lods.iter().filter_map(|&l| residency.range(l)).collect();
+        let size = std::mem::size_of::<DrawInstance>() as u64;
+        let needed = self.used + draws.len() as u64;
+        if needed * size > self.instances.size() {
+            // Earlier chunks keep the old buffer alive until they finish.
+            self.instances = instance_buffer(ctx, needed.next_power_of_two().max(1024));
+            self.used = 0;
+        }
+        let data: Vec<DrawInstance> = draws
+            .iter()
+            .map(|r| DrawInstance {
+                offset: (r.origin - view.eye).as_vec3().extend(0.0).to_array(),
+            })
+            .collect();
+        ctx.queue.write_buffer(
+            &self.instances,
+            self.used * size,
+            bytemuck::cast_slice(&data),
+        );
+        let first = self.used as u32;
+        self.used += draws.len() as u64;
+        draws
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| (r, first + i as u32))
+            .collect()
+    }
+
+    fn record(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        residency: &dyn Residency,
+        draws: &[(LodRange, u32)],
+    ) {
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(1, self.instances.slice(..));
+        let mut bound = None;
+        for (r, instance) in draws {
+            if bound != Some(r.buffer) {
+                let (v, i) = residency.buffers(r.buffer);
+                pass.set_vertex_buffer(0, v.slice(..));
+                pass.set_index_buffer(i.slice(..), wgpu::IndexFormat::Uint32);
+                bound = Some(r.buffer);
+            }
+            pass.draw_indexed(
+                r.first_index..r.first_index + r.index_count,
+                r.base_vertex,
+                *instance..*instance + 1,
+            );
+        }
+    }
+}
+
+fn instance_buffer(ctx: &GpuContext, count: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("draw instances"),
+        size: count * std::mem::size_of::<DrawInstance>() as u64,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn target(
+    ctx: &GpuContext,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+fn pipeline(
+    ctx: &GpuContext,
+    drawer: &Drawer,
+    label: &str,
+    wgsl: &str,
+    colour: Option<wgpu::TextureFormat>,
+) -> wgpu::RenderPipeline {
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(shader_types::shader_source(wgsl).into()),
+        });
+    let targets = [colour.map(|format| wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
+    ctx.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&drawer.layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[
+                    Some(shader_types::vertex_layout()),
+                    Some(shader_types::instance_layout()),
+                ],
+            },
+            primitive: wgpu::PrimitiveState {
+                // No culling: imported winding is not trusted, and OR must
+                // write every occluder's depth.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(DEPTH_COMPARE),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: colour.map(|_| wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// OR: renders occluders' depth at its own resolution and reads it back.
+pub struct DepthPass {
+    drawer: Drawer,
+    pipeline: wgpu::RenderPipeline,
+    depth: wgpu::Texture,
+    width: u32,
+    height: u32,
+}
+
+impl DepthPass {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> DepthPass {
+        let drawer = Drawer::new(ctx, "occluder depth");
+        let pipeline = pipeline(
+            ctx,
+            &drawer,
+            "occluder depth",
+            shader_types::OCCLUDER_DEPTH_WGSL,
+            None,
+        );
+        DepthPass {
+            depth: target(
+                ctx,
+                "occluder depth",
+                width.max(1),
+                height.max(1),
+                DEPTH_FORMAT,
+            ),
+            drawer,
+            pipeline,
+            width: width.max(1),
+            height: height.max(1),
+        }
+    }
+
+    /// Draws the LODs' depth and waits for the readback (call it on the
+    /// OR thread: it blocks only that stage).
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        residency: &dyn Residency,
+        view: &View,
+        lods: &[u32],
+    ) -> Result<DepthImage, GpuError> {
+        self.drawer.begin(ctx, view, false);
+        let draws = self.drawer.prepare(ctx, view, residency, lods);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let dv = self.depth.create_view(&Default::default());
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("occluder depth"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(depth_attachment(&dv, true)),
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.pipeline);
+            self.drawer.record(&mut pass, residency, &draws);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let depth = read_depth(ctx, &self.depth, self.width, self.height)?;
+        Ok(depth)
+    }
+}
+
+fn depth_attachment(
+    view: &wgpu::TextureView,
+    clear: bool,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: if clear {
+                wgpu::LoadOp::Clear(0.0)
+            } else {
+                wgpu::LoadOp::Load
+            },
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    }
+}
+
+/// RVG: draws the visible list in chunks as it arrives, to an offscreen
+/// colour target (or a caller-provided view, e.g. a window's surface).
+pub struct VisiblePass {
+    drawer: Drawer,
+    pipeline: wgpu::RenderPipeline,
+    colour: wgpu::Texture,
+    depth: wgpu::Texture,
+    width: u32,
+    height: u32,
+    /// Whether the current frame's targets have been cleared yet.
+    cleared: bool,
+    view: Option<View>,
+}
+
+/// Background colour (linear): a dark blue-grey, so black geometry shows.
+const BACKGROUND: wgpu::Color = wgpu::Color {
+    r: 0.02,
+    g: 0.025,
+    b: 0.035,
+    a: 1.0,
+};
+
+impl VisiblePass {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> VisiblePass {
+        let (width, height) = (width.max(1), height.max(1));
+        let drawer = Drawer::new(ctx, "visible");
+        let pipeline = pipeline(
+            ctx,
+            &drawer,
+            "visible",
+            shader_types::VISIBLE_WGSL,
+            Some(COLOUR_FORMAT),
+        );
+        VisiblePass {
+            colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
+            depth: target(ctx, "visible depth", width, height, DEPTH_FORMAT),
+            drawer,
+            pipeline,
+            width,
+            height,
+            cleared: false,
+            view: None,
+        }
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
+    pub fn begin(&mut self, ctx: &GpuContext, view: &View) {
+        self.drawer.begin(ctx, view, false);
+        self.cleared = false;
+        self.view = Some(*view);
+    }
+
+    /// Draws one chunk of the frame's visible LODs and submits it, so the
+    /// GPU works while the rest of the list is still being culled.
+    pub fn draw(&mut self, ctx: &GpuContext, residency: &dyn Residency, lods: &[u32]) {
+        let view = self.view.expect("VisiblePass::begin before draw");
+        let draws = self.drawer.prepare(ctx, &view, residency, lods);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let cv = self.colour.create_view(&Default::default());
+            let dv = self.depth.create_view(&Default::default());
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("visible"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &cv,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: if self.cleared {
+                            wgpu::LoadOp::Load
+                        } else {
+                            wgpu::LoadOp::Clear(BACKGROUND)
+                        },
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(depth_attachment(&dv, !self.cleared)),
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.pipeline);
+            self.drawer.record(&mut pass, residency, &draws);
+        }
+        self.cleared = true;
+        ctx.queue.submit([enc.finish()]);
+    }
+
+    /// Ends the frame: waits until the GPU is done and optionally reads
+    /// back colour and depth.
+    pub fn finish(
+        &mut self,
+        ctx: &GpuContext,
+        read_back: bool,
+    ) -> Result<Option<FrameImage>, GpuError> {
+        if !self.cleared {
+            // An empty frame still clears its targets.
+            self.draw(ctx, &NoGeometry, &[]);
+        }
+        self.view = None;
+        if !read_back {
+            ctx.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| device_error(ctx, e))?;
+            ctx.check()?;
+            return Ok(None);
+        }
+        let colour = read_texture(
+            ctx,
+            &self.colour,
+            self.width,
+            self.height,
+            4,
+            wgpu::TextureAspect::All,
+        )?;
+        let depth = read_depth(ctx, &self.depth, self.width, self.height)?;
+        Ok(Some(FrameImage { colour, depth }))
+    }
+}
+
+struct NoGeometry;
+impl Residency for NoGeometry {
+    fn range(&self, _: u32) -> Option<LodRange> {
+        None
+    }
+    fn buffers(&self, _: u32) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        unreachable!("no geometry is ever bound")
+    }
+}
+
+fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
+    GpuError::Device {
+        device: ctx.name.clone(),
+        message: e.to_string(),
+    }
+}
+
+fn read_depth(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    w: u32,
+    h: u32,
+) -> Result<DepthImage, GpuError> {
+    let bytes = read_texture(ctx, tex, w, h, 4, wgpu::TextureAspect::DepthOnly)?;
+    Ok(DepthImage {
+        width: w,
+        height: h,
+        depth: bytemuck::pod_collect_to_vec(&bytes),
+    })
+}
+
+/// Copies a texture into a mappable buffer, waits, and returns its rows
+/// tightly packed (the copy pads rows to 256 bytes).
+fn read_texture(
+    ctx: &GpuContext,
+    tex: &wgpu::Texture,
+    w: u32,
+    h: u32,
+    bpp: u32,
+    aspect: wgpu::TextureAspect,
+) -> Result<Vec<u8>, GpuError> {
+    let row = w * bpp;
+    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: padded as u64 * h as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture: tex,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buf,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    ctx.queue.submit([enc.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    buf.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| device_error(ctx, e))?;
+    ctx.check()?;
+    rx.recv()
+        .map_err(|e| device_error(ctx, e))?
+        .map_err(|e| device_error(ctx, e))?;
+    let data = buf.get_mapped_range(..).map_err(|e| device_error(ctx, e))?;
+    let mut out = Vec::with_capacity((row * h) as usize);
+    for y in 0..h as usize {
+        let start = y * padded as usize;
+        out.extend_from_slice(&data[start..start + row as usize]);
+    }
+    drop(data);
+    buf.unmap();
+    Ok(out)
+}

@@ -1,0 +1,157 @@
+//! GPU passes on a real adapter (lavapipe in CI): depth values follow the
+//! reversed-Z convention, colour shows the scene, and a scene 10^7 units
+//! from the origin renders like the same scene at the origin.
+
+use gigawalk_cull::Camera;
+use gigawalk_gpu::{devices_or_skip, DepthPass, HostGeometry, View, VisiblePass};
+use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
+use glam::{DVec3, Vec3};
+
+/// A red 2x2x1 box 5 units ahead on -Z, and a green 6x6x1 box 20 ahead and
+/// to the right (x 3..9), all shifted by `shift`.
+fn write_scene(path: &std::path::Path, shift: DVec3) {
+    let boxes = [
+        (
+            Aabb::new(DVec3::new(-1.0, -1.0, -6.0), DVec3::new(1.0, 1.0, -5.0)),
+            [255, 0, 0, 255],
+        ),
+        (
+            Aabb::new(DVec3::new(3.0, -3.0, -21.0), DVec3::new(9.0, 3.0, -20.0)),
+            [0, 255, 0, 255],
+        ),
+    ];
+    let mut w = SceneWriter::create(path).unwrap();
+    let mut nodes = vec![Node {
+        bounds: Aabb::EMPTY,
+        parent: NO_NODE,
+        first_child: 1,
+        child_count: 2,
+        first_lod: 0,
+        lod_count: 0,
+    }];
+    for (i, (b, c)) in boxes.iter().enumerate() {
+        let b = Aabb::new(b.min + shift, b.max + shift);
+        w.add_lod(&box_mesh(&b, *c), 0.0).unwrap();
+        nodes[0].bounds = nodes[0].bounds.union(&b);
+        nodes.push(Node {
+            bounds: b,
+            parent: 0,
+            first_child: 0,
+            child_count: 0,
+            first_lod: i as u32,
+            lod_count: 1,
+        });
+    }
+    w.finish(nodes, Provenance::default()).unwrap();
+}
+
+fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {
+    let e = b.extent().as_vec3();
+    let corner = |i: u32| {
+        Vec3::new(
+            if i & 1 != 0 { e.x } else { 0.0 },
+            if i & 2 != 0 { e.y } else { 0.0 },
+            if i & 4 != 0 { e.z } else { 0.0 },
+        )
+    };
+    #[rustfmt::skip]
+    let indices = vec![0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5];
+    LodMesh {
+        origin: b.min,
+        positions: (0..8).map(|i| corner(i).to_array()).collect(),
+        normals: (0..8)
+            .map(|i| (corner(i) - e * 0.5).normalize().to_array())
+            .collect(),
+        colours: Colours::Uniform(colour),
+        indices,
+    }
+}
+
+fn view(shift: DVec3, w: u32, h: u32) -> View {
+    let cam = Camera::look_at(
+        shift,
+        shift + DVec3::NEG_Z,
+        60f64.to_radians(),
+        w as f64 / h as f64,
+        0.1,
+    );
+    View {
+        eye: cam.position,
+        view_proj: cam.view_projection_rel(),
+        forward: cam.forward().as_vec3(),
+    }
+}
+
+/// Renders (depth pass image, visible colour, visible depth) of the scene shifted by `shift`.
+fn render(shift: DVec3) -> Option<(Vec<f32>, Vec<u8>, Vec<f32>)> {
+    let ctx = devices_or_skip(1, "gpu render").map(|mut d| d.remove(0))?;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    write_scene(&path, shift);
+    let scene = SceneReader::open(&path).unwrap();
+    let geometry = HostGeometry::load(&scene, 1 << 20)
+        .unwrap()
+        .upload(&ctx)
+        .unwrap();
+    let (w, h) = (64, 48);
+    let v = view(shift, w, h);
+    let mut or = DepthPass::new(&ctx, w, h);
+    let depth = or.render(&ctx, &geometry, &v, &[0, 1]).unwrap();
+    assert_eq!((depth.width, depth.height), (w, h));
+    let mut rvg = VisiblePass::new(&ctx, w, h);
+    rvg.begin(&ctx, &v);
+    rvg.draw(&ctx, &geometry, &[1]); // far box first, in its own chunk
+    rvg.draw(&ctx, &geometry, &[0]);
+    let frame = rvg.finish(&ctx, true).unwrap().unwrap();
+    Some((depth.depth, frame.colour, frame.depth.depth))
+}
+
+#[test]
+fn depth_and_colour_follow_the_conventions() {
+    let Some((depth, colour, vdepth)) = render(DVec3::ZERO) else {
+        return;
+    };
+    let (w, h) = (64usize, 48usize);
+    let at = |x: usize, y: usize| y * w + x;
+    // Centre: the near box's front face at distance 5: reversed-Z depth = near / 5.
+    let centre = depth[at(w / 2, h / 2)];
+    assert!((centre - 0.1 / 5.0).abs() < 1e-5, "centre depth {centre}");
+    // Corner: nothing drawn, cleared to 0 (infinitely far).
+    assert_eq!(depth[at(0, 0)], 0.0);
+    // The visible pass agrees with the depth pass.
+    assert_eq!(vdepth, depth);
+    // Centre pixel is red; to the right, where tan(x) = 0.3, only the far green box is.
+    let px = |x: usize, y: usize| &colour[4 * at(x, y)..4 * at(x, y) + 4];
+    let c = px(w / 2, h / 2);
+    assert!(c[0] > 100 && c[1] < 30, "centre colour {c:?}");
+    let f = 1.0 / 30f32.to_radians().tan();
+    let x = ((0.3 * f / (w as f32 / h as f32) + 1.0) / 2.0 * w as f32) as usize;
+    let g = px(x, h / 2);
+    assert!(g[1] > 100 && g[0] < 30, "colour at x = {x}: {g:?}");
+    assert!((depth[at(x, h / 2)] - 0.1 / 20.0).abs() < 1e-6);
+    // Top row, background.
+    let bg = px(w / 2, 0);
+    assert!(bg[0] < 60 && bg[1] < 60 && bg[2] < 70, "background {bg:?}");
+}
+
+#[test]
+fn far_from_origin_renders_like_the_origin() {
+    let Some(near) = render(DVec3::ZERO) else {
+        return;
+    };
+    let far = render(DVec3::new(1.0e7, -3.0e7, 2.0e7)).unwrap();
+    let max_diff = near
+        .0
+        .iter()
+        .zip(&far.0)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(max_diff < 1e-6, "depth differs by {max_diff}");
+    let differing = near
+        .1
+        .chunks(4)
+        .zip(far.1.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differing, 0, "colour pixels differ");
+}

@@ -1,0 +1,25 @@
+// Shared by occluder_depth.wgsl and visible.wgsl (concatenated in front of
+// each by crates/gpu). Mirrors crates/gpu/src/shader_types.rs: a test checks
+// sizes and offsets with naga.
+
+// Per-frame uniforms. Positions reaching the GPU are camera-relative.
+struct FrameUniforms {
+    // Projection x rotation only: the camera sits at the origin.
+    view_proj: mat4x4<f32>,
+    // Direction the head light shines (the view direction), world axes.
+    light_dir: vec4<f32>,
+    // x: ambient term, y: 1 to draw flat grey (wireframe/debug), zw: unused.
+    params: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> frame: FrameUniforms;
+
+// Octahedral decoding of snorm16x2 normals (crates/scene/src/mesh.rs).
+fn decode_normal(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        let s = select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0));
+        n = vec3<f32>((1.0 - abs(n.yx)) * s, n.z);
+    }
+    return normalize(n);
+}

@@ -1,0 +1,36 @@
+// RVG: colour + depth with a head light, so shapes read clearly.
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) colour: vec4<f32>,
+};
+
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    let lo = c / 12.92;
+    let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(hi, lo, c <= vec3<f32>(0.04045));
+}
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec2<f32>,
+    @location(2) colour: vec4<f32>,
+    @location(3) offset: vec4<f32>,
+) -> VsOut {
+    var out: VsOut;
+    out.clip = frame.view_proj * vec4<f32>(position + offset.xyz, 1.0);
+    out.normal = decode_normal(normal);
+    out.colour = vec4<f32>(srgb_to_linear(colour.rgb), colour.a);
+    return out;
+}
+
+@fragment
+fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    // Two-sided: imported models' winding and normals are not trusted.
+    let lambert = abs(dot(normalize(in.normal), -frame.light_dir.xyz));
+    let ambient = frame.params.x;
+    let base = select(in.colour.rgb, vec3<f32>(0.6), frame.params.y > 0.5);
+    return vec4<f32>(base * (ambient + (1.0 - ambient) * lambert), 1.0);
+}

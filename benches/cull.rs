@@ -181,6 +181,18 @@ fn cull(c: &mut Criterion) {
                 .count()
         })
     });
+    // The same boxes against a 64x64 HZB that fits in L1: the test's own
+    // cost, without the cache misses of a 1080p pyramid.
+    let small = Hzb::build(64, 64, &[0.001; 64 * 64], Reduction::Farthest).unwrap();
+    let small_test = HzbOcclusion::new(&small);
+    g.bench_function("hzb_occlusion_64x64_in_cache", |b| {
+        b.iter(|| {
+            boxes
+                .iter()
+                .filter(|bx| small_test.is_visible(&view, black_box(bx)))
+                .count()
+        })
+    });
     g.finish();
 
     let mut g = c.benchmark_group("traversal_100k");

@@ -66,6 +66,8 @@ pub struct ChainParams {
     pub ratio: f64,
     /// Stop once a level has at most this many triangles.
     pub floor: usize,
+    /// Levels 1..=collapse_levels of a leaf use edge collapse, the rest sloppy.
+    pub collapse_levels: usize,
 }
 
 /// The full-detail mesh of a final object, relative to `origin`, with
@@ -146,7 +148,8 @@ fn chain(first: Lod, p: &ChainParams, sloppy: bool) -> Vec<Lod> {
         let target = target_triangles(n, p);
         let limit = (MIN_SHRINK * n as f64) as usize;
         let shrunk = |r: &Option<(WorkMesh, f32)>| matches!(r, Some((m, _)) if m.triangles() <= limit && m.triangles() > 0);
-        let mut next = if sloppy { None } else { simplify(mesh, target, false) };
+        let collapse = !sloppy && lods.len() <= p.collapse_levels;
+        let mut next = if collapse { simplify(mesh, target, false) } else { None };
         if !shrunk(&next) {
             next = simplify(mesh, target, true);
         }
@@ -237,7 +240,7 @@ mod tests {
     use crate::parts::initial_parts;
     use crate::test_models::{grid_object, pipe_object};
 
-    const P: ChainParams = ChainParams { ratio: 0.5, floor: 64 };
+    const P: ChainParams = ChainParams { ratio: 0.5, floor: 64, collapse_levels: 1 };
 
     fn mesh_of(o: gigawalk_import::Object) -> WorkMesh {
         let m = Model { objects: vec![o], ..Default::default() };

@@ -201,7 +201,7 @@ pub fn build<S: LodSink>(
     let max_dim = parts.iter().map(|p| p.bounds.extent().max_element()).fold(0.0, f64::max);
     let resolved = resolved.with_d(params, max_dim);
     let boxes: Vec<Aabb> = parts.iter().map(|p| p.bounds).collect();
-    let cp = ClusterParams { d: resolved.d, v: resolved.v, k: resolved.k, min_extent: resolved.min_extent };
+    let cp = ClusterParams { d: params.d, v: resolved.v, k: params.k, min_extent: resolved.min_extent };
     let (clusters, edges) = cluster::cluster(&boxes, &cp);
     stats.cluster_edges = edges;
     let parts = merge_clusters(parts, &clusters);
@@ -226,7 +226,7 @@ pub fn build<S: LodSink>(
 
     // 6. LODs and HLODs (Section 4.3), bottom-up.
     clock.start(Phase::Hlod, tree.len() as u64);
-    let chain = ChainParams { ratio: params.lod_ratio, floor: params.lod_floor as usize };
+    let chain = ChainParams { ratio: params.lod_ratio, floor: params.lod_floor as usize, collapse_levels: params.collapse_levels as usize };
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
     let mut coarse: Vec<Option<Lod>> = vec![None; tree.len()];
     let mut emit = |ni: usize, lods: Vec<(LodMesh, f32)>, per_level: &mut Vec<u64>| -> Result<(), PreprocessError> {

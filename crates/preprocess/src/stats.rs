@@ -39,6 +39,8 @@ pub struct Stats {
     /// Geometry of the input as glTF stores it: f32 positions and normals,
     /// f32 RGBA vertex colours when present, u32 indices.
     pub raw_input_bytes: u64,
+    /// Size of the input file, when the caller read one (0 otherwise).
+    pub input_file_bytes: u64,
     /// Size of the scene file written; 0 when nothing was written.
     pub output_bytes: u64,
     /// `output_bytes / raw_input_bytes`.

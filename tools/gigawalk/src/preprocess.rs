@@ -1,8 +1,172 @@
-//! `gigawalk preprocess`: model -> scene file (work in progress, issue 4).
+//! `gigawalk preprocess`: model -> scene file. Argument parsing, progress
+//! display and the stats table; the work is in gigawalk-preprocess.
+
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use gigawalk_preprocess::{preprocess, Params, Phase, Progress};
+use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Input model: glTF 2.0 (.gltf, .glb) or Wavefront OBJ (.obj)
+    input: PathBuf,
+    /// Output scene file (.gwk), written atomically: nothing appears on failure
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the run's statistics as JSON to this file
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Partition-I: split objects with more triangles than this (paper 4.2.1, 6.3.1: t1 = 1000)
+    #[arg(long, default_value_t = 1000)]
+    t1: u32,
+    /// Partition-I: ...and a box diagonal above this fraction of the model's diagonal (6.3.1: s1 = 0.1 x model size)
+    #[arg(long, default_value_t = 0.1)]
+    s1: f64,
+    /// Partition-I: ...or a box aspect ratio (largest/smallest side) above this (6.3.1: r1 = 2.5)
+    #[arg(long, default_value_t = 2.5)]
+    r1: f64,
+    /// Clustering: objects closer than this fraction of the largest object box dimension share an edge (4.2.2, 6.3.1: D = 0.1 x max box dimension)
+    #[arg(long, default_value_t = 0.1)]
+    d: f64,
+    /// Clustering: largest cluster box volume as a fraction of the scene box volume (6.3.1: V = 1e-3 x scene volume)
+    #[arg(long, default_value_t = 1e-3)]
+    v: f64,
+    /// Clustering: Felzenszwalb-Huttenlocher K, in thousandths of D (6.3.1: K = 1500; see docs/preprocess.md for the units)
+    #[arg(long, default_value_t = 1500.0)]
+    k: f64,
+    /// Partition-II triangle threshold as a multiple of t1 (4.2.3, 6.3.1: t2 = 10 t1)
+    #[arg(long, default_value_t = 10.0)]
+    t2_factor: f64,
+    /// Partition-II size threshold as a multiple of s1 (6.3.1: s2 = 2 s1)
+    #[arg(long, default_value_t = 2.0)]
+    s2_factor: f64,
+    /// Partition-II aspect threshold as a multiple of r1 (6.3.1: r2 = 0.5 r1)
+    #[arg(long, default_value_t = 0.5)]
+    r2_factor: f64,
+    /// LODs (4.3): each level aims for this fraction of the previous level's triangles
+    #[arg(long, default_value_t = 0.5)]
+    lod_ratio: f64,
+    /// LODs (4.3): a chain stops once a level has at most this many triangles
+    #[arg(long, default_value_t = 64)]
+    lod_floor: u32,
+    /// LODs (4.3): leaf levels 1..=N use edge collapse (meshopt simplify), coarser ones sloppy vertex clustering
+    #[arg(long, default_value_t = 1)]
+    collapse_levels: u32,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`gigawalk preprocess` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let params = Params {
+        t1: args.t1,
+        s1: args.s1,
+        r1: args.r1,
+        d: args.d,
+        v: args.v,
+        k: args.k,
+        t2_factor: args.t2_factor,
+        s2_factor: args.s2_factor,
+        r2_factor: args.r2_factor,
+        lod_ratio: args.lod_ratio,
+        lod_floor: args.lod_floor,
+        collapse_levels: args.collapse_levels,
+    };
+    // Bad flags fail before the (possibly long) import.
+    params.validate().context("bad parameter")?;
+
+    let progress = Display::new();
+    let t = Instant::now();
+    progress.line(&format!("importing {}", args.input.display()));
+    let model = gigawalk_import::import(&args.input).with_context(|| format!("cannot import {}", args.input.display()))?;
+    let import_secs = t.elapsed().as_secs_f64();
+    let kept: u64 = model.objects.iter().map(|o| o.triangle_count() as u64).sum();
+    progress.line(&format!(
+        "import: {} objects, {kept} triangles ({} degenerate dropped) in {import_secs:.2} s",
+        model.objects.len(),
+        model.stats.degenerate_triangles_dropped
+    ));
+    for w in &model.stats.warnings {
+        tracing::warn!("{w}");
+    }
+
+    let import_dropped = model.stats.degenerate_triangles_dropped;
+    let source = args.input.display().to_string();
+    let mut stats = preprocess(&model, &params, &args.output, &source, &progress)
+        .with_context(|| format!("cannot preprocess {} into {}", args.input.display(), args.output.display()))?;
+    drop(model);
+    stats.phase_seconds.insert(0, ("import".into(), import_secs));
+    stats.input_file_bytes = std::fs::metadata(&args.input).map(|m| m.len()).unwrap_or(0);
+    // Triangles the importer dropped never reach the preprocessor; count them too.
+    stats.degenerate_dropped += import_dropped;
+    stats.input_triangles += import_dropped;
+    stats.finish();
+
+    print!("{}", stats.table());
+    if stats.input_file_bytes > 0 {
+        println!(
+            "input file        {:.1} MiB; scene / input file = {:.2}x",
+            stats.input_file_bytes as f64 / (1024.0 * 1024.0),
+            stats.output_bytes as f64 / stats.input_file_bytes.max(1) as f64
+        );
+    }
+    println!("wrote {}", args.output.display());
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
+        std::fs::write(path, json + "\n").with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Progress on stderr: an indicatif bar per phase on a terminal, one plain
+/// line per phase otherwise (logs, CI).
+struct Display {
+    terminal: bool,
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Display {
+    fn new() -> Self {
+        Display { terminal: std::io::stderr().is_terminal(), bar: Mutex::new(None) }
+    }
+
+    fn line(&self, s: &str) {
+        eprintln!("{s}");
+    }
+}
+
+impl Progress for Display {
+    fn start(&self, phase: Phase, total: u64) {
+        if !self.terminal {
+            return;
+        }
+        let bar = if total > 0 { ProgressBar::new(total) } else { ProgressBar::new_spinner() };
+        let template = if total > 0 { "{prefix:>13} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}" } else { "{prefix:>13} {spinner} {elapsed_precise}" };
+        if let Ok(style) = ProgressStyle::with_template(template) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar.set_prefix(phase.name());
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        if let Ok(mut b) = self.bar.lock() {
+            *b = Some(bar);
+        }
+    }
+
+    fn advance(&self, n: u64) {
+        if let Ok(b) = self.bar.lock() {
+            if let Some(bar) = b.as_ref() {
+                bar.inc(n);
+            }
+        }
+    }
+
+    fn finish(&self, phase: Phase, seconds: f64) {
+        if let Ok(mut b) = self.bar.lock() {
+            if let Some(bar) = b.take() {
+                bar.finish_and_clear();
+            }
+        }
+        eprintln!("{:>13} done in {seconds:.2} s", phase.name());
+    }
 }

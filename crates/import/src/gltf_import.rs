@@ -73,6 +73,22 @@ pub(crate) fn import_gltf(
     };
     let root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json_bytes)
         .map_err(|e| malformed(format!("{e}")))?;
+    // gltf-json's primitive validation indexes the accessor list with the
+    // POSITION index before checking it (gltf-json 1.4.1, mesh.rs), so a
+    // bad index would panic there: check every attribute index first.
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            for index in prim.attributes.values() {
+                if index.value() >= root.accessors.len() {
+                    return Err(malformed(format!(
+                        "meshes[{mi}].primitives[{pi}].attributes: accessor {} out of range ({} accessors)",
+                        index.value(),
+                        root.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
     let doc = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let mut m = String::new();

@@ -261,3 +261,43 @@ fn garbage_bytes_are_errors_not_panics() {
         assert!(import_glb_bytes(bytes, "garbage").is_err());
     }
 }
+
+/// A poor man's fuzzer for CI (cargo-fuzz targets live in fuzz/): flip,
+/// truncate and overwrite bytes of the good fixtures; every result must be
+/// a model or an error, never a panic.
+#[test]
+fn mutated_fixtures_never_panic() {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let glb = std::fs::read(data("cube.glb")).unwrap();
+    let gltf = std::fs::read(data("modes.gltf")).unwrap();
+    let obj = std::fs::read(data("two_groups.obj")).unwrap();
+    // GIGAWALK_MUTATION_ROUNDS=1000000 for a longer hunt.
+    let rounds: usize = std::env::var("GIGAWALK_MUTATION_ROUNDS")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(6000);
+    for round in 0..rounds {
+        let src = [&glb, &gltf, &obj][round % 3];
+        let mut bytes = src.clone();
+        for _ in 0..1 + next() % 4 {
+            let at = (next() as usize) % bytes.len();
+            match next() % 4 {
+                0 => bytes[at] ^= 1 << (next() % 8),
+                1 => bytes[at] = b"0123456789-.e,:[]{}\" nf/"[(next() % 24) as usize],
+                2 => bytes[at] = next() as u8,
+                _ => bytes.truncate(at.max(1)),
+            }
+        }
+        if round % 3 == 2 {
+            let _ = import_obj_str(&String::from_utf8_lossy(&bytes), "mutated.obj");
+        } else {
+            let _ = import_glb_bytes(&bytes, "mutated");
+        }
+    }
+}

@@ -2,3 +2,4 @@
 //! benches (benches/): scene builders and reference computations.
 
 pub mod raster;
+pub mod scenes;

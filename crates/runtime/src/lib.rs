@@ -1,0 +1,182 @@
+//! gigawalk's runtime: the three stages of the GigaWalk pipeline (paper
+//! Section 5, Figures 3 and 6), the only crate that starts threads.
+//!
+//! Main types: [`Runtime`] (a scene's geometry resident on the devices),
+//! [`RuntimeOptions`] (every knob), [`CameraSource`] (where cameras come
+//! from: a replayed path or live input), [`FrameReport`] (what one frame
+//! did, with timings and optionally its image).
+//!
+//! Pipelined schedule: OR (device A) renders the depth of frame i - lag's
+//! visible set with LODs re-selected for camera i and hands it to STC; STC
+//! builds the HZB, traverses, and streams draw items to RVG as it finds
+//! them, ending each frame with a sentinel that carries the frame number,
+//! the camera and the statistics; RVG (device B) draws the items in chunks.
+//! STC also feeds its visible set back to OR for frame i + lag. Any stage's
+//! error closes its queues, every other stage sees that and stops, and the
+//! run returns the first error.
+
+mod options;
+mod pipeline;
+mod stages;
+
+use std::time::Instant;
+
+pub use gigawalk_cull::{Camera, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport};
+pub use gigawalk_gpu::{FrameImage, GpuContext, GpuError};
+pub use options::{RuntimeOptions, Schedule, Stage};
+
+use gigawalk_gpu::{HostGeometry, ResidentGeometry};
+use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum RuntimeError {
+    #[error("{stage}: {source}")]
+    Gpu { stage: Stage, source: GpuError },
+    #[error("STC, frame {frame}: {source}")]
+    Hzb {
+        frame: u64,
+        source: gigawalk_cull::HzbError,
+    },
+    #[error("bad runtime option: {0}")]
+    Options(String),
+    #[error("{stage}: injected failure at frame {frame}")]
+    Injected { stage: Stage, frame: u64 },
+    #[error("{stage} stage panicked: {message}")]
+    Panic { stage: Stage, message: String },
+    #[error("camera source: {0}")]
+    Camera(String),
+}
+
+/// One camera to render, as a [`CameraSource`] hands it out.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRequest {
+    pub camera: Camera,
+    /// Read back this frame's colour and depth (accuracy checks, screenshots).
+    pub read_back: bool,
+}
+
+/// Where cameras come from: a replayed path, or the viewer's input. Called
+/// on the OR thread once per frame; `None` ends the run.
+pub trait CameraSource: Send {
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, String>;
+}
+
+/// Cameras from a list (a replayed path), one frame each.
+pub struct CameraList {
+    pub cameras: Vec<CameraRequest>,
+}
+
+impl CameraSource for CameraList {
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, String> {
+        Ok(self.cameras.get(frame as usize).copied())
+    }
+}
+
+/// What one frame did.
+#[derive(Clone, Debug)]
+pub struct FrameReport {
+    pub frame: u64,
+    pub camera: Camera,
+    /// When OR took the camera, and when RVG finished the frame.
+    pub sampled_at: Instant,
+    pub finished_at: Instant,
+    /// Whether STC culled against an HZB (false in the startup bypass).
+    pub occlusion_used: bool,
+    pub occluder_items: usize,
+    pub or_ms: f64,
+    pub hzb_ms: f64,
+    /// All of STC, HZB build included.
+    pub stc_ms: f64,
+    pub rvg_ms: f64,
+    pub stats: TraversalStats,
+    /// The nodes drawn and their LODs, in STC's order.
+    pub visible: Vec<DrawItem>,
+    pub image: Option<FrameImage>,
+}
+
+impl FrameReport {
+    /// Camera sampled -> frame finished.
+    pub fn latency_ms(&self) -> f64 {
+        (self.finished_at - self.sampled_at).as_secs_f64() * 1e3
+    }
+}
+
+/// A scene ready to render: its skeleton, and its geometry resident on
+/// each device.
+pub struct Runtime<'s> {
+    skeleton: &'s Skeleton,
+    devices: Vec<GpuContext>,
+    geometry: Vec<ResidentGeometry>,
+    host_bytes: u64,
+}
+
+impl<'s> Runtime<'s> {
+    /// Opens `devices` (1 or 2) wgpu devices and uploads every LOD to each.
+    pub fn new<R: ReadAt>(scene: &'s SceneReader<R>, devices: usize) -> Result<Self, RuntimeError> {
+        let gpu = |source| RuntimeError::Gpu {
+            stage: Stage::Or,
+            source,
+        };
+        let ctxs = gigawalk_gpu::open_devices(devices).map_err(gpu)?;
+        Self::with_devices(scene, ctxs)
+    }
+
+    /// Like [`Runtime::new`] with devices the caller opened.
+    pub fn with_devices<R: ReadAt>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+    ) -> Result<Self, RuntimeError> {
+        let gpu = |source| RuntimeError::Gpu {
+            stage: Stage::Or,
+            source,
+        };
+        let limit = devices
+            .iter()
+            .map(|d| d.device.limits().max_buffer_size)
+            .min()
+            .unwrap_or(1 << 28)
+            .min(1 << 28);
+        let host = HostGeometry::load(scene, limit).map_err(gpu)?;
+        let geometry = devices
+            .iter()
+            .map(|d| host.upload(d))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(gpu)?;
+        Ok(Runtime {
+            skeleton: scene.skeleton(),
+            devices,
+            geometry,
+            host_bytes: host.bytes(),
+        })
+    }
+
+    pub fn skeleton(&self) -> &Skeleton {
+        self.skeleton
+    }
+
+    /// Bytes of geometry resident on each device.
+    pub fn resident_bytes(&self) -> u64 {
+        self.host_bytes
+    }
+
+    pub fn device_names(&self) -> Vec<String> {
+        self.devices.iter().map(|d| d.name.clone()).collect()
+    }
+
+    /// Runs frames until the source ends, `on_frame` returns false, or a
+    /// stage fails. `on_frame` is called on the caller's thread, in frame
+    /// order.
+    pub fn run(
+        &self,
+        opts: &RuntimeOptions,
+        source: &mut dyn CameraSource,
+        on_frame: &mut dyn FnMut(FrameReport) -> bool,
+    ) -> Result<u64, RuntimeError> {
+        opts.validate().map_err(RuntimeError::Options)?;
+        match opts.schedule {
+            Schedule::Sequential => pipeline::run_sequential(self, opts, source, on_frame),
+            Schedule::Pipelined => pipeline::run_pipelined(self, opts, source, on_frame),
+        }
+    }
+}

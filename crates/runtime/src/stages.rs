@@ -1,0 +1,252 @@
+//! The work of each stage for one frame, shared by the pipelined and the
+//! sequential schedule (so both run the same algorithms).
+
+use std::time::Instant;
+
+use gigawalk_cull::{
+    reselect_lods, CullView, DrawItem, Hzb, HzbOcclusion, NoOcclusion, TraversalOptions,
+    TraversalStats, Traverser,
+};
+use gigawalk_gpu::{
+    DepthImage, DepthPass, FrameImage, GpuContext, ResidentGeometry, View, VisiblePass,
+};
+use gigawalk_scene::Skeleton;
+
+use crate::{RuntimeError, RuntimeOptions, Stage};
+
+pub(crate) fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The GPU's view of a cull view: camera-relative matrices, eye in f64.
+pub(crate) fn gpu_view(v: &CullView) -> View {
+    View {
+        eye: v.camera.position,
+        view_proj: v.camera.view_projection_rel(),
+        forward: v.camera.forward().as_vec3(),
+    }
+}
+
+/// Absolute LOD ids (indices into `Skeleton::lods`) of draw items.
+pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
+    items
+        .iter()
+        .map(|i| skeleton.nodes[i.node as usize].first_lod + i.lod)
+        .collect()
+}
+
+pub(crate) fn check_injected(
+    opts: &RuntimeOptions,
+    stage: Stage,
+    frame: u64,
+) -> Result<(), RuntimeError> {
+    match opts.inject_failure {
+        Some((s, f)) if s == stage && f == frame => Err(RuntimeError::Injected { stage, frame }),
+        _ => Ok(()),
+    }
+}
+
+/// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
+/// camera i (Section 5.2), at the occluder resolution.
+pub(crate) struct OrStage<'a> {
+    pub ctx: &'a GpuContext,
+    pub geometry: &'a ResidentGeometry,
+    pub skeleton: &'a Skeleton,
+    pub opts: &'a RuntimeOptions,
+    pub pass: DepthPass,
+}
+
+pub(crate) struct OrOutput {
+    pub depth: Option<DepthImage>,
+    pub occluder_items: usize,
+    pub ms: f64,
+}
+
+impl<'a> OrStage<'a> {
+    pub fn new(
+        ctx: &'a GpuContext,
+        geometry: &'a ResidentGeometry,
+        skeleton: &'a Skeleton,
+        opts: &'a RuntimeOptions,
+    ) -> Self {
+        let (w, h) = opts.occluder_size();
+        OrStage {
+            ctx,
+            geometry,
+            skeleton,
+            opts,
+            pass: DepthPass::new(ctx, w, h),
+        }
+    }
+
+    /// `occluders` is `None` during the startup bypass or with occlusion off.
+    pub fn run(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        occluders: Option<&[DrawItem]>,
+    ) -> Result<OrOutput, RuntimeError> {
+        let _span = tracing::info_span!("OR", frame).entered();
+        let t = Instant::now();
+        check_injected(self.opts, Stage::Or, frame)?;
+        let Some(occluders) = occluders else {
+            return Ok(OrOutput {
+                depth: None,
+                occluder_items: 0,
+                ms: ms_since(t),
+            });
+        };
+        // The same LOD choice STC makes for this camera (conservative mode).
+        let mut items = Vec::with_capacity(occluders.len());
+        reselect_lods(
+            self.skeleton,
+            view,
+            &self.opts.traversal,
+            occluders,
+            &mut |i| items.push(i),
+        );
+        let lods = lod_ids(self.skeleton, &items);
+        let depth = self
+            .pass
+            .render(self.ctx, self.geometry, &gpu_view(view), &lods)
+            .map_err(|source| RuntimeError::Gpu {
+                stage: Stage::Or,
+                source,
+            })?;
+        Ok(OrOutput {
+            depth: Some(depth),
+            occluder_items: items.len(),
+            ms: ms_since(t),
+        })
+    }
+}
+
+/// STC: HZB from OR's depth, then traversal (Algorithm 5.2).
+pub(crate) struct StcStage<'a> {
+    pub skeleton: &'a Skeleton,
+    pub opts: &'a RuntimeOptions,
+    traverser: Traverser,
+    hzb: Hzb,
+}
+
+pub(crate) struct StcOutput {
+    pub stats: TraversalStats,
+    pub visible: Vec<DrawItem>,
+    pub occlusion_used: bool,
+    pub hzb_ms: f64,
+    pub ms: f64,
+}
+
+impl<'a> StcStage<'a> {
+    pub fn new(skeleton: &'a Skeleton, opts: &'a RuntimeOptions) -> Self {
+        StcStage {
+            skeleton,
+            opts,
+            traverser: Traverser::new(),
+            hzb: Hzb::new(),
+        }
+    }
+
+    /// Traverses, handing every item to `emit` as it is found.
+    pub fn run(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        depth: Option<&DepthImage>,
+        emit: &mut dyn FnMut(DrawItem),
+    ) -> Result<StcOutput, RuntimeError> {
+        let _span = tracing::info_span!("STC", frame).entered();
+        let t = Instant::now();
+        check_injected(self.opts, Stage::Stc, frame)?;
+        let mut hzb_ms = 0.0;
+        let occlusion = match depth {
+            Some(d) if self.opts.traversal.occlusion => {
+                let th = Instant::now();
+                let _s = tracing::info_span!("HZB build", frame).entered();
+                self.hzb
+                    .rebuild(d.width, d.height, &d.depth, self.opts.hzb_reduction)
+                    .map_err(|source| RuntimeError::Hzb { frame, source })?;
+                hzb_ms = ms_since(th);
+                true
+            }
+            _ => false,
+        };
+        let options = TraversalOptions {
+            occlusion,
+            ..self.opts.traversal
+        };
+        let mut visible = Vec::new();
+        let mut sink = |item: DrawItem| {
+            visible.push(item);
+            emit(item);
+        };
+        let stats = if occlusion {
+            self.traverser.traverse(
+                self.skeleton,
+                view,
+                &HzbOcclusion::new(&self.hzb),
+                &options,
+                &mut sink,
+            )
+        } else {
+            self.traverser
+                .traverse(self.skeleton, view, &NoOcclusion, &options, &mut sink)
+        };
+        Ok(StcOutput {
+            stats,
+            visible,
+            occlusion_used: occlusion,
+            hzb_ms,
+            ms: ms_since(t),
+        })
+    }
+}
+
+/// RVG: draws a frame's items as they arrive.
+pub(crate) struct RvgStage<'a> {
+    pub ctx: &'a GpuContext,
+    pub geometry: &'a ResidentGeometry,
+    pub opts: &'a RuntimeOptions,
+    pub pass: VisiblePass,
+    started: Option<Instant>,
+}
+
+impl<'a> RvgStage<'a> {
+    pub fn new(
+        ctx: &'a GpuContext,
+        geometry: &'a ResidentGeometry,
+        opts: &'a RuntimeOptions,
+    ) -> Self {
+        RvgStage {
+            ctx,
+            geometry,
+            opts,
+            pass: VisiblePass::new(ctx, opts.width, opts.height),
+            started: None,
+        }
+    }
+
+    pub fn begin(&mut self, frame: u64, view: &CullView) -> Result<(), RuntimeError> {
+        check_injected(self.opts, Stage::Rvg, frame)?;
+        self.started = Some(Instant::now());
+        self.pass.begin(self.ctx, &gpu_view(view));
+        Ok(())
+    }
+
+    pub fn draw(&mut self, lods: &[u32]) {
+        let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
+        self.pass.draw(self.ctx, self.geometry, lods);
+    }
+
+    /// Waits for the frame; returns its image if asked and the stage's ms.
+    pub fn finish(&mut self, read_back: bool) -> Result<(Option<FrameImage>, f64), RuntimeError> {
+        let image = self
+            .pass
+            .finish(self.ctx, read_back)
+            .map_err(|source| RuntimeError::Gpu {
+                stage: Stage::Rvg,
+                source,
+            })?;
+        Ok((image, self.started.take().map_or(0.0, ms_since)))
+    }
+}

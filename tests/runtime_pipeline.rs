@@ -1,0 +1,267 @@
+//! The pipelined runtime on lavapipe (or any adapter), on a hand-built
+//! street of boxes: conservative occlusion culling changes no pixel's
+//! depth, the pipelined and sequential schedules choose the same nodes,
+//! and a failure in any stage ends the run with that error.
+
+use std::time::{Duration, Instant};
+
+use gigawalk_cull::{Camera, TraversalOptions};
+use gigawalk_gpu::devices_or_skip;
+use gigawalk_runtime::{
+    CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule, Stage,
+};
+use gigawalk_scene::SceneReader;
+use gigawalk_suite::scenes::{street, write_boxes_scene};
+use glam::DVec3;
+
+const W: u32 = 96;
+const H: u32 = 64;
+
+/// A walk down the street towards and through the wall's gap, looking
+/// around; `frames` poses.
+fn walk(frames: usize, shift: DVec3, read_back: bool) -> CameraList {
+    let cameras = (0..frames)
+        .map(|i| {
+            let t = i as f64 / frames as f64;
+            let eye = shift + DVec3::new(3.0 * t, 1.7, 8.0 - 30.0 * t);
+            let yaw = (t * 9.0).sin() * 0.6;
+            let target = eye + DVec3::new(yaw.sin(), -0.05, -yaw.cos());
+            CameraRequest {
+                camera: Camera::look_at(eye, target, 60f64.to_radians(), W as f64 / H as f64, 0.05),
+                read_back,
+            }
+        })
+        .collect();
+    CameraList { cameras }
+}
+
+fn options(
+    schedule: Schedule,
+    occlusion: bool,
+    hlod: bool,
+    pixel_tolerance: f64,
+) -> RuntimeOptions {
+    RuntimeOptions {
+        schedule,
+        width: W,
+        height: H,
+        traversal: TraversalOptions {
+            occlusion,
+            hlod,
+            pixel_tolerance,
+        },
+        ..Default::default()
+    }
+}
+
+fn run(
+    rt: &Runtime,
+    opts: &RuntimeOptions,
+    cams: CameraList,
+) -> Result<Vec<FrameReport>, RuntimeError> {
+    let mut cams = cams;
+    let mut out = Vec::new();
+    rt.run(opts, &mut cams, &mut |r| {
+        out.push(r);
+        true
+    })?;
+    Ok(out)
+}
+
+struct Fixture {
+    _dir: tempfile::TempDir,
+    scene: SceneReader,
+}
+
+fn fixture(shift: DVec3) -> Fixture {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("street.gwk");
+    write_boxes_scene(&path, &street(400, shift));
+    let scene = SceneReader::open(&path).unwrap();
+    Fixture { _dir: dir, scene }
+}
+
+/// Pixels where the reference is nearer than the result (something that
+/// should show is missing). Reversed-Z: nearer = larger. The tolerance
+/// covers nothing but f32 noise: both images come from the same rasterizer.
+fn wrongly_culled(reference: &[f32], result: &[f32]) -> usize {
+    reference
+        .iter()
+        .zip(result)
+        .filter(|(r, x)| **r > **x + 1e-7)
+        .count()
+}
+
+fn check_conservative(shift: DVec3) {
+    let Some(devices) = devices_or_skip(2, "runtime conservativeness") else {
+        return;
+    };
+    let f = fixture(shift);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    let frames = 60;
+    let occ = run(
+        &rt,
+        &options(Schedule::Pipelined, true, false, 0.0),
+        walk(frames, shift, true),
+    )
+    .unwrap();
+    let vfc = run(
+        &rt,
+        &options(Schedule::Sequential, false, false, 0.0),
+        walk(frames, shift, true),
+    )
+    .unwrap();
+    assert_eq!((occ.len(), vfc.len()), (frames, frames));
+    let mut culled = 0;
+    let mut identical = 0;
+    for (o, v) in occ.iter().zip(&vfc) {
+        assert_eq!(o.frame, v.frame);
+        let (od, vd) = (
+            &o.image.as_ref().unwrap().depth.depth,
+            &v.image.as_ref().unwrap().depth.depth,
+        );
+        assert_eq!(
+            wrongly_culled(vd, od),
+            0,
+            "frame {}: occlusion culling removed visible pixels",
+            o.frame
+        );
+        identical += (od == vd) as usize;
+        culled += o.stats.occlusion_culled;
+        assert!(o.stats.drawn_triangles <= v.stats.drawn_triangles);
+    }
+    // The test means something only if occlusion culled nodes.
+    assert!(
+        culled > 100,
+        "only {culled} nodes occlusion-culled over the walk"
+    );
+    // Same rasterizer, same triangles for every visible pixel: the depth
+    // images are bit-identical (a culled box never wins a pixel).
+    assert_eq!(identical, frames);
+    assert!(
+        occ[0..2].iter().all(|r| !r.occlusion_used),
+        "startup bypass"
+    );
+    assert!(occ[2..].iter().all(|r| r.occlusion_used));
+}
+
+#[test]
+fn pipelined_occlusion_is_conservative() {
+    check_conservative(DVec3::ZERO);
+}
+
+#[test]
+fn pipelined_occlusion_is_conservative_far_from_origin() {
+    check_conservative(DVec3::new(2.0e7, 1.0e6, -3.0e7));
+}
+
+#[test]
+fn pipelined_and_sequential_choose_the_same_nodes() {
+    let Some(devices) = devices_or_skip(2, "pipelined vs sequential") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    for lag in [1, 2] {
+        let mut p = options(Schedule::Pipelined, true, true, 2.0);
+        p.occluder_lag = lag;
+        let s = RuntimeOptions {
+            schedule: Schedule::Sequential,
+            ..p.clone()
+        };
+        let a = run(&rt, &p, walk(30, DVec3::ZERO, false)).unwrap();
+        let b = run(&rt, &s, walk(30, DVec3::ZERO, false)).unwrap();
+        assert_eq!(a.len(), 30);
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!(x.visible, y.visible, "lag {lag}, frame {}", x.frame);
+            assert_eq!(x.stats, y.stats);
+        }
+        assert!(a.iter().any(|r| r.stats.drawn_nodes < r.stats.visited));
+    }
+}
+
+#[test]
+fn a_failure_in_any_stage_stops_the_run() {
+    let Some(devices) = devices_or_skip(2, "failure injection") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    for schedule in [Schedule::Pipelined, Schedule::Sequential] {
+        for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
+            let mut o = options(schedule, true, true, 1.0);
+            o.inject_failure = Some((stage, 5));
+            let t = Instant::now();
+            let mut seen = 0;
+            let mut cams = walk(1000, DVec3::ZERO, false);
+            let err = rt.run(&o, &mut cams, &mut |_| {
+                seen += 1;
+                true
+            });
+            let took = t.elapsed();
+            match err {
+                Err(RuntimeError::Injected { stage: s, frame: 5 }) => assert_eq!(s, stage),
+                other => panic!("{schedule:?} {stage}: expected the injected error, got {other:?}"),
+            }
+            assert!(
+                seen <= 5,
+                "{stage}: {seen} frames finished after a failure at frame 5"
+            );
+            // Generous bound for a loaded 2-core CI machine; typically milliseconds.
+            assert!(
+                took < Duration::from_secs(10),
+                "{stage}: took {took:?} to stop"
+            );
+        }
+    }
+}
+
+#[test]
+fn stopping_early_from_the_frame_callback() {
+    let Some(devices) = devices_or_skip(2, "early stop") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    let mut cams = walk(1000, DVec3::ZERO, false);
+    let mut seen = 0;
+    let n = rt
+        .run(
+            &options(Schedule::Pipelined, true, true, 1.0),
+            &mut cams,
+            &mut |_| {
+                seen += 1;
+                seen < 7
+            },
+        )
+        .unwrap();
+    assert_eq!((n, seen), (7, 7));
+}
+
+#[test]
+fn bad_options_and_cameras_are_errors() {
+    let Some(devices) = devices_or_skip(1, "bad options") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    let mut o = options(Schedule::Pipelined, true, true, 1.0);
+    o.occluder_scale = 0.0;
+    let e = rt
+        .run(&o, &mut walk(3, DVec3::ZERO, false), &mut |_| true)
+        .unwrap_err();
+    assert!(e.to_string().contains("occluder scale 0"), "{e}");
+    let mut cams = walk(3, DVec3::ZERO, false);
+    cams.cameras[1].camera.position.x = f64::NAN;
+    let e = rt
+        .run(
+            &options(Schedule::Pipelined, true, true, 1.0),
+            &mut cams,
+            &mut |_| true,
+        )
+        .unwrap_err();
+    assert!(
+        matches!(e, RuntimeError::Camera(ref m) if m.contains("frame 1")),
+        "{e}"
+    );
+}

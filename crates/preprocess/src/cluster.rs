@@ -53,7 +53,11 @@ struct Edge {
 /// the number of edges in the graph.
 pub fn cluster(boxes: &[Aabb], p: &ClusterParams) -> (Vec<Vec<u32>>, usize) {
     let edges = neighbour_edges(boxes, p.d);
-    tracing::debug!(objects = boxes.len(), edges = edges.len(), "clustering graph");
+    tracing::debug!(
+        objects = boxes.len(),
+        edges = edges.len(),
+        "clustering graph"
+    );
     (merge(boxes, &edges, p), edges.len())
 }
 
@@ -76,7 +80,11 @@ fn neighbour_edges(boxes: &[Aabb], d: f64) -> Vec<Edge> {
         )
     };
     let prims: Vec<BvhAabb> = boxes.iter().map(|b| to_bvh(b, 0.0)).collect();
-    let bvh: Bvh2 = build_bvh2(&prims, BvhBuildParams::fast_build(), &mut Default::default());
+    let bvh: Bvh2 = build_bvh2(
+        &prims,
+        BvhBuildParams::fast_build(),
+        &mut Default::default(),
+    );
     let mut edges: Vec<Edge> = (0..boxes.len())
         .into_par_iter()
         .flat_map_iter(|i| {
@@ -131,7 +139,11 @@ fn merge(boxes: &[Aabb], edges: &[Edge], p: &ClusterParams) -> Vec<Vec<u32>> {
         }
         // Union by size keeps the forest shallow; the smaller index wins a
         // tie so the result does not depend on anything but the input.
-        let (big, small) = if (size[ra], rb) > (size[rb], ra) { (ra, rb) } else { (rb, ra) };
+        let (big, small) = if (size[ra], rb) > (size[rb], ra) {
+            (ra, rb)
+        } else {
+            (rb, ra)
+        };
         parent[small] = big as u32;
         size[big] += size[small];
         bounds[big] = joined;
@@ -170,13 +182,21 @@ mod tests {
 
     /// For unit cubes, whose largest side is 1, `d` is also the distance.
     fn params(d: f64, v: f64) -> ClusterParams {
-        ClusterParams { d, v, k: 1500.0, min_extent: 1e-3 }
+        ClusterParams {
+            d,
+            v,
+            k: 1500.0,
+            min_extent: 1e-3,
+        }
     }
 
     #[test]
     fn empty_and_single() {
         assert!(cluster(&[], &params(1.0, 10.0)).0.is_empty());
-        assert_eq!(cluster(&[unit_box(0.0, 0.0, 0.0)], &params(1.0, 10.0)).0, vec![vec![0]]);
+        assert_eq!(
+            cluster(&[unit_box(0.0, 0.0, 0.0)], &params(1.0, 10.0)).0,
+            vec![vec![0]]
+        );
     }
 
     #[test]
@@ -200,8 +220,14 @@ mod tests {
         assert!(c.len() >= 4, "{c:?}");
         assert!(c.len() < 20, "nothing merged: {c:?}");
         for members in &c {
-            let b = members.iter().fold(Aabb::EMPTY, |a, &i| a.union(&boxes[i as usize]));
-            assert!(b.volume() <= 5.0 + 1e-9, "cluster {members:?} has volume {}", b.volume());
+            let b = members
+                .iter()
+                .fold(Aabb::EMPTY, |a, &i| a.union(&boxes[i as usize]));
+            assert!(
+                b.volume() <= 5.0 + 1e-9,
+                "cluster {members:?} has volume {}",
+                b.volume()
+            );
             // Touching cubes merge into contiguous runs.
             assert_eq!(b.extent().x as usize, members.len());
         }
@@ -213,10 +239,17 @@ mod tests {
     fn criterion_rejects_a_wide_gap_to_a_tight_cluster() {
         // Five cubes 0.01 apart, then one 0.9 away: with K small, the tight
         // cluster's K/|C| term is too small to accept the wide gap.
-        let mut boxes: Vec<Aabb> = (0..5).map(|i| unit_box(i as f64 * 1.01, 0.0, 0.0)).collect();
+        let mut boxes: Vec<Aabb> = (0..5)
+            .map(|i| unit_box(i as f64 * 1.01, 0.0, 0.0))
+            .collect();
         boxes.push(unit_box(4.0 * 1.01 + 1.0 + 0.9, 0.0, 0.0));
         // K = 200 thousandths of D = 1: a K/|C| term of 0.2 for a lone cube.
-        let p = ClusterParams { d: 1.0, v: 1e9, k: 200.0, min_extent: 1e-3 };
+        let p = ClusterParams {
+            d: 1.0,
+            v: 1e9,
+            k: 200.0,
+            min_extent: 1e-3,
+        };
         let (c, _) = cluster(&boxes, &p);
         assert_eq!(c, vec![vec![0, 1, 2, 3, 4], vec![5]]);
         // A larger K accepts it.
@@ -229,21 +262,35 @@ mod tests {
         let mut boxes = Vec::new();
         let mut s = 12345u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 33) as f64 / (1u64 << 31) as f64
         };
         for _ in 0..300 {
             let min = DVec3::new(rnd() * 100.0, rnd() * 100.0, rnd() * 10.0);
-            boxes.push(Aabb::new(min, min + DVec3::new(rnd() * 3.0, rnd() * 3.0, rnd() * 3.0)));
+            boxes.push(Aabb::new(
+                min,
+                min + DVec3::new(rnd() * 3.0, rnd() * 3.0, rnd() * 3.0),
+            ));
         }
         let got = neighbour_edges(&boxes, 0.5);
         let mut want = Vec::new();
         for i in 0..boxes.len() {
             for j in i + 1..boxes.len() {
                 let w = boxes[i].gap(&boxes[j]);
-                let d = 0.5 * boxes[i].extent().max_element().max(boxes[j].extent().max_element());
+                let d = 0.5
+                    * boxes[i]
+                        .extent()
+                        .max_element()
+                        .max(boxes[j].extent().max_element());
                 if w < d {
-                    want.push(Edge { w, a: i as u32, b: j as u32, d });
+                    want.push(Edge {
+                        w,
+                        a: i as u32,
+                        b: j as u32,
+                        d,
+                    });
                 }
             }
         }

@@ -34,13 +34,25 @@ pub struct HNode {
 pub fn build(boxes: &[Aabb]) -> Vec<HNode> {
     debug_assert!(!boxes.is_empty());
     if boxes.len() == 1 {
-        return vec![HNode { bounds: pad(boxes[0]), parent: NO_NODE, first_child: 0, child_count: 0, object: Some(0), depth: 1 }];
+        return vec![HNode {
+            bounds: pad(boxes[0]),
+            parent: NO_NODE,
+            first_child: 0,
+            child_count: 0,
+            object: Some(0),
+            depth: 1,
+        }];
     }
     let scene = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
     let centre = scene.center();
     let prims: Vec<BvhAabb> = boxes
         .iter()
-        .map(|b| BvhAabb::new(Vec3A::from((b.min - centre).as_vec3()), Vec3A::from((b.max - centre).as_vec3())))
+        .map(|b| {
+            BvhAabb::new(
+                Vec3A::from((b.min - centre).as_vec3()),
+                Vec3A::from((b.max - centre).as_vec3()),
+            )
+        })
         .collect();
     let config = BvhBuildParams {
         pre_split: false,
@@ -59,7 +71,14 @@ pub fn build(boxes: &[Aabb]) -> Vec<HNode> {
     // their parent, as the scene format requires.
     let mut out: Vec<HNode> = Vec::with_capacity(bvh.nodes.len());
     let mut queue: VecDeque<(Source, u32)> = VecDeque::new();
-    out.push(HNode { bounds: Aabb::EMPTY, parent: NO_NODE, first_child: 0, child_count: 0, object: None, depth: 1 });
+    out.push(HNode {
+        bounds: Aabb::EMPTY,
+        parent: NO_NODE,
+        first_child: 0,
+        child_count: 0,
+        object: None,
+        depth: 1,
+    });
     queue.push_back((Source::Bvh(0), 0));
     while let Some((src, at)) = queue.pop_front() {
         let children: Vec<Source> = match src {
@@ -70,9 +89,11 @@ pub fn build(boxes: &[Aabb]) -> Vec<HNode> {
             Source::Bvh(i) => {
                 let n = &bvh.nodes[i as usize];
                 if n.is_leaf() {
-                    let prims = (n.first_index..n.first_index + n.prim_count).map(|k| bvh.primitive_indices[k as usize]);
+                    let prims = (n.first_index..n.first_index + n.prim_count)
+                        .map(|k| bvh.primitive_indices[k as usize]);
                     if n.prim_count == 1 {
-                        out[at as usize].object = Some(bvh.primitive_indices[n.first_index as usize]);
+                        out[at as usize].object =
+                            Some(bvh.primitive_indices[n.first_index as usize]);
                         continue;
                     }
                     prims.map(Source::Object).collect()
@@ -87,7 +108,14 @@ pub fn build(boxes: &[Aabb]) -> Vec<HNode> {
         out[at as usize].child_count = children.len() as u32;
         for c in children {
             let idx = out.len() as u32;
-            out.push(HNode { bounds: Aabb::EMPTY, parent: at, first_child: 0, child_count: 0, object: None, depth });
+            out.push(HNode {
+                bounds: Aabb::EMPTY,
+                parent: at,
+                first_child: 0,
+                child_count: 0,
+                object: None,
+                depth,
+            });
             queue.push_back((c, idx));
         }
     }
@@ -97,7 +125,8 @@ pub fn build(boxes: &[Aabb]) -> Vec<HNode> {
             Some(o) => boxes[o as usize],
             None => {
                 let n = &out[i];
-                (n.first_child..n.first_child + n.child_count).fold(Aabb::EMPTY, |a, c| a.union(&out[c as usize].bounds))
+                (n.first_child..n.first_child + n.child_count)
+                    .fold(Aabb::EMPTY, |a, c| a.union(&out[c as usize].bounds))
             }
         };
         out[i].bounds = pad(b);
@@ -134,7 +163,11 @@ mod tests {
                 assert!(!seen[o as usize]);
                 seen[o as usize] = true;
             } else {
-                assert!(n.child_count >= 2, "inner node {i} has {} children", n.child_count);
+                assert!(
+                    n.child_count >= 2,
+                    "inner node {i} has {} children",
+                    n.child_count
+                );
             }
             for c in n.first_child..n.first_child + n.child_count {
                 assert!(c as usize > i);

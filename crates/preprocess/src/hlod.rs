@@ -73,7 +73,10 @@ pub struct ChainParams {
 /// The full-detail mesh of a final object, relative to `origin`, with
 /// only the vertices its triangles use.
 pub fn leaf_mesh(model: &Model, part: &Part, origin: DVec3) -> WorkMesh {
-    let mut m = WorkMesh { origin, ..Default::default() };
+    let mut m = WorkMesh {
+        origin,
+        ..Default::default()
+    };
     m.indices.reserve(3 * part.triangles);
     let mut used: Vec<u32> = Vec::new();
     for piece in &part.pieces {
@@ -88,7 +91,8 @@ pub fn leaf_mesh(model: &Model, part: &Part, origin: DVec3) -> WorkMesh {
         let uniform = srgb8(o.colour);
         for &v in &used {
             let v = v as usize;
-            m.positions.push((o.positions[v] - origin).as_vec3().to_array());
+            m.positions
+                .push((o.positions[v] - origin).as_vec3().to_array());
             m.normals.push(o.normals[v].to_array());
             m.colours.push(match &o.vertex_colours {
                 Some(c) => srgb8(c[v]),
@@ -120,12 +124,25 @@ pub fn inner_lods(children: &[&Lod], origin: DVec3, p: &ChainParams) -> Vec<Lod>
     let base_error = children.iter().map(|l| l.error).fold(0.0f32, f32::max);
     if merged.triangles() <= p.floor {
         // Too small to be worth simplifying: the union is the HLOD.
-        return vec![Lod { mesh: merged, error: base_error }];
+        return vec![Lod {
+            mesh: merged,
+            error: base_error,
+        }];
     }
     let target = target_triangles(merged.triangles(), p);
     match simplify(&merged, target, true) {
-        Some((mesh, e)) if mesh.triangles() < merged.triangles() => chain(Lod { mesh, error: base_error + e }, p, true),
-        _ => vec![Lod { mesh: merged, error: base_error }],
+        Some((mesh, e)) if mesh.triangles() < merged.triangles() => chain(
+            Lod {
+                mesh,
+                error: base_error + e,
+            },
+            p,
+            true,
+        ),
+        _ => vec![Lod {
+            mesh: merged,
+            error: base_error,
+        }],
     }
 }
 
@@ -149,7 +166,11 @@ fn chain(first: Lod, p: &ChainParams, sloppy: bool) -> Vec<Lod> {
         let limit = (MIN_SHRINK * n as f64) as usize;
         let shrunk = |r: &Option<(WorkMesh, f32)>| matches!(r, Some((m, _)) if m.triangles() <= limit && m.triangles() > 0);
         let collapse = !sloppy && lods.len() <= p.collapse_levels;
-        let mut next = if collapse { simplify(mesh, target, false) } else { None };
+        let mut next = if collapse {
+            simplify(mesh, target, false)
+        } else {
+            None
+        };
         if !shrunk(&next) {
             next = simplify(mesh, target, true);
         }
@@ -157,7 +178,10 @@ fn chain(first: Lod, p: &ChainParams, sloppy: bool) -> Vec<Lod> {
             break;
         }
         let Some((mesh, e)) = next else { break };
-        lods.push(Lod { mesh, error: error + e });
+        lods.push(Lod {
+            mesh,
+            error: error + e,
+        });
     }
     lods
 }
@@ -183,19 +207,33 @@ fn simplify(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<(WorkMesh, f
         err *= meshopt::simplify_scale(&adapter);
         r
     } else {
-        meshopt::simplify(&welded, &adapter, 3 * target, f32::MAX, SimplifyOptions::ErrorAbsolute, Some(&mut err))
+        meshopt::simplify(
+            &welded,
+            &adapter,
+            3 * target,
+            f32::MAX,
+            SimplifyOptions::ErrorAbsolute,
+            Some(&mut err),
+        )
     };
     if indices.is_empty() {
         return None;
     }
-    let err = if err.is_finite() { err.max(0.0) } else { return None };
+    let err = if err.is_finite() {
+        err.max(0.0)
+    } else {
+        return None;
+    };
     Some((compact(mesh, &indices), err))
 }
 
 /// The vertices `indices` use, in first-use order.
 fn compact(mesh: &WorkMesh, indices: &[u32]) -> WorkMesh {
     let mut remap = vec![u32::MAX; mesh.positions.len()];
-    let mut out = WorkMesh { origin: mesh.origin, ..Default::default() };
+    let mut out = WorkMesh {
+        origin: mesh.origin,
+        ..Default::default()
+    };
     out.indices.reserve(indices.len());
     for &i in indices {
         let slot = &mut remap[i as usize];
@@ -211,11 +249,18 @@ fn compact(mesh: &WorkMesh, indices: &[u32]) -> WorkMesh {
 }
 
 fn merge(children: &[&Lod], origin: DVec3) -> WorkMesh {
-    let mut m = WorkMesh { origin, ..Default::default() };
+    let mut m = WorkMesh {
+        origin,
+        ..Default::default()
+    };
     for c in children {
         let base = m.positions.len() as u32;
         let shift = c.mesh.origin - origin;
-        m.positions.extend(c.mesh.positions.iter().map(|p| (shift + glam::Vec3::from_array(*p).as_dvec3()).as_vec3().to_array()));
+        m.positions.extend(c.mesh.positions.iter().map(|p| {
+            (shift + glam::Vec3::from_array(*p).as_dvec3())
+                .as_vec3()
+                .to_array()
+        }));
         m.normals.extend_from_slice(&c.mesh.normals);
         m.colours.extend_from_slice(&c.mesh.colours);
         m.indices.extend(c.mesh.indices.iter().map(|&i| base + i));
@@ -226,11 +271,23 @@ fn merge(children: &[&Lod], origin: DVec3) -> WorkMesh {
 /// Linear RGBA in 0..=1 to sRGB-encoded RGBA8 (alpha stays linear).
 pub fn srgb8(c: [f32; 4]) -> [u8; 4] {
     let enc = |x: f32| {
-        let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
-        let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+        let x = if x.is_finite() {
+            x.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let s = if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
         (s * 255.0).round() as u8
     };
-    let a = if c[3].is_finite() { c[3].clamp(0.0, 1.0) } else { 1.0 };
+    let a = if c[3].is_finite() {
+        c[3].clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
     [enc(c[0]), enc(c[1]), enc(c[2]), (a * 255.0).round() as u8]
 }
 
@@ -240,10 +297,17 @@ mod tests {
     use crate::parts::initial_parts;
     use crate::test_models::{grid_object, pipe_object};
 
-    const P: ChainParams = ChainParams { ratio: 0.5, floor: 64, collapse_levels: 1 };
+    const P: ChainParams = ChainParams {
+        ratio: 0.5,
+        floor: 64,
+        collapse_levels: 1,
+    };
 
     fn mesh_of(o: gigawalk_import::Object) -> WorkMesh {
-        let m = Model { objects: vec![o], ..Default::default() };
+        let m = Model {
+            objects: vec![o],
+            ..Default::default()
+        };
         let (parts, _) = initial_parts(&m).unwrap();
         leaf_mesh(&m, &parts[0], parts[0].bounds.center())
     }
@@ -276,7 +340,13 @@ mod tests {
         // 300 separate tiny pipes: edge collapse cannot remove components.
         let mut all = pipe_object(DVec3::ZERO, 0.5, 0.05, 1, 3);
         for i in 1..300 {
-            let p = pipe_object(DVec3::new((i % 20) as f64, (i / 20) as f64, 0.0), 0.5, 0.05, 1, 3);
+            let p = pipe_object(
+                DVec3::new((i % 20) as f64, (i / 20) as f64, 0.0),
+                0.5,
+                0.05,
+                1,
+                3,
+            );
             let base = all.positions.len() as u32;
             all.positions.extend(p.positions);
             all.normals.extend(p.normals);
@@ -290,7 +360,10 @@ mod tests {
     #[test]
     fn inner_hlod_error_is_at_least_every_child_coarsest() {
         let a = leaf_lods(mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.2)), &P);
-        let b = leaf_lods(mesh_of(grid_object(DVec3::new(12.0, 0.0, 0.0), 10.0, 32, 0.5)), &P);
+        let b = leaf_lods(
+            mesh_of(grid_object(DVec3::new(12.0, 0.0, 0.0), 10.0, 32, 0.5)),
+            &P,
+        );
         let children = [a.last().unwrap(), b.last().unwrap()];
         let origin = DVec3::new(11.0, 0.0, 5.0);
         let lods = inner_lods(&children, origin, &P);

@@ -148,7 +148,10 @@ pub fn preprocess(
     let mut parameters = params.to_json();
     if let Some(r) = &built.stats.resolved {
         if let Ok(serde_json::Value::Object(m)) = serde_json::to_value(r) {
-            parameters.insert("resolved_in_model_units".into(), serde_json::Value::Object(m));
+            parameters.insert(
+                "resolved_in_model_units".into(),
+                serde_json::Value::Object(m),
+            );
         }
     }
     let provenance = Provenance {
@@ -156,7 +159,9 @@ pub fn preprocess(
         tool: format!("gigawalk-preprocess {}", env!("CARGO_PKG_VERSION")),
         parameters,
     };
-    let summary = writer.finish(built.nodes, provenance).map_err(|e| PreprocessError::Write(e.into()))?;
+    let summary = writer
+        .finish(built.nodes, provenance)
+        .map_err(|e| PreprocessError::Write(e.into()))?;
     let secs = t.elapsed().as_secs_f64();
     progress.finish(Phase::Write, secs);
     let stats = &mut built.stats;
@@ -175,7 +180,10 @@ pub fn build<S: LodSink>(
     progress: &dyn Progress,
 ) -> Result<Built, PreprocessError> {
     params.validate()?;
-    let mut stats = Stats { raw_input_bytes: stats::raw_input_bytes(model), ..Default::default() };
+    let mut stats = Stats {
+        raw_input_bytes: stats::raw_input_bytes(model),
+        ..Default::default()
+    };
     let mut clock = PhaseClock::new(progress);
 
     // 1. Input checks.
@@ -191,17 +199,30 @@ pub fn build<S: LodSink>(
 
     // 2. Partition-I (Section 4.2.1): split at the box middle.
     clock.start(Phase::PartitionI, stats.triangles);
-    let rule1 = SplitRule { max_triangles: resolved.t1, max_diagonal: resolved.s1, max_aspect: resolved.r1, at: SplitAt::Midpoint };
+    let rule1 = SplitRule {
+        max_triangles: resolved.t1,
+        max_diagonal: resolved.s1,
+        max_aspect: resolved.r1,
+        at: SplitAt::Midpoint,
+    };
     let parts = partition::partition(model, parts, &rule1, &|n| progress.advance(n));
     stats.objects_part1 = parts.len();
     clock.finish(&mut stats);
 
     // 3. Clustering (Section 4.2.2).
     clock.start(Phase::Cluster, 0);
-    let max_dim = parts.iter().map(|p| p.bounds.extent().max_element()).fold(0.0, f64::max);
+    let max_dim = parts
+        .iter()
+        .map(|p| p.bounds.extent().max_element())
+        .fold(0.0, f64::max);
     let resolved = resolved.with_d(params, max_dim);
     let boxes: Vec<Aabb> = parts.iter().map(|p| p.bounds).collect();
-    let cp = ClusterParams { d: params.d, v: resolved.v, k: params.k, min_extent: resolved.min_extent };
+    let cp = ClusterParams {
+        d: params.d,
+        v: resolved.v,
+        k: params.k,
+        min_extent: resolved.min_extent,
+    };
     let (clusters, edges) = cluster::cluster(&boxes, &cp);
     stats.cluster_edges = edges;
     let parts = merge_clusters(parts, &clusters);
@@ -210,7 +231,12 @@ pub fn build<S: LodSink>(
 
     // 4. Partition-II (Section 4.2.3): split about the centre of mass.
     clock.start(Phase::PartitionII, stats.triangles);
-    let rule2 = SplitRule { max_triangles: resolved.t2, max_diagonal: resolved.s2, max_aspect: resolved.r2, at: SplitAt::CentreOfMass };
+    let rule2 = SplitRule {
+        max_triangles: resolved.t2,
+        max_diagonal: resolved.s2,
+        max_aspect: resolved.r2,
+        at: SplitAt::CentreOfMass,
+    };
     let parts = partition::partition(model, parts, &rule2, &|n| progress.advance(n));
     stats.objects_part2 = parts.len();
     clock.finish(&mut stats);
@@ -226,13 +252,22 @@ pub fn build<S: LodSink>(
 
     // 6. LODs and HLODs (Section 4.3), bottom-up.
     clock.start(Phase::Hlod, tree.len() as u64);
-    let chain = ChainParams { ratio: params.lod_ratio, floor: params.lod_floor as usize, collapse_levels: params.collapse_levels as usize };
+    let chain = ChainParams {
+        ratio: params.lod_ratio,
+        floor: params.lod_floor as usize,
+        collapse_levels: params.collapse_levels as usize,
+    };
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
     let mut coarse: Vec<Option<Lod>> = vec![None; tree.len()];
-    let mut emit = |ni: usize, lods: Vec<(LodMesh, f32)>, per_level: &mut Vec<u64>| -> Result<(), PreprocessError> {
+    let mut emit = |ni: usize,
+                    lods: Vec<(LodMesh, f32)>,
+                    per_level: &mut Vec<u64>|
+     -> Result<(), PreprocessError> {
         let mut first = None;
         for (k, (mesh, error)) in lods.iter().enumerate() {
-            let i = sink.add_lod(mesh, *error).map_err(|e| PreprocessError::Write(e.into()))?;
+            let i = sink
+                .add_lod(mesh, *error)
+                .map_err(|e| PreprocessError::Write(e.into()))?;
             first.get_or_insert(i);
             if per_level.len() <= k {
                 per_level.push(0);
@@ -242,7 +277,9 @@ pub fn build<S: LodSink>(
         lod_ranges[ni] = (first.unwrap_or(0), lods.len() as u32);
         Ok(())
     };
-    let leaves: Vec<usize> = (0..tree.len()).filter(|&i| tree[i].object.is_some()).collect();
+    let leaves: Vec<usize> = (0..tree.len())
+        .filter(|&i| tree[i].object.is_some())
+        .collect();
     for batch in leaves.chunks(HLOD_BATCH) {
         let made: Vec<(Vec<(LodMesh, f32)>, Lod)> = batch
             .par_iter()
@@ -261,18 +298,25 @@ pub fn build<S: LodSink>(
     }
     drop(parts);
     // Inner nodes deepest first, so every child is done before its parent.
-    let mut inner: Vec<usize> = (0..tree.len()).filter(|&i| tree[i].object.is_none()).collect();
+    let mut inner: Vec<usize> = (0..tree.len())
+        .filter(|&i| tree[i].object.is_none())
+        .collect();
     inner.sort_by_key(|&i| (std::cmp::Reverse(tree[i].depth), i));
     let mut at = 0;
     while at < inner.len() {
         let depth = tree[inner[at]].depth;
-        let level_end = at + inner[at..].iter().take_while(|&&i| tree[i].depth == depth).count();
+        let level_end = at
+            + inner[at..]
+                .iter()
+                .take_while(|&&i| tree[i].depth == depth)
+                .count();
         for batch in inner[at..level_end].chunks(HLOD_BATCH) {
             let made: Vec<(Vec<(LodMesh, f32)>, Lod)> = batch
                 .par_iter()
                 .map(|&ni| {
                     let node = &tree[ni];
-                    let children: Vec<&Lod> = (node.first_child..node.first_child + node.child_count)
+                    let children: Vec<&Lod> = (node.first_child
+                        ..node.first_child + node.child_count)
                         .filter_map(|c| coarse[c as usize].as_ref())
                         .collect();
                     finish_chain(hlod::inner_lods(&children, node.bounds.center(), &chain))
@@ -312,8 +356,14 @@ pub fn build<S: LodSink>(
 /// The scene-file form of every level, and the coarsest level kept for the
 /// parent's HLODs.
 fn finish_chain(mut lods: Vec<Lod>) -> (Vec<(LodMesh, f32)>, Lod) {
-    let out = lods.iter().map(|l| (l.mesh.to_lod_mesh(), l.error)).collect();
-    let coarsest = lods.pop().unwrap_or(Lod { mesh: Default::default(), error: 0.0 });
+    let out = lods
+        .iter()
+        .map(|l| (l.mesh.to_lod_mesh(), l.error))
+        .collect();
+    let coarsest = lods.pop().unwrap_or(Lod {
+        mesh: Default::default(),
+        error: 0.0,
+    });
     (out, coarsest)
 }
 
@@ -344,7 +394,11 @@ fn merge_clusters(parts: Vec<Part>, clusters: &[Vec<u32>]) -> Vec<Part> {
             for m in &mut merged {
                 m.triangles.sort_unstable();
             }
-            Part { pieces: merged, bounds, triangles }
+            Part {
+                pieces: merged,
+                bounds,
+                triangles,
+            }
         })
         .collect()
 }
@@ -358,7 +412,11 @@ struct PhaseClock<'a> {
 
 impl<'a> PhaseClock<'a> {
     fn new(progress: &'a dyn Progress) -> Self {
-        PhaseClock { progress, phase: Phase::Check, started: Instant::now() }
+        PhaseClock {
+            progress,
+            phase: Phase::Check,
+            started: Instant::now(),
+        }
     }
     fn start(&mut self, phase: Phase, total: u64) {
         self.phase = phase;

@@ -93,16 +93,28 @@ impl Params {
             if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
-                Err(ParamError { name, value, why: "must be a finite number above 0" })
+                Err(ParamError {
+                    name,
+                    value,
+                    why: "must be a finite number above 0",
+                })
             }
         };
         if self.t1 == 0 {
-            return Err(ParamError { name: "t1", value: 0.0, why: "must be at least 1" });
+            return Err(ParamError {
+                name: "t1",
+                value: 0.0,
+                why: "must be at least 1",
+            });
         }
         positive("s1", self.s1)?;
         positive("r1", self.r1)?;
         if self.r1 < 1.0 {
-            return Err(ParamError { name: "r1", value: self.r1, why: "an aspect ratio is at least 1" });
+            return Err(ParamError {
+                name: "r1",
+                value: self.r1,
+                why: "an aspect ratio is at least 1",
+            });
         }
         positive("d", self.d)?;
         positive("v", self.v)?;
@@ -118,10 +130,18 @@ impl Params {
             });
         }
         if !(self.lod_ratio > 0.0 && self.lod_ratio < 1.0) {
-            return Err(ParamError { name: "lod-ratio", value: self.lod_ratio, why: "must be between 0 and 1" });
+            return Err(ParamError {
+                name: "lod-ratio",
+                value: self.lod_ratio,
+                why: "must be between 0 and 1",
+            });
         }
         if self.lod_floor == 0 {
-            return Err(ParamError { name: "lod-floor", value: 0.0, why: "must be at least 1" });
+            return Err(ParamError {
+                name: "lod-floor",
+                value: 0.0,
+                why: "must be at least 1",
+            });
         }
         Ok(())
     }
@@ -238,11 +258,20 @@ mod tests {
 
     #[test]
     fn bad_values_are_named() {
-        let p = Params { s1: -1.0, ..Params::default() };
+        let p = Params {
+            s1: -1.0,
+            ..Params::default()
+        };
         assert_eq!(p.validate().unwrap_err().name, "s1");
-        let p = Params { lod_ratio: 1.0, ..Params::default() };
+        let p = Params {
+            lod_ratio: 1.0,
+            ..Params::default()
+        };
         assert_eq!(p.validate().unwrap_err().name, "lod-ratio");
-        let p = Params { v: f64::NAN, ..Params::default() };
+        let p = Params {
+            v: f64::NAN,
+            ..Params::default()
+        };
         assert_eq!(p.validate().unwrap_err().name, "v");
     }
 

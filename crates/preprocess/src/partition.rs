@@ -73,7 +73,12 @@ struct Item {
 /// Splits every part that meets `rule` until none of the results does (or
 /// it is down to a single triangle). Parts are processed in parallel; the
 /// output order depends only on the input, never on scheduling.
-pub fn partition(model: &Model, parts: Vec<Part>, rule: &SplitRule, progress: &(dyn Fn(u64) + Sync)) -> Vec<Part> {
+pub fn partition(
+    model: &Model,
+    parts: Vec<Part>,
+    rule: &SplitRule,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Vec<Part> {
     let nested: Vec<Vec<Part>> = parts
         .into_par_iter()
         .map(|p| {
@@ -95,7 +100,11 @@ fn split_part(model: &Model, part: Part, rule: &SplitRule) -> Vec<Part> {
         let o = &model.objects[piece.object as usize];
         items.extend(piece.triangles.iter().map(|&t| {
             let [a, b, c] = triangle(o, t);
-            Item { object: piece.object, triangle: t, centroid: (a + b + c) / 3.0 }
+            Item {
+                object: piece.object,
+                triangle: t,
+                centroid: (a + b + c) / 3.0,
+            }
         }));
     }
     drop(part.pieces);
@@ -174,10 +183,17 @@ fn make_part(items: &mut [Item], bounds: Aabb) -> Part {
     for i in items.iter() {
         match pieces.last_mut() {
             Some(p) if p.object == i.object => p.triangles.push(i.triangle),
-            _ => pieces.push(Piece { object: i.object, triangles: vec![i.triangle] }),
+            _ => pieces.push(Piece {
+                object: i.object,
+                triangles: vec![i.triangle],
+            }),
         }
     }
-    Part { pieces, bounds, triangles: items.len() }
+    Part {
+        pieces,
+        bounds,
+        triangles: items.len(),
+    }
 }
 
 #[cfg(test)]
@@ -188,13 +204,21 @@ mod tests {
     use gigawalk_import::Model;
 
     fn rule(max_triangles: usize, max_diagonal: f64, max_aspect: f64) -> SplitRule {
-        SplitRule { max_triangles, max_diagonal, max_aspect, at: SplitAt::Midpoint }
+        SplitRule {
+            max_triangles,
+            max_diagonal,
+            max_aspect,
+            at: SplitAt::Midpoint,
+        }
     }
 
     #[test]
     fn long_pipe_is_split_along_its_long_axis() {
         // A pipe along X, 100 long and 2 wide, 20k triangles.
-        let m = Model { objects: vec![pipe_object(DVec3::ZERO, 100.0, 1.0, 500, 20)], ..Default::default() };
+        let m = Model {
+            objects: vec![pipe_object(DVec3::ZERO, 100.0, 1.0, 500, 20)],
+            ..Default::default()
+        };
         let (parts, _) = initial_parts(&m).unwrap();
         let whole = parts[0].bounds;
         let out = partition(&m, parts, &rule(1000, 10.0, 2.5), &|_| {});
@@ -202,7 +226,11 @@ mod tests {
         for p in &out {
             // Each part spans the pipe's full cross-section but only a slice of its length.
             let e = p.bounds.extent();
-            assert!(e.x < whole.extent().x * 0.5, "part {:?} not cut along X", p.bounds);
+            assert!(
+                e.x < whole.extent().x * 0.5,
+                "part {:?} not cut along X",
+                p.bounds
+            );
             assert!((e.y - whole.extent().y).abs() < 1e-9 && (e.z - whole.extent().z).abs() < 1e-9);
             assert!(!rule(1000, 10.0, 2.5).needs_split(p.triangles, &p.bounds));
         }
@@ -211,7 +239,10 @@ mod tests {
 
     #[test]
     fn small_object_is_left_alone() {
-        let m = Model { objects: vec![box_object(DVec3::ZERO, DVec3::ONE)], ..Default::default() };
+        let m = Model {
+            objects: vec![box_object(DVec3::ZERO, DVec3::ONE)],
+            ..Default::default()
+        };
         let (parts, _) = initial_parts(&m).unwrap();
         let out = partition(&m, parts.clone(), &rule(1000, 0.01, 2.5), &|_| {});
         assert_eq!(out, parts);
@@ -223,7 +254,10 @@ mod tests {
         let mut o = box_object(DVec3::ZERO, DVec3::ONE);
         let tri = o.indices[..3].to_vec();
         o.indices = tri.iter().copied().cycle().take(3 * 4000).collect();
-        let m = Model { objects: vec![o], ..Default::default() };
+        let m = Model {
+            objects: vec![o],
+            ..Default::default()
+        };
         let (parts, _) = initial_parts(&m).unwrap();
         let out = partition(&m, parts, &rule(1000, 0.0, 1.0), &|_| {});
         assert!(out.iter().all(|p| p.triangles <= 1000));
@@ -232,17 +266,31 @@ mod tests {
 
     #[test]
     fn every_triangle_lands_in_exactly_one_part() {
-        let objects = (0..5).map(|i| pipe_object(DVec3::new(0.0, i as f64 * 3.0, 0.0), 40.0, 1.0, 200, 8)).collect();
-        let m = Model { objects, ..Default::default() };
+        let objects = (0..5)
+            .map(|i| pipe_object(DVec3::new(0.0, i as f64 * 3.0, 0.0), 40.0, 1.0, 200, 8))
+            .collect();
+        let m = Model {
+            objects,
+            ..Default::default()
+        };
         let (parts, _) = initial_parts(&m).unwrap();
-        let r = SplitRule { at: SplitAt::CentreOfMass, ..rule(300, 5.0, 2.0) };
+        let r = SplitRule {
+            at: SplitAt::CentreOfMass,
+            ..rule(300, 5.0, 2.0)
+        };
         let out = partition(&m, parts, &r, &|_| {});
         let mut seen: Vec<(u32, u32)> = out
             .iter()
-            .flat_map(|p| p.pieces.iter().flat_map(|pc| pc.triangles.iter().map(move |&t| (pc.object, t))))
+            .flat_map(|p| {
+                p.pieces
+                    .iter()
+                    .flat_map(|pc| pc.triangles.iter().map(move |&t| (pc.object, t)))
+            })
             .collect();
         seen.sort_unstable();
-        let expect: Vec<(u32, u32)> = (0..5).flat_map(|o| (0..3200).map(move |t| (o, t))).collect();
+        let expect: Vec<(u32, u32)> = (0..5)
+            .flat_map(|o| (0..3200).map(move |t| (o, t)))
+            .collect();
         assert_eq!(seen, expect);
     }
 }

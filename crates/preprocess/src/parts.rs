@@ -29,15 +29,41 @@ pub struct Part {
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum InputError {
     #[error("object {index} ({name}): index count {count} is not a multiple of 3")]
-    IndexCount { index: usize, name: String, count: usize },
+    IndexCount {
+        index: usize,
+        name: String,
+        count: usize,
+    },
     #[error("object {index} ({name}): triangle {triangle} uses vertex {vertex}, but the object has {vertices} vertices")]
-    IndexOutOfRange { index: usize, name: String, triangle: usize, vertex: u32, vertices: usize },
+    IndexOutOfRange {
+        index: usize,
+        name: String,
+        triangle: usize,
+        vertex: u32,
+        vertices: usize,
+    },
     #[error("object {index} ({name}): vertex {vertex} has a non-finite position")]
-    NonFinite { index: usize, name: String, vertex: usize },
+    NonFinite {
+        index: usize,
+        name: String,
+        vertex: usize,
+    },
     #[error("object {index} ({name}): {what} has {got} entries for {vertices} vertices")]
-    AttributeCount { index: usize, name: String, what: &'static str, got: usize, vertices: usize },
-    #[error("object {index} ({name}) has {vertices} vertices, more than 32-bit indices can address")]
-    TooManyVertices { index: usize, name: String, vertices: usize },
+    AttributeCount {
+        index: usize,
+        name: String,
+        what: &'static str,
+        got: usize,
+        vertices: usize,
+    },
+    #[error(
+        "object {index} ({name}) has {vertices} vertices, more than 32-bit indices can address"
+    )]
+    TooManyVertices {
+        index: usize,
+        name: String,
+        vertices: usize,
+    },
     #[error("the model has no triangles (after dropping {dropped} degenerate ones)")]
     Empty { dropped: u64 },
 }
@@ -81,21 +107,45 @@ fn check_object(index: usize, o: &Object) -> Result<Option<(Part, u64)>, InputEr
     let name = || o.name.clone();
     let nv = o.positions.len();
     if nv > u32::MAX as usize {
-        return Err(InputError::TooManyVertices { index, name: name(), vertices: nv });
+        return Err(InputError::TooManyVertices {
+            index,
+            name: name(),
+            vertices: nv,
+        });
     }
     if o.indices.len() % 3 != 0 {
-        return Err(InputError::IndexCount { index, name: name(), count: o.indices.len() });
+        return Err(InputError::IndexCount {
+            index,
+            name: name(),
+            count: o.indices.len(),
+        });
     }
     if o.normals.len() != nv {
-        return Err(InputError::AttributeCount { index, name: name(), what: "normals", got: o.normals.len(), vertices: nv });
+        return Err(InputError::AttributeCount {
+            index,
+            name: name(),
+            what: "normals",
+            got: o.normals.len(),
+            vertices: nv,
+        });
     }
     if let Some(c) = &o.vertex_colours {
         if c.len() != nv {
-            return Err(InputError::AttributeCount { index, name: name(), what: "vertex colours", got: c.len(), vertices: nv });
+            return Err(InputError::AttributeCount {
+                index,
+                name: name(),
+                what: "vertex colours",
+                got: c.len(),
+                vertices: nv,
+            });
         }
     }
     if let Some(vertex) = o.positions.iter().position(|p| !p.is_finite()) {
-        return Err(InputError::NonFinite { index, name: name(), vertex });
+        return Err(InputError::NonFinite {
+            index,
+            name: name(),
+            vertex,
+        });
     }
     let tris = o.indices.len() / 3;
     let mut keep = Vec::with_capacity(tris);
@@ -104,7 +154,13 @@ fn check_object(index: usize, o: &Object) -> Result<Option<(Part, u64)>, InputEr
     for t in 0..tris {
         let idx = &o.indices[3 * t..3 * t + 3];
         if let Some(&vertex) = idx.iter().find(|&&v| v as usize >= nv) {
-            return Err(InputError::IndexOutOfRange { index, name: name(), triangle: t, vertex, vertices: nv });
+            return Err(InputError::IndexOutOfRange {
+                index,
+                name: name(),
+                triangle: t,
+                vertex,
+                vertices: nv,
+            });
         }
         let [a, b, c] = triangle(o, t as u32);
         let repeated = idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2];
@@ -121,7 +177,14 @@ fn check_object(index: usize, o: &Object) -> Result<Option<(Part, u64)>, InputEr
         return Ok(None);
     }
     let triangles = keep.len();
-    let part = Part { pieces: vec![Piece { object: index as u32, triangles: keep }], bounds, triangles };
+    let part = Part {
+        pieces: vec![Piece {
+            object: index as u32,
+            triangles: keep,
+        }],
+        bounds,
+        triangles,
+    };
     Ok(Some((part, dropped)))
 }
 
@@ -155,29 +218,58 @@ mod tests {
     #[test]
     fn degenerate_triangles_are_dropped_and_counted() {
         let o = object(
-            &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [2.0, 0.0, 0.0]],
+            &[
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [2.0, 0.0, 0.0],
+            ],
             &[0, 1, 2, 0, 0, 1, 0, 1, 3],
         );
-        let m = Model { objects: vec![o], ..Default::default() };
+        let m = Model {
+            objects: vec![o],
+            ..Default::default()
+        };
         let (parts, dropped) = initial_parts(&m).unwrap();
         assert_eq!(dropped, 2);
         assert_eq!(parts[0].pieces[0].triangles, vec![0]);
-        assert_eq!(parts[0].bounds, Aabb::new(DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0)));
+        assert_eq!(
+            parts[0].bounds,
+            Aabb::new(DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0))
+        );
     }
 
     #[test]
     fn out_of_range_index_names_object_and_triangle() {
-        let o = object(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[0, 1, 2, 0, 1, 7]);
-        let m = Model { objects: vec![o], ..Default::default() };
+        let o = object(
+            &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[0, 1, 2, 0, 1, 7],
+        );
+        let m = Model {
+            objects: vec![o],
+            ..Default::default()
+        };
         let e = initial_parts(&m).unwrap_err();
-        assert_eq!(e.to_string(), "object 0 (o): triangle 1 uses vertex 7, but the object has 3 vertices");
+        assert_eq!(
+            e.to_string(),
+            "object 0 (o): triangle 1 uses vertex 7, but the object has 3 vertices"
+        );
     }
 
     #[test]
     fn nan_position_is_rejected() {
-        let o = object(&[[0.0; 3], [f64::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]], &[0, 1, 2]);
-        let m = Model { objects: vec![o], ..Default::default() };
-        assert!(matches!(initial_parts(&m), Err(InputError::NonFinite { vertex: 1, .. })));
+        let o = object(
+            &[[0.0; 3], [f64::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[0, 1, 2],
+        );
+        let m = Model {
+            objects: vec![o],
+            ..Default::default()
+        };
+        assert!(matches!(
+            initial_parts(&m),
+            Err(InputError::NonFinite { vertex: 1, .. })
+        ));
     }
 
     #[test]

@@ -65,7 +65,11 @@ pub fn raw_input_bytes(model: &Model) -> u64 {
         .iter()
         .map(|o| {
             let v = o.positions.len() as u64;
-            let colours = if o.vertex_colours.is_some() { 16 * v } else { 0 };
+            let colours = if o.vertex_colours.is_some() {
+                16 * v
+            } else {
+                0
+            };
             24 * v + colours + 4 * o.indices.len() as u64
         })
         .sum()
@@ -99,11 +103,28 @@ impl Stats {
     pub fn table(&self) -> String {
         let mut s = String::new();
         let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
-        let _ = writeln!(s, "triangles         {} kept, {} degenerate dropped", self.triangles, self.degenerate_dropped);
-        let _ = writeln!(s, "objects           Init {}  Part-I {}  Clust {}  Part-II {}", self.objects_init, self.objects_part1, self.objects_clust, self.objects_part2);
+        let _ = writeln!(
+            s,
+            "triangles         {} kept, {} degenerate dropped",
+            self.triangles, self.degenerate_dropped
+        );
+        let _ = writeln!(
+            s,
+            "objects           Init {}  Part-I {}  Clust {}  Part-II {}",
+            self.objects_init, self.objects_part1, self.objects_clust, self.objects_part2
+        );
         let _ = writeln!(s, "clustering graph  {} edges", self.cluster_edges);
-        let _ = writeln!(s, "hierarchy         {} nodes, {} leaves, depth {}, {} LODs", self.nodes, self.leaves, self.depth, self.lods);
-        let list = |v: &[u64]| v.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(" / ");
+        let _ = writeln!(
+            s,
+            "hierarchy         {} nodes, {} leaves, depth {}, {} LODs",
+            self.nodes, self.leaves, self.depth, self.lods
+        );
+        let list = |v: &[u64]| {
+            v.iter()
+                .map(|t| t.to_string())
+                .collect::<Vec<_>>()
+                .join(" / ")
+        };
         let _ = writeln!(s, "leaf LODs (tris)  {}", list(&self.leaf_lod_triangles));
         let _ = writeln!(s, "HLODs (tris)      {}", list(&self.inner_lod_triangles));
         let _ = writeln!(
@@ -117,7 +138,11 @@ impl Stats {
         for (name, secs) in &self.phase_seconds {
             let _ = writeln!(s, "time {name:<13}{secs:>9.3} s");
         }
-        let _ = writeln!(s, "time total        {:>9.3} s  ({:.0} triangles/s)", self.total_seconds, self.triangles_per_second);
+        let _ = writeln!(
+            s,
+            "time total        {:>9.3} s  ({:.0} triangles/s)",
+            self.total_seconds, self.triangles_per_second
+        );
         if let Some(p) = self.peak_memory_bytes {
             let _ = writeln!(s, "peak memory       {:.1} MiB", mib(p));
         }

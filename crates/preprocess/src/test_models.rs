@@ -6,7 +6,14 @@ use gigawalk_import::Object;
 use glam::{DVec3, Vec3};
 
 fn object(name: &str, positions: Vec<DVec3>, normals: Vec<Vec3>, indices: Vec<u32>) -> Object {
-    Object { name: name.into(), positions, normals, indices, colour: [0.5, 0.5, 0.5, 1.0], vertex_colours: None }
+    Object {
+        name: name.into(),
+        positions,
+        normals,
+        indices,
+        colour: [0.5, 0.5, 0.5, 1.0],
+        vertex_colours: None,
+    }
 }
 
 /// An open cylinder along +X from `start`: `along` x `around` quads, so
@@ -39,7 +46,10 @@ pub fn grid_object(origin: DVec3, size: f64, cells: u32, bump: f64) -> Object {
     let k = cells + 1;
     for i in 0..k {
         for j in 0..k {
-            let (x, z) = (size * i as f64 / cells as f64, size * j as f64 / cells as f64);
+            let (x, z) = (
+                size * i as f64 / cells as f64,
+                size * j as f64 / cells as f64,
+            );
             let y = bump * (x * 1.3).sin() * (z * 0.7).cos();
             p.push(origin + DVec3::new(x, y, z));
             n.push(Vec3::Y);
@@ -57,9 +67,18 @@ pub fn grid_object(origin: DVec3, size: f64, cells: u32, bump: f64) -> Object {
 /// An axis-aligned box from `min` to `max`: 12 triangles, 8 shared vertices.
 pub fn box_object(min: DVec3, max: DVec3) -> Object {
     let p: Vec<DVec3> = (0..8)
-        .map(|i| DVec3::new(if i & 1 == 0 { min.x } else { max.x }, if i & 2 == 0 { min.y } else { max.y }, if i & 4 == 0 { min.z } else { max.z }))
+        .map(|i| {
+            DVec3::new(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            )
+        })
         .collect();
-    let n = p.iter().map(|q| (*q - (min + max) * 0.5).normalize_or_zero().as_vec3()).collect();
+    let n = p
+        .iter()
+        .map(|q| (*q - (min + max) * 0.5).normalize_or_zero().as_vec3())
+        .collect();
     #[rustfmt::skip]
     let idx = vec![
         0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,

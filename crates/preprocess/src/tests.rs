@@ -38,11 +38,17 @@ fn small_plant() -> Model {
         let min = DVec3::new(70.0 + i as f64 * 1.5, 0.0, 30.0);
         objects.push(box_object(min, min + DVec3::splat(0.8)));
     }
-    Model { objects, ..Default::default() }
+    Model {
+        objects,
+        ..Default::default()
+    }
 }
 
 fn small_params() -> Params {
-    Params { t1: 500, ..Params::default() }
+    Params {
+        t1: 500,
+        ..Params::default()
+    }
 }
 
 fn build_in_memory(model: &Model, params: &Params) -> (Built, MemorySink) {
@@ -53,7 +59,12 @@ fn build_in_memory(model: &Model, params: &Params) -> (Built, MemorySink) {
 
 fn part2_rule(built: &Built) -> SplitRule {
     let r = built.stats.resolved.as_ref().unwrap();
-    SplitRule { max_triangles: r.t2, max_diagonal: r.s2, max_aspect: r.r2, at: SplitAt::CentreOfMass }
+    SplitRule {
+        max_triangles: r.t2,
+        max_diagonal: r.s2,
+        max_aspect: r.r2,
+        at: SplitAt::CentreOfMass,
+    }
 }
 
 #[test]
@@ -61,7 +72,14 @@ fn small_plant_meets_every_property() {
     let model = small_plant();
     let (built, sink) = build_in_memory(&model, &small_params());
     let errors: Vec<f32> = sink.0.iter().map(|l| l.1).collect();
-    let v = verify(&model, &built.nodes, &errors, &mut |i| sink.0[i as usize].0.clone(), Some(&part2_rule(&built))).unwrap();
+    let v = verify(
+        &model,
+        &built.nodes,
+        &errors,
+        &mut |i| sink.0[i as usize].0.clone(),
+        Some(&part2_rule(&built)),
+    )
+    .unwrap();
     let s = &built.stats;
     assert_eq!(v.matched_triangles as u64, s.triangles);
     assert_eq!(s.triangles, 9600 + 7200 + 50 * 12);
@@ -69,7 +87,11 @@ fn small_plant_meets_every_property() {
     assert!(s.objects_part1 > s.objects_init, "{s:?}");
     assert!(s.objects_clust < s.objects_part1, "{s:?}");
     assert_eq!(v.leaves, s.objects_part2);
-    assert!(s.leaf_lod_triangles.len() >= 3, "{:?}", s.leaf_lod_triangles);
+    assert!(
+        s.leaf_lod_triangles.len() >= 3,
+        "{:?}",
+        s.leaf_lod_triangles
+    );
     assert!(!s.inner_lod_triangles.is_empty());
 }
 
@@ -83,7 +105,10 @@ fn single_triangle_model() {
         colour: [1.0, 0.0, 0.0, 1.0],
         vertex_colours: None,
     };
-    let model = Model { objects: vec![o], ..Default::default() };
+    let model = Model {
+        objects: vec![o],
+        ..Default::default()
+    };
     let (built, sink) = build_in_memory(&model, &Params::default());
     assert_eq!(built.nodes.len(), 1);
     assert_eq!(sink.0.len(), 1);
@@ -100,7 +125,14 @@ fn scene_far_from_origin_verifies() {
     }
     let (built, sink) = build_in_memory(&model, &small_params());
     let errors: Vec<f32> = sink.0.iter().map(|l| l.1).collect();
-    verify(&model, &built.nodes, &errors, &mut |i| sink.0[i as usize].0.clone(), Some(&part2_rule(&built))).unwrap();
+    verify(
+        &model,
+        &built.nodes,
+        &errors,
+        &mut |i| sink.0[i as usize].0.clone(),
+        Some(&part2_rule(&built)),
+    )
+    .unwrap();
 }
 
 #[test]
@@ -116,7 +148,14 @@ fn scene_file_round_trips_and_verifies() {
     assert_eq!(sk.provenance.source, "small_plant");
     assert_eq!(sk.provenance.parameters["t1"], 500);
     let errors: Vec<f32> = sk.lods.iter().map(|l| l.error).collect();
-    verify(&model, &sk.nodes, &errors, &mut |i| reader.read_lod(i).unwrap(), None).unwrap();
+    verify(
+        &model,
+        &sk.nodes,
+        &errors,
+        &mut |i| reader.read_lod(i).unwrap(),
+        None,
+    )
+    .unwrap();
 }
 
 #[test]
@@ -125,8 +164,12 @@ fn same_input_gives_identical_bytes_with_one_thread_or_many() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str, threads: usize| {
         let path = dir.path().join(name);
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| preprocess(&model, &small_params(), &path, "m", &NoProgress)).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| preprocess(&model, &small_params(), &path, "m", &NoProgress))
+            .unwrap();
         std::fs::read(&path).unwrap()
     };
     let a = run("a.gwk", 1);
@@ -146,7 +189,17 @@ fn bad_input_leaves_no_file() {
     assert!(matches!(e, PreprocessError::Input(_)), "{e}");
     assert!(e.to_string().contains("object 3"), "{e}");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-    let e = preprocess(&small_plant(), &Params { r1: 0.5, ..Params::default() }, &path, "m", &NoProgress).unwrap_err();
+    let e = preprocess(
+        &small_plant(),
+        &Params {
+            r1: 0.5,
+            ..Params::default()
+        },
+        &path,
+        "m",
+        &NoProgress,
+    )
+    .unwrap_err();
     assert!(matches!(e, PreprocessError::Params(_)), "{e}");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }

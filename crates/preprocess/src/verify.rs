@@ -48,16 +48,22 @@ pub fn verify(
     let mut out = Verified::default();
     for (i, n) in nodes.iter().enumerate() {
         for c in n.children() {
-            let child = nodes.get(c as usize).ok_or(format!("node {i}: child {c} out of range"))?;
+            let child = nodes
+                .get(c as usize)
+                .ok_or(format!("node {i}: child {c} out of range"))?;
             if c as usize <= i || child.parent != i as u32 {
-                return Err(format!("node {i}: child {c} is before it or names another parent"));
+                return Err(format!(
+                    "node {i}: child {c} is before it or names another parent"
+                ));
             }
             reached[c as usize] = true;
             if !n.bounds.contains_box(&child.bounds) {
                 return Err(format!("node {i}: box does not contain child {c}'s box"));
             }
         }
-        let errs = errors.get(n.lods()).ok_or(format!("node {i}: LODs out of range"))?;
+        let errs = errors
+            .get(n.lods())
+            .ok_or(format!("node {i}: LODs out of range"))?;
         if errs.windows(2).any(|w| w[1] < w[0]) {
             return Err(format!("node {i}: LOD errors {errs:?} decrease"));
         }
@@ -69,7 +75,9 @@ pub fn verify(
                 let ce = &errors[nodes[c as usize].lods()];
                 if let Some(&coarsest) = ce.last() {
                     if finest < coarsest {
-                        return Err(format!("node {i}: finest error {finest} below child {c}'s coarsest {coarsest}"));
+                        return Err(format!(
+                            "node {i}: finest error {finest} below child {c}'s coarsest {coarsest}"
+                        ));
                     }
                 }
             }
@@ -78,17 +86,34 @@ pub fn verify(
             let m = mesh(l as u32);
             for p in &m.positions {
                 let w = m.origin + glam::Vec3::from_array(*p).as_dvec3();
-                if Aabb::new(n.bounds.min - DVec3::splat(tol), n.bounds.max + DVec3::splat(tol)).distance_to_point(w) > 0.0 {
-                    return Err(format!("node {i}: LOD {l} vertex {w} outside the box {:?}", n.bounds));
+                if Aabb::new(
+                    n.bounds.min - DVec3::splat(tol),
+                    n.bounds.max + DVec3::splat(tol),
+                )
+                .distance_to_point(w)
+                    > 0.0
+                {
+                    return Err(format!(
+                        "node {i}: LOD {l} vertex {w} outside the box {:?}",
+                        n.bounds
+                    ));
                 }
             }
             if l == n.first_lod as usize && n.is_leaf() {
                 out.leaves += 1;
                 let tris = m.triangle_count();
                 if let Some(rule) = targets {
-                    let b = Aabb::from_points(m.positions.iter().map(|p| m.origin + glam::Vec3::from_array(*p).as_dvec3()));
+                    let b = Aabb::from_points(
+                        m.positions
+                            .iter()
+                            .map(|p| m.origin + glam::Vec3::from_array(*p).as_dvec3()),
+                    );
                     // A little slack: the box here is of f32-rounded positions.
-                    let relaxed = SplitRule { max_diagonal: rule.max_diagonal * (1.0 + 1e-5) + tol, max_aspect: rule.max_aspect * (1.0 + 1e-5), ..*rule };
+                    let relaxed = SplitRule {
+                        max_diagonal: rule.max_diagonal * (1.0 + 1e-5) + tol,
+                        max_aspect: rule.max_aspect * (1.0 + 1e-5),
+                        ..*rule
+                    };
                     if tris > 1 && relaxed.needs_split(tris, &b) {
                         return Err(format!(
                             "leaf {i}: {tris} triangles, diagonal {}, aspect {} miss the partition targets {rule:?}",
@@ -98,10 +123,16 @@ pub fn verify(
                     }
                 }
                 for t in 0..tris {
-                    let v = |k: usize| m.origin + glam::Vec3::from_array(m.positions[m.indices[3 * t + k] as usize]).as_dvec3();
+                    let v = |k: usize| {
+                        m.origin
+                            + glam::Vec3::from_array(m.positions[m.indices[3 * t + k] as usize])
+                                .as_dvec3()
+                    };
                     let tri = [v(0), v(1), v(2)];
                     if !index.take(&tri, tol) {
-                        return Err(format!("leaf {i}: triangle {t} {tri:?} matches no unused input triangle"));
+                        return Err(format!(
+                            "leaf {i}: triangle {t} {tri:?} matches no unused input triangle"
+                        ));
                     }
                     out.matched_triangles += 1;
                 }
@@ -112,7 +143,10 @@ pub fn verify(
         return Err(format!("node {i} is not reachable from the root"));
     }
     if index.left > 0 {
-        return Err(format!("{} input triangles are in no leaf's finest LOD", index.left));
+        return Err(format!(
+            "{} input triangles are in no leaf's finest LOD",
+            index.left
+        ));
     }
     Ok(out)
 }
@@ -126,13 +160,27 @@ struct TriangleIndex {
 
 impl TriangleIndex {
     fn new(model: &Model, cell: f64) -> Self {
-        let mut s = TriangleIndex { cell, cells: HashMap::new(), left: 0 };
+        let mut s = TriangleIndex {
+            cell,
+            cells: HashMap::new(),
+            left: 0,
+        };
         for o in &model.objects {
             for t in o.indices.chunks_exact(3) {
-                let tri = [o.positions[t[0] as usize], o.positions[t[1] as usize], o.positions[t[2] as usize]];
-                let degenerate = t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() == 0.0;
+                let tri = [
+                    o.positions[t[0] as usize],
+                    o.positions[t[1] as usize],
+                    o.positions[t[2] as usize],
+                ];
+                let degenerate = t[0] == t[1]
+                    || t[1] == t[2]
+                    || t[0] == t[2]
+                    || (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() == 0.0;
                 if !degenerate {
-                    s.cells.entry(s.key((tri[0] + tri[1] + tri[2]) / 3.0)).or_default().push((tri, false));
+                    s.cells
+                        .entry(s.key((tri[0] + tri[1] + tri[2]) / 3.0))
+                        .or_default()
+                        .push((tri, false));
                     s.left += 1;
                 }
             }
@@ -152,7 +200,9 @@ impl TriangleIndex {
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let Some(list) = self.cells.get_mut(&[k[0] + dx, k[1] + dy, k[2] + dz]) else { continue };
+                    let Some(list) = self.cells.get_mut(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                        continue;
+                    };
                     for (cand, used) in list.iter_mut() {
                         if !*used && (0..3).all(|i| cand[i].distance(tri[i]) <= tol) {
                             *used = true;

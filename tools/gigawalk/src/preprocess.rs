@@ -79,9 +79,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let progress = Display::new();
     let t = Instant::now();
     progress.line(&format!("importing {}", args.input.display()));
-    let model = gigawalk_import::import(&args.input).with_context(|| format!("cannot import {}", args.input.display()))?;
+    let model = gigawalk_import::import(&args.input)
+        .with_context(|| format!("cannot import {}", args.input.display()))?;
     let import_secs = t.elapsed().as_secs_f64();
-    let kept: u64 = model.objects.iter().map(|o| o.triangle_count() as u64).sum();
+    let kept: u64 = model
+        .objects
+        .iter()
+        .map(|o| o.triangle_count() as u64)
+        .sum();
     progress.line(&format!(
         "import: {} objects, {kept} triangles ({} degenerate dropped) in {import_secs:.2} s",
         model.objects.len(),
@@ -93,10 +98,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     let import_dropped = model.stats.degenerate_triangles_dropped;
     let source = args.input.display().to_string();
-    let mut stats = preprocess(&model, &params, &args.output, &source, &progress)
-        .with_context(|| format!("cannot preprocess {} into {}", args.input.display(), args.output.display()))?;
+    let mut stats =
+        preprocess(&model, &params, &args.output, &source, &progress).with_context(|| {
+            format!(
+                "cannot preprocess {} into {}",
+                args.input.display(),
+                args.output.display()
+            )
+        })?;
     drop(model);
-    stats.phase_seconds.insert(0, ("import".into(), import_secs));
+    stats
+        .phase_seconds
+        .insert(0, ("import".into(), import_secs));
     stats.input_file_bytes = std::fs::metadata(&args.input).map(|m| m.len()).unwrap_or(0);
     // Triangles the importer dropped never reach the preprocessor; count them too.
     stats.degenerate_dropped += import_dropped;
@@ -114,7 +127,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     println!("wrote {}", args.output.display());
     if let Some(path) = &args.stats {
         let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
-        std::fs::write(path, json + "\n").with_context(|| format!("cannot write {}", path.display()))?;
+        std::fs::write(path, json + "\n")
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
     Ok(())
 }
@@ -128,7 +142,10 @@ struct Display {
 
 impl Display {
     fn new() -> Self {
-        Display { terminal: std::io::stderr().is_terminal(), bar: Mutex::new(None) }
+        Display {
+            terminal: std::io::stderr().is_terminal(),
+            bar: Mutex::new(None),
+        }
     }
 
     fn line(&self, s: &str) {
@@ -141,8 +158,16 @@ impl Progress for Display {
         if !self.terminal {
             return;
         }
-        let bar = if total > 0 { ProgressBar::new(total) } else { ProgressBar::new_spinner() };
-        let template = if total > 0 { "{prefix:>13} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}" } else { "{prefix:>13} {spinner} {elapsed_precise}" };
+        let bar = if total > 0 {
+            ProgressBar::new(total)
+        } else {
+            ProgressBar::new_spinner()
+        };
+        let template = if total > 0 {
+            "{prefix:>13} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}"
+        } else {
+            "{prefix:>13} {spinner} {elapsed_precise}"
+        };
         if let Ok(style) = ProgressStyle::with_template(template) {
             bar.set_style(style.progress_chars("=> "));
         }

@@ -47,6 +47,7 @@ fn check(kind: Kind) {
         .map(|p| CameraRequest {
             camera: Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), 0.05),
             read_back: true,
+            hold_culling: false,
         })
         .collect();
     assert_eq!(cameras.len(), FRAMES);

@@ -29,6 +29,7 @@ fn walk(frames: usize, shift: DVec3, read_back: bool) -> CameraList {
             CameraRequest {
                 camera: Camera::look_at(eye, target, 60f64.to_radians(), W as f64 / H as f64, 0.05),
                 read_back,
+                hold_culling: false,
             }
         })
         .collect();
@@ -264,4 +265,80 @@ fn bad_options_and_cameras_are_errors() {
         matches!(e, RuntimeError::Camera(ref m) if m.contains("frame 1")),
         "{e}"
     );
+}
+
+#[test]
+fn held_culling_reuses_the_frozen_set_in_every_schedule() {
+    let Some(devices) = devices_or_skip(2, "hold culling") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    for (schedule, async_rvg) in [
+        (Schedule::Sequential, false),
+        (Schedule::Pipelined, false),
+        (Schedule::Pipelined, true),
+    ] {
+        let mut cams = walk(20, DVec3::ZERO, false);
+        for c in &mut cams.cameras[10..] {
+            c.hold_culling = true;
+        }
+        let mut o = options(schedule, true, true, 1.0);
+        o.async_rvg = async_rvg;
+        o.record_culled = true;
+        let frames = run(&rt, &o, cams).unwrap();
+        assert_eq!(frames.len(), 20);
+        // Frames 10.. draw exactly what frame 9 drew (with async RVG, frame
+        // 9 may itself have drawn an earlier camera's set).
+        for r in &frames[10..] {
+            assert!(r.reused_visible_set);
+            assert_eq!(
+                r.visible, frames[9].visible,
+                "{schedule:?} async {async_rvg}, frame {}",
+                r.frame
+            );
+        }
+        if !async_rvg {
+            assert!(frames[..10].iter().all(|r| !r.reused_visible_set));
+        }
+        for r in &frames {
+            assert_eq!(
+                r.culled.len() as u64,
+                r.stats.frustum_culled + r.stats.occlusion_culled
+            );
+        }
+    }
+}
+
+#[test]
+fn async_rvg_renders_every_camera() {
+    let Some(devices) = devices_or_skip(2, "async RVG") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    let mut o = options(Schedule::Pipelined, true, true, 1.0);
+    o.async_rvg = true;
+    let frames = run(&rt, &o, walk(40, DVec3::ZERO, true)).unwrap();
+    assert_eq!(frames.len(), 40);
+    for (i, r) in frames.iter().enumerate() {
+        assert_eq!(r.frame, i as u64);
+        assert!(r.image.is_some());
+        assert!(!r.visible.is_empty());
+    }
+    // Failures stop the asynchronous schedule too.
+    for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
+        o.inject_failure = Some((stage, 3));
+        let e = run(&rt, &o, walk(1000, DVec3::ZERO, false)).unwrap_err();
+        assert!(
+            matches!(e, RuntimeError::Injected { stage: s, .. } if s == stage),
+            "{e}"
+        );
+    }
+    o.schedule = Schedule::Sequential;
+    o.inject_failure = None;
+    assert!(run(&rt, &o, walk(3, DVec3::ZERO, false))
+        .unwrap_err()
+        .to_string()
+        .contains("pipelined"));
 }

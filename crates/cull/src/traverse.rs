@@ -54,6 +54,15 @@ impl<F: FnMut(DrawItem)> DrawSink for F {
     }
 }
 
+/// Why traversal culled a node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CullReason {
+    /// Outside the view frustum.
+    Frustum,
+    /// Hidden behind the occluders (the occlusion test said invisible).
+    Occlusion,
+}
+
 /// What one traversal did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalStats {
@@ -167,6 +176,25 @@ impl Traverser {
         O: OcclusionTest + ?Sized,
         S: DrawSink + ?Sized,
     {
+        self.traverse_recording(skeleton, view, occlusion, options, sink, &mut |_, _| {})
+    }
+
+    /// Like [`Traverser::traverse`], and also tells `culled` about every
+    /// node it culls and why (the viewer colours their boxes).
+    pub fn traverse_recording<O, S, C>(
+        &mut self,
+        skeleton: &Skeleton,
+        view: &CullView,
+        occlusion: &O,
+        options: &TraversalOptions,
+        sink: &mut S,
+        culled: &mut C,
+    ) -> TraversalStats
+    where
+        O: OcclusionTest + ?Sized,
+        S: DrawSink + ?Sized,
+        C: FnMut(u32, CullReason) + ?Sized,
+    {
         let mut stats = TraversalStats::default();
         self.heap.clear();
         if skeleton.nodes.is_empty() {
@@ -189,11 +217,13 @@ impl Traverser {
             };
             if containment == Containment::Outside {
                 stats.frustum_culled += 1;
+                culled(node, CullReason::Frustum);
                 continue;
             }
             if options.occlusion && !occlusion.is_visible(view, &crate::RelBox::from_f64(min, max))
             {
                 stats.occlusion_culled += 1;
+                culled(node, CullReason::Occlusion);
                 continue;
             }
             match choose(skeleton, node, distance, view, options) {
@@ -383,6 +413,27 @@ mod tests {
             ),
             n([0.5, -1.0, -12.0], [2.0, 1.0, -10.0], 0..0, &[0.0, 0.0625]),
         ])
+    }
+
+    #[test]
+    fn recording_names_every_frustum_culled_node() {
+        // Looking away (+Z) from the two leaves: the root is outside.
+        let eye = DVec3::ZERO;
+        let away = CullView::new(
+            Camera::look_at(eye, eye + DVec3::Z, 90f64.to_radians(), 1.0, 0.1),
+            Viewport::new(100, 100),
+        );
+        let mut culled = Vec::new();
+        let stats = Traverser::new().traverse_recording(
+            &two_leaves(),
+            &away,
+            &NoOcclusion,
+            &TraversalOptions::default(),
+            &mut |_| {},
+            &mut |node, why| culled.push((node, why)),
+        );
+        assert_eq!(culled, [(0, CullReason::Frustum)]);
+        assert_eq!(stats.frustum_culled, 1);
     }
 
     #[test]

@@ -196,7 +196,9 @@ fn target(
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     })
 }
@@ -387,6 +389,18 @@ impl VisiblePass {
         (self.width, self.height)
     }
 
+    /// The offscreen colour target (`COLOUR_FORMAT`), for presenting and
+    /// overlays once a frame is finished.
+    pub fn colour_texture(&self) -> &wgpu::Texture {
+        &self.colour
+    }
+
+    /// The depth target (`DEPTH_FORMAT`, reversed-Z), for overlays that
+    /// depth-test against the frame.
+    pub fn depth_texture(&self) -> &wgpu::Texture {
+        &self.depth
+    }
+
     /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
     pub fn begin(&mut self, ctx: &GpuContext, view: &View) {
         self.drawer.begin(ctx, view, false);
@@ -447,6 +461,11 @@ impl VisiblePass {
             ctx.check()?;
             return Ok(None);
         }
+        self.read_back(ctx).map(Some)
+    }
+
+    /// Reads back the last finished frame's colour and depth.
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<FrameImage, GpuError> {
         let colour = read_texture(
             ctx,
             &self.colour,
@@ -456,7 +475,7 @@ impl VisiblePass {
             wgpu::TextureAspect::All,
         )?;
         let depth = read_depth(ctx, &self.depth, self.width, self.height)?;
-        Ok(Some(FrameImage { colour, depth }))
+        Ok(FrameImage { colour, depth })
     }
 }
 

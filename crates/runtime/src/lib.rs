@@ -21,8 +21,10 @@ mod stages;
 
 use std::time::Instant;
 
-pub use gigawalk_cull::{Camera, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport};
-pub use gigawalk_gpu::{FrameImage, GpuContext, GpuError};
+pub use gigawalk_cull::{
+    Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
+};
+pub use gigawalk_gpu::{FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{RuntimeOptions, Schedule, Stage};
 
 use gigawalk_gpu::{HostGeometry, ResidentGeometry};
@@ -54,6 +56,46 @@ pub struct CameraRequest {
     pub camera: Camera,
     /// Read back this frame's colour and depth (accuracy checks, screenshots).
     pub read_back: bool,
+    /// Freeze culling: draw the last culled visible set (same nodes and
+    /// LODs) with this camera; OR and STC do no work for this frame. The
+    /// viewer uses it to fly around a frozen visible set.
+    pub hold_culling: bool,
+}
+
+impl CameraRequest {
+    pub fn new(camera: Camera, read_back: bool) -> Self {
+        CameraRequest {
+            camera,
+            read_back,
+            hold_culling: false,
+        }
+    }
+}
+
+/// Shows frames as they finish, on the RVG thread: the viewer blits the
+/// offscreen target to its window, draws overlays and presents.
+pub trait Presenter: Send {
+    /// Called after `pass` holds the finished frame (before any read-back).
+    fn present(
+        &mut self,
+        ctx: &GpuContext,
+        pass: &VisiblePass,
+        report: &FrameReport,
+    ) -> Result<(), GpuError>;
+}
+
+/// A presenter that shows nothing (replay, tests).
+pub struct NoPresenter;
+
+impl Presenter for NoPresenter {
+    fn present(
+        &mut self,
+        _: &GpuContext,
+        _: &VisiblePass,
+        _: &FrameReport,
+    ) -> Result<(), GpuError> {
+        Ok(())
+    }
 }
 
 /// Where cameras come from: a replayed path, or the viewer's input. Called
@@ -92,6 +134,11 @@ pub struct FrameReport {
     pub stats: TraversalStats,
     /// The nodes drawn and their LODs, in STC's order.
     pub visible: Vec<DrawItem>,
+    /// Nodes culled and why, when `RuntimeOptions::record_culled` is set.
+    pub culled: Vec<(u32, CullReason)>,
+    /// The frame reused an older visible set: culling was held (frozen), or
+    /// asynchronous RVG drew before STC had this camera's set.
+    pub reused_visible_set: bool,
     pub image: Option<FrameImage>,
 }
 
@@ -173,10 +220,34 @@ impl<'s> Runtime<'s> {
         source: &mut dyn CameraSource,
         on_frame: &mut dyn FnMut(FrameReport) -> bool,
     ) -> Result<u64, RuntimeError> {
+        self.run_presenting(opts, source, on_frame, &mut NoPresenter)
+    }
+
+    /// Like [`Runtime::run`], showing every frame through `presenter` on
+    /// the RVG thread.
+    pub fn run_presenting(
+        &self,
+        opts: &RuntimeOptions,
+        source: &mut dyn CameraSource,
+        on_frame: &mut dyn FnMut(FrameReport) -> bool,
+        presenter: &mut dyn Presenter,
+    ) -> Result<u64, RuntimeError> {
         opts.validate().map_err(RuntimeError::Options)?;
-        match opts.schedule {
-            Schedule::Sequential => pipeline::run_sequential(self, opts, source, on_frame),
-            Schedule::Pipelined => pipeline::run_pipelined(self, opts, source, on_frame),
+        match (opts.schedule, opts.async_rvg) {
+            (Schedule::Sequential, _) => {
+                pipeline::run_sequential(self, opts, source, on_frame, presenter)
+            }
+            (Schedule::Pipelined, false) => {
+                pipeline::run_pipelined(self, opts, source, on_frame, presenter)
+            }
+            (Schedule::Pipelined, true) => {
+                pipeline::run_async(self, opts, source, on_frame, presenter)
+            }
         }
+    }
+
+    /// Device `i` (0 = OR's; RVG uses 1 when there are two).
+    pub fn device(&self, i: usize) -> &GpuContext {
+        &self.devices[i.min(self.devices.len() - 1)]
     }
 }

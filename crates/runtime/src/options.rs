@@ -60,6 +60,14 @@ pub struct RuntimeOptions {
     pub chunk: usize,
     /// Near plane distance in model units.
     pub near: f64,
+    /// Asynchronous RVG (Section 5.3): RVG does not wait for STC's list of
+    /// the current camera; it draws the newest finished list with the
+    /// newest camera. Removes a frame of latency; may show brief occlusion
+    /// errors when the camera moves fast. Pipelined schedule only.
+    pub async_rvg: bool,
+    /// Fill `FrameReport::culled` with every culled node (for the viewer's
+    /// box overlay); off by default since big scenes cull many nodes.
+    pub record_culled: bool,
     /// Test hook: make a stage fail at a frame, to check that any stage's
     /// error stops every stage.
     pub inject_failure: Option<(Stage, u64)>,
@@ -78,6 +86,8 @@ impl Default for RuntimeOptions {
             devices: 2,
             chunk: 256,
             near: 0.05,
+            async_rvg: false,
+            record_culled: false,
             inject_failure: None,
         }
     }
@@ -117,6 +127,9 @@ impl RuntimeOptions {
             if !(1..=4).contains(&n) {
                 return Err(format!("n-th farthest HZB needs n in 1..=4, got {n}"));
             }
+        }
+        if self.async_rvg && self.schedule == Schedule::Sequential {
+            return Err("asynchronous RVG needs the pipelined schedule".into());
         }
         if self.chunk == 0 {
             return Err("chunk must be at least 1".into());

@@ -1,20 +1,29 @@
-//! The two schedules: three threads joined by queues, or one thread.
+//! The schedules: three threads joined by queues (synchronous or with
+//! asynchronous RVG), or one thread.
 
+use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
-use crossbeam_channel::{bounded, unbounded, Receiver, Sender};
-use gigawalk_cull::{CullView, DrawItem, TraversalStats, Viewport};
+use crossbeam_channel::{bounded, unbounded, Receiver, Sender, TryRecvError};
+use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::DepthImage;
 
-use crate::stages::{lod_ids, OrStage, RvgStage, StcStage};
-use crate::{CameraSource, FrameReport, Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::stages::{lod_ids, OrStage, RvgStage, StcOutput, StcStage};
+use crate::{CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
 
-/// OR -> STC: one frame's camera and occluder depth.
-struct OrToStc {
+/// One camera as OR took it.
+#[derive(Clone)]
+struct Sample {
     frame: u64,
     view: CullView,
     read_back: bool,
+    hold: bool,
     sampled_at: Instant,
+}
+
+/// OR -> STC: one frame's camera and occluder depth.
+struct OrToStc {
+    sample: Sample,
     depth: Option<DepthImage>,
     occluder_items: usize,
     or_ms: f64,
@@ -23,31 +32,26 @@ struct OrToStc {
 /// STC -> RVG: a frame is `Begin`, any number of `Items`, then the
 /// sentinel `End` carrying the frame number, camera and statistics.
 enum StcToRvg {
-    Begin { frame: u64, view: Box<CullView> },
+    Begin(u64, Box<CullView>),
     Items(Vec<u32>),
     End(Box<FrameEnd>),
 }
 
+/// What the sentinel carries.
 struct FrameEnd {
-    frame: u64,
-    view: CullView,
-    read_back: bool,
-    sampled_at: Instant,
+    sample: Sample,
     occluder_items: usize,
     or_ms: f64,
-    hzb_ms: f64,
-    stc_ms: f64,
-    occlusion_used: bool,
-    stats: TraversalStats,
-    visible: Vec<DrawItem>,
+    stc: StcOutput,
+    reused: bool,
 }
 
 /// The view of camera request `frame`, or `None` at the end of the source.
-fn next_view(
+fn next_sample(
     source: &mut dyn CameraSource,
     frame: u64,
     opts: &RuntimeOptions,
-) -> Result<Option<(CullView, bool)>, RuntimeError> {
+) -> Result<Option<Sample>, RuntimeError> {
     let Some(req) = source.next_camera(frame).map_err(RuntimeError::Camera)? else {
         return Ok(None);
     };
@@ -57,15 +61,75 @@ fn next_view(
         ..req.camera
     };
     if !camera.is_valid() {
-        return Err(RuntimeError::Camera(format!("frame {frame}: camera {camera:?} is not valid (non-finite position, bad orientation or field of view)")));
+        return Err(RuntimeError::Camera(format!(
+            "frame {frame}: camera {camera:?} is not valid (non-finite position, bad orientation or field of view)"
+        )));
     }
-    Ok(Some((CullView::new(camera, viewport), req.read_back)))
+    Ok(Some(Sample {
+        frame,
+        view: CullView::new(camera, viewport),
+        read_back: req.read_back,
+        hold: req.hold_culling,
+        sampled_at: Instant::now(),
+    }))
 }
 
-/// Occluders of frame i: the visible set of frame i - lag, if occlusion is on
-/// and that frame exists.
+/// Whether frame `frame` culls against occluders (not in the startup bypass).
 fn wants_occluders(opts: &RuntimeOptions, frame: u64) -> bool {
     opts.traversal.occlusion && frame >= opts.occluder_lag as u64
+}
+
+/// The result of a held frame: the last culled set, unchanged. Before any
+/// frame was culled there is nothing to hold, so the frame culls normally.
+fn held(last: &Option<StcOutput>) -> Option<StcOutput> {
+    last.clone().map(|mut s| {
+        s.ms = 0.0;
+        s.hzb_ms = 0.0;
+        s
+    })
+}
+
+fn report(end: FrameEnd, image: Option<gigawalk_gpu::FrameImage>, rvg_ms: f64) -> FrameReport {
+    FrameReport {
+        frame: end.sample.frame,
+        camera: end.sample.view.camera,
+        sampled_at: end.sample.sampled_at,
+        finished_at: Instant::now(),
+        occlusion_used: end.stc.occlusion_used,
+        occluder_items: end.occluder_items,
+        or_ms: end.or_ms,
+        hzb_ms: end.stc.hzb_ms,
+        stc_ms: end.stc.ms,
+        rvg_ms,
+        stats: end.stc.stats,
+        visible: end.stc.visible,
+        culled: end.stc.culled,
+        reused_visible_set: end.reused,
+        image,
+    }
+}
+
+/// Finishes RVG's frame: presents, then reads back if asked.
+fn finish_frame(
+    rvg: &mut RvgStage,
+    presenter: &mut dyn Presenter,
+    end: FrameEnd,
+) -> Result<FrameReport, RuntimeError> {
+    let read_back = end.sample.read_back;
+    let (_, rvg_ms) = rvg.finish(false)?;
+    let mut r = report(end, None, rvg_ms);
+    presenter
+        .present(rvg.ctx, &rvg.pass, &r)
+        .map_err(|source| RuntimeError::Gpu {
+            stage: Stage::Rvg,
+            source,
+        })?;
+    if read_back {
+        r.image = rvg.read_back()?;
+    }
+    r.rvg_ms = (Instant::now() - r.finished_at).as_secs_f64() * 1e3 + rvg_ms;
+    r.finished_at = Instant::now();
+    Ok(r)
 }
 
 pub(crate) fn run_sequential(
@@ -73,46 +137,47 @@ pub(crate) fn run_sequential(
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
+    presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
     let (ctx, geometry) = (&rt.devices[0], &rt.geometry[0]);
     let mut or = OrStage::new(ctx, geometry, rt.skeleton, opts);
     let mut stc = StcStage::new(rt.skeleton, opts);
     let mut rvg = RvgStage::new(ctx, geometry, opts);
     let mut history: std::collections::VecDeque<Vec<DrawItem>> = Default::default();
+    let mut last: Option<StcOutput> = None;
     let mut frame = 0u64;
-    while let Some((view, read_back)) = next_view(source, frame, opts)? {
-        let sampled_at = Instant::now();
-        let occluders = wants_occluders(opts, frame)
-            .then(|| history.front().map(|v| v.as_slice()).unwrap_or(&[]));
-        let o = or.run(frame, &view, occluders)?;
+    while let Some(sample) = next_sample(source, frame, opts)? {
+        let view = sample.view.clone();
+        let (stc_out, o, reused) = match held(&last).filter(|_| sample.hold) {
+            Some(s) => (s, None, true),
+            None => {
+                let occluders = wants_occluders(opts, frame)
+                    .then(|| history.front().map(|v| v.as_slice()).unwrap_or(&[]));
+                let o = or.run(frame, &view, occluders)?;
+                let s = stc.run(frame, &view, o.depth.as_ref(), &mut |_| {})?;
+                (s, Some(o), false)
+            }
+        };
         rvg.begin(frame, &view)?;
-        // Same chunking as the pipeline, drawn after traversal.
-        let s = stc.run(frame, &view, o.depth.as_ref(), &mut |_| {})?;
-        for chunk in lod_ids(rt.skeleton, &s.visible).chunks(opts.chunk) {
+        // The same chunks as the pipeline, drawn after traversal.
+        for chunk in lod_ids(rt.skeleton, &stc_out.visible).chunks(opts.chunk) {
             rvg.draw(chunk);
         }
-        let (image, rvg_ms) = rvg.finish(read_back)?;
-        history.push_back(s.visible.clone());
+        history.push_back(stc_out.visible.clone());
         if history.len() > opts.occluder_lag as usize {
             history.pop_front();
         }
-        let report = FrameReport {
-            frame,
-            camera: view.camera,
-            sampled_at,
-            finished_at: Instant::now(),
-            occlusion_used: s.occlusion_used,
-            occluder_items: o.occluder_items,
-            or_ms: o.ms,
-            hzb_ms: s.hzb_ms,
-            stc_ms: s.ms,
-            rvg_ms,
-            stats: s.stats,
-            visible: s.visible,
-            image,
+        last = Some(stc_out.clone());
+        let end = FrameEnd {
+            sample,
+            occluder_items: o.as_ref().map_or(0, |o| o.occluder_items),
+            or_ms: o.as_ref().map_or(0.0, |o| o.ms),
+            stc: stc_out,
+            reused,
         };
+        let r = finish_frame(&mut rvg, presenter, end)?;
         frame += 1;
-        if !on_frame(report) {
+        if !on_frame(r) {
             break;
         }
     }
@@ -126,81 +191,112 @@ fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
         .unwrap_or_else(|| "unknown panic".into())
 }
 
+/// One stage's thread body.
+type StageBody<'scope> = Box<dyn FnOnce() -> Result<(), RuntimeError> + Send + 'scope>;
+
+/// Runs the three stage bodies on their own threads, feeds reports to
+/// `on_frame` on this thread, and returns the first stage error.
+fn run_threads<'scope, 'env>(
+    s: &'scope std::thread::Scope<'scope, 'env>,
+    stages: [(Stage, StageBody<'scope>); 3],
+    reports: Receiver<FrameReport>,
+    on_frame: &mut dyn FnMut(FrameReport) -> bool,
+) -> Result<u64, RuntimeError> {
+    let handles: Vec<_> = stages
+        .into_iter()
+        .map(|(stage, body)| {
+            let h = std::thread::Builder::new()
+                .name(format!("gigawalk-{stage}"))
+                .spawn_scoped(s, body)
+                .expect("spawn stage thread");
+            (stage, h)
+        })
+        .collect();
+    let mut frames = 0;
+    for report in reports.iter() {
+        frames += 1;
+        if !on_frame(report) {
+            break;
+        }
+    }
+    // Closing the report queue stops RVG, whose queues closing stop the rest.
+    drop(reports);
+    let mut first_error = None;
+    for (stage, handle) in handles {
+        let result = handle.join().unwrap_or_else(|p| {
+            Err(RuntimeError::Panic {
+                stage,
+                message: panic_message(p),
+            })
+        });
+        // A stage that merely saw its queue close returns Ok, so the error
+        // kept is the root cause.
+        if let Err(e) = result {
+            first_error.get_or_insert(e);
+        }
+    }
+    match first_error {
+        Some(e) => Err(e),
+        None => Ok(frames),
+    }
+}
+
+fn rvg_device(rt: &Runtime, opts: &RuntimeOptions) -> usize {
+    if opts.devices >= 2 && rt.devices.len() >= 2 {
+        1
+    } else {
+        0
+    }
+}
+
 pub(crate) fn run_pipelined(
     rt: &Runtime,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
+    presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
-    let a = 0;
-    let b = if opts.devices >= 2 && rt.devices.len() >= 2 {
-        1
-    } else {
-        0
-    };
     // Small queues keep latency bounded: OR runs at most one frame ahead of
     // STC; RVG's queue holds a few frames' chunks.
     let (or_tx, or_rx) = bounded::<OrToStc>(1);
     let (rvg_tx, rvg_rx) = bounded::<StcToRvg>(64);
     let (feedback_tx, feedback_rx) = unbounded::<Vec<DrawItem>>();
     let (report_tx, report_rx) = bounded::<FrameReport>(4);
-
+    let b = rvg_device(rt, opts);
     std::thread::scope(|s| {
-        let or = std::thread::Builder::new()
-            .name("gigawalk-OR".into())
-            .spawn_scoped(s, || or_thread(rt, a, opts, source, or_tx, feedback_rx))
-            .expect("spawn OR");
-        let stc = std::thread::Builder::new()
-            .name("gigawalk-STC".into())
-            .spawn_scoped(s, || stc_thread(rt, opts, or_rx, rvg_tx, feedback_tx))
-            .expect("spawn STC");
-        let rvg = std::thread::Builder::new()
-            .name("gigawalk-RVG".into())
-            .spawn_scoped(s, || rvg_thread(rt, b, opts, rvg_rx, report_tx))
-            .expect("spawn RVG");
-        let mut frames = 0;
-        for report in report_rx.iter() {
-            frames += 1;
-            if !on_frame(report) {
-                break;
-            }
-        }
-        // Closing the report queue stops RVG, which stops STC, which stops OR.
-        drop(report_rx);
-        let mut first_error = None;
-        for (stage, handle) in [(Stage::Or, or), (Stage::Stc, stc), (Stage::Rvg, rvg)] {
-            let result = handle.join().unwrap_or_else(|p| {
-                Err(RuntimeError::Panic {
-                    stage,
-                    message: panic_message(p),
-                })
-            });
-            if let Err(e) = result {
-                // Report the root cause: a stage that failed on its own,
-                // not one that merely saw its queue close.
-                first_error.get_or_insert(e);
-            }
-        }
-        match first_error {
-            Some(e) => Err(e),
-            None => Ok(frames),
-        }
+        run_threads(
+            s,
+            [
+                (
+                    Stage::Or,
+                    Box::new(move || or_thread(rt, opts, source, or_tx, feedback_rx)),
+                ),
+                (
+                    Stage::Stc,
+                    Box::new(move || stc_thread(rt, opts, or_rx, rvg_tx, feedback_tx)),
+                ),
+                (
+                    Stage::Rvg,
+                    Box::new(move || rvg_thread(rt, b, opts, rvg_rx, report_tx, presenter)),
+                ),
+            ],
+            report_rx,
+            on_frame,
+        )
     })
 }
 
 fn or_thread(
     rt: &Runtime,
-    device: usize,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     out: Sender<OrToStc>,
     feedback: Receiver<Vec<DrawItem>>,
 ) -> Result<(), RuntimeError> {
-    let mut or = OrStage::new(&rt.devices[device], &rt.geometry[device], rt.skeleton, opts);
+    let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
     let mut frame = 0u64;
     let mut occluders: Vec<DrawItem> = Vec::new();
-    while let Some((view, read_back)) = next_view(source, frame, opts)? {
-        let sampled_at = Instant::now();
+    while let Some(sample) = next_sample(source, frame, opts)? {
         // Frame i's occluders are STC(i - lag)'s visible set; with lag 2
         // it was usually finished while OR drew frame i - 1.
         if frame >= opts.occluder_lag as u64 {
@@ -209,19 +305,25 @@ fn or_thread(
                 Err(_) => return Ok(()), // STC stopped: its error is reported there
             }
         }
-        let o = or.run(
-            frame,
-            &view,
-            wants_occluders(opts, frame).then_some(occluders.as_slice()),
-        )?;
-        let msg = OrToStc {
-            frame,
-            view,
-            read_back,
-            sampled_at,
-            depth: o.depth,
-            occluder_items: o.occluder_items,
-            or_ms: o.ms,
+        let msg = if sample.hold {
+            OrToStc {
+                sample,
+                depth: None,
+                occluder_items: 0,
+                or_ms: 0.0,
+            }
+        } else {
+            let o = or.run(
+                frame,
+                &sample.view,
+                wants_occluders(opts, frame).then_some(occluders.as_slice()),
+            )?;
+            OrToStc {
+                sample,
+                depth: o.depth,
+                occluder_items: o.occluder_items,
+                or_ms: o.ms,
+            }
         };
         if out.send(msg).is_err() {
             return Ok(());
@@ -239,46 +341,49 @@ fn stc_thread(
     feedback: Sender<Vec<DrawItem>>,
 ) -> Result<(), RuntimeError> {
     let mut stc = StcStage::new(rt.skeleton, opts);
+    let mut last: Option<StcOutput> = None;
     for m in input.iter() {
+        let frame = m.sample.frame;
         if out
-            .send(StcToRvg::Begin {
-                frame: m.frame,
-                view: Box::new(m.view.clone()),
-            })
+            .send(StcToRvg::Begin(frame, Box::new(m.sample.view.clone())))
             .is_err()
         {
             return Ok(());
         }
-        let mut chunk = Vec::with_capacity(opts.chunk);
-        let mut closed = false;
-        let s = stc.run(m.frame, &m.view, m.depth.as_ref(), &mut |item| {
-            chunk.push(rt.skeleton.nodes[item.node as usize].first_lod + item.lod);
-            if chunk.len() == opts.chunk && !closed {
-                closed = out
-                    .send(StcToRvg::Items(std::mem::replace(
-                        &mut chunk,
-                        Vec::with_capacity(opts.chunk),
-                    )))
-                    .is_err();
+        let (s, reused) = match held(&last).filter(|_| m.sample.hold) {
+            Some(s) => {
+                for chunk in lod_ids(rt.skeleton, &s.visible).chunks(opts.chunk) {
+                    if out.send(StcToRvg::Items(chunk.to_vec())).is_err() {
+                        return Ok(());
+                    }
+                }
+                (s, true)
             }
-        })?;
-        if closed || (!chunk.is_empty() && out.send(StcToRvg::Items(chunk)).is_err()) {
-            return Ok(());
-        }
+            None => {
+                let mut chunk = Vec::with_capacity(opts.chunk);
+                let mut closed = false;
+                let s = stc.run(frame, &m.sample.view, m.depth.as_ref(), &mut |item| {
+                    chunk.push(rt.skeleton.nodes[item.node as usize].first_lod + item.lod);
+                    if chunk.len() == opts.chunk && !closed {
+                        let full = std::mem::replace(&mut chunk, Vec::with_capacity(opts.chunk));
+                        closed = out.send(StcToRvg::Items(full)).is_err();
+                    }
+                })?;
+                if closed || (!chunk.is_empty() && out.send(StcToRvg::Items(chunk)).is_err()) {
+                    return Ok(());
+                }
+                (s, false)
+            }
+        };
         // OR may have finished its camera source already: ignore a closed feedback queue.
         let _ = feedback.send(s.visible.clone());
+        last = Some(s.clone());
         let end = FrameEnd {
-            frame: m.frame,
-            view: m.view,
-            read_back: m.read_back,
-            sampled_at: m.sampled_at,
+            sample: m.sample,
             occluder_items: m.occluder_items,
             or_ms: m.or_ms,
-            hzb_ms: s.hzb_ms,
-            stc_ms: s.ms,
-            occlusion_used: s.occlusion_used,
-            stats: s.stats,
-            visible: s.visible,
+            stc: s,
+            reused,
         };
         if out.send(StcToRvg::End(Box::new(end))).is_err() {
             return Ok(());
@@ -293,40 +398,249 @@ fn rvg_thread(
     opts: &RuntimeOptions,
     input: Receiver<StcToRvg>,
     out: Sender<FrameReport>,
+    presenter: &mut dyn Presenter,
 ) -> Result<(), RuntimeError> {
     let mut rvg = RvgStage::new(&rt.devices[device], &rt.geometry[device], opts);
     let mut span = None;
     for m in input.iter() {
         match m {
-            StcToRvg::Begin { frame, view } => {
+            StcToRvg::Begin(frame, view) => {
                 span = Some(tracing::info_span!("RVG", frame).entered());
                 rvg.begin(frame, &view)?;
             }
             StcToRvg::Items(lods) => rvg.draw(&lods),
             StcToRvg::End(end) => {
-                let (image, rvg_ms) = rvg.finish(end.read_back)?;
+                let r = finish_frame(&mut rvg, presenter, *end)?;
                 span = None;
-                let report = FrameReport {
-                    frame: end.frame,
-                    camera: end.view.camera,
-                    sampled_at: end.sampled_at,
-                    finished_at: Instant::now(),
-                    occlusion_used: end.occlusion_used,
-                    occluder_items: end.occluder_items,
-                    or_ms: end.or_ms,
-                    hzb_ms: end.hzb_ms,
-                    stc_ms: end.stc_ms,
-                    rvg_ms,
-                    stats: end.stats,
-                    visible: end.visible,
-                    image,
-                };
-                if out.send(report).is_err() {
+                if out.send(r).is_err() {
                     return Ok(());
                 }
             }
         }
     }
     drop(span);
+    Ok(())
+}
+
+/// The newest camera, handed from RVG (which owns the camera source in
+/// asynchronous mode) to OR, which skips cameras it is too slow for.
+#[derive(Default)]
+struct Latest {
+    sample: Option<Sample>,
+    closed: bool,
+}
+
+struct LatestSlot {
+    slot: Mutex<Latest>,
+    changed: Condvar,
+}
+
+impl LatestSlot {
+    fn put(&self, s: Sample) {
+        self.slot.lock().expect("camera slot").sample = Some(s);
+        self.changed.notify_all();
+    }
+    fn close(&self) {
+        self.slot.lock().expect("camera slot").closed = true;
+        self.changed.notify_all();
+    }
+    /// Waits for a camera newer than `after`; `None` once closed.
+    fn take_newer(&self, after: Option<u64>) -> Option<Sample> {
+        let mut g = self.slot.lock().expect("camera slot");
+        loop {
+            if g.closed {
+                return None;
+            }
+            if let Some(s) = g
+                .sample
+                .as_ref()
+                .filter(|s| after.is_none_or(|a| s.frame > a))
+            {
+                return Some(s.clone());
+            }
+            g = self.changed.wait(g).expect("camera slot");
+        }
+    }
+}
+
+/// Closes the slot when RVG ends for any reason (including a panic), so OR
+/// never waits for a camera that will not come.
+struct CloseOnDrop<'a>(&'a LatestSlot);
+impl Drop for CloseOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.close();
+    }
+}
+
+/// Asynchronous RVG (Section 5.3): RVG samples every camera and draws the
+/// newest finished visible set with it at once; OR and STC work on the
+/// newest camera whenever they are free.
+pub(crate) fn run_async(
+    rt: &Runtime,
+    opts: &RuntimeOptions,
+    source: &mut dyn CameraSource,
+    on_frame: &mut dyn FnMut(FrameReport) -> bool,
+    presenter: &mut dyn Presenter,
+) -> Result<u64, RuntimeError> {
+    let latest = LatestSlot {
+        slot: Mutex::new(Latest::default()),
+        changed: Condvar::new(),
+    };
+    let (or_tx, or_rx) = bounded::<OrToStc>(1);
+    let (sets_tx, sets_rx) = bounded::<Box<FrameEnd>>(2);
+    let (feedback_tx, feedback_rx) = unbounded::<Vec<DrawItem>>();
+    let (report_tx, report_rx) = bounded::<FrameReport>(4);
+    let b = rvg_device(rt, opts);
+    let latest = &latest;
+    std::thread::scope(|s| {
+        run_threads(
+            s,
+            [
+                (
+                    Stage::Or,
+                    Box::new(move || async_or_thread(rt, opts, latest, or_tx, feedback_rx)),
+                ),
+                (
+                    Stage::Stc,
+                    Box::new(move || async_stc_thread(rt, opts, or_rx, sets_tx, feedback_tx)),
+                ),
+                (
+                    Stage::Rvg,
+                    Box::new(move || {
+                        async_rvg_thread(rt, b, opts, source, latest, sets_rx, report_tx, presenter)
+                    }),
+                ),
+            ],
+            report_rx,
+            on_frame,
+        )
+    })
+}
+
+fn async_or_thread(
+    rt: &Runtime,
+    opts: &RuntimeOptions,
+    latest: &LatestSlot,
+    out: Sender<OrToStc>,
+    feedback: Receiver<Vec<DrawItem>>,
+) -> Result<(), RuntimeError> {
+    let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
+    let mut done: Option<u64> = None;
+    let mut runs = 0u64;
+    // The newest visible sets, most recent last; occluders lag by `lag` runs.
+    let mut sets: std::collections::VecDeque<Vec<DrawItem>> = Default::default();
+    while let Some(sample) = latest.take_newer(done) {
+        done = Some(sample.frame);
+        loop {
+            match feedback.try_recv() {
+                Ok(v) => sets.push_back(v),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return Ok(()),
+            }
+        }
+        while sets.len() > opts.occluder_lag as usize {
+            sets.pop_front();
+        }
+        let occluders = (opts.traversal.occlusion && runs >= opts.occluder_lag as u64)
+            .then(|| sets.front().map(|v| v.as_slice()).unwrap_or(&[]));
+        let o = or.run(sample.frame, &sample.view, occluders)?;
+        runs += 1;
+        let msg = OrToStc {
+            sample,
+            depth: o.depth,
+            occluder_items: o.occluder_items,
+            or_ms: o.ms,
+        };
+        if out.send(msg).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+fn async_stc_thread(
+    rt: &Runtime,
+    opts: &RuntimeOptions,
+    input: Receiver<OrToStc>,
+    out: Sender<Box<FrameEnd>>,
+    feedback: Sender<Vec<DrawItem>>,
+) -> Result<(), RuntimeError> {
+    let mut stc = StcStage::new(rt.skeleton, opts);
+    for m in input.iter() {
+        let s = stc.run(
+            m.sample.frame,
+            &m.sample.view,
+            m.depth.as_ref(),
+            &mut |_| {},
+        )?;
+        let _ = feedback.send(s.visible.clone());
+        let end = FrameEnd {
+            sample: m.sample,
+            occluder_items: m.occluder_items,
+            or_ms: m.or_ms,
+            stc: s,
+            reused: false,
+        };
+        if out.send(Box::new(end)).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn async_rvg_thread(
+    rt: &Runtime,
+    device: usize,
+    opts: &RuntimeOptions,
+    source: &mut dyn CameraSource,
+    latest: &LatestSlot,
+    sets: Receiver<Box<FrameEnd>>,
+    out: Sender<FrameReport>,
+    presenter: &mut dyn Presenter,
+) -> Result<(), RuntimeError> {
+    let _close = CloseOnDrop(latest);
+    let mut rvg = RvgStage::new(&rt.devices[device], &rt.geometry[device], opts);
+    let mut newest: Option<Box<FrameEnd>> = None;
+    let mut frame = 0u64;
+    while let Some(sample) = next_sample(source, frame, opts)? {
+        let _span = tracing::info_span!("RVG", frame).entered();
+        if !sample.hold || newest.is_none() {
+            latest.put(sample.clone());
+        }
+        // The newest finished set (none newer while culling is held); wait
+        // only when there is none yet.
+        while !sample.hold || newest.is_none() {
+            match sets.try_recv() {
+                Ok(s) => newest = Some(s),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return Ok(()),
+            }
+        }
+        if newest.is_none() {
+            match sets.recv() {
+                Ok(s) => newest = Some(s),
+                Err(_) => return Ok(()),
+            }
+        }
+        let set = newest.as_ref().expect("a visible set");
+        let reused = set.sample.frame != frame;
+        rvg.begin(frame, &sample.view)?;
+        for chunk in lod_ids(rt.skeleton, &set.stc.visible).chunks(opts.chunk) {
+            rvg.draw(chunk);
+        }
+        let end = FrameEnd {
+            sample,
+            occluder_items: set.occluder_items,
+            or_ms: set.or_ms,
+            stc: set.stc.clone(),
+            reused,
+        };
+        let r = finish_frame(&mut rvg, presenter, end)?;
+        if out.send(r).is_err() {
+            return Ok(());
+        }
+        frame += 1;
+    }
     Ok(())
 }

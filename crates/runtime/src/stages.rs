@@ -4,8 +4,8 @@
 use std::time::Instant;
 
 use gigawalk_cull::{
-    reselect_lods, CullView, DrawItem, Hzb, HzbOcclusion, NoOcclusion, TraversalOptions,
-    TraversalStats, Traverser,
+    reselect_lods, CullReason, CullView, DrawItem, Hzb, HzbOcclusion, NoOcclusion,
+    TraversalOptions, TraversalStats, Traverser,
 };
 use gigawalk_gpu::{
     DepthImage, DepthPass, FrameImage, GpuContext, ResidentGeometry, View, VisiblePass,
@@ -129,9 +129,11 @@ pub(crate) struct StcStage<'a> {
     hzb: Hzb,
 }
 
+#[derive(Clone)]
 pub(crate) struct StcOutput {
     pub stats: TraversalStats,
     pub visible: Vec<DrawItem>,
+    pub culled: Vec<(u32, CullReason)>,
     pub occlusion_used: bool,
     pub hzb_ms: f64,
     pub ms: f64,
@@ -180,20 +182,36 @@ impl<'a> StcStage<'a> {
             visible.push(item);
             emit(item);
         };
+        let mut culled = Vec::new();
+        let record = self.opts.record_culled;
+        let mut on_cull = |node, why| {
+            if record {
+                culled.push((node, why));
+            }
+        };
         let stats = if occlusion {
-            self.traverser.traverse(
+            let hzb = HzbOcclusion::new(&self.hzb);
+            self.traverser.traverse_recording(
                 self.skeleton,
                 view,
-                &HzbOcclusion::new(&self.hzb),
+                &hzb,
                 &options,
                 &mut sink,
+                &mut on_cull,
             )
         } else {
-            self.traverser
-                .traverse(self.skeleton, view, &NoOcclusion, &options, &mut sink)
+            self.traverser.traverse_recording(
+                self.skeleton,
+                view,
+                &NoOcclusion,
+                &options,
+                &mut sink,
+                &mut on_cull,
+            )
         };
         Ok(StcOutput {
             stats,
+            culled,
             visible,
             occlusion_used: occlusion,
             hzb_ms,
@@ -236,6 +254,17 @@ impl<'a> RvgStage<'a> {
     pub fn draw(&mut self, lods: &[u32]) {
         let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
         self.pass.draw(self.ctx, self.geometry, lods);
+    }
+
+    /// Reads back the finished frame's colour and depth.
+    pub fn read_back(&mut self) -> Result<Option<FrameImage>, RuntimeError> {
+        self.pass
+            .read_back(self.ctx)
+            .map(Some)
+            .map_err(|source| RuntimeError::Gpu {
+                stage: Stage::Rvg,
+                source,
+            })
     }
 
     /// Waits for the frame; returns its image if asked and the stage's ms.

@@ -89,40 +89,59 @@ fn main() {
         ("pipelined, 1 device", Schedule::Pipelined, 1),
         ("pipelined, 2 devices", Schedule::Pipelined, 2),
     ];
-    let mut frame_ms = Vec::new();
-    for (name, schedule, devices) in schedules {
-        let opts = RuntimeOptions {
-            schedule,
-            devices,
-            width: w,
-            height: h,
-            traversal: TraversalOptions {
-                occlusion: true,
-                hlod: true,
-                pixel_tolerance: pixel_error,
-            },
-            ..Default::default()
-        };
-        let mut reports: Vec<FrameReport> = Vec::new();
-        rt.run(
-            &opts,
-            &mut CameraList {
-                cameras: cameras.clone(),
-            },
-            &mut |r| {
-                reports.push(r);
-                true
-            },
-        )
-        .unwrap();
-        // Skip warm-up frames (startup bypass, first allocations).
-        let steady = &reports[10.min(reports.len())..];
-        let intervals: Vec<f64> = steady
-            .windows(2)
-            .map(|p| (p[1].finished_at - p[0].finished_at).as_secs_f64() * 1e3)
+    // Rounds interleave the schedules, each round on its own stretch of the
+    // walk, so load changes on a shared machine hit every schedule alike.
+    let rounds = env("ROUNDS", 4usize).max(1);
+    let per_round = (cameras.len() / rounds).max(12);
+    let mut all: Vec<Vec<FrameReport>> = vec![Vec::new(); schedules.len()];
+    let mut intervals: Vec<Vec<f64>> = vec![Vec::new(); schedules.len()];
+    for round in 0..rounds {
+        let stretch: Vec<CameraRequest> = cameras
+            .iter()
+            .skip(round * per_round)
+            .take(per_round)
+            .copied()
             .collect();
-        let m = median(intervals);
+        for (k, &(_, schedule, devices)) in schedules.iter().enumerate() {
+            let opts = RuntimeOptions {
+                schedule,
+                devices,
+                width: w,
+                height: h,
+                traversal: TraversalOptions {
+                    occlusion: true,
+                    hlod: true,
+                    pixel_tolerance: pixel_error,
+                },
+                ..Default::default()
+            };
+            let mut reports: Vec<FrameReport> = Vec::new();
+            rt.run(
+                &opts,
+                &mut CameraList {
+                    cameras: stretch.clone(),
+                },
+                &mut |r| {
+                    reports.push(r);
+                    true
+                },
+            )
+            .unwrap();
+            // Skip warm-up frames (startup bypass, pipeline filling).
+            let steady: Vec<FrameReport> = reports.into_iter().skip(5).collect();
+            intervals[k].extend(
+                steady
+                    .windows(2)
+                    .map(|p| (p[1].finished_at - p[0].finished_at).as_secs_f64() * 1e3),
+            );
+            all[k].extend(steady);
+        }
+    }
+    let mut frame_ms = Vec::new();
+    for (k, (name, _, _)) in schedules.iter().enumerate() {
+        let m = median(intervals[k].clone());
         frame_ms.push(m);
+        let steady = &all[k];
         let med = |f: fn(&FrameReport) -> f64| median(steady.iter().map(f).collect());
         println!(
             "| {name} | {m:.1} | {:.1} | {:.1} | {:.1} ({:.1}) | {:.1} | {:.1} | {:.0} |",

@@ -11,6 +11,15 @@ use gigawalk_gpu::DepthImage;
 use crate::stages::{lod_ids, OrStage, RvgStage, StcOutput, StcStage};
 use crate::{CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
 
+/// Messages STC may queue for RVG: enough that STC never waits on RVG
+/// within a frame.
+const RVG_QUEUE: usize = 64;
+
+/// Frames between OR taking a camera and RVG finishing it: one per stage,
+/// as in the paper's Figure 6. More would raise throughput only by queueing,
+/// and every queued frame adds a frame of latency.
+const MAX_IN_FLIGHT: usize = 3;
+
 /// One camera as OR took it.
 #[derive(Clone)]
 struct Sample {
@@ -256,12 +265,16 @@ pub(crate) fn run_pipelined(
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
-    // Small queues keep latency bounded: OR runs at most one frame ahead of
-    // STC; RVG's queue holds a few frames' chunks.
+    // OR takes a token per frame and RVG returns it when the frame is done,
+    // so at most MAX_IN_FLIGHT frames are between camera and screen.
     let (or_tx, or_rx) = bounded::<OrToStc>(1);
-    let (rvg_tx, rvg_rx) = bounded::<StcToRvg>(64);
+    let (rvg_tx, rvg_rx) = bounded::<StcToRvg>(RVG_QUEUE);
     let (feedback_tx, feedback_rx) = unbounded::<Vec<DrawItem>>();
-    let (report_tx, report_rx) = bounded::<FrameReport>(4);
+    let (report_tx, report_rx) = bounded::<FrameReport>(1);
+    let (token_tx, token_rx) = bounded::<()>(MAX_IN_FLIGHT);
+    for _ in 0..MAX_IN_FLIGHT {
+        token_tx.send(()).expect("room for every token");
+    }
     let b = rvg_device(rt, opts);
     std::thread::scope(|s| {
         run_threads(
@@ -269,7 +282,7 @@ pub(crate) fn run_pipelined(
             [
                 (
                     Stage::Or,
-                    Box::new(move || or_thread(rt, opts, source, or_tx, feedback_rx)),
+                    Box::new(move || or_thread(rt, opts, source, or_tx, feedback_rx, token_rx)),
                 ),
                 (
                     Stage::Stc,
@@ -277,7 +290,9 @@ pub(crate) fn run_pipelined(
                 ),
                 (
                     Stage::Rvg,
-                    Box::new(move || rvg_thread(rt, b, opts, rvg_rx, report_tx, presenter)),
+                    Box::new(move || {
+                        rvg_thread(rt, b, opts, rvg_rx, report_tx, token_tx, presenter)
+                    }),
                 ),
             ],
             report_rx,
@@ -292,11 +307,20 @@ fn or_thread(
     source: &mut dyn CameraSource,
     out: Sender<OrToStc>,
     feedback: Receiver<Vec<DrawItem>>,
+    tokens: Receiver<()>,
 ) -> Result<(), RuntimeError> {
     let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
     let mut frame = 0u64;
     let mut occluders: Vec<DrawItem> = Vec::new();
-    while let Some(sample) = next_sample(source, frame, opts)? {
+    loop {
+        // Wait until fewer than MAX_IN_FLIGHT frames are on their way to
+        // the screen; RVG gone means the run is over.
+        if tokens.recv().is_err() {
+            return Ok(());
+        }
+        let Some(sample) = next_sample(source, frame, opts)? else {
+            break;
+        };
         // Frame i's occluders are STC(i - lag)'s visible set; with lag 2
         // it was usually finished while OR drew frame i - 1.
         if frame >= opts.occluder_lag as u64 {
@@ -398,6 +422,7 @@ fn rvg_thread(
     opts: &RuntimeOptions,
     input: Receiver<StcToRvg>,
     out: Sender<FrameReport>,
+    tokens: Sender<()>,
     presenter: &mut dyn Presenter,
 ) -> Result<(), RuntimeError> {
     let mut rvg = RvgStage::new(&rt.devices[device], &rt.geometry[device], opts);
@@ -412,6 +437,8 @@ fn rvg_thread(
             StcToRvg::End(end) => {
                 let r = finish_frame(&mut rvg, presenter, *end)?;
                 span = None;
+                // OR may have ended already; a closed token queue is fine.
+                let _ = tokens.send(());
                 if out.send(r).is_err() {
                     return Ok(());
                 }
@@ -489,7 +516,7 @@ pub(crate) fn run_async(
     let (or_tx, or_rx) = bounded::<OrToStc>(1);
     let (sets_tx, sets_rx) = bounded::<Box<FrameEnd>>(2);
     let (feedback_tx, feedback_rx) = unbounded::<Vec<DrawItem>>();
-    let (report_tx, report_rx) = bounded::<FrameReport>(4);
+    let (report_tx, report_rx) = bounded::<FrameReport>(1);
     let b = rvg_device(rt, opts);
     let latest = &latest;
     std::thread::scope(|s| {

@@ -29,6 +29,6 @@ pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};
 pub use read::{ReadAt, SceneReader, SectionInfo};
-pub use stats::SceneStats;
 pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};
+pub use stats::SceneStats;
 pub use write::{SceneWriter, WriteSummary};

@@ -36,7 +36,12 @@ pub struct SceneStats {
 impl SceneStats {
     pub fn of<R: crate::ReadAt>(r: &SceneReader<R>) -> SceneStats {
         let s = r.skeleton();
-        let max_lods = s.nodes.iter().map(|n| n.lod_count as usize).max().unwrap_or(0);
+        let max_lods = s
+            .nodes
+            .iter()
+            .map(|n| n.lod_count as usize)
+            .max()
+            .unwrap_or(0);
         let mut per_level = vec![0u64; max_lods];
         for leaf in s.leaves() {
             let lods = s.node_lods(leaf);
@@ -56,7 +61,10 @@ impl SceneStats {
                 per_depth.resize(depth[i] + 1, 0);
             }
             // A node without LODs is drawn through its children.
-            per_depth[depth[i]] += s.node_lods(i as u32).first().map_or(0, |l| l.triangles as u64);
+            per_depth[depth[i]] += s
+                .node_lods(i as u32)
+                .first()
+                .map_or(0, |l| l.triangles as u64);
         }
         let triangles = s.finest_triangles();
         let (major, minor) = r.version();
@@ -73,7 +81,11 @@ impl SceneStats {
             bounds_min: s.bounds.min.to_array(),
             bounds_max: s.bounds.max.to_array(),
             origin: s.origin.to_array(),
-            sections: r.sections().iter().map(|x| (x.name.clone(), x.len)).collect(),
+            sections: r
+                .sections()
+                .iter()
+                .map(|x| (x.name.clone(), x.len))
+                .collect(),
             bytes_per_triangle: r.file_len() as f64 / triangles.max(1) as f64,
             provenance: s.provenance.clone(),
         }

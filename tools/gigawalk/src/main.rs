@@ -1,9 +1,11 @@
 //! The `gigawalk` command line: argument parsing, progress and error
 //! printing only. Every subcommand's logic lives in a crate.
 
+mod demo;
 mod generate;
 mod info;
 mod preprocess;
+mod replay;
 
 use clap::{Parser, Subcommand};
 
@@ -27,6 +29,10 @@ enum Command {
     Generate(generate::Args),
     /// Turn a glTF/OBJ model into a scene file: partition, cluster, AABB hierarchy, HLODs
     Preprocess(preprocess::Args),
+    /// Replay a camera path in the Table 2 modes and write a frame-time and accuracy report
+    Replay(replay::Args),
+    /// The whole story on the built-in plant: generate, preprocess, replay all modes, report
+    Demo(demo::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -37,6 +43,8 @@ fn main() -> std::process::ExitCode {
         Command::Info(a) => info::run(a),
         Command::Generate(a) => generate::run(a),
         Command::Preprocess(a) => preprocess::run(a),
+        Command::Replay(a) => replay::run(a),
+        Command::Demo(a) => demo::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,0 +1,28 @@
+//! gigawalk's replay reports: a camera path replayed in the paper's Table 2
+//! modes, every frame timed and counted, every K-th frame compared with a
+//! full-detail reference; and the `gigawalk demo` driver.
+//!
+//! Main items: [`replay()`] (run it) with [`ReplayOptions`] and a
+//! [`Progress`] watcher, giving a [`Replay`] (every [`FrameRecord`] of
+//! every [`RunRecord`]); [`Replay::summary`] ([`Summary`], summary.json)
+//! and [`Replay::write_report`] (the report directory,
+//! docs/report-format.md); [`Mode`]; [`Accuracy`]; [`demo::DemoScene`].
+//!
+//! The library prints nothing and draws no bars; the CLI does.
+
+mod accuracy;
+pub mod demo;
+mod mode;
+mod plot;
+mod replay;
+mod report;
+mod summary;
+
+pub use accuracy::{Accuracy, WRONGLY_CULLED_RELATIVE_DEPTH};
+pub use mode::{runs, Mode};
+pub use replay::{
+    replay, replay_on, FrameRecord, NoProgress, Progress, Replay, ReplayError, ReplayOptions,
+    RunRecord,
+};
+pub use report::{markdown, ReportError, Written};
+pub use summary::{median, percentile, ModeSummary, Summary};

@@ -1,0 +1,127 @@
+//! The rendering modes a replay compares: the paper's Table 2 rows.
+
+use gigawalk_cull::TraversalOptions;
+
+/// One row of the paper's Table 2 (Section 6.3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Mode {
+    /// View-frustum culling only, every leaf at full detail: the baseline
+    /// every speed-up is measured against, and the accuracy reference.
+    Vfc,
+    /// HLODs selected by pixel error, plus frustum culling.
+    Hlod,
+    /// HZB occlusion culling plus frustum culling, full detail.
+    Occ,
+    /// Occlusion culling plus HLODs: GigaWalk.
+    Och,
+}
+
+impl Mode {
+    pub const ALL: [Mode; 4] = [Mode::Vfc, Mode::Hlod, Mode::Occ, Mode::Och];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Vfc => "vfc",
+            Mode::Hlod => "hlod",
+            Mode::Occ => "occ",
+            Mode::Och => "och",
+        }
+    }
+
+    /// Whether the mode's output depends on the pixel-error tolerance.
+    /// `vfc` and `occ` draw every leaf at full detail, so a pixel-error
+    /// sweep runs them once, at 0.
+    pub fn uses_pixel_error(self) -> bool {
+        matches!(self, Mode::Hlod | Mode::Och)
+    }
+
+    /// The traversal this mode runs with at `pixel_error`.
+    pub fn traversal(self, pixel_error: f64) -> TraversalOptions {
+        let tol = if self.uses_pixel_error() {
+            pixel_error
+        } else {
+            0.0
+        };
+        TraversalOptions {
+            occlusion: matches!(self, Mode::Occ | Mode::Och),
+            hlod: self.uses_pixel_error(),
+            pixel_tolerance: tol,
+        }
+    }
+}
+
+impl std::fmt::Display for Mode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "vfc" => Ok(Mode::Vfc),
+            "hlod" => Ok(Mode::Hlod),
+            "occ" => Ok(Mode::Occ),
+            "och" => Ok(Mode::Och),
+            other => Err(format!(
+                "unknown mode {other:?} (expected vfc, hlod, occ or och)"
+            )),
+        }
+    }
+}
+
+/// The runs of a replay: every requested mode, the pixel-error modes once
+/// per pixel error, the full-detail modes once at 0. In the order given,
+/// duplicates removed.
+pub fn runs(modes: &[Mode], pixel_errors: &[f64]) -> Vec<(Mode, f64)> {
+    let mut out: Vec<(Mode, f64)> = Vec::new();
+    for &m in modes {
+        let errs: Vec<f64> = if m.uses_pixel_error() {
+            pixel_errors.to_vec()
+        } else {
+            vec![0.0]
+        };
+        for e in errs {
+            if !out.iter().any(|&(m2, e2)| m2 == m && e2 == e) {
+                out.push((m, e));
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_detail_modes_run_once_in_a_sweep() {
+        let r = runs(&Mode::ALL, &[0.0, 1.0, 4.0]);
+        assert_eq!(
+            r,
+            vec![
+                (Mode::Vfc, 0.0),
+                (Mode::Hlod, 0.0),
+                (Mode::Hlod, 1.0),
+                (Mode::Hlod, 4.0),
+                (Mode::Occ, 0.0),
+                (Mode::Och, 0.0),
+                (Mode::Och, 1.0),
+                (Mode::Och, 4.0),
+            ]
+        );
+    }
+
+    #[test]
+    fn mode_traversals() {
+        let v = Mode::Vfc.traversal(2.0);
+        assert!(!v.occlusion && !v.hlod && v.pixel_tolerance == 0.0);
+        let o = Mode::Occ.traversal(2.0);
+        assert!(o.occlusion && !o.hlod && o.pixel_tolerance == 0.0);
+        let h = Mode::Och.traversal(2.0);
+        assert!(h.occlusion && h.hlod && h.pixel_tolerance == 2.0);
+        assert_eq!("och".parse::<Mode>(), Ok(Mode::Och));
+        assert!("fast".parse::<Mode>().is_err());
+    }
+}

@@ -1,0 +1,253 @@
+//! The report's plots with plotters (bitmap backend, PNG): frame rate along
+//! the path per run (the paper's Figure 9) and, for a pixel-error sweep,
+//! frame rate against image error.
+//!
+//! Text goes through ab_glyph with a vendored DejaVu Sans subset
+//! (assets/, with its licence), so plots need no system fonts.
+
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+use crate::mode::Mode;
+use crate::replay::Replay;
+use crate::summary::{measured, Summary};
+
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans-ascii.ttf");
+const FAMILY: &str = "sans-serif";
+
+fn fonts() {
+    static REGISTER: Once = Once::new();
+    REGISTER.call_once(|| {
+        // The font is compiled in and checked by the plot tests: failing to
+        // parse it is a build defect, not a user error.
+        if register_font(FAMILY, FontStyle::Normal, FONT).is_err() {
+            debug_assert!(false, "vendored font does not parse");
+        }
+    });
+}
+
+fn colour(mode: Mode, shade: usize) -> RGBColor {
+    let base = match mode {
+        Mode::Vfc => (200, 40, 40),
+        Mode::Hlod => (230, 150, 20),
+        Mode::Occ => (40, 90, 200),
+        Mode::Och => (30, 150, 60),
+    };
+    // Later runs of a swept mode get darker.
+    let k = 1.0 / (1.0 + 0.45 * shade as f64);
+    let f = |c: u8| (c as f64 * k) as u8;
+    RGBColor(f(base.0), f(base.1), f(base.2))
+}
+
+/// More than one pixel error among the runs that use one.
+pub fn is_sweep(s: &Summary) -> bool {
+    let mut errs: Vec<f64> = s
+        .modes
+        .iter()
+        .filter(|m| m.name.parse::<Mode>().is_ok_and(|m| m.uses_pixel_error()))
+        .map(|m| m.pixel_error)
+        .collect();
+    errs.sort_by(f64::total_cmp);
+    errs.dedup();
+    errs.len() > 1
+}
+
+fn err<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+/// Rounds a positive range out to whole decades for a log axis.
+fn decades(lo: f64, hi: f64) -> (f64, f64) {
+    let lo = if lo.is_finite() && lo > 0.0 { lo } else { 0.1 };
+    let hi = if hi.is_finite() && hi > lo {
+        hi
+    } else {
+        lo * 10.0
+    };
+    (
+        10f64.powf(lo.log10().floor()),
+        10f64.powf(hi.log10().ceil()),
+    )
+}
+
+/// fps.png: each run's frame rate (1000 / frame ms) along the path, log
+/// scale, warm-up frames left out.
+pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
+    fonts();
+    let root = BitMapBackend::new(file, (1000, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let series: Vec<(String, Mode, Vec<(f64, f64)>)> = replay
+        .runs
+        .iter()
+        .map(|r| {
+            let pts = measured(&r.frames)
+                .iter()
+                .filter_map(|f| f.frame_ms.map(|ms| (f.frame as f64, 1e3 / ms)))
+                .collect();
+            (r.label(), r.mode, pts)
+        })
+        .collect();
+    let all = series.iter().flat_map(|s| s.2.iter());
+    let (lo, hi) = all.fold((f64::INFINITY, 0f64), |(lo, hi), p| {
+        (lo.min(p.1), hi.max(p.1))
+    });
+    let (lo, hi) = decades(lo, hi);
+    let frames = replay.frames.max(2) as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!(
+                "Frame rate along the path ({}x{})",
+                replay.options.runtime.width, replay.options.runtime.height
+            ),
+            (FAMILY, 22),
+        )
+        .margin(12)
+        .x_label_area_size(42)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..frames - 1.0, (lo..hi).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame (pose along the path)")
+        .y_desc("frames per second (log)")
+        .label_style((FAMILY, 14))
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| {
+            if *v >= 1.0 {
+                format!("{v:.0}")
+            } else {
+                format!("{v}")
+            }
+        })
+        .draw()
+        .map_err(err)?;
+    let mut shade = std::collections::HashMap::new();
+    for (label, mode, pts) in series {
+        let s = shade.entry(mode).or_insert(0usize);
+        let c = colour(mode, *s);
+        *s += 1;
+        chart
+            .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
+}
+
+/// tradeoff.png: mean frame rate against the fraction of differing pixels
+/// (or against the pixel error when accuracy was not measured), one line
+/// per mode through its pixel errors.
+pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
+    fonts();
+    let with_accuracy = s
+        .modes
+        .iter()
+        .all(|m| m.differing_pixels_fraction.is_some());
+    let x_of = |m: &crate::summary::ModeSummary| {
+        if with_accuracy {
+            100.0 * m.differing_pixels_fraction.unwrap_or(0.0)
+        } else {
+            m.pixel_error
+        }
+    };
+    let root = BitMapBackend::new(file, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let xs = s.modes.iter().map(x_of);
+    let x_hi = xs.fold(0f64, f64::max).max(1e-3) * 1.15;
+    let (lo, hi) = s.modes.iter().fold((f64::INFINITY, 0f64), |(lo, hi), m| {
+        (lo.min(m.mean_fps), hi.max(m.mean_fps))
+    });
+    let (lo, hi) = decades(lo, hi);
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Speed against image error", (FAMILY, 22))
+        .margin(12)
+        .x_label_area_size(42)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..x_hi, (lo..hi).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(if with_accuracy {
+            "pixels differing from the full-detail reference (%)"
+        } else {
+            "pixel error tolerance (px)"
+        })
+        .y_desc("mean frames per second (log)")
+        .label_style((FAMILY, 14))
+        .draw()
+        .map_err(err)?;
+    for mode in Mode::ALL {
+        let mut pts: Vec<(f64, f64, f64)> = s
+            .modes
+            .iter()
+            .filter(|m| m.name == mode.name() && m.mean_fps.is_finite())
+            .map(|m| (x_of(m), m.mean_fps, m.pixel_error))
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        pts.sort_by(|a, b| a.2.total_cmp(&b.2));
+        let c = colour(mode, 0);
+        chart
+            .draw_series(LineSeries::new(
+                pts.iter().map(|p| (p.0, p.1)),
+                c.stroke_width(2),
+            ))
+            .map_err(err)?
+            .label(mode.name())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
+        chart
+            .draw_series(pts.iter().map(|&(x, y, px)| {
+                EmptyElement::at((x, y))
+                    + Circle::new((0, 0), 4, c.filled())
+                    + Text::new(
+                        if mode.uses_pixel_error() {
+                            format!("{px}px")
+                        } else {
+                            String::new()
+                        },
+                        (6, -16),
+                        (FAMILY, 13),
+                    )
+            }))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vendored_font_parses() {
+        assert!(register_font("gigawalk-test", FontStyle::Normal, FONT).is_ok());
+    }
+
+    #[test]
+    fn decade_ranges() {
+        assert_eq!(decades(2.0, 35.0), (1.0, 100.0));
+        assert_eq!(decades(0.5, 0.7), (0.1, 1.0));
+        assert_eq!(decades(f64::INFINITY, 0.0), (0.1, 1.0));
+    }
+}

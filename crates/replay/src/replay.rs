@@ -1,0 +1,338 @@
+//! Replaying a camera path: the reference render of every K-th pose, then
+//! one run of the runtime per (mode, pixel error), one frame per pose, each
+//! frame recorded with its timings, counts and accuracy.
+
+use std::time::Instant;
+
+use gigawalk_cull::{Camera, Viewport};
+use gigawalk_gpu::FrameImage;
+use gigawalk_runtime::{
+    CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule,
+};
+use gigawalk_scene::path::Pose;
+use gigawalk_scene::{ReadAt, SceneReader};
+use serde::Serialize;
+
+use crate::accuracy::Accuracy;
+use crate::mode::{runs, Mode};
+
+/// What to replay, and how.
+#[derive(Clone, Debug)]
+pub struct ReplayOptions {
+    /// Modes to compare, in report order.
+    pub modes: Vec<Mode>,
+    /// Pixel-error tolerances for the modes that use one (`hlod`, `och`);
+    /// more than one is a sweep.
+    pub pixel_errors: Vec<f64>,
+    /// Every runtime knob; `traversal` is set per mode.
+    pub runtime: RuntimeOptions,
+    /// Replay at most this many poses (from the start of the path).
+    pub frames: Option<usize>,
+    /// Compare every K-th frame (0, K, 2K, ...) with the reference; 0 = no
+    /// accuracy measurement.
+    pub accuracy_every: usize,
+    /// Frames at the start of every run left out of the statistics (they
+    /// are still in frames.csv). They cover the startup bypass (the first
+    /// `occluder_lag` frames have no occluders), the pipeline filling, and
+    /// first-use allocations in the driver.
+    pub warmup: usize,
+}
+
+impl Default for ReplayOptions {
+    fn default() -> Self {
+        ReplayOptions {
+            modes: Mode::ALL.to_vec(),
+            pixel_errors: vec![1.0],
+            runtime: RuntimeOptions::default(),
+            frames: None,
+            accuracy_every: 10,
+            warmup: 5,
+        }
+    }
+}
+
+/// Why a replay could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    #[error("bad replay option: {0}")]
+    Options(String),
+    #[error("the camera path has no poses")]
+    EmptyPath,
+    #[error("cannot start the runtime: {0}")]
+    Start(#[source] RuntimeError),
+    #[error("{run}: {source}")]
+    Run {
+        run: String,
+        #[source]
+        source: RuntimeError,
+    },
+}
+
+/// One frame of one run.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRecord {
+    pub frame: u64,
+    /// The pose's time on the path, seconds.
+    pub pose_time_s: f64,
+    /// Interval between this frame and the previous one finishing at RVG;
+    /// `None` for frame 0.
+    pub frame_ms: Option<f64>,
+    /// Camera sampled -> frame finished.
+    pub latency_ms: f64,
+    pub or_ms: f64,
+    pub hzb_ms: f64,
+    pub stc_ms: f64,
+    pub rvg_ms: f64,
+    pub visited: u64,
+    pub frustum_culled: u64,
+    pub occlusion_culled: u64,
+    pub drawn_nodes: u64,
+    pub drawn_triangles: u64,
+    pub occlusion_used: bool,
+    /// Left out of the statistics (see [`ReplayOptions::warmup`]).
+    pub warmup: bool,
+    /// Against the reference, on every K-th frame.
+    pub accuracy: Option<Accuracy>,
+}
+
+/// One run: a mode at a pixel error along the path.
+#[derive(Clone, Debug)]
+pub struct RunRecord {
+    pub mode: Mode,
+    pub pixel_error: f64,
+    pub frames: Vec<FrameRecord>,
+}
+
+impl RunRecord {
+    /// "och 1px" style label.
+    pub fn label(&self) -> String {
+        run_label(self.mode, self.pixel_error)
+    }
+}
+
+pub(crate) fn run_label(mode: Mode, pixel_error: f64) -> String {
+    if mode.uses_pixel_error() {
+        format!("{mode} {pixel_error}px")
+    } else {
+        mode.name().to_string()
+    }
+}
+
+/// Everything a replay measured; [`Replay::summary`] and
+/// [`Replay::write_report`] turn it into the report.
+#[derive(Clone, Debug)]
+pub struct Replay {
+    pub scene: String,
+    pub path: String,
+    /// Poses replayed per run.
+    pub frames: usize,
+    pub options: ReplayOptions,
+    pub devices: Vec<String>,
+    pub runs: Vec<RunRecord>,
+    /// False when the replay was stopped early ([`Progress::keep_going`]).
+    pub complete: bool,
+    /// Reference frames rendered (every K-th pose).
+    pub reference_frames: usize,
+    pub seconds: f64,
+}
+
+/// Watches a replay; every method has a do-nothing default. The library
+/// prints nothing: the CLI draws bars.
+pub trait Progress {
+    /// A run begins ("reference", "vfc", "och 1px", ...) of `frames` frames.
+    fn start(&mut self, _label: &str, _frames: u64) {}
+    /// One more frame of the current run is done.
+    fn frame(&mut self) {}
+    /// The current run ended.
+    fn finish(&mut self, _label: &str) {}
+    /// False stops the replay after the current frame (Ctrl-C); what was
+    /// measured so far is kept.
+    fn keep_going(&self) -> bool {
+        true
+    }
+}
+
+/// A [`Progress`] that ignores everything.
+pub struct NoProgress;
+impl Progress for NoProgress {}
+
+/// Replays `poses` over `scene` in every run of `opts`. `scene_name` and
+/// `path_name` go into the report.
+pub fn replay<R: ReadAt>(
+    scene: &SceneReader<R>,
+    scene_name: &str,
+    poses: &[Pose],
+    path_name: &str,
+    opts: &ReplayOptions,
+    progress: &mut dyn Progress,
+) -> Result<Replay, ReplayError> {
+    validate(opts)?;
+    if poses.is_empty() {
+        return Err(ReplayError::EmptyPath);
+    }
+    let devices = match opts.runtime.schedule {
+        Schedule::Sequential => 1,
+        Schedule::Pipelined => opts.runtime.devices,
+    };
+    let rt = Runtime::new(scene, devices).map_err(ReplayError::Start)?;
+    replay_on(&rt, scene_name, poses, path_name, opts, progress)
+}
+
+/// Like [`replay()`] on a runtime the caller made (tests open their own
+/// devices to skip without an adapter).
+pub fn replay_on(
+    rt: &Runtime,
+    scene_name: &str,
+    poses: &[Pose],
+    path_name: &str,
+    opts: &ReplayOptions,
+    progress: &mut dyn Progress,
+) -> Result<Replay, ReplayError> {
+    let start = Instant::now();
+    validate(opts)?;
+    let n = opts.frames.unwrap_or(poses.len()).min(poses.len());
+    if n == 0 {
+        return Err(ReplayError::EmptyPath);
+    }
+    let (w, h) = (opts.runtime.width, opts.runtime.height);
+    let k = opts.accuracy_every;
+    let cameras: Vec<CameraRequest> = poses[..n]
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let camera = Camera::from_pose(
+                p.position,
+                p.orientation,
+                p.fovy,
+                Viewport::new(w, h),
+                opts.runtime.near,
+            );
+            CameraRequest::new(camera, k > 0 && i % k == 0)
+        })
+        .collect();
+    let mut out = Replay {
+        scene: scene_name.to_string(),
+        path: path_name.to_string(),
+        frames: n,
+        options: opts.clone(),
+        devices: rt.device_names(),
+        runs: Vec::new(),
+        complete: true,
+        reference_frames: 0,
+        seconds: 0.0,
+    };
+
+    // The reference: full detail, frustum culling only, one thread, one
+    // device, only the frames that are compared.
+    let mut reference: Vec<Option<FrameImage>> = Vec::new();
+    if k > 0 {
+        let mut list = CameraList {
+            cameras: cameras.iter().step_by(k).copied().collect(),
+        };
+        let ro = RuntimeOptions {
+            schedule: Schedule::Sequential,
+            traversal: Mode::Vfc.traversal(0.0),
+            ..opts.runtime.clone()
+        };
+        progress.start("reference", list.cameras.len() as u64);
+        let mut stopped = false;
+        rt.run(&ro, &mut list, &mut |r: FrameReport| {
+            reference.push(r.image);
+            progress.frame();
+            stopped = !progress.keep_going();
+            !stopped
+        })
+        .map_err(|source| ReplayError::Run {
+            run: "reference".into(),
+            source,
+        })?;
+        progress.finish("reference");
+        out.reference_frames = reference.len();
+        if stopped {
+            out.complete = false;
+            out.seconds = start.elapsed().as_secs_f64();
+            return Ok(out);
+        }
+    }
+
+    for (mode, pixel_error) in runs(&opts.modes, &opts.pixel_errors) {
+        let label = run_label(mode, pixel_error);
+        let ro = RuntimeOptions {
+            traversal: mode.traversal(pixel_error),
+            ..opts.runtime.clone()
+        };
+        let mut list = CameraList {
+            cameras: cameras.clone(),
+        };
+        let mut frames: Vec<FrameRecord> = Vec::with_capacity(n);
+        let mut last_finish: Option<Instant> = None;
+        let mut stopped = false;
+        progress.start(&label, n as u64);
+        let result = rt.run(&ro, &mut list, &mut |r: FrameReport| {
+            let i = r.frame as usize;
+            let accuracy = match (&r.image, k) {
+                (Some(img), k) if k > 0 && i % k == 0 => reference
+                    .get(i / k)
+                    .and_then(|x| x.as_ref())
+                    .and_then(|reference| Accuracy::compare(reference, img)),
+                _ => None,
+            };
+            frames.push(FrameRecord {
+                frame: r.frame,
+                pose_time_s: poses.get(i).map_or(0.0, |p| p.time),
+                frame_ms: last_finish.map(|t| (r.finished_at - t).as_secs_f64() * 1e3),
+                latency_ms: r.latency_ms(),
+                or_ms: r.or_ms,
+                hzb_ms: r.hzb_ms,
+                stc_ms: r.stc_ms,
+                rvg_ms: r.rvg_ms,
+                visited: r.stats.visited,
+                frustum_culled: r.stats.frustum_culled,
+                occlusion_culled: r.stats.occlusion_culled,
+                drawn_nodes: r.stats.drawn_nodes,
+                drawn_triangles: r.stats.drawn_triangles,
+                occlusion_used: r.occlusion_used,
+                warmup: i < opts.warmup,
+                accuracy,
+            });
+            last_finish = Some(r.finished_at);
+            progress.frame();
+            stopped = !progress.keep_going();
+            !stopped
+        });
+        progress.finish(&label);
+        out.runs.push(RunRecord {
+            mode,
+            pixel_error,
+            frames,
+        });
+        result.map_err(|source| ReplayError::Run { run: label, source })?;
+        if stopped {
+            out.complete = false;
+            break;
+        }
+    }
+    out.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+fn validate(opts: &ReplayOptions) -> Result<(), ReplayError> {
+    let bad = |m: String| Err(ReplayError::Options(m));
+    if opts.modes.is_empty() {
+        return bad("no modes given".into());
+    }
+    if opts.pixel_errors.is_empty() {
+        return bad("no pixel errors given".into());
+    }
+    if let Some(e) = opts
+        .pixel_errors
+        .iter()
+        .find(|e| !(e.is_finite() && **e >= 0.0))
+    {
+        return bad(format!("pixel error {e} must be a finite number >= 0"));
+    }
+    if opts.frames == Some(0) {
+        return bad("frames must be at least 1".into());
+    }
+    opts.runtime.validate().map_err(ReplayError::Options)
+}

@@ -1,0 +1,163 @@
+//! Writing a replay's report directory: summary.md, summary.json,
+//! frames.csv, fps.png and (for a pixel-error sweep) tradeoff.png.
+//! docs/report-format.md describes every file.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::replay::Replay;
+use crate::summary::Summary;
+
+/// Why a report could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("{file}: cannot write: {source}")]
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{file}: cannot draw the plot: {message}")]
+    Plot { file: PathBuf, message: String },
+}
+
+/// The files written, in the order written.
+#[derive(Clone, Debug, Default)]
+pub struct Written {
+    pub files: Vec<PathBuf>,
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8], w: &mut Written) -> Result<(), ReportError> {
+    let file = dir.join(name);
+    std::fs::write(&file, bytes).map_err(|source| ReportError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    w.files.push(file);
+    Ok(())
+}
+
+impl Replay {
+    /// Writes the report into `dir` (created if missing; files in it are
+    /// replaced).
+    pub fn write_report(&self, dir: &Path) -> Result<Written, ReportError> {
+        std::fs::create_dir_all(dir).map_err(|source| ReportError::Io {
+            file: dir.to_owned(),
+            source,
+        })?;
+        let summary = self.summary();
+        let mut w = Written::default();
+        let json = serde_json::to_string_pretty(&summary).expect("summary serialises") + "\n";
+        write(dir, "summary.json", json.as_bytes(), &mut w)?;
+        write(dir, "summary.md", markdown(&summary).as_bytes(), &mut w)?;
+        write(dir, "frames.csv", self.csv().as_bytes(), &mut w)?;
+        let fps = dir.join("fps.png");
+        crate::plot::fps(self, &fps).map_err(|message| ReportError::Plot {
+            file: fps.clone(),
+            message,
+        })?;
+        w.files.push(fps);
+        if crate::plot::is_sweep(&summary) {
+            let t = dir.join("tradeoff.png");
+            crate::plot::tradeoff(&summary, &t).map_err(|message| ReportError::Plot {
+                file: t.clone(),
+                message,
+            })?;
+            w.files.push(t);
+        }
+        Ok(w)
+    }
+
+    /// frames.csv: one row per frame of every run.
+    pub fn csv(&self) -> String {
+        let mut s = String::from(
+            "mode,pixel_error,frame,pose_time_s,frame_ms,fps,latency_ms,or_ms,hzb_ms,stc_ms,rvg_ms,\
+             visited,frustum_culled,occlusion_culled,drawn_nodes,drawn_triangles,occlusion_used,warmup,\
+             accuracy_pixels,differing_pixels,wrongly_culled_pixels,psnr_db\n",
+        );
+        for run in &self.runs {
+            for f in &run.frames {
+                let opt =
+                    |x: Option<f64>, d: usize| x.map_or(String::new(), |x| format!("{x:.d$}"));
+                let a = f.accuracy.as_ref();
+                let _ = writeln!(
+                    s,
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
+                    run.mode,
+                    run.pixel_error,
+                    f.frame,
+                    f.pose_time_s,
+                    opt(f.frame_ms, 3),
+                    opt(f.frame_ms.map(|ms| 1e3 / ms), 2),
+                    f.latency_ms,
+                    f.or_ms,
+                    f.hzb_ms,
+                    f.stc_ms,
+                    f.rvg_ms,
+                    f.visited,
+                    f.frustum_culled,
+                    f.occlusion_culled,
+                    f.drawn_nodes,
+                    f.drawn_triangles,
+                    f.occlusion_used as u8,
+                    f.warmup as u8,
+                    a.map_or(String::new(), |a| a.pixels.to_string()),
+                    a.map_or(String::new(), |a| a.differing_pixels.to_string()),
+                    a.map_or(String::new(), |a| a.wrongly_culled_pixels.to_string()),
+                    // Identical images: PSNR is infinite; written as "inf".
+                    a.map_or(String::new(), |a| a
+                        .psnr_db()
+                        .map_or("inf".into(), |p| format!("{p:.2}"))),
+                );
+            }
+        }
+        s
+    }
+}
+
+/// summary.md.
+pub fn markdown(s: &Summary) -> String {
+    let mut m = String::new();
+    let _ = writeln!(m, "# gigawalk replay report\n");
+    let _ = writeln!(m, "- scene: `{}`", s.scene);
+    let _ = writeln!(m, "- path: `{}`, {} frames per run", s.path, s.frames);
+    let _ = writeln!(m, "- viewport: {}x{}", s.width, s.height);
+    let _ = writeln!(
+        m,
+        "- runtime: {} schedule on {}; occluders from frame i-{}, occluder resolution x{}, HZB {}",
+        s.schedule,
+        s.devices.join(" + "),
+        s.occluder_lag,
+        s.occluder_scale,
+        s.hzb_reduction
+    );
+    let _ = writeln!(
+        m,
+        "- frame time = interval between frames finishing at RVG; the first {} frames of every run are warm-up (startup bypass without occluders, pipeline filling) and are left out of every frame statistic (they are in frames.csv)",
+        s.warmup_frames
+    );
+    if s.accuracy_every > 0 {
+        let _ = writeln!(
+            m,
+            "- accuracy: every {}th frame (read back, so those frames include a colour and depth read-back) against a full-detail, frustum-culling-only reference of the same camera; pixel counts summed over the compared frames, PSNR from their pooled mean squared error (\"identical\": every compared frame is bit-identical)",
+            s.accuracy_every
+        );
+    } else {
+        let _ = writeln!(m, "- accuracy: not measured (`--accuracy-every 0`)");
+    }
+    let _ = writeln!(m, "- wall time of the whole replay: {:.1} s", s.seconds);
+    if !s.complete {
+        let _ = writeln!(
+            m,
+            "\n**Stopped early: the figures cover only the frames measured before the stop.**"
+        );
+    }
+    let _ = writeln!(m, "\n## Frame rate and accuracy\n");
+    m += &s.table();
+    let _ = writeln!(m, "\n## Stages (medians) and nodes (means)\n");
+    m += &s.stage_table();
+    let _ = writeln!(m, "\n![frame rate along the path](fps.png)");
+    if crate::plot::is_sweep(s) {
+        let _ = writeln!(m, "\n![frame rate against image error](tradeoff.png)");
+    }
+    m
+}

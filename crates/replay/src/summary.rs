@@ -1,0 +1,318 @@
+//! Per-run statistics of a replay: frame rates, percentiles, speed-ups over
+//! `vfc`, pooled accuracy; the shape of summary.json
+//! (docs/report-format.md).
+
+use serde::{Deserialize, Serialize};
+
+use crate::accuracy::Accuracy;
+use crate::mode::Mode;
+use crate::replay::{FrameRecord, Replay, RunRecord};
+
+/// summary.json.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Summary {
+    pub scene: String,
+    pub path: String,
+    /// Poses replayed per run.
+    pub frames: usize,
+    pub width: u32,
+    pub height: u32,
+    pub warmup_frames: usize,
+    pub accuracy_every: usize,
+    /// False when the replay was stopped early: some runs have fewer frames
+    /// or are missing.
+    pub complete: bool,
+    pub devices: Vec<String>,
+    pub schedule: String,
+    pub occluder_lag: u32,
+    pub occluder_scale: f64,
+    pub hzb_reduction: String,
+    pub seconds: f64,
+    pub modes: Vec<ModeSummary>,
+}
+
+/// One run's figures. Frame statistics leave out the warm-up frames;
+/// accuracy pools every compared frame.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModeSummary {
+    pub name: String,
+    pub pixel_error: f64,
+    /// Frames recorded (warm-up included).
+    pub frames: usize,
+    /// Frame intervals the statistics use.
+    pub measured_frames: usize,
+    /// Frames / time over the measured intervals (1000 / mean frame ms).
+    pub mean_fps: f64,
+    pub median_frame_ms: f64,
+    pub p95_frame_ms: f64,
+    pub mean_triangles: f64,
+    pub mean_drawn_nodes: f64,
+    pub mean_visited: f64,
+    pub mean_occlusion_culled: f64,
+    /// mean_fps / vfc's mean_fps (null without a vfc run).
+    pub speedup_vs_vfc: Option<f64>,
+    /// vfc's median frame ms / this run's median frame ms.
+    pub median_speedup_vs_vfc: Option<f64>,
+    pub mean_latency_ms: f64,
+    pub median_or_ms: f64,
+    pub median_hzb_ms: f64,
+    pub median_stc_ms: f64,
+    pub median_rvg_ms: f64,
+    /// Frames compared with the reference.
+    pub accuracy_frames: usize,
+    /// Summed over the compared frames (null without accuracy frames).
+    pub wrongly_culled_pixels: Option<u64>,
+    pub wrongly_culled_fraction: Option<f64>,
+    pub differing_pixels_fraction: Option<f64>,
+    /// From the pooled mean squared error; null when every compared frame
+    /// is identical to the reference (infinite PSNR) or nothing was compared.
+    pub psnr_db: Option<f64>,
+}
+
+impl ModeSummary {
+    /// "och 1px" style label.
+    pub fn label(&self) -> String {
+        match self.name.parse::<Mode>() {
+            Ok(m) => crate::replay::run_label(m, self.pixel_error),
+            Err(_) => self.name.clone(),
+        }
+    }
+}
+
+/// Median (mean of the middle two for an even count); NaN when empty.
+pub fn median(v: &[f64]) -> f64 {
+    percentile(v, 50.0)
+}
+
+/// Linear-interpolated percentile `p` (0..=100) of `v`; NaN when empty.
+pub fn percentile(v: &[f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let x = p / 100.0 * (s.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x.fract());
+    if i + 1 < s.len() {
+        s[i] + (s[i + 1] - s[i]) * f
+    } else {
+        s[i]
+    }
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v {
+        s += x;
+        n += 1;
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        s / n as f64
+    }
+}
+
+/// The frames the statistics use: past the warm-up, with an interval. A
+/// run shorter than the warm-up uses every frame with an interval.
+pub fn measured(frames: &[FrameRecord]) -> Vec<&FrameRecord> {
+    let m: Vec<&FrameRecord> = frames
+        .iter()
+        .filter(|f| !f.warmup && f.frame_ms.is_some())
+        .collect();
+    if m.is_empty() {
+        frames.iter().filter(|f| f.frame_ms.is_some()).collect()
+    } else {
+        m
+    }
+}
+
+fn summarise(run: &RunRecord) -> ModeSummary {
+    let m = measured(&run.frames);
+    let ms: Vec<f64> = m.iter().filter_map(|f| f.frame_ms).collect();
+    let mean_ms = mean(ms.iter().copied());
+    let mut acc = Accuracy::default();
+    let mut accuracy_frames = 0;
+    for a in run.frames.iter().filter_map(|f| f.accuracy.as_ref()) {
+        acc.add(a);
+        accuracy_frames += 1;
+    }
+    let has_acc = accuracy_frames > 0;
+    let med = |f: fn(&FrameRecord) -> f64| median(&m.iter().map(|x| f(x)).collect::<Vec<_>>());
+    ModeSummary {
+        name: run.mode.name().into(),
+        pixel_error: run.pixel_error,
+        frames: run.frames.len(),
+        measured_frames: ms.len(),
+        mean_fps: 1e3 / mean_ms,
+        median_frame_ms: median(&ms),
+        p95_frame_ms: percentile(&ms, 95.0),
+        mean_triangles: mean(m.iter().map(|f| f.drawn_triangles as f64)),
+        mean_drawn_nodes: mean(m.iter().map(|f| f.drawn_nodes as f64)),
+        mean_visited: mean(m.iter().map(|f| f.visited as f64)),
+        mean_occlusion_culled: mean(m.iter().map(|f| f.occlusion_culled as f64)),
+        speedup_vs_vfc: None,
+        median_speedup_vs_vfc: None,
+        mean_latency_ms: mean(m.iter().map(|f| f.latency_ms)),
+        median_or_ms: med(|f| f.or_ms),
+        median_hzb_ms: med(|f| f.hzb_ms),
+        median_stc_ms: med(|f| f.stc_ms),
+        median_rvg_ms: med(|f| f.rvg_ms),
+        accuracy_frames,
+        wrongly_culled_pixels: has_acc.then_some(acc.wrongly_culled_pixels),
+        wrongly_culled_fraction: has_acc.then(|| acc.wrongly_culled_fraction()),
+        differing_pixels_fraction: has_acc.then(|| acc.differing_fraction()),
+        psnr_db: if has_acc { acc.psnr_db() } else { None },
+    }
+}
+
+/// NaN and infinities become JSON null through `Option`; keep figures
+/// finite or absent.
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+impl Replay {
+    /// The report's figures.
+    pub fn summary(&self) -> Summary {
+        let mut modes: Vec<ModeSummary> = self.runs.iter().map(summarise).collect();
+        let vfc = modes
+            .iter()
+            .find(|m| m.name == Mode::Vfc.name())
+            .map(|m| (m.mean_fps, m.median_frame_ms));
+        if let Some((fps, ms)) = vfc {
+            for m in &mut modes {
+                m.speedup_vs_vfc = finite(m.mean_fps / fps);
+                m.median_speedup_vs_vfc = finite(ms / m.median_frame_ms);
+            }
+        }
+        let r = &self.options.runtime;
+        Summary {
+            scene: self.scene.clone(),
+            path: self.path.clone(),
+            frames: self.frames,
+            width: r.width,
+            height: r.height,
+            warmup_frames: self.options.warmup,
+            accuracy_every: self.options.accuracy_every,
+            complete: self.complete,
+            devices: self.devices.clone(),
+            schedule: format!("{:?}", r.schedule).to_lowercase(),
+            occluder_lag: r.occluder_lag,
+            occluder_scale: r.occluder_scale,
+            hzb_reduction: match r.hzb_reduction {
+                gigawalk_cull::Reduction::Farthest => "farthest".into(),
+                gigawalk_cull::Reduction::NthFarthest(n) => format!("{n}-th farthest"),
+            },
+            seconds: self.seconds,
+            modes,
+        }
+    }
+}
+
+impl Summary {
+    /// The per-run table of summary.md, also what `gigawalk replay` and
+    /// `gigawalk demo` print.
+    pub fn table(&self) -> String {
+        let mut s = String::from(
+            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | PSNR dB |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        for m in &self.modes {
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                m.name,
+                m.pixel_error,
+                num(m.mean_fps, 2),
+                num(m.median_frame_ms, 1),
+                num(m.p95_frame_ms, 1),
+                thousands(m.mean_triangles),
+                m.speedup_vs_vfc.map_or("-".into(), |x| format!("{x:.2}x")),
+                num(m.mean_latency_ms, 1),
+                m.wrongly_culled_pixels
+                    .map_or("-".into(), |x| x.to_string()),
+                m.differing_pixels_fraction
+                    .map_or("-".into(), |x| format!("{:.2}%", 100.0 * x)),
+                match (m.accuracy_frames, m.psnr_db) {
+                    (0, _) => "-".into(),
+                    (_, None) => "identical".into(),
+                    (_, Some(p)) => format!("{p:.1}"),
+                },
+            );
+        }
+        s
+    }
+
+    /// Stage times and node counts per run.
+    pub fn stage_table(&self) -> String {
+        let mut s = String::from(
+            "| mode | pixel error | OR ms | HZB ms | STC ms (HZB incl.) | RVG ms | nodes visited | occlusion-culled | drawn nodes | median speed-up vs vfc |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        for m in &self.modes {
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                m.name,
+                m.pixel_error,
+                num(m.median_or_ms, 2),
+                num(m.median_hzb_ms, 2),
+                num(m.median_stc_ms, 2),
+                num(m.median_rvg_ms, 2),
+                thousands(m.mean_visited),
+                thousands(m.mean_occlusion_culled),
+                thousands(m.mean_drawn_nodes),
+                m.median_speedup_vs_vfc
+                    .map_or("-".into(), |x| format!("{x:.2}x")),
+            );
+        }
+        s
+    }
+}
+
+fn num(x: f64, digits: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.digits$}")
+    } else {
+        "-".into()
+    }
+}
+
+/// 1234567.8 -> "1,234,568".
+fn thousands(x: f64) -> String {
+    if !x.is_finite() {
+        return "-".into();
+    }
+    let s = format!("{:.0}", x.round());
+    let (sign, digits) = s.split_at(if s.starts_with('-') { 1 } else { 0 });
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    format!("{sign}{out}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles() {
+        assert!(median(&[]).is_nan());
+        assert_eq!(median(&[3.0]), 3.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(percentile(&[0.0, 10.0], 95.0), 9.5);
+        let v: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert!((percentile(&v, 95.0) - 95.05).abs() < 1e-9);
+    }
+
+    #[test]
+    fn thousands_separators() {
+        assert_eq!(thousands(0.0), "0");
+        assert_eq!(thousands(999.4), "999");
+        assert_eq!(thousands(1234567.8), "1,234,568");
+        assert_eq!(thousands(f64::NAN), "-");
+    }
+}

@@ -1,0 +1,268 @@
+//! Replays on a small generated plant (lavapipe or any adapter): the report
+//! files are written and parse, every frame is counted, `och` draws fewer
+//! triangles than `vfc`, and conservative `occ` and `och` at pixel error 0
+//! lose no pixel against the reference.
+
+use std::path::Path;
+
+use gigawalk_gpu::devices_or_skip;
+use gigawalk_procgen::{generate, Kind};
+use gigawalk_replay::{replay_on, Mode, NoProgress, Progress, ReplayOptions};
+use gigawalk_runtime::{Runtime, RuntimeOptions};
+use gigawalk_scene::path::CameraPath;
+use gigawalk_scene::SceneReader;
+
+/// Small enough for lavapipe on 2 cores (a few hundred thousand triangles
+/// drawn over the whole test), big enough that occlusion culls.
+const TRIANGLES: u64 = 30_000;
+const W: u32 = 128;
+const H: u32 = 72;
+
+fn plant(dir: &Path, poses: usize) -> (SceneReader, CameraPath) {
+    let g = generate(Kind::Plant, TRIANGLES, 3, poses);
+    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "plant").unwrap();
+    let file = dir.join("plant.gwk");
+    gigawalk_preprocess::preprocess(
+        &model,
+        &gigawalk_preprocess::Params::default(),
+        &file,
+        "test plant",
+        &gigawalk_preprocess::NoProgress,
+    )
+    .unwrap();
+    (SceneReader::open(&file).unwrap(), g.path)
+}
+
+fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
+    ReplayOptions {
+        modes: Mode::ALL.to_vec(),
+        pixel_errors: pixel_errors.to_vec(),
+        runtime: RuntimeOptions {
+            width: W,
+            height: H,
+            ..Default::default()
+        },
+        frames: Some(frames),
+        accuracy_every: every,
+        warmup: 3,
+    }
+}
+
+#[test]
+fn sweep_writes_every_report_file_and_counts_every_frame() {
+    let Some(devices) = devices_or_skip(2, "replay report") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), 40);
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    let frames = 24;
+    let opts = options(&[0.0, 2.0], frames, 4);
+    let r = replay_on(
+        &rt,
+        "plant.gwk",
+        &path.poses,
+        "plant.path",
+        &opts,
+        &mut NoProgress,
+    )
+    .unwrap();
+    assert!(r.complete);
+    // vfc, hlod 0, hlod 2, occ, och 0, och 2.
+    assert_eq!(r.runs.len(), 6);
+    for run in &r.runs {
+        assert_eq!(run.frames.len(), frames, "{}", run.label());
+        let ids: Vec<u64> = run.frames.iter().map(|f| f.frame).collect();
+        assert_eq!(ids, (0..frames as u64).collect::<Vec<_>>());
+        // Frames 0, 4, ..., 20 are compared.
+        assert_eq!(
+            run.frames.iter().filter(|f| f.accuracy.is_some()).count(),
+            6
+        );
+    }
+
+    let out = dir.path().join("report");
+    let written = r.write_report(&out).unwrap();
+    for name in [
+        "summary.md",
+        "summary.json",
+        "frames.csv",
+        "fps.png",
+        "tradeoff.png",
+    ] {
+        assert!(
+            written.files.contains(&out.join(name)),
+            "{name} not written"
+        );
+        assert!(
+            std::fs::metadata(out.join(name)).unwrap().len() > 0,
+            "{name} empty"
+        );
+    }
+    for png in ["fps.png", "tradeoff.png"] {
+        let bytes = std::fs::read(out.join(png)).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{png}");
+    }
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["frames"], frames);
+    assert_eq!(
+        (json["width"].as_u64(), json["height"].as_u64()),
+        (Some(W as u64), Some(H as u64))
+    );
+    let modes = json["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 6);
+    for m in modes {
+        for key in [
+            "name",
+            "pixel_error",
+            "mean_fps",
+            "median_frame_ms",
+            "p95_frame_ms",
+            "mean_triangles",
+            "speedup_vs_vfc",
+            "mean_latency_ms",
+            "wrongly_culled_pixels",
+            "differing_pixels_fraction",
+            "psnr_db",
+        ] {
+            assert!(m.get(key).is_some(), "{key} missing from {m}");
+        }
+        assert!(m["mean_fps"].as_f64().unwrap() > 0.0);
+        assert_eq!(m["frames"], frames);
+        assert_eq!(m["measured_frames"], frames - 3);
+    }
+    assert_eq!(modes[0]["speedup_vs_vfc"].as_f64(), Some(1.0));
+
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 6 * frames);
+    assert!(rows.iter().all(|r| r.len() == header.len()));
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    // Frame 0 has no interval; every later frame has one, and they parse.
+    for r in &rows {
+        let frame: u64 = r[col("frame")].parse().unwrap();
+        let ms = r[col("frame_ms")];
+        if frame == 0 {
+            assert_eq!(ms, "");
+        } else {
+            assert!(ms.parse::<f64>().unwrap() >= 0.0);
+        }
+    }
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("| och | 2 |") && md.contains("fps.png"), "{md}");
+}
+
+#[test]
+fn och_draws_less_and_conservative_modes_lose_no_pixel() {
+    let Some(devices) = devices_or_skip(2, "replay accuracy") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), 40);
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    let opts = options(&[0.0, 1.0], 30, 3);
+    let r = replay_on(
+        &rt,
+        "plant.gwk",
+        &path.poses,
+        "plant.path",
+        &opts,
+        &mut NoProgress,
+    )
+    .unwrap();
+    let s = r.summary();
+    let get = |name: &str, px: f64| {
+        s.modes
+            .iter()
+            .find(|m| m.name == name && m.pixel_error == px)
+            .unwrap_or_else(|| panic!("no {name} {px}px run"))
+    };
+    let vfc = get("vfc", 0.0);
+    let och = get("och", 1.0);
+    assert!(
+        och.mean_triangles < vfc.mean_triangles,
+        "och {} vs vfc {} triangles",
+        och.mean_triangles,
+        vfc.mean_triangles
+    );
+    // The reference is vfc itself (other schedule, same rasterizer): identical.
+    assert_eq!(vfc.wrongly_culled_pixels, Some(0));
+    assert_eq!(vfc.differing_pixels_fraction, Some(0.0));
+    for m in [get("occ", 0.0), get("och", 0.0)] {
+        assert_eq!(m.accuracy_frames, 10, "{}", m.name);
+        assert_eq!(
+            m.wrongly_culled_pixels,
+            Some(0),
+            "{} at 0px lost pixels",
+            m.name
+        );
+    }
+    // Occlusion culled something, or the check above means little.
+    let occ_culled: u64 = r
+        .runs
+        .iter()
+        .filter(|x| x.mode == Mode::Occ)
+        .flat_map(|x| &x.frames)
+        .map(|f| f.occlusion_culled)
+        .sum();
+    assert!(occ_culled > 0, "occlusion culled nothing on the walk");
+}
+
+/// Stops after a few frames, as Ctrl-C does.
+struct StopAfter(usize);
+impl Progress for StopAfter {
+    fn frame(&mut self) {
+        self.0 = self.0.saturating_sub(1);
+    }
+    fn keep_going(&self) -> bool {
+        self.0 > 0
+    }
+}
+
+#[test]
+fn stopping_keeps_what_was_measured() {
+    let Some(devices) = devices_or_skip(2, "replay stop") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), 20);
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    // Reference: 0, 5, 10, 15 (4 frames); then vfc stops after 3 frames.
+    let opts = options(&[1.0], 20, 5);
+    let r = replay_on(&rt, "s", &path.poses, "p", &opts, &mut StopAfter(7)).unwrap();
+    assert!(!r.complete);
+    assert_eq!(r.reference_frames, 4);
+    assert_eq!(r.runs.len(), 1);
+    assert_eq!(r.runs[0].frames.len(), 3);
+    let out = dir.path().join("partial");
+    r.write_report(&out).unwrap();
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("Stopped early"), "{md}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["complete"], false);
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let Some(devices) = devices_or_skip(1, "replay options") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), 5);
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    let mut o = options(&[-1.0], 5, 0);
+    let e = replay_on(&rt, "s", &path.poses, "p", &o, &mut NoProgress).unwrap_err();
+    assert!(e.to_string().contains("pixel error -1"), "{e}");
+    o.pixel_errors = vec![1.0];
+    o.modes.clear();
+    let e = replay_on(&rt, "s", &path.poses, "p", &o, &mut NoProgress).unwrap_err();
+    assert!(e.to_string().contains("no modes"), "{e}");
+    let o = options(&[1.0], 5, 0);
+    let e = replay_on(&rt, "s", &[], "p", &o, &mut NoProgress).unwrap_err();
+    assert!(e.to_string().contains("no poses"), "{e}");
+}

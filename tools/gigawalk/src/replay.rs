@@ -1,0 +1,225 @@
+//! `gigawalk replay`: a camera path through a scene in the Table 2 modes,
+//! written as a frame-time and accuracy report. Argument parsing, progress
+//! bars and Ctrl-C only; the work is in gigawalk-replay.
+
+use std::io::IsTerminal as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
+use gigawalk_runtime::{Reduction, RuntimeOptions, Schedule};
+use gigawalk_scene::path::CameraPath;
+use gigawalk_scene::SceneReader;
+use indicatif::{ProgressBar, ProgressStyle};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (.gwk) from `gigawalk preprocess`
+    scene: PathBuf,
+    /// Camera path to replay, one frame per pose (docs/path-format.md)
+    #[arg(long)]
+    path: PathBuf,
+    /// Report directory: summary.md, summary.json, frames.csv, fps.png, tradeoff.png
+    #[arg(long, default_value = "report")]
+    out: PathBuf,
+    /// Modes (the paper's Table 2): vfc = frustum only, hlod = HLOD + frustum, occ = occlusion + frustum, och = occlusion + HLOD
+    #[arg(long, value_delimiter = ',', default_value = "vfc,hlod,occ,och", value_parser = parse_mode)]
+    modes: Vec<Mode>,
+    /// Pixel-error tolerance of hlod and och; a list sweeps (e.g. 0,1,2,4,8)
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pixel_error: Vec<f64>,
+    /// Replay at most this many poses from the start of the path
+    #[arg(long)]
+    frames: Option<usize>,
+    /// Compare every K-th frame with a full-detail, frustum-only reference (0 = no accuracy)
+    #[arg(long, default_value_t = 10)]
+    accuracy_every: usize,
+    /// Frames at the start of every run left out of the statistics
+    #[arg(long, default_value_t = 5)]
+    warmup: usize,
+    #[command(flatten)]
+    runtime: RuntimeArgs,
+}
+
+/// The runtime's knobs, shared by `replay` and `demo`.
+#[derive(clap::Args)]
+pub struct RuntimeArgs {
+    /// Viewport width
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    /// Viewport height
+    #[arg(long, default_value_t = 360)]
+    pub height: u32,
+    /// Occluders of frame i are the visible set of frame i - lag (1 or 2; paper: 2)
+    #[arg(long, default_value_t = 2)]
+    occluder_lag: u32,
+    /// Occluder depth resolution as a fraction of the viewport (1 = conservative)
+    #[arg(long, default_value_t = 1.0)]
+    occluder_scale: f64,
+    /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest)
+    #[arg(long)]
+    nth_farthest: Option<u8>,
+    /// wgpu devices in the pipelined schedule (1 or 2)
+    #[arg(long, default_value_t = 2)]
+    devices: usize,
+    /// Asynchronous RVG (Section 5.3): draw the newest finished visible set with the newest camera (approximate, less latency)
+    #[arg(long = "async")]
+    async_rvg: bool,
+    /// One thread, one device, the stages one after another (the baseline of the pipeline)
+    #[arg(long)]
+    sequential: bool,
+    /// Visible items per RVG submission
+    #[arg(long, default_value_t = 256)]
+    chunk: usize,
+    /// Near plane distance in model units
+    #[arg(long, default_value_t = 0.05)]
+    near: f64,
+}
+
+impl RuntimeArgs {
+    pub fn options(&self) -> RuntimeOptions {
+        RuntimeOptions {
+            schedule: if self.sequential {
+                Schedule::Sequential
+            } else {
+                Schedule::Pipelined
+            },
+            width: self.width,
+            height: self.height,
+            occluder_lag: self.occluder_lag,
+            occluder_scale: self.occluder_scale,
+            hzb_reduction: match self.nth_farthest {
+                None | Some(1) => Reduction::Farthest,
+                Some(n) => Reduction::NthFarthest(n),
+            },
+            devices: self.devices,
+            chunk: self.chunk,
+            near: self.near,
+            async_rvg: self.async_rvg,
+            ..RuntimeOptions::default()
+        }
+    }
+}
+
+fn parse_mode(s: &str) -> Result<Mode, String> {
+    s.parse()
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let path = CameraPath::read(&args.path).context("cannot read the camera path")?;
+    let scene = SceneReader::open(&args.scene).context("cannot open the scene")?;
+    let opts = ReplayOptions {
+        modes: args.modes,
+        pixel_errors: args.pixel_error,
+        runtime: args.runtime.options(),
+        frames: args.frames,
+        accuracy_every: args.accuracy_every,
+        warmup: args.warmup,
+    };
+    let replay = run_replay(
+        &scene,
+        &args.scene.display().to_string(),
+        &path,
+        &args.path.display().to_string(),
+        &opts,
+    )?;
+    write_and_print(&replay, &args.out)
+}
+
+/// Replays with bars and Ctrl-C handling; shared with `gigawalk demo`.
+pub fn run_replay(
+    scene: &SceneReader,
+    scene_name: &str,
+    path: &CameraPath,
+    path_name: &str,
+    opts: &ReplayOptions,
+) -> anyhow::Result<Replay> {
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // From here on Ctrl-C ends the current frame and writes what was
+        // measured; a second Ctrl-C while stopping is ignored.
+        if let Err(e) = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst)) {
+            tracing::warn!("Ctrl-C will not stop the replay cleanly: {e}");
+        }
+    }
+    let mut bars = Bars {
+        terminal: std::io::stderr().is_terminal(),
+        bar: None,
+        started: Instant::now(),
+        stop,
+    };
+    gigawalk_replay::replay(scene, scene_name, &path.poses, path_name, opts, &mut bars)
+        .with_context(|| format!("cannot replay {path_name} through {scene_name}"))
+}
+
+pub fn write_and_print(replay: &Replay, out: &Path) -> anyhow::Result<()> {
+    let written = replay
+        .write_report(out)
+        .context("cannot write the report")?;
+    let summary = replay.summary();
+    println!(
+        "{} frames per run, {}x{}, on {}",
+        summary.frames,
+        summary.width,
+        summary.height,
+        summary.devices.join(" + ")
+    );
+    print!("{}", summary.table());
+    if !replay.complete {
+        println!("stopped early: the report covers the frames measured before the stop");
+    }
+    for f in &written.files {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}
+
+/// An indicatif bar per run on a terminal, one line per run otherwise.
+struct Bars {
+    terminal: bool,
+    bar: Option<ProgressBar>,
+    started: Instant,
+    stop: Arc<AtomicBool>,
+}
+
+impl Progress for Bars {
+    fn start(&mut self, label: &str, frames: u64) {
+        self.started = Instant::now();
+        if !self.terminal {
+            eprintln!("{label}: {frames} frames");
+            return;
+        }
+        let bar = ProgressBar::new(frames);
+        if let Ok(style) = ProgressStyle::with_template(
+            "{prefix:>10} [{bar:40}] {pos}/{len} frames {per_sec} eta {eta}",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar.set_prefix(label.to_string());
+        self.bar = Some(bar);
+    }
+
+    fn frame(&mut self) {
+        if let Some(b) = &self.bar {
+            b.inc(1);
+        }
+    }
+
+    fn finish(&mut self, label: &str) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
+        eprintln!(
+            "{label:>10} done in {:.1} s",
+            self.started.elapsed().as_secs_f64()
+        );
+    }
+
+    fn keep_going(&self) -> bool {
+        !self.stop.load(Ordering::SeqCst)
+    }
+}

@@ -1,0 +1,137 @@
+//! `gigawalk replay` end to end: bad path and scene files are clear errors
+//! with a non-zero exit code; a small generated plant replays into a report.
+
+use std::path::Path;
+use std::process::Command;
+
+fn gigawalk(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+const ONE_POSE: &str = "0 0 1.7 5 0 0 0 1 60\n";
+
+#[test]
+fn missing_path_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("none.gwk");
+    std::fs::write(&scene, b"").unwrap();
+    let path = dir.path().join("missing.path");
+    let (ok, _, err) = gigawalk(&["replay", s(&scene), "--path", s(&path)]);
+    assert!(!ok);
+    assert!(
+        err.contains("missing.path") && err.contains("camera path"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn malformed_path_file_names_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("none.gwk");
+    std::fs::write(&scene, b"").unwrap();
+    let path = dir.path().join("bad.path");
+    std::fs::write(&path, format!("{ONE_POSE}1 0 1.7 oops 0 0 0 1 60\n")).unwrap();
+    let (ok, _, err) = gigawalk(&["replay", s(&scene), "--path", s(&path)]);
+    assert!(!ok);
+    assert!(err.contains("bad.path") && err.contains("line 2"), "{err}");
+}
+
+#[test]
+fn garbage_scene_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("garbage.gwk");
+    std::fs::write(&scene, b"this is not a scene file at all, just some bytes").unwrap();
+    let path = dir.path().join("ok.path");
+    std::fs::write(&path, ONE_POSE).unwrap();
+    let (ok, _, err) = gigawalk(&["replay", s(&scene), "--path", s(&path)]);
+    assert!(!ok);
+    assert!(err.contains("garbage.gwk"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn unknown_mode_is_rejected() {
+    let (ok, _, err) = gigawalk(&["replay", "x.gwk", "--path", "x.path", "--modes", "vfc,fast"]);
+    assert!(!ok);
+    assert!(err.contains("unknown mode \"fast\""), "{err}");
+}
+
+#[test]
+fn small_plant_replays_into_a_report() {
+    if gigawalk_gpu::devices_or_skip(2, "gigawalk replay CLI").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (glb, path, gwk, out) = (
+        dir.path().join("p.glb"),
+        dir.path().join("p.path"),
+        dir.path().join("p.gwk"),
+        dir.path().join("report"),
+    );
+    let (ok, _, err) = gigawalk(&[
+        "generate",
+        "plant",
+        "--triangles",
+        "20k",
+        "--seed",
+        "2",
+        "-o",
+        s(&glb),
+        "--path",
+        s(&path),
+        "--poses",
+        "12",
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)]);
+    assert!(ok, "{err}");
+    let (ok, stdout, err) = gigawalk(&[
+        "replay",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--out",
+        s(&out),
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--accuracy-every",
+        "4",
+        "--warmup",
+        "2",
+        "--modes",
+        "vfc,och",
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("| och |"), "{stdout}");
+    for f in ["summary.md", "summary.json", "frames.csv", "fps.png"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    assert!(
+        !out.join("tradeoff.png").exists(),
+        "no sweep, no tradeoff plot"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["frames"], 12);
+    assert_eq!(json["modes"].as_array().unwrap().len(), 2);
+    let rows = std::fs::read_to_string(out.join("frames.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert_eq!(rows, 1 + 2 * 12);
+}

@@ -73,13 +73,16 @@ fn decades(lo: f64, hi: f64) -> (f64, f64) {
     )
 }
 
+/// A run's label, mode and (frame, fps) points.
+type Series = (String, Mode, Vec<(f64, f64)>);
+
 /// fps.png: each run's frame rate (1000 / frame ms) along the path, log
 /// scale, warm-up frames left out.
 pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
     fonts();
     let root = BitMapBackend::new(file, (1000, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
-    let series: Vec<(String, Mode, Vec<(f64, f64)>)> = replay
+    let series: Vec<Series> = replay
         .runs
         .iter()
         .map(|r| {

@@ -59,12 +59,12 @@ pub enum ReplayError {
     #[error("the camera path has no poses")]
     EmptyPath,
     #[error("cannot start the runtime: {0}")]
-    Start(#[source] RuntimeError),
+    Start(#[source] Box<RuntimeError>),
     #[error("{run}: {source}")]
     Run {
         run: String,
         #[source]
-        source: RuntimeError,
+        source: Box<RuntimeError>,
     },
 }
 
@@ -174,7 +174,7 @@ pub fn replay<R: ReadAt>(
         Schedule::Sequential => 1,
         Schedule::Pipelined => opts.runtime.devices,
     };
-    let rt = Runtime::new(scene, devices).map_err(ReplayError::Start)?;
+    let rt = Runtime::new(scene, devices).map_err(|e| ReplayError::Start(Box::new(e)))?;
     replay_on(&rt, scene_name, poses, path_name, opts, progress)
 }
 
@@ -244,7 +244,7 @@ pub fn replay_on(
         })
         .map_err(|source| ReplayError::Run {
             run: "reference".into(),
-            source,
+            source: Box::new(source),
         })?;
         progress.finish("reference");
         out.reference_frames = reference.len();
@@ -306,7 +306,10 @@ pub fn replay_on(
             pixel_error,
             frames,
         });
-        result.map_err(|source| ReplayError::Run { run: label, source })?;
+        result.map_err(|source| ReplayError::Run {
+            run: label,
+            source: Box::new(source),
+        })?;
         if stopped {
             out.complete = false;
             break;

@@ -49,7 +49,7 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_chain(&e));
             std::process::ExitCode::FAILURE
         }
     }
@@ -76,4 +76,22 @@ fn init_tracing(trace: Option<&std::path::Path>) -> Option<tracing_chrome::Flush
     };
     tracing_subscriber::registry().with(fmt).with(chrome).init();
     guard
+}
+
+/// The error and its causes joined by ": ", leaving out a cause whose text
+/// the message before it already contains (library errors often quote
+/// their source, e.g. "x.glb: cannot read: No such file or directory").
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
 }

@@ -115,4 +115,6 @@ fn info_on_bad_input_names_the_file() {
 
     let (ok, _, err) = gigawalk(&["info", "/nonexistent/x.gwk"]);
     assert!(!ok && err.contains("/nonexistent/x.gwk"), "{err}");
+    // The OS error is said once, not repeated by the cause chain.
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
 }

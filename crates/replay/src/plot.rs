@@ -189,6 +189,7 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
         })
         .y_desc("mean frames per second (log)")
         .label_style((FAMILY, 14))
+        .y_label_formatter(&|v| format!("{v}"))
         .draw()
         .map_err(err)?;
     for mode in Mode::ALL {

@@ -255,6 +255,7 @@ pub fn replay_on(
         }
     }
 
+    let all_runs = runs(&opts.modes, &opts.pixel_errors).len();
     for (mode, pixel_error) in runs(&opts.modes, &opts.pixel_errors) {
         let label = run_label(mode, pixel_error);
         let ro = RuntimeOptions {
@@ -311,10 +312,14 @@ pub fn replay_on(
             source: Box::new(source),
         })?;
         if stopped {
-            out.complete = false;
             break;
         }
     }
+    // Complete when everything was measured, even if the stop came with
+    // the last frame.
+    out.complete = out.runs.len() == all_runs
+        && out.runs.iter().all(|r| r.frames.len() == n)
+        && (k == 0 || out.reference_frames == n.div_ceil(k));
     out.seconds = start.elapsed().as_secs_f64();
     Ok(out)
 }

@@ -52,7 +52,7 @@ impl GpuContext {
     }
 }
 
-fn rank(t: wgpu::DeviceType) -> u8 {
+pub(crate) fn rank(t: wgpu::DeviceType) -> u8 {
     match t {
         wgpu::DeviceType::DiscreteGpu => 0,
         wgpu::DeviceType::IntegratedGpu => 1,
@@ -72,7 +72,7 @@ fn instance(backends: wgpu::Backends) -> wgpu::Instance {
 /// in wgpu's examples; otherwise the primary backends (Vulkan, Metal, DX12),
 /// and GL only when they have no adapter (probing GL prints noise on
 /// headless machines).
-fn instance_with_adapters() -> (wgpu::Instance, Vec<wgpu::Adapter>, wgpu::Backends) {
+pub(crate) fn instance_with_adapters() -> (wgpu::Instance, Vec<wgpu::Adapter>, wgpu::Backends) {
     let tries = match wgpu::Backends::from_env() {
         Some(b) => vec![b],
         None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::SECONDARY],
@@ -92,7 +92,7 @@ fn instance_with_adapters() -> (wgpu::Instance, Vec<wgpu::Adapter>, wgpu::Backen
 
 /// Adapters, best first: hardware before software, then by backend
 /// (Vulkan/Metal/DX12 before GL).
-fn adapters(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
+pub(crate) fn adapters(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
     let mut list = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
     list.sort_by_key(|a| {
         let i = a.get_info();
@@ -137,7 +137,7 @@ pub fn open_devices(count: usize) -> Result<Vec<GpuContext>, GpuError> {
     Ok(out)
 }
 
-fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, GpuError> {
+pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, GpuError> {
     let info = adapter.get_info();
     let label = format!("{name} ({}, {:?})", info.name, info.backend);
     let limits = wgpu::Limits {

@@ -13,7 +13,9 @@
 //! row-major with row 0 at the top.
 
 mod context;
+mod overlay;
 mod passes;
+mod present;
 mod residency;
 pub mod shader_types;
 
@@ -21,4 +23,6 @@ pub use context::{devices_or_skip, open_devices, GpuContext, GpuError};
 pub use passes::{
     DepthImage, DepthPass, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
 };
+pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
+pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use residency::{HostGeometry, LodRange, Residency, ResidentGeometry};

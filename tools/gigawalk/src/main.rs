@@ -6,6 +6,7 @@ mod generate;
 mod info;
 mod preprocess;
 mod replay;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -33,6 +34,8 @@ enum Command {
     Replay(replay::Args),
     /// The whole story on the built-in plant: generate, preprocess, replay all modes, report
     Demo(demo::Args),
+    /// Walk through a scene in a window: fly, toggle culling and LODs, see what they do
+    View(view::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -45,6 +48,7 @@ fn main() -> std::process::ExitCode {
         Command::Preprocess(a) => preprocess::run(a),
         Command::Replay(a) => replay::run(a),
         Command::Demo(a) => demo::run(a),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,0 +1,473 @@
+//! Showing RVG's frames in a window: devices whose adapter can present to
+//! it, the surface's configuration (resized with the window; a minimised,
+//! 0x0 window skips presenting instead of erroring), and per frame a copy of
+//! the offscreen colour into a composite target, the overlays on top, an
+//! optional read-back (screenshots) and a blit to the surface.
+
+use crate::context::{adapters, instance_with_adapters, open, rank};
+use crate::overlay::{OverlayFrame, OverlayRenderer};
+use crate::{GpuContext, GpuError, VisiblePass, COLOUR_FORMAT};
+
+pub const BLIT_WGSL: &str = include_str!("../../../shaders/blit.wgsl");
+
+/// Why a window could not get a GPU surface.
+#[derive(Debug, thiserror::Error)]
+pub enum WindowError {
+    #[error("cannot create a GPU surface for the window: {0}")]
+    Surface(String),
+    #[error("no GPU adapter can present to the window (adapters: {adapters})")]
+    NoPresentableAdapter { adapters: String },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// Opens `count` (1 or 2) devices, all on an adapter that can present to
+/// `window` (the surface and the adapters come from one wgpu instance, as
+/// wgpu requires), and the window's surface.
+pub fn open_devices_for_window(
+    count: usize,
+    window: impl Into<wgpu::SurfaceTarget<'static>>,
+) -> Result<(Vec<GpuContext>, WindowSurface), WindowError> {
+    debug_assert!((1..=2).contains(&count));
+    let (instance, list, backends) = instance_with_adapters();
+    if list.is_empty() {
+        return Err(GpuError::NoAdapter {
+            backends: format!("{backends:?}"),
+        }
+        .into());
+    }
+    let surface = instance
+        .create_surface(window)
+        .map_err(|e| WindowError::Surface(e.to_string()))?;
+    let Some(best) = list.iter().find(|a| a.is_surface_supported(&surface)) else {
+        let names: Vec<String> = list
+            .iter()
+            .map(|a| format!("{} ({:?})", a.get_info().name, a.get_info().backend))
+            .collect();
+        return Err(WindowError::NoPresentableAdapter {
+            adapters: names.join(", "),
+        });
+    };
+    let info = best.get_info();
+    tracing::info!(
+        "presenting on {} ({:?}, rank {})",
+        info.name,
+        info.backend,
+        rank(info.device_type)
+    );
+    let mut devices = Vec::with_capacity(count);
+    for k in 0..count {
+        let name = ["A", "B"][k];
+        // wgpu allows one device per Adapter object: enumerate again for
+        // the second device on the same adapter.
+        let adapter = if k == 0 {
+            best.clone()
+        } else {
+            adapters(&instance)
+                .into_iter()
+                .find(|a| a.get_info() == info)
+                .unwrap_or_else(|| best.clone())
+        };
+        devices.push(open(&adapter, name)?);
+    }
+    let caps = surface.get_capabilities(best);
+    Ok((
+        devices,
+        WindowSurface {
+            surface,
+            caps,
+            config: None,
+            gpu: None,
+        },
+    ))
+}
+
+/// A window's surface and what presenting to it needs on the presenting
+/// device (created on the first [`WindowSurface::present`]).
+pub struct WindowSurface {
+    surface: wgpu::Surface<'static>,
+    caps: wgpu::SurfaceCapabilities,
+    config: Option<wgpu::SurfaceConfiguration>,
+    gpu: Option<PresentGpu>,
+}
+
+struct PresentGpu {
+    overlay: OverlayRenderer,
+    blit: wgpu::RenderPipeline,
+    blit_format: wgpu::TextureFormat,
+    blit_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    /// The frame with overlays, at the render size.
+    composite: Option<(wgpu::Texture, wgpu::BindGroup)>,
+}
+
+/// What [`WindowSurface::present`] did.
+#[derive(Debug, Default, PartialEq)]
+pub struct Presented {
+    /// False when the window is minimised, occluded or its surface timed out.
+    pub shown: bool,
+    /// The composited frame (sRGB RGBA8, row 0 at the top) when asked for.
+    pub capture: Option<(u32, u32, Vec<u8>)>,
+}
+
+impl WindowSurface {
+    /// Shows RVG's current frame with `overlay` on top in a window of
+    /// `window_size` pixels, after the pass's `finish`. With `capture`, also
+    /// reads the composited frame back (even when the window is minimised).
+    pub fn present(
+        &mut self,
+        ctx: &GpuContext,
+        pass: &VisiblePass,
+        overlay: &OverlayFrame,
+        window_size: (u32, u32),
+        capture: bool,
+    ) -> Result<Presented, GpuError> {
+        self.present_texture(ctx, pass.colour_texture(), overlay, window_size, capture)
+    }
+
+    /// [`WindowSurface::present`] for any `COLOUR_FORMAT` texture with
+    /// `COPY_SRC` usage.
+    pub fn present_texture(
+        &mut self,
+        ctx: &GpuContext,
+        colour: &wgpu::Texture,
+        overlay: &OverlayFrame,
+        window_size: (u32, u32),
+        capture: bool,
+    ) -> Result<Presented, GpuError> {
+        let size = (colour.width(), colour.height());
+        let gpu = self.gpu.get_or_insert_with(|| PresentGpu::new(ctx));
+        gpu.ensure_composite(ctx, size);
+        let composite = &gpu.composite.as_ref().expect("just made").0;
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let extent = wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        };
+        enc.copy_texture_to_texture(colour.as_image_copy(), composite.as_image_copy(), extent);
+        let composite_view = composite.create_view(&Default::default());
+        gpu.overlay
+            .draw(ctx, &mut enc, &composite_view, size, overlay);
+        ctx.queue.submit([enc.finish()]);
+        let capture = if capture {
+            Some((size.0, size.1, read_rgba(ctx, composite, size)?))
+        } else {
+            None
+        };
+        let shown = self.blit_to_surface(ctx, window_size)?;
+        ctx.check()?;
+        Ok(Presented { shown, capture })
+    }
+
+    /// Configures the surface for `size` if it changed; false for a 0x0
+    /// (minimised) window.
+    fn configure(&mut self, ctx: &GpuContext, size: (u32, u32)) -> bool {
+        if size.0 == 0 || size.1 == 0 {
+            return false;
+        }
+        let max = ctx.device.limits().max_texture_dimension_2d;
+        let (w, h) = (size.0.min(max), size.1.min(max));
+        if let Some(c) = &self.config {
+            if c.width == w && c.height == h {
+                return true;
+            }
+        }
+        let format = self
+            .caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| f.is_srgb())
+            .or_else(|| self.caps.formats.first().copied())
+            .unwrap_or(wgpu::TextureFormat::Bgra8UnormSrgb);
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            color_space: wgpu::SurfaceColorSpace::Auto,
+            width: w,
+            height: h,
+            // Unthrottled where the platform allows, so the HUD's fps is
+            // the pipeline's, not the monitor's; falls back to Fifo.
+            present_mode: wgpu::PresentMode::AutoNoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: self
+                .caps
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: vec![],
+        };
+        self.surface.configure(&ctx.device, &config);
+        self.config = Some(config);
+        true
+    }
+
+    fn blit_to_surface(&mut self, ctx: &GpuContext, size: (u32, u32)) -> Result<bool, GpuError> {
+        if !self.configure(ctx, size) {
+            return Ok(false);
+        }
+        let mut texture = None;
+        // One retry after reconfiguring an outdated surface (the window
+        // changed between our configure and the acquire).
+        for _ in 0..2 {
+            match self.surface.get_current_texture() {
+                wgpu::CurrentSurfaceTexture::Success(t) => {
+                    texture = Some((t, false));
+                    break;
+                }
+                wgpu::CurrentSurfaceTexture::Suboptimal(t) => {
+                    texture = Some((t, true));
+                    break;
+                }
+                wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                    return Ok(false)
+                }
+                wgpu::CurrentSurfaceTexture::Outdated => {
+                    self.config = None;
+                    if !self.configure(ctx, size) {
+                        return Ok(false);
+                    }
+                }
+                wgpu::CurrentSurfaceTexture::Lost => {
+                    return Err(GpuError::Device {
+                        device: ctx.name.clone(),
+                        message: "the window's surface was lost".into(),
+                    })
+                }
+                wgpu::CurrentSurfaceTexture::Validation => {
+                    ctx.check()?;
+                    return Err(GpuError::Device {
+                        device: ctx.name.clone(),
+                        message: "validation error acquiring the window's surface texture".into(),
+                    });
+                }
+            }
+        }
+        let Some((frame, suboptimal)) = texture else {
+            return Ok(false);
+        };
+        let format = self
+            .config
+            .as_ref()
+            .map(|c| c.format)
+            .unwrap_or(frame.texture.format());
+        let gpu = self.gpu.as_mut().expect("present_texture created it");
+        gpu.blit_pipeline(ctx, format);
+        let blit = &gpu.blit;
+        let (_, bind_group) = gpu.composite.as_ref().expect("composite made this frame");
+        let view = frame.texture.create_view(&Default::default());
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("blit to window"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            });
+            pass.set_pipeline(blit);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        ctx.queue.present(frame);
+        if suboptimal {
+            self.config = None;
+        }
+        Ok(true)
+    }
+}
+
+impl PresentGpu {
+    fn new(ctx: &GpuContext) -> PresentGpu {
+        let d = &ctx.device;
+        let blit_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("blit"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("blit"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        PresentGpu {
+            overlay: OverlayRenderer::new(ctx, COLOUR_FORMAT),
+            blit: blit_pipeline(ctx, &blit_layout, wgpu::TextureFormat::Bgra8UnormSrgb),
+            blit_format: wgpu::TextureFormat::Bgra8UnormSrgb,
+            blit_layout,
+            sampler,
+            composite: None,
+        }
+    }
+
+    /// The blit pipeline for the surface's format (rebuilt if it differs).
+    fn blit_pipeline(&mut self, ctx: &GpuContext, format: wgpu::TextureFormat) {
+        if self.blit_format != format {
+            self.blit = blit_pipeline(ctx, &self.blit_layout, format);
+            self.blit_format = format;
+        }
+    }
+
+    fn ensure_composite(&mut self, ctx: &GpuContext, size: (u32, u32)) {
+        let stale = match &self.composite {
+            Some((t, _)) => (t.width(), t.height()) != size,
+            None => true,
+        };
+        if stale {
+            let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("viewer composite"),
+                size: wgpu::Extent3d {
+                    width: size.0,
+                    height: size.1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: COLOUR_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_DST
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let view = tex.create_view(&Default::default());
+            let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("blit"),
+                layout: &self.blit_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                ],
+            });
+            self.composite = Some((tex, bind_group));
+        }
+    }
+}
+
+fn blit_pipeline(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    let d = &ctx.device;
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("blit"),
+        source: wgpu::ShaderSource::Wgsl(BLIT_WGSL.into()),
+    });
+    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("blit"),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("blit"),
+        layout: Some(&pl),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// Reads an RGBA8 texture back, rows tightly packed, row 0 at the top.
+fn read_rgba(ctx: &GpuContext, tex: &wgpu::Texture, size: (u32, u32)) -> Result<Vec<u8>, GpuError> {
+    let (w, h) = size;
+    let row = w * 4;
+    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("screenshot readback"),
+        size: padded as u64 * h as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        tex.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buf,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    ctx.queue.submit([enc.finish()]);
+    let err = |e: &dyn std::fmt::Display| GpuError::Device {
+        device: ctx.name.clone(),
+        message: format!("screenshot readback: {e}"),
+    };
+    let (tx, rx) = std::sync::mpsc::channel();
+    buf.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| err(&e))?;
+    ctx.check()?;
+    rx.recv().map_err(|e| err(&e))?.map_err(|e| err(&e))?;
+    let data = buf.get_mapped_range(..).map_err(|e| err(&e))?;
+    let mut out = Vec::with_capacity((row * h) as usize);
+    for y in 0..h as usize {
+        let start = y * padded as usize;
+        out.extend_from_slice(&data[start..start + row as usize]);
+    }
+    drop(data);
+    buf.unmap();
+    Ok(out)
+}

@@ -1,0 +1,142 @@
+//! The viewer's key bindings: one table that input handling, the on-screen
+//! help, `gigawalk view --help` and the README all come from.
+
+use winit::keyboard::KeyCode;
+
+/// Something a key does once when pressed (movement keys are held instead,
+/// see [`Movement`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Action {
+    ToggleWalk,
+    ToggleOcclusion,
+    ToggleHlod,
+    PixelErrorUp,
+    PixelErrorDown,
+    ToggleAsync,
+    ToggleWireframe,
+    ToggleBoxes,
+    ToggleFreeze,
+    ToggleRecord,
+    Screenshot,
+    ToggleHud,
+    ToggleHelp,
+    Quit,
+}
+
+/// Held movement keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Movement {
+    Forward,
+    Back,
+    Left,
+    Right,
+    Down,
+    Up,
+    Fast,
+}
+
+/// One line of the bindings table.
+pub struct Binding {
+    pub keys: &'static [KeyCode],
+    /// How the keys are written in help text.
+    pub label: &'static str,
+    pub what: &'static str,
+    pub does: Does,
+}
+
+pub enum Does {
+    Move(Movement),
+    Act(Action),
+}
+
+use Does::{Act, Move};
+
+#[rustfmt::skip]
+pub const BINDINGS: &[Binding] = &[
+    Binding { keys: &[KeyCode::KeyW, KeyCode::ArrowUp], label: "W / Up", what: "fly forward", does: Move(Movement::Forward) },
+    Binding { keys: &[KeyCode::KeyS, KeyCode::ArrowDown], label: "S / Down", what: "fly back", does: Move(Movement::Back) },
+    Binding { keys: &[KeyCode::KeyA, KeyCode::ArrowLeft], label: "A / Left", what: "strafe left", does: Move(Movement::Left) },
+    Binding { keys: &[KeyCode::KeyD, KeyCode::ArrowRight], label: "D / Right", what: "strafe right", does: Move(Movement::Right) },
+    Binding { keys: &[KeyCode::KeyQ], label: "Q", what: "down", does: Move(Movement::Down) },
+    Binding { keys: &[KeyCode::KeyE], label: "E", what: "up", does: Move(Movement::Up) },
+    Binding { keys: &[KeyCode::ShiftLeft, KeyCode::ShiftRight], label: "Shift", what: "hold: 5x faster", does: Move(Movement::Fast) },
+    Binding { keys: &[KeyCode::KeyG], label: "G", what: "walk mode (eye height, level) on/off", does: Act(Action::ToggleWalk) },
+    Binding { keys: &[KeyCode::KeyO], label: "O", what: "occlusion culling on/off", does: Act(Action::ToggleOcclusion) },
+    Binding { keys: &[KeyCode::KeyL], label: "L", what: "HLOD on/off", does: Act(Action::ToggleHlod) },
+    Binding { keys: &[KeyCode::Equal, KeyCode::NumpadAdd, KeyCode::PageUp], label: "+ / PgUp", what: "pixel error up", does: Act(Action::PixelErrorUp) },
+    Binding { keys: &[KeyCode::Minus, KeyCode::NumpadSubtract, KeyCode::PageDown], label: "- / PgDn", what: "pixel error down", does: Act(Action::PixelErrorDown) },
+    Binding { keys: &[KeyCode::KeyY], label: "Y", what: "async rendering on/off", does: Act(Action::ToggleAsync) },
+    Binding { keys: &[KeyCode::KeyT], label: "T", what: "wireframe (node edges) on/off", does: Act(Action::ToggleWireframe) },
+    Binding { keys: &[KeyCode::KeyB], label: "B", what: "bounding boxes on/off", does: Act(Action::ToggleBoxes) },
+    Binding { keys: &[KeyCode::KeyF], label: "F", what: "freeze culling: keep this view's visible set, fly around it", does: Act(Action::ToggleFreeze) },
+    Binding { keys: &[KeyCode::KeyR], label: "R", what: "record camera path: start / stop and write", does: Act(Action::ToggleRecord) },
+    Binding { keys: &[KeyCode::KeyP, KeyCode::F12], label: "P / F12", what: "screenshot to PNG", does: Act(Action::Screenshot) },
+    Binding { keys: &[KeyCode::Tab], label: "Tab", what: "HUD on/off", does: Act(Action::ToggleHud) },
+    Binding { keys: &[KeyCode::KeyH, KeyCode::F1], label: "H / F1", what: "this help", does: Act(Action::ToggleHelp) },
+    Binding { keys: &[KeyCode::Escape], label: "Esc", what: "quit", does: Act(Action::Quit) },
+];
+
+/// Mouse controls, not in the key table.
+pub const MOUSE_HELP: &[(&str, &str)] = &[
+    ("drag (any button)", "look around"),
+    ("scroll", "move speed up / down"),
+];
+
+/// What a key does, if anything.
+pub fn lookup(key: KeyCode) -> Option<&'static Does> {
+    BINDINGS
+        .iter()
+        .find(|b| b.keys.contains(&key))
+        .map(|b| &b.does)
+}
+
+/// The controls as aligned text lines: on-screen help, `--help` and README.
+pub fn help_lines() -> Vec<String> {
+    let rows: Vec<(&str, &str)> = MOUSE_HELP
+        .iter()
+        .copied()
+        .chain(BINDINGS.iter().map(|b| (b.label, b.what)))
+        .collect();
+    let width = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
+    rows.iter()
+        .map(|(k, w)| format!("{k:<width$}  {w}"))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_key_is_bound_twice() {
+        let mut seen = std::collections::HashSet::new();
+        for b in BINDINGS {
+            for k in b.keys {
+                assert!(seen.insert(*k), "{k:?} is bound twice");
+            }
+        }
+    }
+
+    #[test]
+    fn wasd_moves_and_f_freezes() {
+        assert!(matches!(
+            lookup(KeyCode::KeyW),
+            Some(Does::Move(Movement::Forward))
+        ));
+        assert!(matches!(
+            lookup(KeyCode::KeyF),
+            Some(Does::Act(Action::ToggleFreeze))
+        ));
+        assert!(lookup(KeyCode::KeyZ).is_none());
+    }
+
+    #[test]
+    fn help_lists_every_binding_and_the_mouse() {
+        let help = help_lines();
+        assert_eq!(help.len(), BINDINGS.len() + MOUSE_HELP.len());
+        assert!(help
+            .iter()
+            .any(|l| l.contains("scroll") && l.contains("speed")));
+        assert!(help.iter().all(|l| l.is_ascii()), "the HUD font is ASCII");
+    }
+}

@@ -1,0 +1,203 @@
+//! The HUD's text: frame rate, each stage's milliseconds, latency, what was
+//! drawn and culled, the mode and the toggles; and the frame-rate clock.
+
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+use gigawalk_cull::TraversalStats;
+
+use crate::settings::Settings;
+
+/// The frame rate is averaged over this window: long enough to be steady
+/// to read, short enough to follow a walk into a denser area.
+pub const FPS_WINDOW: Duration = Duration::from_millis(500);
+
+/// Frame finish times over the last [`FPS_WINDOW`].
+#[derive(Debug, Default)]
+pub struct FrameClock {
+    finished: VecDeque<Instant>,
+}
+
+impl FrameClock {
+    pub fn tick(&mut self, at: Instant) {
+        self.finished.push_back(at);
+        while let Some(&first) = self.finished.front() {
+            if at.duration_since(first) > FPS_WINDOW && self.finished.len() > 2 {
+                self.finished.pop_front();
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// Frames per second over the window; 0 before two frames.
+    pub fn fps(&self) -> f64 {
+        match (self.finished.front(), self.finished.back()) {
+            (Some(&a), Some(&b)) if self.finished.len() >= 2 && b > a => {
+                (self.finished.len() - 1) as f64 / b.duration_since(a).as_secs_f64()
+            }
+            _ => 0.0,
+        }
+    }
+}
+
+/// One frame's numbers, as the runtime reported them.
+#[derive(Clone, Debug, Default)]
+pub struct FrameNumbers {
+    pub frame: u64,
+    pub or_ms: f64,
+    pub hzb_ms: f64,
+    pub stc_ms: f64,
+    pub rvg_ms: f64,
+    pub latency_ms: f64,
+    pub occlusion_used: bool,
+    pub stats: TraversalStats,
+}
+
+/// The viewer's state the HUD shows besides the frame's numbers.
+#[derive(Clone, Debug, Default)]
+pub struct ViewerState {
+    pub walking: bool,
+    pub speed: f64,
+    pub recording: Option<usize>,
+    pub devices: String,
+    /// A short-lived message (screenshot written, path saved, error).
+    pub message: Option<String>,
+}
+
+pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> Vec<String> {
+    let st = &n.stats;
+    let mut lines = vec![
+        format!(
+            "{fps:6.1} fps   frame {}   latency {:.1} ms",
+            n.frame, n.latency_ms
+        ),
+        format!(
+            "OR {:.1}  HZB {:.1}  STC {:.1}  RVG {:.1} ms",
+            n.or_ms, n.hzb_ms, n.stc_ms, n.rvg_ms
+        ),
+        format!(
+            "drawn {} tris in {} nodes ({} visited)",
+            group(st.drawn_triangles),
+            group(st.drawn_nodes),
+            group(st.visited)
+        ),
+        format!(
+            "culled: {} frustum, {} occlusion{}",
+            group(st.frustum_culled),
+            group(st.occlusion_culled),
+            if s.occlusion && !n.occlusion_used {
+                " (startup bypass)"
+            } else {
+                ""
+            }
+        ),
+        format!("mode: {}", s.mode()),
+    ];
+    let mut flags = Vec::new();
+    if s.async_rvg {
+        flags.push("async");
+    }
+    if s.frozen {
+        flags.push("FROZEN culling");
+    }
+    if s.boxes {
+        flags.push("boxes");
+    }
+    if s.wireframe {
+        flags.push("wireframe");
+    }
+    lines.push(format!(
+        "{} {:.3} u/s{}{}",
+        if v.walking { "walk" } else { "fly" },
+        v.speed,
+        if flags.is_empty() { "" } else { "   " },
+        flags.join(", ")
+    ));
+    if let Some(poses) = v.recording {
+        lines.push(format!("* REC path: {poses} poses (R stops)"));
+    }
+    if let Some(m) = &v.message {
+        lines.push(m.clone());
+    }
+    lines.push(format!("{}   H: help", v.devices));
+    lines
+}
+
+/// 1234567 -> "1,234,567": counts of millions read at a glance.
+pub fn group(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::with_capacity(s.len() + s.len() / 3);
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn group_thousands() {
+        assert_eq!(group(0), "0");
+        assert_eq!(group(999), "999");
+        assert_eq!(group(1000), "1,000");
+        assert_eq!(group(1234567), "1,234,567");
+    }
+
+    #[test]
+    fn fps_over_evenly_spaced_frames() {
+        let mut c = FrameClock::default();
+        let t0 = Instant::now();
+        assert_eq!(c.fps(), 0.0);
+        for i in 0..=10 {
+            c.tick(t0 + Duration::from_millis(20 * i));
+        }
+        assert!((c.fps() - 50.0).abs() < 1e-6, "{}", c.fps());
+        // Old frames leave the window.
+        c.tick(t0 + Duration::from_millis(2000));
+        c.tick(t0 + Duration::from_millis(2100));
+        assert!((c.fps() - 10.0).abs() < 1e-6, "{}", c.fps());
+    }
+
+    #[test]
+    fn hud_shows_stages_counts_mode_and_flags() {
+        let n = FrameNumbers {
+            frame: 7,
+            or_ms: 1.0,
+            stc_ms: 2.5,
+            stats: TraversalStats {
+                drawn_triangles: 1_500_000,
+                occlusion_culled: 42,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let s = Settings {
+            frozen: true,
+            ..Default::default()
+        };
+        let v = ViewerState {
+            recording: Some(3),
+            ..Default::default()
+        };
+        let text = hud_lines(60.0, &n, &s, &v).join("\n");
+        for want in [
+            "60.0 fps",
+            "STC 2.5",
+            "1,500,000 tris",
+            "42 occlusion",
+            "occlusion + HLOD",
+            "FROZEN",
+            "REC",
+            "startup bypass",
+        ] {
+            assert!(text.contains(want), "{want:?} missing from\n{text}");
+        }
+        assert!(text.is_ascii());
+    }
+}

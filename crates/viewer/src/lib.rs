@@ -1,0 +1,29 @@
+//! gigawalk's interactive viewer: fly or walk through a scene and watch
+//! what culling and LODs do.
+//!
+//! Main types: [`FlyController`] (the camera: mouse look, WASD/QE, walk
+//! mode), [`Settings`] (the toggles, and which need the pipeline
+//! restarted), [`controls::BINDINGS`] (the key table that input, the
+//! on-screen help and `--help` share), [`PathRecorder`] (camera paths),
+//! [`hud_lines`] (the HUD text), [`overlay_boxes`] (node boxes coloured by
+//! what culling did), [`write_png`] (screenshots), and [`run`], the winit
+//! app that feeds live input to the runtime and presents its frames.
+//!
+//! Everything but [`run`] works without a window, so it is unit-tested.
+
+mod app;
+mod boxes;
+mod controller;
+pub mod controls;
+mod hud;
+mod image;
+mod recorder;
+mod settings;
+
+pub use app::{run, ViewArgs, ViewError};
+pub use boxes::{overlay_boxes, CullSets};
+pub use controller::{FlyController, EYE_HEIGHT};
+pub use hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
+pub use image::{image_stats, read_png, write_png, ImageStats, ScreenshotError};
+pub use recorder::{next_free_name, PathRecorder};
+pub use settings::{Settings, PIXEL_ERROR_STEPS};

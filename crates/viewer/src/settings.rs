@@ -1,0 +1,169 @@
+//! The viewer's toggles (occlusion, HLOD, pixel error, async rendering,
+//! wireframe, boxes, freeze, HUD, help), and which of them need the
+//! pipeline restarted: the runtime fixes its options per run.
+
+use gigawalk_cull::TraversalOptions;
+
+/// Pixel-error steps for +/-: 0 is full detail; then doubling from half a
+/// pixel (the paper's Table 2 uses 1 to 20 pixels; 64 is far past visible).
+pub const PIXEL_ERROR_STEPS: &[f64] = &[0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub occlusion: bool,
+    pub hlod: bool,
+    pub pixel_error: f64,
+    /// RVG draws the newest culled set without waiting for the camera's own
+    /// (the runtime's `async_rvg`).
+    pub async_rvg: bool,
+    pub wireframe: bool,
+    pub boxes: bool,
+    /// Freeze culling: RVG keeps drawing the frozen view's visible set.
+    pub frozen: bool,
+    pub hud: bool,
+    pub help: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let t = TraversalOptions::default();
+        Settings {
+            occlusion: t.occlusion,
+            hlod: t.hlod,
+            pixel_error: t.pixel_tolerance,
+            async_rvg: false,
+            wireframe: false,
+            boxes: false,
+            frozen: false,
+            hud: true,
+            help: false,
+        }
+    }
+}
+
+impl Settings {
+    pub fn traversal(&self) -> TraversalOptions {
+        TraversalOptions {
+            occlusion: self.occlusion,
+            hlod: self.hlod,
+            pixel_tolerance: self.pixel_error,
+        }
+    }
+
+    /// The next pixel-error step up (`up`) or down from the current value.
+    pub fn step_pixel_error(&mut self, up: bool) {
+        let cur = self.pixel_error;
+        self.pixel_error = if up {
+            PIXEL_ERROR_STEPS
+                .iter()
+                .copied()
+                .find(|&s| s > cur)
+                .unwrap_or(cur)
+        } else {
+            PIXEL_ERROR_STEPS
+                .iter()
+                .rev()
+                .copied()
+                .find(|&s| s < cur)
+                .unwrap_or(cur)
+        };
+    }
+
+    /// Whether going from `self` to `next` needs a new pipeline run.
+    pub fn needs_restart(&self, next: &Settings) -> bool {
+        self.traversal() != next.traversal() || self.async_rvg != next.async_rvg
+    }
+
+    /// The mode as the HUD names it (Table 2's modes).
+    pub fn mode(&self) -> String {
+        let detail = if self.pixel_error == 0.0 {
+            "full detail".to_string()
+        } else {
+            format!("{} px", self.pixel_error)
+        };
+        format!(
+            "{}{}, {}",
+            if self.occlusion {
+                "occlusion"
+            } else {
+                "frustum only"
+            },
+            if self.hlod { " + HLOD" } else { "" },
+            detail
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_error_steps_clamp_at_both_ends() {
+        let mut s = Settings {
+            pixel_error: 0.0,
+            ..Default::default()
+        };
+        s.step_pixel_error(false);
+        assert_eq!(s.pixel_error, 0.0);
+        s.step_pixel_error(true);
+        assert_eq!(s.pixel_error, 0.5);
+        s.pixel_error = 64.0;
+        s.step_pixel_error(true);
+        assert_eq!(s.pixel_error, 64.0);
+    }
+
+    #[test]
+    fn off_step_values_go_to_the_neighbouring_step() {
+        let mut s = Settings {
+            pixel_error: 3.0,
+            ..Default::default()
+        };
+        s.step_pixel_error(true);
+        assert_eq!(s.pixel_error, 4.0);
+        s.pixel_error = 3.0;
+        s.step_pixel_error(false);
+        assert_eq!(s.pixel_error, 2.0);
+    }
+
+    #[test]
+    fn only_pipeline_options_restart() {
+        let a = Settings::default();
+        let hud = Settings {
+            hud: false,
+            help: true,
+            ..a.clone()
+        };
+        assert!(!a.needs_restart(&hud));
+        let occ = Settings {
+            occlusion: false,
+            ..a.clone()
+        };
+        assert!(a.needs_restart(&occ));
+        // Boxes and freezing work on every frame's culled set: no restart.
+        let frozen = Settings {
+            frozen: true,
+            boxes: true,
+            ..a.clone()
+        };
+        assert!(!a.needs_restart(&frozen));
+        let asynchronous = Settings {
+            async_rvg: true,
+            ..a.clone()
+        };
+        assert!(a.needs_restart(&asynchronous));
+    }
+
+    #[test]
+    fn mode_names_the_table_2_mode() {
+        let s = Settings::default();
+        assert_eq!(s.mode(), "occlusion + HLOD, 1 px");
+        let s = Settings {
+            occlusion: false,
+            hlod: false,
+            pixel_error: 0.0,
+            ..s
+        };
+        assert_eq!(s.mode(), "frustum only, full detail");
+    }
+}

@@ -1,0 +1,104 @@
+//! `gigawalk view`: the interactive walkthrough. Argument parsing only;
+//! the viewer (window, input, HUD, runtime wiring) is gigawalk-viewer.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use gigawalk_viewer::{controls, Settings, ViewArgs};
+
+/// The controls, for `--help` (the same table as the on-screen help).
+fn controls_help() -> String {
+    let mut s = String::from("Controls (H in the window shows them too):\n");
+    for line in controls::help_lines() {
+        s.push_str("  ");
+        s.push_str(&line);
+        s.push('\n');
+    }
+    s.push_str(
+        "\nScripted run (tests, docs): --frames N --screenshot out.png [--path p.path] renders N frames and exits.",
+    );
+    s
+}
+
+#[derive(clap::Args)]
+#[command(after_help = controls_help())]
+pub struct Args {
+    /// Scene file (.gwk) from `gigawalk preprocess`
+    scene: PathBuf,
+    /// Camera path (docs/path-format.md): start at its first pose; with --frames, follow it one pose a frame
+    #[arg(long)]
+    path: Option<PathBuf>,
+    /// Scripted run: render this many frames, then exit
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Scripted run: write the last frame, as shown, to this PNG
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Window width in pixels
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    /// Window height in pixels
+    #[arg(long, default_value_t = 720)]
+    height: u32,
+    /// wgpu devices for the pipeline: 2 = OR and RVG on their own devices (paper), 1 = shared
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=2))]
+    devices: u64,
+    /// Start without occlusion culling
+    #[arg(long)]
+    no_occlusion: bool,
+    /// Start without HLODs
+    #[arg(long)]
+    no_hlod: bool,
+    /// Starting pixel-error tolerance (0 = full detail)
+    #[arg(long, default_value_t = 1.0)]
+    pixel_error: f64,
+    /// Start with asynchronous rendering
+    #[arg(long)]
+    async_rvg: bool,
+    /// Start with node bounding boxes shown
+    #[arg(long)]
+    boxes: bool,
+    /// Start with the HUD hidden (Tab shows it)
+    #[arg(long)]
+    no_hud: bool,
+    /// Near plane distance in model units
+    #[arg(long, default_value_t = 0.05)]
+    near: f64,
+    /// Directory for recorded paths and screenshots taken with keys
+    #[arg(long, default_value = ".")]
+    out_dir: PathBuf,
+}
+
+pub fn run(a: Args) -> anyhow::Result<()> {
+    if !(a.pixel_error >= 0.0 && a.pixel_error.is_finite()) {
+        anyhow::bail!(
+            "--pixel-error {} must be a finite number >= 0",
+            a.pixel_error
+        );
+    }
+    if a.width == 0 || a.height == 0 {
+        anyhow::bail!("--width and --height must be at least 1");
+    }
+    let scene = a.scene.clone();
+    gigawalk_viewer::run(ViewArgs {
+        scene: a.scene,
+        path: a.path,
+        frames: a.frames,
+        screenshot: a.screenshot,
+        width: a.width,
+        height: a.height,
+        devices: a.devices as usize,
+        near: a.near,
+        settings: Settings {
+            occlusion: !a.no_occlusion,
+            hlod: !a.no_hlod,
+            pixel_error: a.pixel_error,
+            async_rvg: a.async_rvg,
+            boxes: a.boxes,
+            hud: !a.no_hud,
+            ..Settings::default()
+        },
+        out_dir: a.out_dir,
+    })
+    .with_context(|| format!("viewing {}", scene.display()))
+}

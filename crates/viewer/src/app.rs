@@ -454,7 +454,11 @@ impl LoopState {
                 Action::PixelErrorUp => self.settings.step_pixel_error(true),
                 Action::PixelErrorDown => self.settings.step_pixel_error(false),
                 Action::ToggleAsync => self.settings.async_rvg ^= true,
-                Action::ToggleWireframe => self.settings.wireframe ^= true,
+                // Not drawn yet: RVG's pipeline has no line mode and the
+                // presenter cannot reach the resident geometry.
+                Action::ToggleWireframe => {
+                    self.message = Some(("wireframe: not available yet".into(), now))
+                }
                 Action::ToggleBoxes => self.settings.boxes ^= true,
                 Action::ToggleFreeze => self.settings.frozen ^= true,
                 Action::ToggleHud => self.settings.hud ^= true,

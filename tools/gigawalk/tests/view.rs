@@ -175,7 +175,8 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
     assert_eq!((w, h), (320, 200));
     let stats = gigawalk_viewer::image_stats(&rgba);
     // A lit plant interior: hundreds of shades (a blank or clear-only frame
-    // has one), and geometry over most of the view (the path walks inside).
+    // has one), and no single colour (the clear colour, or a flat-lit floor
+    // or wall) over more than 80% of the view.
     assert!(stats.distinct_colours > 100, "{stats:?}");
-    assert!(stats.non_background > 0.5, "{stats:?}");
+    assert!(stats.non_background > 0.2, "{stats:?}");
 }

@@ -70,10 +70,11 @@ fn main() {
         .poses
         .iter()
         .take(frames)
-        .map(|p| CameraRequest {
-            camera: Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), 0.05),
-            read_back: false,
-            hold_culling: false,
+        .map(|p| {
+            CameraRequest::new(
+                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), 0.05),
+                false,
+            )
         })
         .collect();
     println!(

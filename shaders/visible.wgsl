@@ -28,9 +28,12 @@ fn vs_main(
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    // Wireframe: the object's colour, unlit, so edges read on any side.
+    if (frame.params.y > 0.5) {
+        return vec4<f32>(in.colour.rgb, 1.0);
+    }
     // Two-sided: imported models' winding and normals are not trusted.
     let lambert = abs(dot(normalize(in.normal), -frame.light_dir.xyz));
     let ambient = frame.params.x;
-    let base = select(in.colour.rgb, vec3<f32>(0.6), frame.params.y > 0.5);
-    return vec4<f32>(base * (ambient + (1.0 - ambient) * lambert), 1.0);
+    return vec4<f32>(in.colour.rgb * (ambient + (1.0 - ambient) * lambert), 1.0);
 }

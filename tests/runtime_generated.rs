@@ -44,10 +44,11 @@ fn check(kind: Kind) {
         .path
         .poses
         .iter()
-        .map(|p| CameraRequest {
-            camera: Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), 0.05),
-            read_back: true,
-            hold_culling: false,
+        .map(|p| {
+            CameraRequest::new(
+                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), 0.05),
+                true,
+            )
         })
         .collect();
     assert_eq!(cameras.len(), FRAMES);

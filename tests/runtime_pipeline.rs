@@ -8,7 +8,8 @@ use std::time::{Duration, Instant};
 use gigawalk_cull::{Camera, TraversalOptions};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_runtime::{
-    CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule, Stage,
+    CameraList, CameraRequest, DrawStyle, FrameReport, Runtime, RuntimeError, RuntimeOptions,
+    Schedule, Stage,
 };
 use gigawalk_scene::SceneReader;
 use gigawalk_suite::scenes::{street, write_boxes_scene};
@@ -26,11 +27,10 @@ fn walk(frames: usize, shift: DVec3, read_back: bool) -> CameraList {
             let eye = shift + DVec3::new(3.0 * t, 1.7, 8.0 - 30.0 * t);
             let yaw = (t * 9.0).sin() * 0.6;
             let target = eye + DVec3::new(yaw.sin(), -0.05, -yaw.cos());
-            CameraRequest {
-                camera: Camera::look_at(eye, target, 60f64.to_radians(), W as f64 / H as f64, 0.05),
+            CameraRequest::new(
+                Camera::look_at(eye, target, 60f64.to_radians(), W as f64 / H as f64, 0.05),
                 read_back,
-                hold_culling: false,
-            }
+            )
         })
         .collect();
     CameraList { cameras }
@@ -341,4 +341,62 @@ fn async_rvg_renders_every_camera() {
         .unwrap_err()
         .to_string()
         .contains("pipelined"));
+}
+
+#[test]
+fn wireframe_frames_change_the_image_not_the_culling() {
+    let Some(devices) = devices_or_skip(2, "wireframe style") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    let wireframe = rt.device(0).supports_wireframe() && rt.device(1).supports_wireframe();
+    if !wireframe {
+        assert!(
+            std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none(),
+            "the CI adapter must support POLYGON_MODE_LINE"
+        );
+        eprintln!("!!! SKIPPING wireframe style: no POLYGON_MODE_LINE on this adapter");
+        return;
+    }
+    for (schedule, async_rvg) in [
+        (Schedule::Sequential, false),
+        (Schedule::Pipelined, false),
+        (Schedule::Pipelined, true),
+    ] {
+        let mut o = options(schedule, true, true, 1.0);
+        o.async_rvg = async_rvg;
+        let shaded = run(&rt, &o, walk(12, DVec3::ZERO, true)).unwrap();
+        // Odd frames in wireframe.
+        let mut cams = walk(12, DVec3::ZERO, true);
+        for c in cams.cameras.iter_mut().skip(1).step_by(2) {
+            c.style = DrawStyle::Wireframe;
+        }
+        let mixed = run(&rt, &o, cams).unwrap();
+        assert_eq!(mixed.len(), 12);
+        for (a, b) in shaded.iter().zip(&mixed) {
+            let what = format!("{schedule:?} async {async_rvg}, frame {}", a.frame);
+            let (ia, ib) = (a.image.as_ref().unwrap(), b.image.as_ref().unwrap());
+            if async_rvg {
+                // Which set a frame draws depends on timing; only the style is checked.
+            } else {
+                assert_eq!(a.visible, b.visible, "{what}");
+            }
+            let differing = ia
+                .colour
+                .chunks(4)
+                .zip(ib.colour.chunks(4))
+                .filter(|(x, y)| x != y)
+                .count();
+            if b.frame % 2 == 0 && !async_rvg {
+                assert_eq!(differing, 0, "{what}: a shaded frame changed");
+            } else if b.frame % 2 == 1 {
+                // Lines leave most of what faces covered as background.
+                assert!(
+                    differing * 10 > ia.colour.len() / 4,
+                    "{what}: only {differing} pixels differ in wireframe"
+                );
+            }
+        }
+    }
 }

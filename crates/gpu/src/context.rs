@@ -40,6 +40,13 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// Whether RVG can draw [`crate::DrawStyle::Wireframe`] here.
+    pub fn supports_wireframe(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE)
+    }
+
     /// Returns the first GPU error seen since the device was opened.
     pub fn check(&self) -> Result<(), GpuError> {
         match self.errors.lock().expect("error slot").clone() {
@@ -148,7 +155,8 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some(&label),
-        required_features: wgpu::Features::empty(),
+        // Line mode for the viewer's wireframe, where the adapter has it.
+        required_features: adapter.features() & wgpu::Features::POLYGON_MODE_LINE,
         required_limits: limits,
         ..Default::default()
     }))

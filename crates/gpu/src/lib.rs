@@ -22,7 +22,7 @@ pub mod shader_types;
 pub use context::{devices_or_skip, open_devices, GpuContext, GpuError};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
-    DepthImage, DepthPass, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
+    DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
 };
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use residency::{HostGeometry, LodRange, Residency, ResidentGeometry};

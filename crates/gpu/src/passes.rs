@@ -36,6 +36,18 @@ pub struct FrameImage {
 
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// How RVG draws triangles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrawStyle {
+    /// Filled, lit by the head light.
+    #[default]
+    Shaded,
+    /// Triangle edges only, in the object's unlit colour. Needs the
+    /// adapter's `POLYGON_MODE_LINE` ([`GpuContext::supports_wireframe`]);
+    /// without it RVG draws `Shaded` and logs a warning once.
+    Wireframe,
+}
+
 /// Reversed-Z: clear to 0 (infinitely far), keep the greater depth.
 const DEPTH_COMPARE: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
@@ -93,7 +105,8 @@ impl Drawer {
         }
     }
 
-    fn begin(&mut self, ctx: &GpuContext, view: &View, flat: bool) {
+    /// `unlit`: draw the object colour without lighting (wireframe).
+    fn begin(&mut self, ctx: &GpuContext, view: &View, unlit: bool) {
         let u = FrameUniforms {
             view_proj: view.view_proj.to_cols_array_2d(),
             light_dir: view
@@ -101,7 +114,7 @@ impl Drawer {
                 .normalize_or(Vec3::NEG_Z)
                 .extend(0.0)
                 .to_array(),
-            params: [0.25, if flat { 1.0 } else { 0.0 }, 0.0, 0.0],
+            params: [0.25, if unlit { 1.0 } else { 0.0 }, 0.0, 0.0],
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
@@ -209,6 +222,7 @@ fn pipeline(
     label: &str,
     wgsl: &str,
     colour: Option<wgpu::TextureFormat>,
+    polygon_mode: wgpu::PolygonMode,
 ) -> wgpu::RenderPipeline {
     let module = ctx
         .device
@@ -238,6 +252,7 @@ fn pipeline(
                 // No culling: imported winding is not trusted, and OR must
                 // write every occluder's depth.
                 cull_mode: None,
+                polygon_mode,
                 ..Default::default()
             },
             depth_stencil: Some(wgpu::DepthStencilState {
@@ -277,6 +292,7 @@ impl DepthPass {
             "occluder depth",
             shader_types::OCCLUDER_DEPTH_WGSL,
             None,
+            wgpu::PolygonMode::Fill,
         );
         DepthPass {
             depth: target(
@@ -345,6 +361,10 @@ fn depth_attachment(
 pub struct VisiblePass {
     drawer: Drawer,
     pipeline: wgpu::RenderPipeline,
+    /// The line-mode pipeline, where the device supports it.
+    wire_pipeline: Option<wgpu::RenderPipeline>,
+    style: DrawStyle,
+    warned_no_wireframe: bool,
     colour: wgpu::Texture,
     depth: wgpu::Texture,
     width: u32,
@@ -366,14 +386,24 @@ impl VisiblePass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> VisiblePass {
         let (width, height) = (width.max(1), height.max(1));
         let drawer = Drawer::new(ctx, "visible");
-        let pipeline = pipeline(
-            ctx,
-            &drawer,
-            "visible",
-            shader_types::VISIBLE_WGSL,
-            Some(COLOUR_FORMAT),
-        );
+        let visible = |label, mode| {
+            pipeline(
+                ctx,
+                &drawer,
+                label,
+                shader_types::VISIBLE_WGSL,
+                Some(COLOUR_FORMAT),
+                mode,
+            )
+        };
+        let pipeline = visible("visible", wgpu::PolygonMode::Fill);
+        let wire_pipeline = ctx
+            .supports_wireframe()
+            .then(|| visible("visible wireframe", wgpu::PolygonMode::Line));
         VisiblePass {
+            wire_pipeline,
+            style: DrawStyle::Shaded,
+            warned_no_wireframe: false,
             colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
             depth: target(ctx, "visible depth", width, height, DEPTH_FORMAT),
             drawer,
@@ -402,8 +432,22 @@ impl VisiblePass {
     }
 
     /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
-    pub fn begin(&mut self, ctx: &GpuContext, view: &View) {
-        self.drawer.begin(ctx, view, false);
+    pub fn begin(&mut self, ctx: &GpuContext, view: &View, style: DrawStyle) {
+        self.style = match style {
+            DrawStyle::Wireframe if self.wire_pipeline.is_none() => {
+                if !self.warned_no_wireframe {
+                    tracing::warn!(
+                        "{}: no POLYGON_MODE_LINE, drawing shaded instead of wireframe",
+                        ctx.name
+                    );
+                    self.warned_no_wireframe = true;
+                }
+                DrawStyle::Shaded
+            }
+            s => s,
+        };
+        self.drawer
+            .begin(ctx, view, self.style == DrawStyle::Wireframe);
         self.cleared = false;
         self.view = Some(*view);
     }
@@ -435,7 +479,11 @@ impl VisiblePass {
                 depth_stencil_attachment: Some(depth_attachment(&dv, !self.cleared)),
                 ..Default::default()
             });
-            pass.set_pipeline(&self.pipeline);
+            let pipeline = match (self.style, &self.wire_pipeline) {
+                (DrawStyle::Wireframe, Some(wire)) => wire,
+                _ => &self.pipeline,
+            };
+            pass.set_pipeline(pipeline);
             self.drawer.record(&mut pass, residency, &draws);
         }
         self.cleared = true;

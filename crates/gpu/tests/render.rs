@@ -3,7 +3,7 @@
 //! from the origin renders like the same scene at the origin.
 
 use gigawalk_cull::Camera;
-use gigawalk_gpu::{devices_or_skip, DepthPass, HostGeometry, View, VisiblePass};
+use gigawalk_gpu::{devices_or_skip, DepthPass, DrawStyle, HostGeometry, View, VisiblePass};
 use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use glam::{DVec3, Vec3};
 
@@ -84,6 +84,17 @@ fn view(shift: DVec3, w: u32, h: u32) -> View {
 
 /// Renders (depth pass image, visible colour, visible depth) of the scene shifted by `shift`.
 fn render(shift: DVec3) -> Option<(Vec<f32>, Vec<u8>, Vec<f32>)> {
+    render_styled(shift, DrawStyle::Shaded, (64, 48)).map(|(r, _)| r)
+}
+
+/// As [`render`], drawing RVG in `style`; also says whether the device
+/// supports wireframe.
+#[allow(clippy::type_complexity)]
+fn render_styled(
+    shift: DVec3,
+    style: DrawStyle,
+    (w, h): (u32, u32),
+) -> Option<((Vec<f32>, Vec<u8>, Vec<f32>), bool)> {
     let ctx = devices_or_skip(1, "gpu render").map(|mut d| d.remove(0))?;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
@@ -93,17 +104,19 @@ fn render(shift: DVec3) -> Option<(Vec<f32>, Vec<u8>, Vec<f32>)> {
         .unwrap()
         .upload(&ctx)
         .unwrap();
-    let (w, h) = (64, 48);
     let v = view(shift, w, h);
     let mut or = DepthPass::new(&ctx, w, h);
     let depth = or.render(&ctx, &geometry, &v, &[0, 1]).unwrap();
     assert_eq!((depth.width, depth.height), (w, h));
     let mut rvg = VisiblePass::new(&ctx, w, h);
-    rvg.begin(&ctx, &v);
+    rvg.begin(&ctx, &v, style);
     rvg.draw(&ctx, &geometry, &[1]); // far box first, in its own chunk
     rvg.draw(&ctx, &geometry, &[0]);
     let frame = rvg.finish(&ctx, true).unwrap().unwrap();
-    Some((depth.depth, frame.colour, frame.depth.depth))
+    Some((
+        (depth.depth, frame.colour, frame.depth.depth),
+        ctx.supports_wireframe(),
+    ))
 }
 
 #[test]
@@ -154,4 +167,44 @@ fn far_from_origin_renders_like_the_origin() {
         .filter(|(a, b)| a != b)
         .count();
     assert_eq!(differing, 0, "colour pixels differ");
+}
+
+#[test]
+fn wireframe_draws_edges_in_the_unlit_object_colour() {
+    // Big enough that faces cover many more pixels than their edges.
+    let size = (256, 192);
+    let Some(((_, shaded, _), supported)) = render_styled(DVec3::ZERO, DrawStyle::Shaded, size)
+    else {
+        return;
+    };
+    let ((_, wire, wire_depth), _) =
+        render_styled(DVec3::ZERO, DrawStyle::Wireframe, size).unwrap();
+    // CI's adapter (lavapipe) has line mode; a real GPU does too.
+    assert!(
+        supported || std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none(),
+        "the CI adapter must support POLYGON_MODE_LINE"
+    );
+    if !supported {
+        eprintln!("!!! wireframe unsupported on this adapter: RVG drew shaded");
+        assert_eq!(wire, shaded);
+        return;
+    }
+    let is_bg = |p: &[u8]| p[0] < 60 && p[1] < 60 && p[2] < 70;
+    let covered = |img: &[u8]| img.chunks(4).filter(|p| !is_bg(p)).count();
+    let (n_shaded, n_wire) = (covered(&shaded), covered(&wire));
+    // Edges only: some pixels, far fewer than the filled faces.
+    assert!(n_wire > 20, "wireframe drew {n_wire} pixels");
+    assert!(
+        n_wire * 3 < n_shaded,
+        "wireframe covers {n_wire} pixels, shaded {n_shaded}"
+    );
+    // Every drawn pixel is an object's own colour, unlit: pure red or pure green.
+    for p in wire.chunks(4).filter(|p| !is_bg(p)) {
+        let red = p[0] == 255 && p[1] == 0 && p[2] == 0;
+        let green = p[0] == 0 && p[1] == 255 && p[2] == 0;
+        assert!(red || green, "wireframe pixel {p:?}");
+    }
+    // Lines write depth, and only where they are drawn.
+    let with_depth = wire_depth.iter().filter(|&&d| d > 0.0).count();
+    assert_eq!(with_depth, n_wire, "depth written off the lines");
 }

@@ -24,7 +24,7 @@ use std::time::Instant;
 pub use gigawalk_cull::{
     Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
-pub use gigawalk_gpu::{FrameImage, GpuContext, GpuError, VisiblePass};
+pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{RuntimeOptions, Schedule, Stage};
 
 use gigawalk_gpu::{HostGeometry, ResidentGeometry};
@@ -60,6 +60,9 @@ pub struct CameraRequest {
     /// LODs) with this camera; OR and STC do no work for this frame. The
     /// viewer uses it to fly around a frozen visible set.
     pub hold_culling: bool,
+    /// How RVG draws this frame (the viewer's wireframe toggle). Culling
+    /// does not depend on it.
+    pub style: DrawStyle,
 }
 
 impl CameraRequest {
@@ -68,6 +71,7 @@ impl CameraRequest {
             camera,
             read_back,
             hold_culling: false,
+            style: DrawStyle::Shaded,
         }
     }
 }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use crossbeam_channel::{bounded, unbounded, Receiver, Sender, TryRecvError};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
-use gigawalk_gpu::DepthImage;
+use gigawalk_gpu::{DepthImage, DrawStyle};
 
 use crate::stages::{lod_ids, OrStage, RvgStage, StcOutput, StcStage};
 use crate::{CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
@@ -27,6 +27,7 @@ struct Sample {
     view: CullView,
     read_back: bool,
     hold: bool,
+    style: DrawStyle,
     sampled_at: Instant,
 }
 
@@ -41,7 +42,7 @@ struct OrToStc {
 /// STC -> RVG: a frame is `Begin`, any number of `Items`, then the
 /// sentinel `End` carrying the frame number, camera and statistics.
 enum StcToRvg {
-    Begin(u64, Box<CullView>),
+    Begin(u64, Box<CullView>, DrawStyle),
     Items(Vec<u32>),
     End(Box<FrameEnd>),
 }
@@ -79,6 +80,7 @@ fn next_sample(
         view: CullView::new(camera, viewport),
         read_back: req.read_back,
         hold: req.hold_culling,
+        style: req.style,
         sampled_at: Instant::now(),
     }))
 }
@@ -167,7 +169,7 @@ pub(crate) fn run_sequential(
                 (s, Some(o), false)
             }
         };
-        rvg.begin(frame, &view)?;
+        rvg.begin(frame, &view, sample.style)?;
         // The same chunks as the pipeline, drawn after traversal.
         for chunk in lod_ids(rt.skeleton, &stc_out.visible).chunks(opts.chunk) {
             rvg.draw(chunk);
@@ -369,7 +371,11 @@ fn stc_thread(
     for m in input.iter() {
         let frame = m.sample.frame;
         if out
-            .send(StcToRvg::Begin(frame, Box::new(m.sample.view.clone())))
+            .send(StcToRvg::Begin(
+                frame,
+                Box::new(m.sample.view.clone()),
+                m.sample.style,
+            ))
             .is_err()
         {
             return Ok(());
@@ -429,9 +435,9 @@ fn rvg_thread(
     let mut span = None;
     for m in input.iter() {
         match m {
-            StcToRvg::Begin(frame, view) => {
+            StcToRvg::Begin(frame, view, style) => {
                 span = Some(tracing::info_span!("RVG", frame).entered());
-                rvg.begin(frame, &view)?;
+                rvg.begin(frame, &view, style)?;
             }
             StcToRvg::Items(lods) => rvg.draw(&lods),
             StcToRvg::End(end) => {
@@ -652,7 +658,7 @@ fn async_rvg_thread(
         }
         let set = newest.as_ref().expect("a visible set");
         let reused = set.sample.frame != frame;
-        rvg.begin(frame, &sample.view)?;
+        rvg.begin(frame, &sample.view, sample.style)?;
         for chunk in lod_ids(rt.skeleton, &set.stc.visible).chunks(opts.chunk) {
             rvg.draw(chunk);
         }

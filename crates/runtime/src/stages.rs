@@ -8,7 +8,7 @@ use gigawalk_cull::{
     TraversalOptions, TraversalStats, Traverser,
 };
 use gigawalk_gpu::{
-    DepthImage, DepthPass, FrameImage, GpuContext, ResidentGeometry, View, VisiblePass,
+    DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, ResidentGeometry, View, VisiblePass,
 };
 use gigawalk_scene::Skeleton;
 
@@ -245,10 +245,15 @@ impl<'a> RvgStage<'a> {
         }
     }
 
-    pub fn begin(&mut self, frame: u64, view: &CullView) -> Result<(), RuntimeError> {
+    pub fn begin(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        style: DrawStyle,
+    ) -> Result<(), RuntimeError> {
         check_injected(self.opts, Stage::Rvg, frame)?;
         self.started = Some(Instant::now());
-        self.pass.begin(self.ctx, &gpu_view(view));
+        self.pass.begin(self.ctx, &gpu_view(view), style);
         Ok(())
     }
 

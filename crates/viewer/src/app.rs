@@ -21,8 +21,8 @@ use gigawalk_gpu::{
     WindowError, WindowSurface,
 };
 use gigawalk_runtime::{
-    CameraRequest, CameraSource, CullReason, FrameReport, Presenter, Runtime, RuntimeError,
-    RuntimeOptions,
+    CameraRequest, CameraSource, CullReason, DrawStyle, FrameReport, Presenter, Runtime,
+    RuntimeError, RuntimeOptions,
 };
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
 use gigawalk_scene::{SceneReader, Skeleton};
@@ -93,6 +93,9 @@ pub enum ViewError {
 /// new size (each restart costs a thread start and 2 bypass frames; the
 /// blit scales the old size meanwhile).
 const RESIZE_SETTLE: Duration = Duration::from_millis(200);
+/// Shown when wireframe is asked for on a device without line mode.
+const WIREFRAME_UNSUPPORTED: &str =
+    "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
 /// How long HUD messages (screenshot written, path saved) stay up.
 const MESSAGE_TIME: Duration = Duration::from_secs(4);
 /// While minimised, the camera source waits this long per frame so a
@@ -164,6 +167,14 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         .ok_or_else(|| ViewError::Display("the window was not created within 10 s".into()))?;
     let (devices, surface) = open_devices_for_window(args.devices, window.clone())?;
     let device_names = device_summary(&devices);
+    let wireframe_supported = devices.iter().all(GpuContext::supports_wireframe);
+    let mut start_message = None;
+    let mut settings = args.settings.clone();
+    if settings.wireframe && !wireframe_supported {
+        settings.wireframe = false;
+        start_message = Some((WIREFRAME_UNSUPPORTED.to_string(), Instant::now()));
+        eprintln!("{WIREFRAME_UNSUPPORTED}");
+    }
     let runtime = Runtime::with_devices(&scene, devices)?;
     tracing::info!("viewing {} on {device_names}", args.scene.display());
 
@@ -174,10 +185,10 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     });
     let shared = Arc::new(Mutex::new(Shared {
         camera: controller.camera(aspect(app.size), args.near),
-        frozen: args.settings.frozen,
+        frozen: settings.frozen,
         window_size: (app.size.width, app.size.height),
         capture: None,
-        settings: args.settings.clone(),
+        settings: settings.clone(),
         hud: Vec::new(),
         quit: false,
         message: None,
@@ -198,12 +209,13 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     };
     let mut state = LoopState {
         controller,
-        settings: args.settings.clone(),
+        settings,
+        wireframe_supported,
         recorder: PathRecorder::default(),
         record_start: Instant::now(),
         clock: FrameClock::default(),
         last_update: Instant::now(),
-        message: None,
+        message: start_message,
         devices: device_names,
         out_dir: args.out_dir.clone(),
         near: args.near,
@@ -421,6 +433,8 @@ impl ApplicationHandler for App {
 struct LoopState {
     controller: FlyController,
     settings: Settings,
+    /// Every device has line mode (wireframe).
+    wireframe_supported: bool,
     recorder: PathRecorder,
     record_start: Instant,
     clock: FrameClock,
@@ -454,11 +468,10 @@ impl LoopState {
                 Action::PixelErrorUp => self.settings.step_pixel_error(true),
                 Action::PixelErrorDown => self.settings.step_pixel_error(false),
                 Action::ToggleAsync => self.settings.async_rvg ^= true,
-                // Not drawn yet: RVG's pipeline has no line mode and the
-                // presenter cannot reach the resident geometry.
-                Action::ToggleWireframe => {
-                    self.message = Some(("wireframe: not available yet".into(), now))
+                Action::ToggleWireframe if self.wireframe_supported => {
+                    self.settings.wireframe ^= true
                 }
+                Action::ToggleWireframe => self.message = Some((WIREFRAME_UNSUPPORTED.into(), now)),
                 Action::ToggleBoxes => self.settings.boxes ^= true,
                 Action::ToggleFreeze => self.settings.frozen ^= true,
                 Action::ToggleHud => self.settings.hud ^= true,
@@ -556,11 +569,16 @@ struct LiveSource {
 
 impl CameraSource for LiveSource {
     fn next_camera(&mut self, _frame: u64) -> Result<Option<CameraRequest>, String> {
-        let (camera, frozen, quit, minimised) = {
+        let (camera, frozen, style, quit, minimised) = {
             let s = self.shared.lock().map_err(|e| e.to_string())?;
             (
                 s.camera,
                 s.frozen,
+                if s.settings.wireframe {
+                    DrawStyle::Wireframe
+                } else {
+                    DrawStyle::Shaded
+                },
                 s.quit,
                 s.window_size.0 == 0 || s.window_size.1 == 0,
             )
@@ -588,6 +606,7 @@ impl CameraSource for LiveSource {
                 camera,
                 read_back: false,
                 hold_culling: false,
+                style,
             }));
         }
         if minimised {
@@ -597,6 +616,7 @@ impl CameraSource for LiveSource {
             camera,
             read_back: false,
             hold_culling: frozen,
+            style,
         }))
     }
 }

@@ -66,7 +66,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding { keys: &[KeyCode::Equal, KeyCode::NumpadAdd, KeyCode::PageUp], label: "+ / PgUp", what: "pixel error up", does: Act(Action::PixelErrorUp) },
     Binding { keys: &[KeyCode::Minus, KeyCode::NumpadSubtract, KeyCode::PageDown], label: "- / PgDn", what: "pixel error down", does: Act(Action::PixelErrorDown) },
     Binding { keys: &[KeyCode::KeyY], label: "Y", what: "async rendering on/off", does: Act(Action::ToggleAsync) },
-    Binding { keys: &[KeyCode::KeyT], label: "T", what: "wireframe (not available yet)", does: Act(Action::ToggleWireframe) },
+    Binding { keys: &[KeyCode::KeyT], label: "T", what: "wireframe", does: Act(Action::ToggleWireframe) },
     Binding { keys: &[KeyCode::KeyB], label: "B", what: "bounding boxes on/off", does: Act(Action::ToggleBoxes) },
     Binding { keys: &[KeyCode::KeyF], label: "F", what: "freeze culling: keep this view's visible set, fly around it", does: Act(Action::ToggleFreeze) },
     Binding { keys: &[KeyCode::KeyR], label: "R", what: "record camera path: start / stop and write", does: Act(Action::ToggleRecord) },

@@ -55,6 +55,9 @@ pub struct Args {
     /// Start with asynchronous rendering
     #[arg(long)]
     async_rvg: bool,
+    /// Start in wireframe (triangle edges in each object's colour)
+    #[arg(long)]
+    wireframe: bool,
     /// Start with node bounding boxes shown
     #[arg(long)]
     boxes: bool,
@@ -94,6 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             hlod: !a.no_hlod,
             pixel_error: a.pixel_error,
             async_rvg: a.async_rvg,
+            wireframe: a.wireframe,
             boxes: a.boxes,
             hud: !a.no_hud,
             ..Settings::default()

@@ -152,8 +152,9 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
     assert!(ok, "{err}");
     let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)], None);
     assert!(ok, "{err}");
-    let (ok, _, err) = gigawalk(
-        &[
+    // The same frames shaded, then in wireframe.
+    let shot = |png: &Path, extra: &[&str]| {
+        let mut args = vec![
             "view",
             s(&gwk),
             "--path",
@@ -161,22 +162,44 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
             "--frames",
             "6",
             "--screenshot",
-            s(&png),
+            s(png),
             "--width",
             "320",
             "--height",
             "200",
             "--no-hud",
-        ],
-        Some(&x.display),
-    );
-    assert!(ok, "gigawalk view failed:\n{err}");
-    let (w, h, rgba) = gigawalk_viewer::read_png(&png).unwrap();
-    assert_eq!((w, h), (320, 200));
-    let stats = gigawalk_viewer::image_stats(&rgba);
+        ];
+        args.extend_from_slice(extra);
+        let (ok, _, err) = gigawalk(&args, Some(&x.display));
+        assert!(ok, "gigawalk view {extra:?} failed:\n{err}");
+        let (w, h, rgba) = gigawalk_viewer::read_png(png).unwrap();
+        assert_eq!((w, h), (320, 200));
+        rgba
+    };
+    let shaded = shot(&png, &[]);
+    let stats = gigawalk_viewer::image_stats(&shaded);
     // A lit plant interior: hundreds of shades (a blank or clear-only frame
     // has one), and no single colour (the clear colour, or a flat-lit floor
     // or wall) over more than 80% of the view.
     assert!(stats.distinct_colours > 100, "{stats:?}");
     assert!(stats.non_background > 0.2, "{stats:?}");
+
+    // Wireframe: edges in each object's unlit colour over the background,
+    // so far fewer distinct colours, yet lines all over the view.
+    let wire = shot(&dir.path().join("wire.png"), &["--wireframe"]);
+    let wstats = gigawalk_viewer::image_stats(&wire);
+    assert!(
+        wstats.distinct_colours * 4 < stats.distinct_colours,
+        "wireframe {wstats:?} vs shaded {stats:?}"
+    );
+    assert!(wstats.non_background > 0.05, "{wstats:?}");
+    let differing = shaded
+        .chunks(4)
+        .zip(wire.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        differing * 4 > shaded.len() / 4,
+        "only {differing} pixels differ from the shaded frame"
+    );
 }

@@ -1,10 +1,12 @@
-//! `gigawalk view` scripted under Xvfb: a small generated plant, a few
-//! frames, and a screenshot that must show the scene (many colours, most of
-//! the image covered), not a blank or background-only frame. Skips loudly
-//! without Xvfb or a GPU adapter, unless GIGAWALK_REQUIRE_ADAPTER is set
-//! (CI), where both must be there.
+//! `gigawalk view` under Xvfb on a small generated plant. Scripted: a few
+//! frames and a screenshot that must show the scene (many colours, most of
+//! the image covered), not a blank or background-only frame, and the same
+//! in wireframe. Live: xdotool drives it with keys and the mouse (fly,
+//! look, wireframe, record a path, screenshots, resize, minimise, Esc).
+//! Skips loudly without Xvfb, xdotool or a GPU adapter, unless
+//! GIGAWALK_REQUIRE_ADAPTER is set (CI), where all must be there.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -49,46 +51,45 @@ impl Drop for Xvfb {
     }
 }
 
-/// Starts Xvfb on the first free display from :99 up (several test runs
-/// may share a machine); None when there is no Xvfb binary.
+/// Starts Xvfb on a display it picks itself (`-displayfd`: tests running
+/// at once must not race for the same number) and waits until it is ready;
+/// None when there is no Xvfb binary.
 fn start_xvfb() -> Option<Xvfb> {
-    for n in 99..120 {
-        let lock = format!("/tmp/.X{n}-lock");
-        if Path::new(&lock).exists() {
-            continue;
-        }
-        let display = format!(":{n}");
-        let child = match Command::new("Xvfb")
-            .args([
-                display.as_str(),
-                "-screen",
-                "0",
-                "1024x768x24",
-                "-nolisten",
-                "tcp",
-            ])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-        {
-            Ok(c) => c,
-            Err(_) => return None,
-        };
-        let mut x = Xvfb { child, display };
-        // Ready when its socket exists; gone if the display was taken.
-        let deadline = Instant::now() + Duration::from_secs(10);
-        while Instant::now() < deadline {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
-                return Some(x);
-            }
-            if let Ok(Some(_)) = x.child.try_wait() {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        drop(x);
-    }
-    None
+    use std::io::BufRead as _;
+    let mut child = Command::new("Xvfb")
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "1024x768x24",
+            "-nolisten",
+            "tcp",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .ok()?;
+    let stdout = child.stdout.take().expect("piped stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = std::io::BufReader::new(stdout).read_line(&mut line);
+        let _ = tx.send(line);
+    });
+    let mut x = Xvfb {
+        child,
+        display: String::new(),
+    };
+    let line = rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("Xvfb did not report its display within 20 s");
+    let n: u32 = line
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("Xvfb -displayfd wrote {line:?}"));
+    x.display = format!(":{n}");
+    Some(x)
 }
 
 #[test]
@@ -116,22 +117,10 @@ fn missing_scene_is_a_clear_error() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
-#[test]
-fn scripted_view_of_a_small_plant_shows_the_scene() {
-    if gigawalk_gpu::devices_or_skip(1, "gigawalk view").is_none() {
-        return;
-    }
-    let Some(x) = start_xvfb() else {
-        skip("no Xvfb binary (apt-get install xvfb)");
-        return;
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (glb, path, gwk, png) = (
-        dir.path().join("p.glb"),
-        dir.path().join("p.path"),
-        dir.path().join("p.gwk"),
-        dir.path().join("shot.png"),
-    );
+/// Generates and preprocesses a 20k-triangle plant with an 8-pose path in
+/// `dir`; returns (scene, path).
+fn small_plant(dir: &Path) -> (PathBuf, PathBuf) {
+    let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
     let (ok, _, err) = gigawalk(
         &[
             "generate",
@@ -152,6 +141,21 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
     assert!(ok, "{err}");
     let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)], None);
     assert!(ok, "{err}");
+    (gwk, path)
+}
+
+#[test]
+fn scripted_view_of_a_small_plant_shows_the_scene() {
+    if gigawalk_gpu::devices_or_skip(1, "gigawalk view").is_none() {
+        return;
+    }
+    let Some(x) = start_xvfb() else {
+        skip("no Xvfb binary (apt-get install xvfb)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (gwk, path) = small_plant(dir.path());
+    let png = dir.path().join("shot.png");
     // The same frames shaded, then in wireframe.
     let shot = |png: &Path, extra: &[&str]| {
         let mut args = vec![
@@ -202,4 +206,202 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
         differing * 4 > shaded.len() / 4,
         "only {differing} pixels differ from the shaded frame"
     );
+}
+
+/// A running `gigawalk view`, killed if the test fails before it quits.
+struct Viewer(Child);
+
+impl Drop for Viewer {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn xdotool(display: &str, args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .args(args)
+        .env("DISPLAY", display)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "xdotool {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// Waits up to 30 s for `file` to exist (and its writer to finish).
+fn wait_for(file: &Path, viewer: &mut Viewer) {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while !file.exists() {
+        if let Ok(Some(status)) = viewer.0.try_wait() {
+            panic!(
+                "the viewer exited ({status}) before writing {}",
+                file.display()
+            );
+        }
+        assert!(
+            Instant::now() < deadline,
+            "{} never appeared",
+            file.display()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // The viewer writes to a temporary name and renames; give the rename a moment anyway.
+    std::thread::sleep(Duration::from_millis(100));
+}
+
+fn differing_fraction(a: &[u8], b: &[u8]) -> f64 {
+    let n = a.chunks(4).zip(b.chunks(4)).filter(|(x, y)| x != y).count();
+    n as f64 / (a.len() / 4) as f64
+}
+
+/// A live session driven like a person would: keys held to fly, a mouse
+/// drag to look, toggles, a recorded path, screenshots, a resize, a
+/// minimise and Esc to quit.
+#[test]
+fn live_keys_and_mouse_drive_the_viewer() {
+    if gigawalk_gpu::devices_or_skip(1, "gigawalk view (live)").is_none() {
+        return;
+    }
+    if Command::new("xdotool").arg("version").output().is_err() {
+        skip("no xdotool binary (apt-get install xdotool)");
+        return;
+    }
+    let Some(x) = start_xvfb() else {
+        skip("no Xvfb binary (apt-get install xvfb)");
+        return;
+    };
+    let d = x.display.as_str();
+    let dir = tempfile::tempdir().unwrap();
+    let (gwk, path) = small_plant(dir.path());
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let log = std::fs::File::create(dir.path().join("view.log")).unwrap();
+    let mut viewer = Viewer(
+        Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+            .args(["view", s(&gwk), "--path", s(&path), "--no-hud"])
+            .args(["--width", "480", "--height", "300", "--out-dir", s(&out)])
+            .env("DISPLAY", d)
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(log.try_clone().unwrap())
+            .stderr(log)
+            .spawn()
+            .unwrap(),
+    );
+    // The window, once it is mapped.
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let window = loop {
+        let found = Command::new("xdotool")
+            .args(["search", "--onlyvisible", "--name", "gigawalk"])
+            .env("DISPLAY", d)
+            .output()
+            .unwrap();
+        let id = String::from_utf8_lossy(&found.stdout);
+        if let Some(id) = id.lines().next() {
+            break id.to_string();
+        }
+        assert!(Instant::now() < deadline, "no gigawalk window after 30 s");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let w = window.as_str();
+    // Keyboard focus, as a click would give it (Xvfb runs no window manager).
+    xdotool(d, &["windowfocus", "--sync", w]);
+    let key = |k: &str| {
+        xdotool(d, &["key", "--window", w, k]);
+    };
+    let hold = |k: &str, ms: u64| {
+        xdotool(d, &["keydown", "--window", w, k]);
+        std::thread::sleep(Duration::from_millis(ms));
+        xdotool(d, &["keyup", "--window", w, k]);
+    };
+    let mut shots = 0;
+    let mut shot = |viewer: &mut Viewer| {
+        // Let a few frames of the last input through first.
+        std::thread::sleep(Duration::from_millis(400));
+        key("p");
+        shots += 1;
+        let file = out.join(format!("gigawalk-view-{shots}.png"));
+        wait_for(&file, viewer);
+        let (w, h, rgba) = gigawalk_viewer::read_png(&file).unwrap();
+        (w, h, rgba)
+    };
+
+    let (w0, h0, start) = shot(&mut viewer);
+    assert_eq!((w0, h0), (480, 300));
+    // W held: the view moves forward.
+    hold("w", 1500);
+    let (_, _, forward) = shot(&mut viewer);
+    let moved = differing_fraction(&start, &forward);
+    // A still camera redraws the same pixels exactly (0.0); 1.5 s at the
+    // default speed changes a few percent of this view.
+    assert!(moved > 0.01, "holding W changed {moved:.3} of the view");
+    // T: wireframe, then back.
+    key("t");
+    let (_, _, wire) = shot(&mut viewer);
+    let (ws, fs) = (
+        gigawalk_viewer::image_stats(&wire),
+        gigawalk_viewer::image_stats(&forward),
+    );
+    assert!(
+        ws.distinct_colours * 4 < fs.distinct_colours,
+        "wireframe {ws:?} vs shaded {fs:?}"
+    );
+    key("t");
+    // R, look around with a drag, strafe, R: a recorded path.
+    key("r");
+    std::thread::sleep(Duration::from_millis(300));
+    xdotool(d, &["mousemove", "--window", w, "240", "150"]);
+    xdotool(d, &["mousedown", "1"]);
+    for step in 1..=5 {
+        let x = (240 + 30 * step).to_string();
+        xdotool(d, &["mousemove", "--window", w, &x, "140"]);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    xdotool(d, &["mouseup", "1"]);
+    hold("d", 600);
+    key("r");
+    let recorded = out.join("gigawalk-view-1.path");
+    wait_for(&recorded, &mut viewer);
+    let rec = gigawalk_scene::path::CameraPath::read(&recorded).unwrap();
+    assert!(rec.poses.len() >= 5, "{} poses recorded", rec.poses.len());
+    let (first, last) = (rec.poses.first().unwrap(), rec.poses.last().unwrap());
+    assert!(
+        first.orientation.dot(last.orientation).abs() < 0.9999,
+        "the drag did not turn the camera: {:?} -> {:?}",
+        first.orientation,
+        last.orientation
+    );
+    assert!(
+        (first.position - last.position).length() > 0.1,
+        "D did not move the camera: {:?} -> {:?}",
+        first.position,
+        last.position
+    );
+    // Resize: screenshots follow the window's new size.
+    xdotool(d, &["windowsize", w, "640", "400"]);
+    std::thread::sleep(Duration::from_millis(1000));
+    let (w1, h1, _) = shot(&mut viewer);
+    assert_eq!((w1, h1), (640, 400), "after the resize");
+    // Minimise and restore: the viewer keeps running.
+    xdotool(d, &["windowminimize", w]);
+    std::thread::sleep(Duration::from_millis(1000));
+    xdotool(d, &["windowmap", w]);
+    let (_, _, back) = shot(&mut viewer);
+    assert!(gigawalk_viewer::image_stats(&back).distinct_colours > 50);
+    // Esc quits cleanly.
+    key("Escape");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let status = loop {
+        if let Some(status) = viewer.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "Esc did not quit within 30 s");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let log = std::fs::read_to_string(dir.path().join("view.log")).unwrap();
+    assert!(status.success(), "the viewer failed:\n{log}");
+    assert!(!log.contains("panicked"), "{log}");
 }

@@ -400,3 +400,51 @@ fn wireframe_frames_change_the_image_not_the_culling() {
         }
     }
 }
+
+#[test]
+fn an_occluder_budget_culls_less_but_never_wrongly() {
+    let Some(devices) = devices_or_skip(2, "occluder budget") else {
+        return;
+    };
+    let f = fixture(DVec3::ZERO);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    let frames = 40;
+    let vfc = run(
+        &rt,
+        &options(Schedule::Sequential, false, false, 0.0),
+        walk(frames, DVec3::ZERO, true),
+    )
+    .unwrap();
+    let mut culled_by_budget = Vec::new();
+    for budget in [None, Some(2_000), Some(200), Some(0)] {
+        let mut o = options(Schedule::Pipelined, true, false, 0.0);
+        o.occluder_budget = budget;
+        let occ = run(&rt, &o, walk(frames, DVec3::ZERO, true)).unwrap();
+        assert_eq!(occ.len(), frames);
+        let mut culled = 0;
+        for (r, v) in occ.iter().zip(&vfc) {
+            let (rd, vd) = (
+                &r.image.as_ref().unwrap().depth.depth,
+                &v.image.as_ref().unwrap().depth.depth,
+            );
+            assert_eq!(
+                wrongly_culled(vd, rd),
+                0,
+                "budget {budget:?}, frame {}: visible pixels removed",
+                r.frame
+            );
+            assert_eq!(rd, vd, "budget {budget:?}, frame {}", r.frame);
+            culled += r.stats.occlusion_culled;
+        }
+        culled_by_budget.push((budget, culled));
+    }
+    // No occluders, no occlusion culling; a budget culls at most what all
+    // occluders cull, and a sensible one still culls.
+    let all = culled_by_budget[0].1;
+    assert_eq!(culled_by_budget[3].1, 0, "{culled_by_budget:?}");
+    assert!(
+        culled_by_budget.iter().all(|&(_, c)| c <= all),
+        "{culled_by_budget:?}"
+    );
+    assert!(culled_by_budget[1].1 > 0, "{culled_by_budget:?}");
+}

@@ -44,7 +44,7 @@ pub use hzb::{Hzb, HzbError, HzbLevel, Reduction};
 pub use lod::select_lod;
 pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK};
 pub use traverse::{
-    reselect_lods, traverse, CullReason, DrawItem, DrawSink, TraversalOptions, TraversalStats,
-    Traverser,
+    reselect_lods, select_occluders, traverse, CullReason, DrawItem, DrawSink, TraversalOptions,
+    TraversalStats, Traverser,
 };
 pub use view::{BoxProjection, CullView, RelBox};

@@ -318,6 +318,58 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
     count
 }
 
+/// Keeps the occluders that hide most per triangle, within a budget of
+/// `max_triangles`: items are ranked by their node box's apparent size
+/// (face area over squared distance from the eye; a box the eye is inside
+/// ranks first) per triangle of the chosen LOD, and taken greedily while
+/// they fit. Big, cheap occluders (walls, floors, tanks) come first; dense
+/// small parts (bolts, valves) last. Drawing fewer occluders is always
+/// conservative: the HZB only gets farther, so it culls less, never wrongly.
+/// Returns the triangles kept. Items naming a node or LOD the skeleton does
+/// not have are dropped.
+pub fn select_occluders(
+    skeleton: &Skeleton,
+    view: &CullView,
+    items: &mut Vec<DrawItem>,
+    max_triangles: u64,
+) -> u64 {
+    let triangles = |i: &DrawItem| -> Option<u64> {
+        let n = skeleton.nodes.get(i.node as usize)?;
+        if i.lod >= n.lod_count {
+            return None;
+        }
+        let lod = skeleton.lods.get((n.first_lod + i.lod) as usize)?;
+        Some(lod.triangles.max(1) as u64)
+    };
+    let mut ranked: Vec<(f64, u64, DrawItem)> = items
+        .iter()
+        .filter_map(|&i| {
+            let t = triangles(&i)?;
+            let (min, max) = view.rel_f64(&skeleton.nodes[i.node as usize].bounds);
+            let e = max - min;
+            let area = e.x * e.y + e.y * e.z + e.z * e.x;
+            let d = crate::lod::distance_to_rel_box(min, max);
+            let apparent = if d > 0.0 {
+                area / (d * d)
+            } else {
+                f64::INFINITY
+            };
+            Some((apparent / t as f64, t, i))
+        })
+        .collect();
+    // Best first; ties (and NaN from degenerate boxes) in a fixed order.
+    ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.node.cmp(&b.2.node)));
+    items.clear();
+    let mut kept = 0u64;
+    for (_, t, item) in ranked {
+        if kept + t <= max_triangles {
+            kept += t;
+            items.push(item);
+        }
+    }
+    kept
+}
+
 #[cfg(test)]
 mod tests {
     use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, NO_NODE};
@@ -636,5 +688,83 @@ mod tests {
         drawn.sort_by_key(|i| i.node);
         assert_eq!(expanded, drawn);
         assert_eq!(expanded.len(), 2);
+    }
+
+    /// A near big wall (node 1: 1000 triangles at LOD 0, 500 at LOD 1), a
+    /// far small part (node 2) and a near small part (node 3).
+    fn occluder_scene() -> Skeleton {
+        tree(vec![
+            n([-50.0, -5.0, -60.0], [50.0, 5.0, -2.0], 1..4, &[0.0]),
+            n([-50.0, -5.0, -6.0], [50.0, 5.0, -5.0], 0..0, &[0.0, 0.5]),
+            n([0.0, 0.0, -60.0], [0.2, 0.2, -59.8], 0..0, &[0.0]),
+            n([1.0, 0.0, -3.0], [1.2, 0.2, -2.8], 0..0, &[0.0]),
+        ])
+    }
+
+    #[test]
+    fn occluders_rank_by_apparent_size_per_triangle_within_the_budget() {
+        let s = occluder_scene();
+        let v = view_from([0.0, 0.0, 0.0]);
+        let all = [
+            DrawItem { node: 2, lod: 0 },
+            DrawItem { node: 3, lod: 0 },
+            DrawItem { node: 1, lod: 1 },
+        ];
+        // Everything fits: all kept, best first (the wall, 500 triangles).
+        let mut items = all.to_vec();
+        assert_eq!(select_occluders(&s, &v, &mut items, u64::MAX), 2500);
+        assert_eq!(items[0], DrawItem { node: 1, lod: 1 });
+        assert_eq!(items[1], DrawItem { node: 3, lod: 0 });
+        assert_eq!(items[2], DrawItem { node: 2, lod: 0 });
+        // 1600 triangles: the wall and the near part; the far part does not fit.
+        let mut items = all.to_vec();
+        assert_eq!(select_occluders(&s, &v, &mut items, 1600), 1500);
+        assert_eq!(items.len(), 2);
+        assert!(!items.contains(&DrawItem { node: 2, lod: 0 }));
+        // 999: the wall (500) fits; neither 1000-triangle part does.
+        let mut items = all.to_vec();
+        assert_eq!(select_occluders(&s, &v, &mut items, 999), 500);
+        assert_eq!(items, vec![DrawItem { node: 1, lod: 1 }]);
+        // A budget of 0 keeps nothing; nothing is never an error.
+        let mut items = all.to_vec();
+        assert_eq!(select_occluders(&s, &v, &mut items, 0), 0);
+        assert!(items.is_empty());
+        let mut none = Vec::new();
+        assert_eq!(select_occluders(&s, &v, &mut none, 10), 0);
+    }
+
+    #[test]
+    fn occluder_selection_drops_bad_items_and_ranks_a_box_around_the_eye_first() {
+        let s = occluder_scene();
+        // Eye inside the root's box only; inside node 1's box.
+        let v = view_from([0.0, 0.0, -5.5]);
+        let mut items = vec![
+            DrawItem { node: 3, lod: 0 },
+            DrawItem { node: 1, lod: 0 },
+            DrawItem { node: 99, lod: 0 },
+            DrawItem { node: 2, lod: 7 },
+        ];
+        assert_eq!(select_occluders(&s, &v, &mut items, u64::MAX), 2000);
+        assert_eq!(
+            items,
+            vec![DrawItem { node: 1, lod: 0 }, DrawItem { node: 3, lod: 0 }]
+        );
+        // Far from the origin: the same ranking (boxes are camera-relative).
+        let shift = DVec3::new(3.0e7, -1.0e7, 2.0e7);
+        let far = {
+            let mut f = occluder_scene();
+            for n in &mut f.nodes {
+                n.bounds = Aabb::new(n.bounds.min + shift, n.bounds.max + shift);
+            }
+            f
+        };
+        let v = view_from((shift + DVec3::new(0.0, 0.0, 0.0)).to_array());
+        let mut items = vec![
+            DrawItem { node: 2, lod: 0 },
+            DrawItem { node: 3, lod: 0 },
+            DrawItem { node: 1, lod: 1 },
+        ];
+        assert_eq!(select_occluders(&far, &v, &mut items, 1600), 1500);
+        assert_eq!(items[0], DrawItem { node: 1, lod: 1 });
     }
 }

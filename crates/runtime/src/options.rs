@@ -50,6 +50,13 @@ pub struct RuntimeOptions {
     /// Occluder depth resolution as a fraction of the viewport (Section
     /// 5.3: lower is faster and approximate). 1 = conservative.
     pub occluder_scale: f64,
+    /// At most this many triangles of occluders per frame, chosen by
+    /// apparent size per triangle (`gigawalk_cull::select_occluders`).
+    /// `None`: all of frame i - lag's visible set (the paper). Conservative
+    /// either way: fewer occluders cull less, never wrongly. Where OR and
+    /// RVG share a processor (lavapipe on the CPU) OR's cost comes out of
+    /// RVG's time, and a budget trades culling for it.
+    pub occluder_budget: Option<u64>,
     /// How the HZB reduces depth: farthest (conservative) or n-th farthest
     /// (approximate, Section 5.3).
     pub hzb_reduction: Reduction,
@@ -82,6 +89,7 @@ impl Default for RuntimeOptions {
             traversal: TraversalOptions::default(),
             occluder_lag: 2,
             occluder_scale: 1.0,
+            occluder_budget: None,
             hzb_reduction: Reduction::Farthest,
             devices: 2,
             chunk: 256,

@@ -4,8 +4,8 @@
 use std::time::Instant;
 
 use gigawalk_cull::{
-    reselect_lods, CullReason, CullView, DrawItem, Hzb, HzbOcclusion, NoOcclusion,
-    TraversalOptions, TraversalStats, Traverser,
+    reselect_lods, select_occluders, CullReason, CullView, DrawItem, Hzb, HzbOcclusion,
+    NoOcclusion, TraversalOptions, TraversalStats, Traverser,
 };
 use gigawalk_gpu::{
     DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, ResidentGeometry, View, VisiblePass,
@@ -106,6 +106,9 @@ impl<'a> OrStage<'a> {
             occluders,
             &mut |i| items.push(i),
         );
+        if let Some(budget) = self.opts.occluder_budget {
+            select_occluders(self.skeleton, view, &mut items, budget);
+        }
         let lods = lod_ids(self.skeleton, &items);
         let depth = self
             .pass

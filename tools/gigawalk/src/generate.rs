@@ -80,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let r = &g.report;
     let (lo, hi) = (r.bounds.min, r.bounds.max);
-    println!(
+    out!(
         "{}: {} {} triangles, {} objects, bounds [{:.1} {:.1} {:.1}]..[{:.1} {:.1} {:.1}], {:.1} MB{}, {:.2} s",
         args.output.display(),
         args.kind.name(),

@@ -25,14 +25,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let s = SceneStats::of(&r);
     if args.json {
-        println!(
+        out!(
             "{}",
             serde_json::to_string_pretty(&s).context("serialising stats")?
         );
         return Ok(());
     }
-    println!("scene       {}", args.scene.display());
-    println!(
+    out!("scene       {}", args.scene.display());
+    out!(
         "format      v{}{}",
         s.format_version,
         if args.verify {
@@ -41,35 +41,38 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ""
         }
     );
-    println!(
+    out!(
         "size        {} ({:.1} bytes per triangle)",
         human_bytes(s.file_bytes),
         s.bytes_per_triangle
     );
-    println!("triangles   {}", s.triangles);
-    println!(
+    out!("triangles   {}", s.triangles);
+    out!(
         "nodes       {} ({} leaves, depth {}, up to {} LODs per node)",
-        s.nodes, s.leaves, s.depth, s.max_lods_per_node
+        s.nodes,
+        s.leaves,
+        s.depth,
+        s.max_lods_per_node
     );
-    println!("bounds      {:?} .. {:?}", s.bounds_min, s.bounds_max);
-    println!("origin      {:?}", s.origin);
-    println!("leaf triangles per LOD level (level 0 = original):");
+    out!("bounds      {:?} .. {:?}", s.bounds_min, s.bounds_max);
+    out!("origin      {:?}", s.origin);
+    out!("leaf triangles per LOD level (level 0 = original):");
     for (k, t) in s.leaf_triangles_per_level.iter().enumerate() {
-        println!("  level {k:<3} {t:>14}");
+        out!("  level {k:<3} {t:>14}");
     }
-    println!("HLOD triangles per tree depth (finest LOD of every node at that depth):");
+    out!("HLOD triangles per tree depth (finest LOD of every node at that depth):");
     for (d, t) in s.hlod_triangles_per_depth.iter().enumerate() {
-        println!("  depth {d:<3} {t:>14}");
+        out!("  depth {d:<3} {t:>14}");
     }
-    println!("sections:");
+    out!("sections:");
     for (name, len) in &s.sections {
-        println!("  {name:<6} {:>12}", human_bytes(*len));
+        out!("  {name:<6} {:>12}", human_bytes(*len));
     }
-    println!("provenance:");
-    println!("  source    {}", s.provenance.source);
-    println!("  tool      {}", s.provenance.tool);
+    out!("provenance:");
+    out!("  source    {}", s.provenance.source);
+    out!("  tool      {}", s.provenance.tool);
     for (k, v) in &s.provenance.parameters {
-        println!("  {k:<24} {v}");
+        out!("  {k:<24} {v}");
     }
     Ok(())
 }

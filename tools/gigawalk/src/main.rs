@@ -1,6 +1,15 @@
 //! The `gigawalk` command line: argument parsing, progress and error
 //! printing only. Every subcommand's logic lives in a crate.
 
+/// `println!` for results on standard output. A reader that stops early
+/// (`gigawalk info scene.gwk | head`) closes the pipe: that ends the
+/// program quietly instead of panicking as `println!` does.
+macro_rules! out {
+    ($($t:tt)*) => {
+        $crate::write_stdout(format_args!($($t)*))
+    };
+}
+
 mod demo;
 mod generate;
 mod info;
@@ -36,6 +45,23 @@ enum Command {
     Demo(demo::Args),
     /// Walk through a scene in a window: fly, toggle culling and LODs, see what they do
     View(view::Args),
+}
+
+/// Writes one line to standard output (see [`out!`]).
+pub(crate) fn write_stdout(args: std::fmt::Arguments) {
+    use std::io::Write as _;
+    let mut o = std::io::stdout().lock();
+    if let Err(e) = o
+        .write_fmt(args)
+        .and_then(|()| o.write_all(b"\n"))
+        .and_then(|()| o.flush())
+    {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write to standard output: {e}");
+        std::process::exit(1);
+    }
 }
 
 fn main() -> std::process::ExitCode {

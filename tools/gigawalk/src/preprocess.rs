@@ -118,13 +118,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     print!("{}", stats.table());
     if stats.input_file_bytes > 0 {
-        println!(
+        out!(
             "input file        {:.1} MiB; scene / input file = {:.2}x",
             stats.input_file_bytes as f64 / (1024.0 * 1024.0),
             stats.output_bytes as f64 / stats.input_file_bytes.max(1) as f64
         );
     }
-    println!("wrote {}", args.output.display());
+    out!("wrote {}", args.output.display());
     if let Some(path) = &args.stats {
         let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
         std::fs::write(path, json + "\n")

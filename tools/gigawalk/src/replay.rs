@@ -59,6 +59,9 @@ pub struct RuntimeArgs {
     /// Occluder depth resolution as a fraction of the viewport (1 = conservative)
     #[arg(long, default_value_t = 1.0)]
     occluder_scale: f64,
+    /// Occluders: at most this many triangles a frame, those hiding most per triangle first (conservative; default: all of frame i - lag's visible set, as the paper)
+    #[arg(long, value_name = "TRIANGLES")]
+    occluder_budget: Option<u64>,
     /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest)
     #[arg(long)]
     nth_farthest: Option<u8>,
@@ -91,6 +94,7 @@ impl RuntimeArgs {
             height: self.height,
             occluder_lag: self.occluder_lag,
             occluder_scale: self.occluder_scale,
+            occluder_budget: self.occluder_budget,
             hzb_reduction: match self.nth_farthest {
                 None | Some(1) => Reduction::Farthest,
                 Some(n) => Reduction::NthFarthest(n),
@@ -161,7 +165,7 @@ pub fn write_and_print(replay: &Replay, out: &Path) -> anyhow::Result<()> {
         .write_report(out)
         .context("cannot write the report")?;
     let summary = replay.summary();
-    println!(
+    out!(
         "{} frames per run, {}x{}, on {}",
         summary.frames,
         summary.width,
@@ -170,10 +174,10 @@ pub fn write_and_print(replay: &Replay, out: &Path) -> anyhow::Result<()> {
     );
     print!("{}", summary.table());
     if !replay.complete {
-        println!("stopped early: the report covers the frames measured before the stop");
+        out!("stopped early: the report covers the frames measured before the stop");
     }
     for f in &written.files {
-        println!("wrote {}", f.display());
+        out!("wrote {}", f.display());
     }
     Ok(())
 }

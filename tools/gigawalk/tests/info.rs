@@ -118,3 +118,23 @@ fn info_on_bad_input_names_the_file() {
     // The OS error is said once, not repeated by the cause chain.
     assert_eq!(err.matches("No such file").count(), 1, "{err}");
 }
+
+#[test]
+fn a_reader_that_stops_early_is_not_a_panic() {
+    // `gigawalk info scene.gwk | head -1`: the pipe closes before the output ends.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    write_scene(&path);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(["info", path.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the read end before anything is written: every write fails.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+}

@@ -123,10 +123,14 @@ pub fn markdown(s: &Summary) -> String {
     let _ = writeln!(m, "- viewport: {}x{}", s.width, s.height);
     let _ = writeln!(
         m,
-        "- runtime: {} schedule on {}; occluders from frame i-{}, occluder resolution x{}, HZB {}",
+        "- runtime: {} schedule on {}; occluders from frame i-{} ({}), occluder resolution x{}, HZB {}",
         s.schedule,
         s.devices.join(" + "),
         s.occluder_lag,
+        match s.occluder_budget {
+            None => "all of them".to_string(),
+            Some(b) => format!("at most {b} triangles"),
+        },
         s.occluder_scale,
         s.hzb_reduction
     );

@@ -26,6 +26,9 @@ pub struct Summary {
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
+    /// Most occluder triangles OR draws a frame; null: no budget (all of
+    /// frame i - lag's visible set).
+    pub occluder_budget: Option<u64>,
     pub hzb_reduction: String,
     pub seconds: f64,
     pub modes: Vec<ModeSummary>,
@@ -200,6 +203,7 @@ impl Replay {
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,
+            occluder_budget: r.occluder_budget,
             hzb_reduction: match r.hzb_reduction {
                 gigawalk_cull::Reduction::Farthest => "farthest".into(),
                 gigawalk_cull::Reduction::NthFarthest(n) => format!("{n}-th farthest"),

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use gigawalk_cull::{Camera, TraversalOptions};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_runtime::{
-    CameraList, CameraRequest, DrawStyle, FrameReport, Runtime, RuntimeError, RuntimeOptions,
-    Schedule, Stage,
+    CameraList, CameraRequest, DrawStyle, FrameReport, OccluderBudget, Runtime, RuntimeError,
+    RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
 };
 use gigawalk_scene::SceneReader;
 use gigawalk_suite::scenes::{street, write_boxes_scene};
@@ -416,7 +416,12 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
     )
     .unwrap();
     let mut culled_by_budget = Vec::new();
-    for budget in [None, Some(2_000), Some(200), Some(0)] {
+    for budget in [
+        OccluderBudget::All,
+        OccluderBudget::Triangles(2_000),
+        OccluderBudget::Triangles(200),
+        OccluderBudget::Triangles(0),
+    ] {
         let mut o = options(Schedule::Pipelined, true, false, 0.0);
         o.occluder_budget = budget;
         let occ = run(&rt, &o, walk(frames, DVec3::ZERO, true)).unwrap();
@@ -447,4 +452,11 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
         "{culled_by_budget:?}"
     );
     assert!(culled_by_budget[1].1 > 0, "{culled_by_budget:?}");
+    // Auto: the CPU budget on a CPU rasterizer (lavapipe in CI), else all.
+    let cpu = rt.device(0).is_cpu() || rt.device(1).is_cpu();
+    assert_eq!(
+        rt.occluder_budget(OccluderBudget::Auto),
+        cpu.then_some(CPU_OCCLUDER_BUDGET)
+    );
+    assert_eq!(rt.occluder_budget(OccluderBudget::All), None);
 }

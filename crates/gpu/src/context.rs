@@ -40,6 +40,11 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe, WARP).
+    pub fn is_cpu(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Whether RVG can draw [`crate::DrawStyle::Wireframe`] here.
     pub fn supports_wireframe(&self) -> bool {
         self.device

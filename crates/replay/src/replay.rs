@@ -127,6 +127,9 @@ pub struct Replay {
     /// Poses replayed per run.
     pub frames: usize,
     pub options: ReplayOptions,
+    /// The occluder budget the runs used on these devices, in triangles
+    /// (`None`: all occluders); `options.runtime.occluder_budget` resolved.
+    pub occluder_budget: Option<u64>,
     pub devices: Vec<String>,
     pub runs: Vec<RunRecord>,
     /// False when the replay was stopped early ([`Progress::keep_going`]).
@@ -215,6 +218,7 @@ pub fn replay_on(
         path: path_name.to_string(),
         frames: n,
         options: opts.clone(),
+        occluder_budget: rt.occluder_budget(opts.runtime.occluder_budget),
         devices: rt.device_names(),
         runs: Vec::new(),
         complete: true,

@@ -203,7 +203,7 @@ impl Replay {
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,
-            occluder_budget: r.occluder_budget,
+            occluder_budget: self.occluder_budget,
             hzb_reduction: match r.hzb_reduction {
                 gigawalk_cull::Reduction::Farthest => "farthest".into(),
                 gigawalk_cull::Reduction::NthFarthest(n) => format!("{n}-th farthest"),

@@ -25,7 +25,7 @@ pub use gigawalk_cull::{
     Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
-pub use options::{RuntimeOptions, Schedule, Stage};
+pub use options::{OccluderBudget, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET};
 
 use gigawalk_gpu::{HostGeometry, ResidentGeometry};
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
@@ -237,6 +237,13 @@ impl<'s> Runtime<'s> {
         presenter: &mut dyn Presenter,
     ) -> Result<u64, RuntimeError> {
         opts.validate().map_err(RuntimeError::Options)?;
+        let opts = &RuntimeOptions {
+            occluder_budget: match self.occluder_budget(opts.occluder_budget) {
+                Some(t) => OccluderBudget::Triangles(t),
+                None => OccluderBudget::All,
+            },
+            ..opts.clone()
+        };
         match (opts.schedule, opts.async_rvg) {
             (Schedule::Sequential, _) => {
                 pipeline::run_sequential(self, opts, source, on_frame, presenter)
@@ -248,6 +255,12 @@ impl<'s> Runtime<'s> {
                 pipeline::run_async(self, opts, source, on_frame, presenter)
             }
         }
+    }
+
+    /// The occluder budget `budget` means on these devices, in triangles
+    /// (`None`: all occluders); resolves [`OccluderBudget::Auto`].
+    pub fn occluder_budget(&self, budget: OccluderBudget) -> Option<u64> {
+        budget.resolve(self.devices.iter().any(GpuContext::is_cpu))
     }
 
     /// Device `i` (0 = OR's; RVG uses 1 when there are two).

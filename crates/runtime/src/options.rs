@@ -34,6 +34,76 @@ impl std::fmt::Display for Stage {
     }
 }
 
+/// How many triangles of occluders OR draws a frame. Conservative at any
+/// budget: fewer occluders make the HZB farther, so STC culls less, never
+/// wrongly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OccluderBudget {
+    /// All of frame i - lag's visible set (the paper).
+    All,
+    /// At most this many triangles, those hiding most per triangle first
+    /// (`gigawalk_cull::select_occluders`).
+    Triangles(u64),
+    /// [`CPU_OCCLUDER_BUDGET`] triangles when a device is a CPU rasterizer
+    /// (lavapipe, llvmpipe, WARP), where OR's triangles come out of RVG's
+    /// time on the same cores; `All` on GPUs, where OR has its own device.
+    #[default]
+    Auto,
+}
+
+/// The budget `OccluderBudget::Auto` uses on CPU rasterizers: on the 4M
+/// demo plant with lavapipe, 10k-30k triangles made `och` 1.29x faster
+/// than all occluders (docs/PERFORMANCE.md, "Occluder budget").
+pub const CPU_OCCLUDER_BUDGET: u64 = 30_000;
+
+impl OccluderBudget {
+    /// The budget in triangles, `None` for all, given whether any device
+    /// rasterizes on the CPU.
+    pub fn resolve(self, cpu_device: bool) -> Option<u64> {
+        match self {
+            OccluderBudget::All => None,
+            OccluderBudget::Triangles(t) => Some(t),
+            OccluderBudget::Auto => cpu_device.then_some(CPU_OCCLUDER_BUDGET),
+        }
+    }
+}
+
+impl std::fmt::Display for OccluderBudget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OccluderBudget::All => f.write_str("all"),
+            OccluderBudget::Triangles(t) => write!(f, "{t}"),
+            OccluderBudget::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+impl std::str::FromStr for OccluderBudget {
+    type Err = String;
+    /// `all`, `auto`, or a triangle count (`30000`, `30k`, `2M`).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => return Ok(OccluderBudget::All),
+            "auto" => return Ok(OccluderBudget::Auto),
+            _ => {}
+        }
+        let (num, mul) = match s.as_bytes().last() {
+            Some(b'k' | b'K') => (&s[..s.len() - 1], 1e3),
+            Some(b'm' | b'M') => (&s[..s.len() - 1], 1e6),
+            _ => (s, 1.0),
+        };
+        let v: f64 = num.parse().map_err(|_| {
+            format!("occluder budget {s:?} is not all, auto or a triangle count (e.g. 30000, 30k)")
+        })?;
+        if !(v.is_finite() && v >= 0.0) || v * mul > 1e12 {
+            return Err(format!(
+                "occluder budget {s:?} is out of range (0 to 1e12 triangles)"
+            ));
+        }
+        Ok(OccluderBudget::Triangles((v * mul).round() as u64))
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {
     pub schedule: Schedule,
@@ -50,13 +120,8 @@ pub struct RuntimeOptions {
     /// Occluder depth resolution as a fraction of the viewport (Section
     /// 5.3: lower is faster and approximate). 1 = conservative.
     pub occluder_scale: f64,
-    /// At most this many triangles of occluders per frame, chosen by
-    /// apparent size per triangle (`gigawalk_cull::select_occluders`).
-    /// `None`: all of frame i - lag's visible set (the paper). Conservative
-    /// either way: fewer occluders cull less, never wrongly. Where OR and
-    /// RVG share a processor (lavapipe on the CPU) OR's cost comes out of
-    /// RVG's time, and a budget trades culling for it.
-    pub occluder_budget: Option<u64>,
+    /// How many occluder triangles OR draws a frame (see [`OccluderBudget`]).
+    pub occluder_budget: OccluderBudget,
     /// How the HZB reduces depth: farthest (conservative) or n-th farthest
     /// (approximate, Section 5.3).
     pub hzb_reduction: Reduction,
@@ -89,7 +154,7 @@ impl Default for RuntimeOptions {
             traversal: TraversalOptions::default(),
             occluder_lag: 2,
             occluder_scale: 1.0,
-            occluder_budget: None,
+            occluder_budget: OccluderBudget::Auto,
             hzb_reduction: Reduction::Farthest,
             devices: 2,
             chunk: 256,
@@ -149,5 +214,43 @@ impl RuntimeOptions {
     pub fn occluder_size(&self) -> (u32, u32) {
         let s = |v: u32| ((v as f64 * self.occluder_scale).round() as u32).max(1);
         (s(self.width), s(self.height))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn occluder_budget_parses_and_resolves() {
+        let p = |s: &str| s.parse::<OccluderBudget>();
+        assert_eq!(p("all"), Ok(OccluderBudget::All));
+        assert_eq!(p("auto"), Ok(OccluderBudget::Auto));
+        assert_eq!(p("30000"), Ok(OccluderBudget::Triangles(30_000)));
+        assert_eq!(p("30k"), Ok(OccluderBudget::Triangles(30_000)));
+        assert_eq!(p("1.5M"), Ok(OccluderBudget::Triangles(1_500_000)));
+        assert_eq!(p("0"), Ok(OccluderBudget::Triangles(0)));
+        for bad in ["", "k", "-5", "nan", "inf", "1e13", "lots", "ALL"] {
+            let e = p(bad).unwrap_err();
+            assert!(e.contains("occluder budget"), "{bad:?}: {e}");
+        }
+        for b in [
+            OccluderBudget::All,
+            OccluderBudget::Auto,
+            OccluderBudget::Triangles(7),
+        ] {
+            assert_eq!(p(&b.to_string()), Ok(b));
+        }
+        assert_eq!(
+            OccluderBudget::Auto.resolve(true),
+            Some(CPU_OCCLUDER_BUDGET)
+        );
+        assert_eq!(OccluderBudget::Auto.resolve(false), None);
+        assert_eq!(OccluderBudget::All.resolve(true), None);
+        assert_eq!(OccluderBudget::Triangles(5).resolve(false), Some(5));
+        assert_eq!(
+            RuntimeOptions::default().occluder_budget,
+            OccluderBudget::Auto
+        );
     }
 }

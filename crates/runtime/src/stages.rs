@@ -12,7 +12,7 @@ use gigawalk_gpu::{
 };
 use gigawalk_scene::Skeleton;
 
-use crate::{RuntimeError, RuntimeOptions, Stage};
+use crate::{OccluderBudget, RuntimeError, RuntimeOptions, Stage};
 
 pub(crate) fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -106,7 +106,8 @@ impl<'a> OrStage<'a> {
             occluders,
             &mut |i| items.push(i),
         );
-        if let Some(budget) = self.opts.occluder_budget {
+        // `run_presenting` resolved `Auto` for these devices.
+        if let OccluderBudget::Triangles(budget) = self.opts.occluder_budget {
             select_occluders(self.skeleton, view, &mut items, budget);
         }
         let lods = lod_ids(self.skeleton, &items);

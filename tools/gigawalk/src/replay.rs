@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
-use gigawalk_runtime::{Reduction, RuntimeOptions, Schedule};
+use gigawalk_runtime::{OccluderBudget, Reduction, RuntimeOptions, Schedule};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -59,9 +59,9 @@ pub struct RuntimeArgs {
     /// Occluder depth resolution as a fraction of the viewport (1 = conservative)
     #[arg(long, default_value_t = 1.0)]
     occluder_scale: f64,
-    /// Occluders: at most this many triangles a frame, those hiding most per triangle first (conservative; default: all of frame i - lag's visible set, as the paper)
-    #[arg(long, value_name = "TRIANGLES")]
-    occluder_budget: Option<u64>,
+    /// Occluder triangles OR draws a frame, those hiding most per triangle first (conservative): a count (30000, 30k), all (the paper), or auto = 30k on CPU rasterizers such as lavapipe, all on GPUs
+    #[arg(long, value_name = "TRIANGLES|all|auto", default_value = "auto")]
+    occluder_budget: OccluderBudget,
     /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest)
     #[arg(long)]
     nth_farthest: Option<u8>,

@@ -70,6 +70,17 @@ fn unknown_mode_is_rejected() {
 }
 
 #[test]
+fn bad_occluder_budget_is_rejected() {
+    for bad in ["lots", "-3", "1e13"] {
+        let flag = format!("--occluder-budget={bad}");
+        let (ok, _, err) = gigawalk(&["replay", "x.gwk", "--path", "x.path", &flag]);
+        assert!(!ok);
+        assert!(err.contains("occluder budget"), "{bad}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
 fn small_plant_replays_into_a_report() {
     if gigawalk_gpu::devices_or_skip(2, "gigawalk replay CLI").is_none() {
         return;
@@ -128,6 +139,16 @@ fn small_plant_replays_into_a_report() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(json["frames"], 12);
+    // The default budget is auto: lavapipe (a CPU rasterizer) gets 30k.
+    let cpu = gigawalk_gpu::devices_or_skip(1, "budget check").unwrap()[0].is_cpu();
+    assert_eq!(
+        json["occluder_budget"],
+        if cpu {
+            serde_json::json!(30_000)
+        } else {
+            serde_json::Value::Null
+        }
+    );
     assert_eq!(json["modes"].as_array().unwrap().len(), 2);
     let rows = std::fs::read_to_string(out.join("frames.csv"))
         .unwrap()

@@ -46,6 +46,18 @@ struct Xvfb {
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
+        // SIGTERM first, so Xvfb removes its lock file and socket (a
+        // SIGKILLed server leaves them behind for the next one to trip on).
+        let _ = Command::new("kill")
+            .arg(self.child.id().to_string())
+            .status();
+        let deadline = Instant::now() + Duration::from_secs(5);
+        while Instant::now() < deadline {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
@@ -56,6 +68,11 @@ impl Drop for Xvfb {
 /// None when there is no Xvfb binary.
 fn start_xvfb() -> Option<Xvfb> {
     use std::io::BufRead as _;
+    // One server starts at a time: two starting together can both clear
+    // the same stale lock file (left by a killed server) and end up on one
+    // display, which the first to finish then takes down.
+    static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = STARTING.lock().unwrap_or_else(|e| e.into_inner());
     let mut child = Command::new("Xvfb")
         .args([
             "-displayfd",
@@ -65,6 +82,9 @@ fn start_xvfb() -> Option<Xvfb> {
             "1024x768x24",
             "-nolisten",
             "tcp",
+            // No server reset when the last client leaves: a client that
+            // connects during a reset is refused.
+            "-noreset",
         ])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -89,6 +109,18 @@ fn start_xvfb() -> Option<Xvfb> {
         .parse()
         .unwrap_or_else(|_| panic!("Xvfb -displayfd wrote {line:?}"));
     x.display = format!(":{n}");
+    // Ready when its socket takes connections (the display number can come
+    // a moment before a client can connect).
+    let socket = format!("/tmp/.X11-unix/X{n}");
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while std::os::unix::net::UnixStream::connect(&socket).is_err() {
+        assert!(
+            Instant::now() < deadline,
+            "Xvfb {}: {socket} takes no connections after 20 s",
+            x.display
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
     Some(x)
 }
 
@@ -303,7 +335,27 @@ fn live_keys_and_mouse_drive_the_viewer() {
         if let Some(id) = id.lines().next() {
             break id.to_string();
         }
-        assert!(Instant::now() < deadline, "no gigawalk window after 30 s");
+        let log = || std::fs::read_to_string(dir.path().join("view.log")).unwrap_or_default();
+        if let Some(status) = viewer.0.try_wait().unwrap() {
+            panic!(
+                "the viewer on {d} exited ({status}) before its window showed:\n{}\nX servers: {:?}",
+                log(),
+                Command::new("pgrep")
+                    .args(["-a", "Xvfb"])
+                    .output()
+                    .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+            );
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no visible gigawalk window after 30 s; windows named gigawalk: {:?}; viewer log:\n{}",
+            Command::new("xdotool")
+                .args(["search", "--name", "gigawalk"])
+                .env("DISPLAY", d)
+                .output()
+                .map(|o| String::from_utf8_lossy(&o.stdout).into_owned()),
+            log()
+        );
         std::thread::sleep(Duration::from_millis(100));
     };
     let w = window.as_str();

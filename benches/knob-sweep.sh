@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Speed and image error of every runtime knob on the default demo scene,
+# each knob against the defaults in the same session (docs/PERFORMANCE.md,
+# "Knobs"). Run `gigawalk demo` once first to build the cached scene.
+# Usage: benches/knob-sweep.sh [OUT_DIR]   (about 6 minutes on 2 cores with lavapipe)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out="${1:-target/knob-sweep}"
+bin="${GIGAWALK_BIN:-target/release/gigawalk}"
+scene="target/gigawalk-demo-cache/plant-4000000-seed1-200poses"
+[ -x "$bin" ] || cargo build --release -p gigawalk
+[ -f "$scene.gwk" ] || "$bin" demo --out "$out/demo"
+run() {
+  local name="$1"; shift
+  echo "== $name: $*"
+  "$bin" replay "$scene.gwk" --path "$scene.path" --out "$out/$name" "$@" 2>/dev/null |
+    grep -E '^\| (vfc|hlod|occ|och) '
+}
+run defaults --modes vfc,hlod,occ,och
+run pixel-error --modes hlod,och --pixel-error 0,0.5,2,4,8
+run occluder-scale-0.5 --modes occ,och --occluder-scale 0.5
+run occluder-scale-0.25 --modes occ,och --occluder-scale 0.25
+run nth-farthest-2 --modes occ,och --nth-farthest 2
+run nth-farthest-3 --modes occ,och --nth-farthest 3
+run occluder-lag-1 --modes occ,och --occluder-lag 1
+run async --modes occ,och --async
+run occluders-all --modes occ,och --occluder-budget all

@@ -13,9 +13,16 @@ scene="target/gigawalk-demo-cache/plant-4000000-seed1-200poses"
 run() {
   local name="$1"; shift
   echo "== $name: $*"
-  "$bin" replay "$scene.gwk" --path "$scene.path" --out "$out/$name" "$@" 2>/dev/null |
-    grep -E '^\| (vfc|hlod|occ|och) '
+  local log="$out/$name.log"
+  mkdir -p "$out"
+  if "$bin" replay "$scene.gwk" --path "$scene.path" --out "$out/$name" "$@" >"$log" 2>&1; then
+    grep -E '^\| (vfc|hlod|occ|och) ' "$log"
+  else
+    echo "FAILED: $(grep '^error' "$log" | tail -1)"
+    status=1
+  fi
 }
+status=0
 run defaults --modes vfc,hlod,occ,och
 run pixel-error --modes hlod,och --pixel-error 0,0.5,2,4,8
 run occluder-scale-0.5 --modes occ,och --occluder-scale 0.5
@@ -25,3 +32,4 @@ run nth-farthest-3 --modes occ,och --nth-farthest 3
 run occluder-lag-1 --modes occ,och --occluder-lag 1
 run async --modes occ,och --async
 run occluders-all --modes occ,och --occluder-budget all
+exit $status

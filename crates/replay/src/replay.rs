@@ -235,6 +235,8 @@ pub fn replay_on(
         };
         let ro = RuntimeOptions {
             schedule: Schedule::Sequential,
+            // Sequential runs synchronously whatever the runs use.
+            async_rvg: false,
             traversal: Mode::Vfc.traversal(0.0),
             ..opts.runtime.clone()
         };

@@ -266,3 +266,66 @@ fn bad_options_are_errors() {
     let e = replay_on(&rt, "s", &[], "p", &o, &mut NoProgress).unwrap_err();
     assert!(e.to_string().contains("no poses"), "{e}");
 }
+
+/// Every runtime knob replays with accuracy checks (the reference always
+/// runs sequentially at full detail, whatever the runs use).
+#[test]
+fn every_runtime_knob_replays_with_accuracy() {
+    let Some(devices) = devices_or_skip(2, "replay knobs") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), 12);
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    let base = RuntimeOptions {
+        width: W,
+        height: H,
+        ..Default::default()
+    };
+    let knobs = [
+        RuntimeOptions {
+            async_rvg: true,
+            ..base.clone()
+        },
+        RuntimeOptions {
+            occluder_scale: 0.25,
+            ..base.clone()
+        },
+        RuntimeOptions {
+            hzb_reduction: gigawalk_cull::Reduction::NthFarthest(3),
+            ..base.clone()
+        },
+        RuntimeOptions {
+            occluder_lag: 1,
+            ..base.clone()
+        },
+        RuntimeOptions {
+            occluder_budget: gigawalk_runtime::OccluderBudget::Triangles(500),
+            ..base.clone()
+        },
+    ];
+    for runtime in knobs {
+        let opts = ReplayOptions {
+            modes: vec![Mode::Occ, Mode::Och],
+            pixel_errors: vec![1.0],
+            runtime: runtime.clone(),
+            frames: Some(12),
+            accuracy_every: 4,
+            warmup: 2,
+        };
+        let r = replay_on(
+            &rt,
+            "plant.gwk",
+            &path.poses,
+            "plant.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
+        assert_eq!(r.reference_frames, 3, "{runtime:?}");
+        for m in r.summary().modes {
+            assert_eq!(m.frames, 12, "{runtime:?} {}", m.name);
+            assert_eq!(m.accuracy_frames, 3, "{runtime:?} {}", m.name);
+        }
+    }
+}

@@ -2,7 +2,7 @@
 //! (issue 6's performance figure): median frame time, each stage's median
 //! time, and latency, per schedule, measured in one run.
 //!
-//! Run: `cargo bench -p gigawalk-suite --bench pipeline` (env: PLANT_TRIANGLES
+//! Run: `cargo bench -p gigawalk-suite --bench pipeline` (env: OCCLUDER_BUDGET, PLANT_TRIANGLES
 //! default 1000000, FRAMES default 200, WIDTH/HEIGHT default 640x360,
 //! PIXEL_ERROR default 1). The scene is cached under target/gigawalk-bench-cache.
 
@@ -12,7 +12,9 @@ use gigawalk_cull::{Camera, TraversalOptions, Viewport};
 use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
-use gigawalk_runtime::{CameraList, CameraRequest, FrameReport, Runtime, RuntimeOptions, Schedule};
+use gigawalk_runtime::{
+    CameraList, CameraRequest, FrameReport, OccluderBudget, Runtime, RuntimeOptions, Schedule,
+};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 
@@ -42,6 +44,8 @@ fn main() {
     let frames: usize = env("FRAMES", 200);
     let (w, h): (u32, u32) = (env("WIDTH", 640), env("HEIGHT", 360));
     let pixel_error: f64 = env("PIXEL_ERROR", 1.0);
+    // `auto` (the default: 30k triangles on lavapipe), `all`, or a count.
+    let occluder_budget: OccluderBudget = env("OCCLUDER_BUDGET", OccluderBudget::Auto);
 
     let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/gigawalk-bench-cache");
     std::fs::create_dir_all(&cache).unwrap();
@@ -78,9 +82,10 @@ fn main() {
         })
         .collect();
     println!(
-        "plant {} triangles, {} frames at {w}x{h}, och pixel error {pixel_error}, devices {:?}",
+        "plant {} triangles, {} frames at {w}x{h}, och pixel error {pixel_error}, occluder budget {occluder_budget} ({:?} triangles), devices {:?}",
         scene.skeleton().finest_triangles(),
         cameras.len(),
+        rt.occluder_budget(occluder_budget),
         rt.device_names()
     );
     println!("| schedule | median frame ms | fps | OR ms | STC ms (HZB) | RVG ms | latency ms | triangles/frame |");
@@ -114,6 +119,7 @@ fn main() {
                     hlod: true,
                     pixel_tolerance: pixel_error,
                 },
+                occluder_budget,
                 ..Default::default()
             };
             let mut reports: Vec<FrameReport> = Vec::new();

@@ -189,7 +189,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         window_size: (app.size.width, app.size.height),
         capture: None,
         settings: settings.clone(),
-        hud: Vec::new(),
+        viewer: ViewerState::default(),
         quit: false,
         message: None,
         error: None,
@@ -206,6 +206,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         skeleton,
         culled_sets: CullSets::default(),
         script: scripted.clone(),
+        clock: FrameClock::default(),
     };
     let mut state = LoopState {
         controller,
@@ -213,7 +214,6 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         wireframe_supported,
         recorder: PathRecorder::default(),
         record_start: Instant::now(),
-        clock: FrameClock::default(),
         last_update: Instant::now(),
         message: start_message,
         devices: device_names,
@@ -240,15 +240,14 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         let result = runtime.run_presenting(
             &opts,
             &mut source,
-            &mut |report| {
+            &mut |_report| {
                 if let PumpStatus::Exit(_) =
                     event_loop.pump_app_events(Some(Duration::ZERO), &mut app)
                 {
                     app.close = true;
                 }
                 state.rendered += 1;
-                let go_on =
-                    state.after_frame(&mut app, &report, &shared, render, scripted.is_some());
+                let go_on = state.after_frame(&mut app, &shared, render, scripted.is_some());
                 if !go_on {
                     return false;
                 }
@@ -327,7 +326,9 @@ struct Shared {
     /// Write the next presented frame here.
     capture: Option<PathBuf>,
     settings: Settings,
-    hud: Vec<String>,
+    /// What the HUD shows besides the frame's own numbers; the presenter
+    /// builds the HUD from it and the frame it presents.
+    viewer: ViewerState,
     quit: bool,
     message: Option<String>,
     /// A failure on the RVG thread that is not the runtime's (screenshot).
@@ -437,7 +438,6 @@ struct LoopState {
     wireframe_supported: bool,
     recorder: PathRecorder,
     record_start: Instant,
-    clock: FrameClock,
     last_update: Instant,
     message: Option<(String, Instant)>,
     devices: String,
@@ -448,11 +448,10 @@ struct LoopState {
 
 impl LoopState {
     /// Applies the input since the last frame and publishes the next
-    /// camera and HUD; false to end the run (quit).
+    /// camera and what the HUD shows; false to end the run (quit).
     fn after_frame(
         &mut self,
         app: &mut App,
-        report: &FrameReport,
         shared: &Mutex<Shared>,
         render: PhysicalSize<u32>,
         scripted: bool,
@@ -493,8 +492,6 @@ impl LoopState {
         let camera = self.controller.camera(aspect(render), self.near);
         self.recorder
             .push((now - self.record_start).as_secs_f64(), &camera);
-        self.clock.tick(report.finished_at);
-
         let mut s = shared.lock().expect("viewer state");
         if let Some(m) = s.message.take() {
             self.message = Some((m, now));
@@ -506,17 +503,7 @@ impl LoopState {
         {
             self.message = None;
         }
-        let numbers = FrameNumbers {
-            frame: report.frame,
-            or_ms: report.or_ms,
-            hzb_ms: report.hzb_ms,
-            stc_ms: report.stc_ms,
-            rvg_ms: report.rvg_ms,
-            latency_ms: report.latency_ms(),
-            occlusion_used: report.occlusion_used,
-            stats: report.stats,
-        };
-        let viewer = ViewerState {
+        s.viewer = ViewerState {
             walking: self.controller.walking(),
             speed: self.controller.speed,
             recording: self
@@ -526,7 +513,6 @@ impl LoopState {
             devices: self.devices.clone(),
             message: self.message.as_ref().map(|(m, _)| m.clone()),
         };
-        s.hud = hud_lines(self.clock.fps(), &numbers, &self.settings, &viewer);
         s.camera = camera;
         s.frozen = self.settings.frozen;
         s.settings = self.settings.clone();
@@ -629,6 +615,7 @@ struct ViewerPresenter<'s> {
     /// The last culled frame's sets, shown while culling is frozen.
     culled_sets: CullSets,
     script: Option<Script>,
+    clock: FrameClock,
 }
 
 impl Presenter for ViewerPresenter<'_> {
@@ -638,15 +625,29 @@ impl Presenter for ViewerPresenter<'_> {
         pass: &VisiblePass,
         report: &FrameReport,
     ) -> Result<(), GpuError> {
-        let (settings, hud, size, mut capture) = {
+        let (settings, viewer, size, mut capture) = {
             let mut s = self.shared.lock().expect("viewer state");
             (
                 s.settings.clone(),
-                s.hud.clone(),
+                s.viewer.clone(),
                 s.window_size,
                 s.capture.take(),
             )
         };
+        // The HUD shows this frame's own numbers (the frame loop only
+        // hears of it after it is presented).
+        self.clock.tick(report.finished_at);
+        let numbers = FrameNumbers {
+            frame: report.frame,
+            or_ms: report.or_ms,
+            hzb_ms: report.hzb_ms,
+            stc_ms: report.stc_ms,
+            rvg_ms: report.rvg_ms,
+            latency_ms: report.latency_ms(),
+            occlusion_used: report.occlusion_used,
+            stats: report.stats,
+        };
+        let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
         if let Some(script) = &self.script {
             if report.frame + 1 >= script.frames {
                 capture = script.screenshot.clone();

@@ -21,8 +21,8 @@ use gigawalk_gpu::{
     WindowError, WindowSurface,
 };
 use gigawalk_runtime::{
-    CameraRequest, CameraSource, CullReason, DrawStyle, FrameReport, Presenter, Runtime,
-    RuntimeError, RuntimeOptions,
+    CameraRequest, CameraSource, CullReason, DrawStyle, FrameReport, OccluderBudget, Presenter,
+    Runtime, RuntimeError, RuntimeOptions,
 };
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
 use gigawalk_scene::{SceneReader, Skeleton};
@@ -57,6 +57,8 @@ pub struct ViewArgs {
     /// wgpu devices for the pipeline (1 or 2).
     pub devices: usize,
     pub near: f64,
+    /// Occluder triangles OR draws a frame (`auto`: 30k on CPU rasterizers).
+    pub occluder_budget: OccluderBudget,
     /// The starting toggles.
     pub settings: Settings,
     /// Where recorded paths and key screenshots go.
@@ -217,6 +219,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         last_update: Instant::now(),
         message: start_message,
         devices: device_names,
+        occluder_budget: runtime.occluder_budget(args.occluder_budget),
         out_dir: args.out_dir.clone(),
         near: args.near,
         rendered: 0,
@@ -229,6 +232,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             height: render.height,
             devices: args.devices,
             near: args.near,
+            occluder_budget: args.occluder_budget,
             traversal: running.traversal(),
             async_rvg: running.async_rvg,
             // Always: freezing must find the culled set of the frame it
@@ -441,6 +445,7 @@ struct LoopState {
     last_update: Instant,
     message: Option<(String, Instant)>,
     devices: String,
+    occluder_budget: Option<u64>,
     out_dir: PathBuf,
     near: f64,
     rendered: u64,
@@ -512,6 +517,7 @@ impl LoopState {
                 .then(|| self.recorder.pose_count()),
             devices: self.devices.clone(),
             message: self.message.as_ref().map(|(m, _)| m.clone()),
+            occluder_budget: self.occluder_budget,
         };
         s.camera = camera;
         s.frozen = self.settings.frozen;

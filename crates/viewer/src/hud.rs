@@ -63,6 +63,8 @@ pub struct ViewerState {
     pub devices: String,
     /// A short-lived message (screenshot written, path saved, error).
     pub message: Option<String>,
+    /// Most occluder triangles OR draws a frame; `None`: all.
+    pub occluder_budget: Option<u64>,
 }
 
 pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> Vec<String> {
@@ -92,7 +94,10 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
                 ""
             }
         ),
-        format!("mode: {}", s.mode()),
+        match (s.occlusion, v.occluder_budget) {
+            (true, Some(t)) => format!("mode: {}, occluders <= {} tris", s.mode(), group(t)),
+            _ => format!("mode: {}", s.mode()),
+        },
     ];
     let mut flags = Vec::new();
     if s.async_rvg {
@@ -183,6 +188,7 @@ mod tests {
         };
         let v = ViewerState {
             recording: Some(3),
+            occluder_budget: Some(30_000),
             ..Default::default()
         };
         let text = hud_lines(60.0, &n, &s, &v).join("\n");
@@ -195,6 +201,7 @@ mod tests {
             "FROZEN",
             "REC",
             "startup bypass",
+            "occluders <= 30,000 tris",
         ] {
             assert!(text.contains(want), "{want:?} missing from\n{text}");
         }

@@ -64,6 +64,9 @@ pub struct Args {
     /// Start with the HUD hidden (Tab shows it)
     #[arg(long)]
     no_hud: bool,
+    /// Occluder triangles OR draws a frame, those hiding most per triangle first: a count (30k), all, or auto (30k on CPU rasterizers such as lavapipe, all on GPUs)
+    #[arg(long, value_name = "TRIANGLES|all|auto", default_value = "auto")]
+    occluder_budget: gigawalk_runtime::OccluderBudget,
     /// Near plane distance in model units
     #[arg(long, default_value_t = 0.05)]
     near: f64,
@@ -92,6 +95,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         height: a.height,
         devices: a.devices as usize,
         near: a.near,
+        occluder_budget: a.occluder_budget,
         settings: Settings {
             occlusion: !a.no_occlusion,
             hlod: !a.no_hlod,

@@ -142,6 +142,24 @@ fn help_lists_the_controls() {
 }
 
 #[test]
+fn bad_occluder_budget_is_a_clear_error() {
+    let (ok, _, err) = gigawalk(
+        &[
+            "view",
+            "x.gwk",
+            "--frames",
+            "1",
+            "--occluder-budget",
+            "many",
+        ],
+        None,
+    );
+    assert!(!ok);
+    assert!(err.contains("occluder budget \"many\""), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
 fn missing_scene_is_a_clear_error() {
     let (ok, _, err) = gigawalk(&["view", "/nonexistent/scene.gwk", "--frames", "1"], None);
     assert!(!ok);

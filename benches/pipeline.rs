@@ -18,11 +18,16 @@ use gigawalk_runtime::{
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 
+/// The environment variable `name` parsed, or `default` when unset; a
+/// value that does not parse stops the bench (a typo must not silently
+/// measure the default).
 fn env<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
+    match std::env::var(name) {
+        Err(_) => default,
+        Ok(v) => v
+            .parse()
+            .unwrap_or_else(|_| panic!("{name}={v:?} is not a valid value")),
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -443,14 +443,12 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
         }
         culled_by_budget.push((budget, culled));
     }
-    // No occluders, no occlusion culling; a budget culls at most what all
-    // occluders cull, and a sensible one still culls.
-    let all = culled_by_budget[0].1;
+    // No occluders, no occlusion culling; a sensible budget still culls.
+    // (Totals need not shrink with the budget: each run's later occluders
+    // come from its own visible sets, and culling a parent counts once
+    // where culling its children counts each.)
+    assert!(culled_by_budget[0].1 > 0, "{culled_by_budget:?}");
     assert_eq!(culled_by_budget[3].1, 0, "{culled_by_budget:?}");
-    assert!(
-        culled_by_budget.iter().all(|&(_, c)| c <= all),
-        "{culled_by_budget:?}"
-    );
     assert!(culled_by_budget[1].1 > 0, "{culled_by_budget:?}");
     // Auto: the CPU budget on a CPU rasterizer (lavapipe in CI), else all.
     let cpu = rt.device(0).is_cpu() || rt.device(1).is_cpu();

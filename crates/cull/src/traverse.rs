@@ -354,15 +354,17 @@ pub fn select_occluders(
             } else {
                 f64::INFINITY
             };
-            Some((apparent / t as f64, t, i))
+            let key = apparent / t as f64;
+            // A NaN (a degenerate box) ranks last, whatever its sign bit.
+            Some((if key.is_nan() { f64::NEG_INFINITY } else { key }, t, i))
         })
         .collect();
-    // Best first; ties (and NaN from degenerate boxes) in a fixed order.
+    // Best first; ties in node order.
     ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.node.cmp(&b.2.node)));
     items.clear();
     let mut kept = 0u64;
     for (_, t, item) in ranked {
-        if kept + t <= max_triangles {
+        if kept.saturating_add(t) <= max_triangles {
             kept += t;
             items.push(item);
         }

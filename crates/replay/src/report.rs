@@ -26,12 +26,18 @@ pub struct Written {
     pub files: Vec<PathBuf>,
 }
 
+/// Writes `name` in `dir` through a temporary file renamed into place, so
+/// an interrupted write never leaves a half-written report file.
 fn write(dir: &Path, name: &str, bytes: &[u8], w: &mut Written) -> Result<(), ReportError> {
+    use std::io::Write as _;
     let file = dir.join(name);
-    std::fs::write(&file, bytes).map_err(|source| ReportError::Io {
+    let io = |source| ReportError::Io {
         file: file.clone(),
         source,
-    })?;
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io)?;
+    tmp.write_all(bytes).map_err(io)?;
+    tmp.persist(&file).map_err(|e| io(e.error))?;
     w.files.push(file);
     Ok(())
 }

@@ -110,6 +110,15 @@ impl<'a> OrStage<'a> {
         if let OccluderBudget::Triangles(budget) = self.opts.occluder_budget {
             select_occluders(self.skeleton, view, &mut items, budget);
         }
+        if items.is_empty() {
+            // No occluder (a budget of 0, or nothing in view): an all-far
+            // HZB would cull nothing, so STC skips occlusion for this frame.
+            return Ok(OrOutput {
+                depth: None,
+                occluder_items: 0,
+                ms: ms_since(t),
+            });
+        }
         let lods = lod_ids(self.skeleton, &items);
         let depth = self
             .pass

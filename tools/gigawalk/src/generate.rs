@@ -98,7 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => String::new(),
         },
         start.elapsed().as_secs_f64()
-    );
+    )?;
     Ok(())
 }
 

@@ -28,10 +28,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         out!(
             "{}",
             serde_json::to_string_pretty(&s).context("serialising stats")?
-        );
+        )?;
         return Ok(());
     }
-    out!("scene       {}", args.scene.display());
+    out!("scene       {}", args.scene.display())?;
     out!(
         "format      v{}{}",
         s.format_version,
@@ -40,39 +40,39 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             ""
         }
-    );
+    )?;
     out!(
         "size        {} ({:.1} bytes per triangle)",
         human_bytes(s.file_bytes),
         s.bytes_per_triangle
-    );
-    out!("triangles   {}", s.triangles);
+    )?;
+    out!("triangles   {}", s.triangles)?;
     out!(
         "nodes       {} ({} leaves, depth {}, up to {} LODs per node)",
         s.nodes,
         s.leaves,
         s.depth,
         s.max_lods_per_node
-    );
-    out!("bounds      {:?} .. {:?}", s.bounds_min, s.bounds_max);
-    out!("origin      {:?}", s.origin);
-    out!("leaf triangles per LOD level (level 0 = original):");
+    )?;
+    out!("bounds      {:?} .. {:?}", s.bounds_min, s.bounds_max)?;
+    out!("origin      {:?}", s.origin)?;
+    out!("leaf triangles per LOD level (level 0 = original):")?;
     for (k, t) in s.leaf_triangles_per_level.iter().enumerate() {
-        out!("  level {k:<3} {t:>14}");
+        out!("  level {k:<3} {t:>14}")?;
     }
-    out!("HLOD triangles per tree depth (finest LOD of every node at that depth):");
+    out!("HLOD triangles per tree depth (finest LOD of every node at that depth):")?;
     for (d, t) in s.hlod_triangles_per_depth.iter().enumerate() {
-        out!("  depth {d:<3} {t:>14}");
+        out!("  depth {d:<3} {t:>14}")?;
     }
-    out!("sections:");
+    out!("sections:")?;
     for (name, len) in &s.sections {
-        out!("  {name:<6} {:>12}", human_bytes(*len));
+        out!("  {name:<6} {:>12}", human_bytes(*len))?;
     }
-    out!("provenance:");
-    out!("  source    {}", s.provenance.source);
-    out!("  tool      {}", s.provenance.tool);
+    out!("provenance:")?;
+    out!("  source    {}", s.provenance.source)?;
+    out!("  tool      {}", s.provenance.tool)?;
     for (k, v) in &s.provenance.parameters {
-        out!("  {k:<24} {v}");
+        out!("  {k:<24} {v}")?;
     }
     Ok(())
 }

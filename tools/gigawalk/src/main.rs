@@ -1,12 +1,14 @@
 //! The `gigawalk` command line: argument parsing, progress and error
 //! printing only. Every subcommand's logic lives in a crate.
 
-/// `println!` for results on standard output. A reader that stops early
-/// (`gigawalk info scene.gwk | head`) closes the pipe: that ends the
-/// program quietly instead of panicking as `println!` does.
+/// `println!` for results on standard output, as an expression of type
+/// `anyhow::Result<()>`: use it with `?`. A reader that stops early
+/// (`gigawalk info scene.gwk | head`) closes the pipe; that comes back as
+/// [`StdoutClosed`], which `main` treats as a quiet end after everything
+/// else has been written and dropped, instead of the panic `println!` gives.
 macro_rules! out {
     ($($t:tt)*) => {
-        $crate::write_stdout(format_args!($($t)*))
+        $crate::write_stdout(format_args!($($t)*), true)
     };
 }
 
@@ -47,20 +49,46 @@ enum Command {
     View(view::Args),
 }
 
-/// Writes one line to standard output (see [`out!`]).
-pub(crate) fn write_stdout(args: std::fmt::Arguments) {
+/// Writes `path` through a temporary file in the same directory, renamed
+/// into place: an interrupted write never leaves a half-written file.
+pub(crate) fn write_file(path: &std::path::Path, bytes: &[u8]) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    use std::io::Write as _;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => std::path::Path::new("."),
+    };
+    let what = || format!("cannot write {}", path.display());
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).with_context(what)?;
+    tmp.write_all(bytes).with_context(what)?;
+    tmp.persist(path).map_err(|e| e.error).with_context(what)?;
+    Ok(())
+}
+
+/// Standard output was closed by its reader: not a failure of ours.
+#[derive(Debug)]
+pub(crate) struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("standard output was closed")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// Writes to standard output, with a newline if `line` (see [`out!`]).
+pub(crate) fn write_stdout(args: std::fmt::Arguments, line: bool) -> anyhow::Result<()> {
     use std::io::Write as _;
     let mut o = std::io::stdout().lock();
-    if let Err(e) = o
+    let written = o
         .write_fmt(args)
-        .and_then(|()| o.write_all(b"\n"))
-        .and_then(|()| o.flush())
-    {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            std::process::exit(0);
-        }
-        eprintln!("error: cannot write to standard output: {e}");
-        std::process::exit(1);
+        .and_then(|()| if line { o.write_all(b"\n") } else { Ok(()) })
+        .and_then(|()| o.flush());
+    match written {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(StdoutClosed.into()),
+        Err(e) => Err(anyhow::anyhow!("cannot write to standard output: {e}")),
     }
 }
 
@@ -78,6 +106,9 @@ fn main() -> std::process::ExitCode {
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        // The reader has what it wanted (`| head`); everything else was
+        // already written.
+        Err(e) if e.downcast_ref::<StdoutClosed>().is_some() => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_chain(&e));
             std::process::ExitCode::FAILURE

@@ -116,20 +116,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     stats.input_triangles += import_dropped;
     stats.finish();
 
-    print!("{}", stats.table());
+    // Files first: a reader that closes standard output early must not
+    // cost the stats file.
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
+        crate::write_file(path, (json + "\n").as_bytes())?;
+    }
+    crate::write_stdout(format_args!("{}", stats.table()), false)?;
     if stats.input_file_bytes > 0 {
         out!(
             "input file        {:.1} MiB; scene / input file = {:.2}x",
             stats.input_file_bytes as f64 / (1024.0 * 1024.0),
             stats.output_bytes as f64 / stats.input_file_bytes.max(1) as f64
-        );
+        )?;
     }
-    out!("wrote {}", args.output.display());
-    if let Some(path) = &args.stats {
-        let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
-        std::fs::write(path, json + "\n")
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
+    out!("wrote {}", args.output.display())?;
     Ok(())
 }
 

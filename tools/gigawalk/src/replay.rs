@@ -171,13 +171,13 @@ pub fn write_and_print(replay: &Replay, out: &Path) -> anyhow::Result<()> {
         summary.width,
         summary.height,
         summary.devices.join(" + ")
-    );
-    print!("{}", summary.table());
+    )?;
+    crate::write_stdout(format_args!("{}", summary.table()), false)?;
     if !replay.complete {
-        out!("stopped early: the report covers the frames measured before the stop");
+        out!("stopped early: the report covers the frames measured before the stop")?;
     }
     for f in &written.files {
-        out!("wrote {}", f.display());
+        out!("wrote {}", f.display())?;
     }
     Ok(())
 }

@@ -125,16 +125,59 @@ fn a_reader_that_stops_early_is_not_a_panic() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
     write_scene(&path);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+    // A pipe whose read end is closed before the program starts: its first
+    // write to standard output fails with a broken pipe, every time.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
         .args(["info", path.to_str().unwrap()])
-        .stdout(std::process::Stdio::piped())
+        .stdout(writer)
         .stderr(std::process::Stdio::piped())
-        .spawn()
+        .output()
         .unwrap();
-    // Close the read end before anything is written: every write fails.
-    drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
     assert!(out.status.success(), "{:?}: {err}", out.status);
+}
+
+#[test]
+fn preprocess_with_stdout_closed_still_writes_every_file() {
+    // `gigawalk preprocess ... --stats s.json | true`: files first, then the
+    // table; the closed pipe ends the program quietly with everything written.
+    let dir = tempfile::tempdir().unwrap();
+    let (glb, gwk, stats) = (
+        dir.path().join("p.glb"),
+        dir.path().join("p.gwk"),
+        dir.path().join("s.json"),
+    );
+    let (ok, _, err) = gigawalk(&[
+        "generate",
+        "plant",
+        "--triangles",
+        "5k",
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args([
+            "preprocess",
+            glb.to_str().unwrap(),
+            "-o",
+            gwk.to_str().unwrap(),
+        ])
+        .args(["--stats", stats.to_str().unwrap()])
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+    assert!(!err.contains("panicked"), "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(json.is_object());
+    gigawalk_scene::SceneReader::open(&gwk).unwrap();
 }

@@ -2,7 +2,7 @@
 //! frames and a screenshot that must show the scene (many colours, most of
 //! the image covered), not a blank or background-only frame, and the same
 //! in wireframe. Live: xdotool drives it with keys and the mouse (fly,
-//! look, wireframe, record a path, screenshots, resize, minimise, Esc).
+//! look, wireframe, record a path, screenshots, resize, hiding and showing the window, Esc).
 //! Skips loudly without Xvfb, xdotool or a GPU adapter, unless
 //! GIGAWALK_REQUIRE_ADAPTER is set (CI), where all must be there.
 
@@ -10,9 +10,15 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+/// Longest a scripted `gigawalk` or `xdotool` call may take before the test
+/// fails instead of hanging CI (coreutils `timeout` kills it).
+const CALL_LIMIT_S: &str = "300";
+
 fn gigawalk(args: &[&str], display: Option<&str>) -> (bool, String, String) {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_gigawalk"));
-    cmd.args(args);
+    let mut cmd = Command::new("timeout");
+    cmd.arg(CALL_LIMIT_S)
+        .arg(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(args);
     if let Some(d) = display {
         // Only X11 under Xvfb: a Wayland session variable would win otherwise.
         cmd.env("DISPLAY", d).env_remove("WAYLAND_DISPLAY");
@@ -42,6 +48,14 @@ fn skip(why: &str) {
 struct Xvfb {
     child: Child,
     display: String,
+    /// Xvfb's stderr, for failure messages.
+    log: tempfile::NamedTempFile,
+}
+
+impl Xvfb {
+    fn log_text(&self) -> String {
+        std::fs::read_to_string(self.log.path()).unwrap_or_default()
+    }
 }
 
 impl Drop for Xvfb {
@@ -73,6 +87,7 @@ fn start_xvfb() -> Option<Xvfb> {
     // display, which the first to finish then takes down.
     static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _one_at_a_time = STARTING.lock().unwrap_or_else(|e| e.into_inner());
+    let log = tempfile::NamedTempFile::new().expect("a temporary file for Xvfb's log");
     let mut child = Command::new("Xvfb")
         .args([
             "-displayfd",
@@ -87,7 +102,7 @@ fn start_xvfb() -> Option<Xvfb> {
             "-noreset",
         ])
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(Stdio::from(log.reopen().expect("Xvfb log")))
         .spawn()
         .ok()?;
     let stdout = child.stdout.take().expect("piped stdout");
@@ -100,14 +115,15 @@ fn start_xvfb() -> Option<Xvfb> {
     let mut x = Xvfb {
         child,
         display: String::new(),
+        log,
     };
     let line = rx
         .recv_timeout(Duration::from_secs(20))
-        .expect("Xvfb did not report its display within 20 s");
+        .unwrap_or_else(|_| panic!("Xvfb reported no display within 20 s:\n{}", x.log_text()));
     let n: u32 = line
         .trim()
         .parse()
-        .unwrap_or_else(|_| panic!("Xvfb -displayfd wrote {line:?}"));
+        .unwrap_or_else(|_| panic!("Xvfb -displayfd wrote {line:?}:\n{}", x.log_text()));
     x.display = format!(":{n}");
     // Ready when its socket takes connections (the display number can come
     // a moment before a client can connect).
@@ -116,8 +132,9 @@ fn start_xvfb() -> Option<Xvfb> {
     while std::os::unix::net::UnixStream::connect(&socket).is_err() {
         assert!(
             Instant::now() < deadline,
-            "Xvfb {}: {socket} takes no connections after 20 s",
-            x.display
+            "Xvfb {}: {socket} takes no connections after 20 s:\n{}",
+            x.display,
+            x.log_text()
         );
         std::thread::sleep(Duration::from_millis(50));
     }
@@ -269,7 +286,9 @@ impl Drop for Viewer {
 }
 
 fn xdotool(display: &str, args: &[&str]) -> String {
-    let out = Command::new("xdotool")
+    let out = Command::new("timeout")
+        .arg(CALL_LIMIT_S)
+        .arg("xdotool")
         .args(args)
         .env("DISPLAY", display)
         .output()
@@ -309,8 +328,8 @@ fn differing_fraction(a: &[u8], b: &[u8]) -> f64 {
 }
 
 /// A live session driven like a person would: keys held to fly, a mouse
-/// drag to look, toggles, a recorded path, screenshots, a resize, a
-/// minimise and Esc to quit.
+/// drag to look, toggles, a recorded path, screenshots, a resize, the
+/// window hidden and shown, and Esc to quit.
 #[test]
 fn live_keys_and_mouse_drive_the_viewer() {
     if gigawalk_gpu::devices_or_skip(1, "gigawalk view (live)").is_none() {
@@ -455,10 +474,13 @@ fn live_keys_and_mouse_drive_the_viewer() {
     std::thread::sleep(Duration::from_millis(1000));
     let (w1, h1, _) = shot(&mut viewer);
     assert_eq!((w1, h1), (640, 400), "after the resize");
-    // Minimise and restore: the viewer keeps running.
-    xdotool(d, &["windowminimize", w]);
+    // Hide and show the window (Xvfb has no window manager to minimise
+    // it, so unmap it directly): the viewer keeps running.
+    xdotool(d, &["windowunmap", "--sync", w]);
     std::thread::sleep(Duration::from_millis(1000));
-    xdotool(d, &["windowmap", w]);
+    xdotool(d, &["windowmap", "--sync", w]);
+    // Unmapping dropped the keyboard focus; a click would give it back.
+    xdotool(d, &["windowfocus", "--sync", w]);
     let (_, _, back) = shot(&mut viewer);
     assert!(gigawalk_viewer::image_stats(&back).distinct_colours > 50);
     // Esc quits cleanly.

@@ -35,7 +35,7 @@ fn write(dir: &Path, name: &str, bytes: &[u8], w: &mut Written) -> Result<(), Re
         file: file.clone(),
         source,
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io)?;
+    let mut tmp = gigawalk_scene::temp_file_in(dir).map_err(io)?;
     tmp.write_all(bytes).map_err(io)?;
     tmp.persist(&file).map_err(|e| io(e.error))?;
     w.files.push(file);

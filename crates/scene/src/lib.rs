@@ -14,6 +14,7 @@
 //! This crate knows nothing about GPUs or threads.
 
 mod aabb;
+mod atomic;
 mod error;
 mod format;
 mod mesh;
@@ -25,6 +26,7 @@ mod validate;
 mod write;
 
 pub use aabb::Aabb;
+pub use atomic::temp_file_in;
 pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};

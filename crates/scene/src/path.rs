@@ -208,7 +208,7 @@ impl CameraPath {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
-        let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(err)?;
+        let mut tmp = crate::temp_file_in(dir).map_err(err)?;
         tmp.write_all(self.to_text().as_bytes()).map_err(err)?;
         tmp.as_file().sync_all().map_err(err)?;
         tmp.persist(path).map_err(|e| err(e.error))?;

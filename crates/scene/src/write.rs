@@ -49,11 +49,7 @@ impl SceneWriter {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
-        let tmp = tempfile::Builder::new()
-            .prefix(".gigawalk-")
-            .suffix(".tmp")
-            .tempfile_in(dir)
-            .map_err(io_err)?;
+        let tmp = crate::temp_file_in(dir).map_err(io_err)?;
         let mut out = BufWriter::with_capacity(1 << 20, tmp);
         // The header is written last, when the TOC's place is known.
         out.write_all(&[0u8; format::HEADER_LEN]).map_err(io_err)?;

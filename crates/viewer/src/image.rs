@@ -42,7 +42,7 @@ pub fn write_png(file: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| err(e.to_string()))?;
+    let tmp = gigawalk_scene::temp_file_in(dir).map_err(|e| err(e.to_string()))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file());
         let mut enc = png::Encoder::new(&mut w, width, height);

@@ -60,7 +60,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir)
+    let mut tmp = gigawalk_scene::temp_file_in(&dir)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
     let bytes = {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());

@@ -59,7 +59,7 @@ pub(crate) fn write_file(path: &std::path::Path, bytes: &[u8]) -> anyhow::Result
         _ => std::path::Path::new("."),
     };
     let what = || format!("cannot write {}", path.display());
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).with_context(what)?;
+    let mut tmp = gigawalk_scene::temp_file_in(dir).with_context(what)?;
     tmp.write_all(bytes).with_context(what)?;
     tmp.persist(path).map_err(|e| e.error).with_context(what)?;
     Ok(())

@@ -113,7 +113,7 @@ fn check_object(index: usize, o: &Object) -> Result<Option<(Part, u64)>, InputEr
             vertices: nv,
         });
     }
-    if o.indices.len() % 3 != 0 {
+    if !o.indices.len().is_multiple_of(3) {
         return Err(InputError::IndexCount {
             index,
             name: name(),

@@ -309,7 +309,7 @@ impl GlbBuilder {
     /// chunk (glTF 2.0 spec, section 4.4).
     pub fn write_glb<W: Write>(&self, w: &mut W) -> std::io::Result<u64> {
         let mut json = self.json().into_bytes();
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let bin_len = self.bin_len();

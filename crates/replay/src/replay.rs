@@ -278,7 +278,7 @@ pub fn replay_on(
         let result = rt.run(&ro, &mut list, &mut |r: FrameReport| {
             let i = r.frame as usize;
             let accuracy = match (&r.image, k) {
-                (Some(img), k) if k > 0 && i % k == 0 => reference
+                (Some(img), k) if k > 0 && i.is_multiple_of(k) => reference
                     .get(i / k)
                     .and_then(|x| x.as_ref())
                     .and_then(|reference| Accuracy::compare(reference, img)),

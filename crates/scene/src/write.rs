@@ -234,7 +234,7 @@ impl SceneWriter {
 /// bounds of the stored geometry, and the blob.
 fn encode_lod(mesh: &LodMesh, error: f32) -> Result<(LodInfo, Aabb, Vec<u8>), String> {
     let nv = mesh.positions.len();
-    if mesh.indices.is_empty() || mesh.indices.len() % 3 != 0 {
+    if mesh.indices.is_empty() || !mesh.indices.len().is_multiple_of(3) {
         return Err(format!(
             "{} indices is not a positive multiple of 3",
             mesh.indices.len()

@@ -125,19 +125,7 @@ fn a_reader_that_stops_early_is_not_a_panic() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
     write_scene(&path);
-    // A pipe whose read end is closed before the program starts: its first
-    // write to standard output fails with a broken pipe, every time.
-    let (reader, writer) = std::io::pipe().unwrap();
-    drop(reader);
-    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(["info", path.to_str().unwrap()])
-        .stdout(writer)
-        .stderr(std::process::Stdio::piped())
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(out.status.success(), "{:?}: {err}", out.status);
+    succeeds_with_stdout_closed(&["info", path.to_str().unwrap()]);
 }
 
 #[test]
@@ -150,34 +138,36 @@ fn preprocess_with_stdout_closed_still_writes_every_file() {
         dir.path().join("p.gwk"),
         dir.path().join("s.json"),
     );
-    let (ok, _, err) = gigawalk(&[
-        "generate",
-        "plant",
-        "--triangles",
-        "5k",
-        "-o",
-        glb.to_str().unwrap(),
-    ]);
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "5k", "-o", &s(&glb)]);
     assert!(ok, "{err}");
+    succeeds_with_stdout_closed(&[
+        "preprocess",
+        &s(&glb),
+        "-o",
+        &s(&gwk),
+        "--stats",
+        &s(&stats),
+    ]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(json.is_object());
+    gigawalk_scene::SceneReader::open(&gwk).unwrap();
+}
+
+/// Runs gigawalk with standard output a pipe whose read end is closed
+/// before it starts (its first write fails with a broken pipe, every time)
+/// and checks it ends successfully without a panic.
+fn succeeds_with_stdout_closed(args: &[&str]) {
     let (reader, writer) = std::io::pipe().unwrap();
     drop(reader);
     let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args([
-            "preprocess",
-            glb.to_str().unwrap(),
-            "-o",
-            gwk.to_str().unwrap(),
-        ])
-        .args(["--stats", stats.to_str().unwrap()])
+        .args(args)
         .stdout(writer)
         .stderr(std::process::Stdio::piped())
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{:?}: {err}", out.status);
-    assert!(!err.contains("panicked"), "{err}");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
-    assert!(json.is_object());
-    gigawalk_scene::SceneReader::open(&gwk).unwrap();
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    assert!(out.status.success(), "{args:?}: {:?}: {err}", out.status);
 }

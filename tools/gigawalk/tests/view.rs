@@ -2,7 +2,8 @@
 //! frames and a screenshot that must show the scene (many colours, most of
 //! the image covered), not a blank or background-only frame, and the same
 //! in wireframe. Live: xdotool drives it with keys and the mouse (fly,
-//! look, wireframe, record a path, screenshots, resize, hiding and showing the window, Esc).
+//! look, wireframe, node boxes, freeze culling, record a path, screenshots,
+//! resize, hiding and showing the window, Esc).
 //! Skips loudly without Xvfb, xdotool or a GPU adapter, unless
 //! GIGAWALK_REQUIRE_ADAPTER is set (CI), where all must be there.
 
@@ -439,6 +440,50 @@ fn live_keys_and_mouse_drive_the_viewer() {
         "wireframe {ws:?} vs shaded {fs:?}"
     );
     key("t");
+    // B: node boxes over the same still view; they add lines, mostly the
+    // green of drawn nodes (culled ones are off-screen or hidden).
+    let (_, _, plain) = shot(&mut viewer);
+    // The camera is still: the same frame again, pixel for pixel, so what
+    // changes next is the boxes alone.
+    let (_, _, again) = shot(&mut viewer);
+    assert_eq!(
+        differing_fraction(&plain, &again),
+        0.0,
+        "a still view changed"
+    );
+    key("b");
+    let (_, _, boxed) = shot(&mut viewer);
+    let changed: Vec<&[u8]> = plain
+        .chunks(4)
+        .zip(boxed.chunks(4))
+        .filter(|(a, b)| a != b)
+        .map(|(_, b)| b)
+        .collect();
+    assert!(
+        changed.len() * 200 > plain.len() / 4,
+        "boxes changed only {} pixels",
+        changed.len()
+    );
+    let greenish = changed
+        .iter()
+        .filter(|p| p[1] > p[0] && p[1] > p[2])
+        .count();
+    assert!(
+        greenish > 0,
+        "no green (drawn) box pixels among {}",
+        changed.len()
+    );
+    // F: freeze culling, then fly: the view moves over the frozen set.
+    key("f");
+    hold("w", 800);
+    let (_, _, frozen) = shot(&mut viewer);
+    let moved = differing_fraction(&boxed, &frozen);
+    assert!(
+        moved > 0.01,
+        "flying while frozen changed {moved:.3} of the view"
+    );
+    key("f");
+    key("b");
     // R, look around with a drag, strafe, R: a recorded path.
     key("r");
     std::thread::sleep(Duration::from_millis(300));

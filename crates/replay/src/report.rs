@@ -29,15 +29,11 @@ pub struct Written {
 /// Writes `name` in `dir` through a temporary file renamed into place, so
 /// an interrupted write never leaves a half-written report file.
 fn write(dir: &Path, name: &str, bytes: &[u8], w: &mut Written) -> Result<(), ReportError> {
-    use std::io::Write as _;
     let file = dir.join(name);
-    let io = |source| ReportError::Io {
+    gigawalk_scene::write_atomic(&file, bytes).map_err(|source| ReportError::Io {
         file: file.clone(),
         source,
-    };
-    let mut tmp = gigawalk_scene::temp_file_in(dir).map_err(io)?;
-    tmp.write_all(bytes).map_err(io)?;
-    tmp.persist(&file).map_err(|e| io(e.error))?;
+    })?;
     w.files.push(file);
     Ok(())
 }

@@ -5,7 +5,6 @@
 //! coordinates (so paths through models far from the origin keep precision),
 //! orientations as quaternions rotating camera-local vectors into world.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use glam::{DQuat, DVec3};
@@ -204,15 +203,7 @@ impl CameraPath {
             file: path.to_owned(),
             source,
         };
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let mut tmp = crate::temp_file_in(dir).map_err(err)?;
-        tmp.write_all(self.to_text().as_bytes()).map_err(err)?;
-        tmp.as_file().sync_all().map_err(err)?;
-        tmp.persist(path).map_err(|e| err(e.error))?;
-        Ok(())
+        crate::write_atomic(path, self.to_text().as_bytes()).map_err(err)
     }
 }
 

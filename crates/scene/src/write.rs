@@ -45,11 +45,7 @@ impl SceneWriter {
             path: path.display().to_string(),
             source,
         };
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let tmp = crate::temp_file_in(dir).map_err(io_err)?;
+        let tmp = crate::temp_file_for(path).map_err(io_err)?;
         let mut out = BufWriter::with_capacity(1 << 20, tmp);
         // The header is written last, when the TOC's place is known.
         out.write_all(&[0u8; format::HEADER_LEN]).map_err(io_err)?;

@@ -38,11 +38,7 @@ pub fn write_png(file: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
         file: file.into(),
         message,
     };
-    let dir = match file.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let tmp = gigawalk_scene::temp_file_in(dir).map_err(|e| err(e.to_string()))?;
+    let tmp = gigawalk_scene::temp_file_for(file).map_err(|e| err(e.to_string()))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file());
         let mut enc = png::Encoder::new(&mut w, width, height);

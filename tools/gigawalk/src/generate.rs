@@ -56,12 +56,12 @@ fn parse_count(s: &str) -> Result<u64, String> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let start = Instant::now();
     let g = generate(args.kind, args.triangles, args.seed, args.poses);
-    let dir = match args.output.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    let mut tmp = gigawalk_scene::temp_file_in(&dir)
-        .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    let mut tmp = gigawalk_scene::temp_file_for(&args.output).with_context(|| {
+        format!(
+            "cannot create a temporary file beside {}",
+            args.output.display()
+        )
+    })?;
     let bytes = {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
         let n = g

@@ -49,22 +49,6 @@ enum Command {
     View(view::Args),
 }
 
-/// Writes `path` through a temporary file in the same directory, renamed
-/// into place: an interrupted write never leaves a half-written file.
-pub(crate) fn write_file(path: &std::path::Path, bytes: &[u8]) -> anyhow::Result<()> {
-    use anyhow::Context as _;
-    use std::io::Write as _;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => std::path::Path::new("."),
-    };
-    let what = || format!("cannot write {}", path.display());
-    let mut tmp = gigawalk_scene::temp_file_in(dir).with_context(what)?;
-    tmp.write_all(bytes).with_context(what)?;
-    tmp.persist(path).map_err(|e| e.error).with_context(what)?;
-    Ok(())
-}
-
 /// Standard output was closed by its reader: not a failure of ours.
 #[derive(Debug)]
 pub(crate) struct StdoutClosed;

@@ -120,7 +120,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // cost the stats file.
     if let Some(path) = &args.stats {
         let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
-        crate::write_file(path, (json + "\n").as_bytes())?;
+        gigawalk_scene::write_atomic(path, (json + "\n").as_bytes())
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
     crate::write_stdout(format_args!("{}", stats.table()), false)?;
     if stats.input_file_bytes > 0 {

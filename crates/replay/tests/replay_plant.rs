@@ -33,6 +33,24 @@ fn plant(dir: &Path, poses: usize) -> (SceneReader, CameraPath) {
     (SceneReader::open(&file).unwrap(), g.path)
 }
 
+/// Runs `test` on a runtime over `devices` devices and a fresh plant with a
+/// `poses`-pose walk (and the plant's temporary directory), or skips it
+/// loudly without an adapter.
+fn on_plant(
+    devices: usize,
+    name: &str,
+    poses: usize,
+    test: impl FnOnce(&Runtime, &CameraPath, &Path),
+) {
+    let Some(devices) = devices_or_skip(devices, name) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), poses);
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    test(&rt, &path, dir.path());
+}
+
 fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
     ReplayOptions {
         modes: Mode::ALL.to_vec(),
@@ -50,166 +68,159 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
 
 #[test]
 fn sweep_writes_every_report_file_and_counts_every_frame() {
-    let Some(devices) = devices_or_skip(2, "replay report") else {
-        return;
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (scene, path) = plant(dir.path(), 40);
-    let rt = Runtime::with_devices(&scene, devices).unwrap();
-    let frames = 24;
-    let opts = options(&[0.0, 2.0], frames, 4);
-    let r = replay_on(
-        &rt,
-        "plant.gwk",
-        &path.poses,
-        "plant.path",
-        &opts,
-        &mut NoProgress,
-    )
-    .unwrap();
-    assert!(r.complete);
-    // vfc, hlod 0, hlod 2, occ, och 0, och 2.
-    assert_eq!(r.runs.len(), 6);
-    for run in &r.runs {
-        assert_eq!(run.frames.len(), frames, "{}", run.label());
-        let ids: Vec<u64> = run.frames.iter().map(|f| f.frame).collect();
-        assert_eq!(ids, (0..frames as u64).collect::<Vec<_>>());
-        // Frames 0, 4, ..., 20 are compared.
-        assert_eq!(
-            run.frames.iter().filter(|f| f.accuracy.is_some()).count(),
-            6
-        );
-    }
+    on_plant(2, "replay report", 40, |rt, path, dir| {
+        let frames = 24;
+        let opts = options(&[0.0, 2.0], frames, 4);
+        let r = replay_on(
+            rt,
+            "plant.gwk",
+            &path.poses,
+            "plant.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .unwrap();
+        assert!(r.complete);
+        // vfc, hlod 0, hlod 2, occ, och 0, och 2.
+        assert_eq!(r.runs.len(), 6);
+        for run in &r.runs {
+            assert_eq!(run.frames.len(), frames, "{}", run.label());
+            let ids: Vec<u64> = run.frames.iter().map(|f| f.frame).collect();
+            assert_eq!(ids, (0..frames as u64).collect::<Vec<_>>());
+            // Frames 0, 4, ..., 20 are compared.
+            assert_eq!(
+                run.frames.iter().filter(|f| f.accuracy.is_some()).count(),
+                6
+            );
+        }
 
-    let out = dir.path().join("report");
-    let written = r.write_report(&out).unwrap();
-    for name in [
-        "summary.md",
-        "summary.json",
-        "frames.csv",
-        "fps.png",
-        "tradeoff.png",
-    ] {
-        assert!(
-            written.files.contains(&out.join(name)),
-            "{name} not written"
-        );
-        assert!(
-            std::fs::metadata(out.join(name)).unwrap().len() > 0,
-            "{name} empty"
-        );
-    }
-    for png in ["fps.png", "tradeoff.png"] {
-        let bytes = std::fs::read(out.join(png)).unwrap();
-        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{png}");
-    }
-
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(json["frames"], frames);
-    assert_eq!(
-        (json["width"].as_u64(), json["height"].as_u64()),
-        (Some(W as u64), Some(H as u64))
-    );
-    let modes = json["modes"].as_array().unwrap();
-    assert_eq!(modes.len(), 6);
-    for m in modes {
-        for key in [
-            "name",
-            "pixel_error",
-            "mean_fps",
-            "median_frame_ms",
-            "p95_frame_ms",
-            "mean_triangles",
-            "speedup_vs_vfc",
-            "mean_latency_ms",
-            "wrongly_culled_pixels",
-            "differing_pixels_fraction",
-            "psnr_db",
+        let out = dir.join("report");
+        let written = r.write_report(&out).unwrap();
+        for name in [
+            "summary.md",
+            "summary.json",
+            "frames.csv",
+            "fps.png",
+            "tradeoff.png",
         ] {
-            assert!(m.get(key).is_some(), "{key} missing from {m}");
+            assert!(
+                written.files.contains(&out.join(name)),
+                "{name} not written"
+            );
+            assert!(
+                std::fs::metadata(out.join(name)).unwrap().len() > 0,
+                "{name} empty"
+            );
         }
-        assert!(m["mean_fps"].as_f64().unwrap() > 0.0);
-        assert_eq!(m["frames"], frames);
-        assert_eq!(m["measured_frames"], frames - 3);
-    }
-    assert_eq!(modes[0]["speedup_vs_vfc"].as_f64(), Some(1.0));
+        for png in ["fps.png", "tradeoff.png"] {
+            let bytes = std::fs::read(out.join(png)).unwrap();
+            assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{png}");
+        }
 
-    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 6 * frames);
-    assert!(rows.iter().all(|r| r.len() == header.len()));
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    // Frame 0 has no interval; every later frame has one, and they parse.
-    for r in &rows {
-        let frame: u64 = r[col("frame")].parse().unwrap();
-        let ms = r[col("frame_ms")];
-        if frame == 0 {
-            assert_eq!(ms, "");
-        } else {
-            assert!(ms.parse::<f64>().unwrap() >= 0.0);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(json["frames"], frames);
+        assert_eq!(
+            (json["width"].as_u64(), json["height"].as_u64()),
+            (Some(W as u64), Some(H as u64))
+        );
+        let modes = json["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), 6);
+        for m in modes {
+            for key in [
+                "name",
+                "pixel_error",
+                "mean_fps",
+                "median_frame_ms",
+                "p95_frame_ms",
+                "mean_triangles",
+                "speedup_vs_vfc",
+                "mean_latency_ms",
+                "wrongly_culled_pixels",
+                "differing_pixels_fraction",
+                "psnr_db",
+            ] {
+                assert!(m.get(key).is_some(), "{key} missing from {m}");
+            }
+            assert!(m["mean_fps"].as_f64().unwrap() > 0.0);
+            assert_eq!(m["frames"], frames);
+            assert_eq!(m["measured_frames"], frames - 3);
         }
-    }
-    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
-    assert!(md.contains("| och | 2 |") && md.contains("fps.png"), "{md}");
+        assert_eq!(modes[0]["speedup_vs_vfc"].as_f64(), Some(1.0));
+
+        let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        assert_eq!(rows.len(), 6 * frames);
+        assert!(rows.iter().all(|r| r.len() == header.len()));
+        let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        // Frame 0 has no interval; every later frame has one, and they parse.
+        for r in &rows {
+            let frame: u64 = r[col("frame")].parse().unwrap();
+            let ms = r[col("frame_ms")];
+            if frame == 0 {
+                assert_eq!(ms, "");
+            } else {
+                assert!(ms.parse::<f64>().unwrap() >= 0.0);
+            }
+        }
+        let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+        assert!(md.contains("| och | 2 |") && md.contains("fps.png"), "{md}");
+    });
 }
 
 #[test]
 fn och_draws_less_and_conservative_modes_lose_no_pixel() {
-    let Some(devices) = devices_or_skip(2, "replay accuracy") else {
-        return;
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (scene, path) = plant(dir.path(), 40);
-    let rt = Runtime::with_devices(&scene, devices).unwrap();
-    let opts = options(&[0.0, 1.0], 30, 3);
-    let r = replay_on(
-        &rt,
-        "plant.gwk",
-        &path.poses,
-        "plant.path",
-        &opts,
-        &mut NoProgress,
-    )
-    .unwrap();
-    let s = r.summary();
-    let get = |name: &str, px: f64| {
-        s.modes
-            .iter()
-            .find(|m| m.name == name && m.pixel_error == px)
-            .unwrap_or_else(|| panic!("no {name} {px}px run"))
-    };
-    let vfc = get("vfc", 0.0);
-    let och = get("och", 1.0);
-    assert!(
-        och.mean_triangles < vfc.mean_triangles,
-        "och {} vs vfc {} triangles",
-        och.mean_triangles,
-        vfc.mean_triangles
-    );
-    // The reference is vfc itself (other schedule, same rasterizer): identical.
-    assert_eq!(vfc.wrongly_culled_pixels, Some(0));
-    assert_eq!(vfc.differing_pixels_fraction, Some(0.0));
-    for m in [get("occ", 0.0), get("och", 0.0)] {
-        assert_eq!(m.accuracy_frames, 10, "{}", m.name);
-        assert_eq!(
-            m.wrongly_culled_pixels,
-            Some(0),
-            "{} at 0px lost pixels",
-            m.name
+    on_plant(2, "replay accuracy", 40, |rt, path, _| {
+        let opts = options(&[0.0, 1.0], 30, 3);
+        let r = replay_on(
+            rt,
+            "plant.gwk",
+            &path.poses,
+            "plant.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .unwrap();
+        let s = r.summary();
+        let get = |name: &str, px: f64| {
+            s.modes
+                .iter()
+                .find(|m| m.name == name && m.pixel_error == px)
+                .unwrap_or_else(|| panic!("no {name} {px}px run"))
+        };
+        let vfc = get("vfc", 0.0);
+        let och = get("och", 1.0);
+        assert!(
+            och.mean_triangles < vfc.mean_triangles,
+            "och {} vs vfc {} triangles",
+            och.mean_triangles,
+            vfc.mean_triangles
         );
-    }
-    // Occlusion culled something, or the check above means little.
-    let occ_culled: u64 = r
-        .runs
-        .iter()
-        .filter(|x| x.mode == Mode::Occ)
-        .flat_map(|x| &x.frames)
-        .map(|f| f.occlusion_culled)
-        .sum();
-    assert!(occ_culled > 0, "occlusion culled nothing on the walk");
+        // The reference is vfc itself (other schedule, same rasterizer): identical.
+        assert_eq!(vfc.wrongly_culled_pixels, Some(0));
+        assert_eq!(vfc.differing_pixels_fraction, Some(0.0));
+        for m in [get("occ", 0.0), get("och", 0.0)] {
+            assert_eq!(m.accuracy_frames, 10, "{}", m.name);
+            assert_eq!(
+                m.wrongly_culled_pixels,
+                Some(0),
+                "{} at 0px lost pixels",
+                m.name
+            );
+        }
+        // Occlusion culled something, or the check above means little.
+        let occ_culled: u64 = r
+            .runs
+            .iter()
+            .filter(|x| x.mode == Mode::Occ)
+            .flat_map(|x| &x.frames)
+            .map(|f| f.occlusion_culled)
+            .sum();
+        assert!(occ_culled > 0, "occlusion culled nothing on the walk");
+    });
 }
 
 /// Stops after a few frames, as Ctrl-C does.
@@ -225,107 +236,96 @@ impl Progress for StopAfter {
 
 #[test]
 fn stopping_keeps_what_was_measured() {
-    let Some(devices) = devices_or_skip(2, "replay stop") else {
-        return;
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (scene, path) = plant(dir.path(), 20);
-    let rt = Runtime::with_devices(&scene, devices).unwrap();
-    // Reference: 0, 5, 10, 15 (4 frames); then vfc stops after 3 frames.
-    let opts = options(&[1.0], 20, 5);
-    let r = replay_on(&rt, "s", &path.poses, "p", &opts, &mut StopAfter(7)).unwrap();
-    assert!(!r.complete);
-    assert_eq!(r.reference_frames, 4);
-    assert_eq!(r.runs.len(), 1);
-    assert_eq!(r.runs[0].frames.len(), 3);
-    let out = dir.path().join("partial");
-    r.write_report(&out).unwrap();
-    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
-    assert!(md.contains("Stopped early"), "{md}");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(json["complete"], false);
+    on_plant(2, "replay stop", 20, |rt, path, dir| {
+        // Reference: 0, 5, 10, 15 (4 frames); then vfc stops after 3 frames.
+        let opts = options(&[1.0], 20, 5);
+        let r = replay_on(rt, "s", &path.poses, "p", &opts, &mut StopAfter(7)).unwrap();
+        assert!(!r.complete);
+        assert_eq!(r.reference_frames, 4);
+        assert_eq!(r.runs.len(), 1);
+        assert_eq!(r.runs[0].frames.len(), 3);
+        let out = dir.join("partial");
+        r.write_report(&out).unwrap();
+        let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+        assert!(md.contains("Stopped early"), "{md}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(json["complete"], false);
+    });
 }
 
 #[test]
 fn bad_options_are_errors() {
-    let Some(devices) = devices_or_skip(1, "replay options") else {
-        return;
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (scene, path) = plant(dir.path(), 5);
-    let rt = Runtime::with_devices(&scene, devices).unwrap();
-    let mut o = options(&[-1.0], 5, 0);
-    let e = replay_on(&rt, "s", &path.poses, "p", &o, &mut NoProgress).unwrap_err();
-    assert!(e.to_string().contains("pixel error -1"), "{e}");
-    o.pixel_errors = vec![1.0];
-    o.modes.clear();
-    let e = replay_on(&rt, "s", &path.poses, "p", &o, &mut NoProgress).unwrap_err();
-    assert!(e.to_string().contains("no modes"), "{e}");
-    let o = options(&[1.0], 5, 0);
-    let e = replay_on(&rt, "s", &[], "p", &o, &mut NoProgress).unwrap_err();
-    assert!(e.to_string().contains("no poses"), "{e}");
+    on_plant(1, "replay options", 5, |rt, path, _| {
+        let mut o = options(&[-1.0], 5, 0);
+        let e = replay_on(rt, "s", &path.poses, "p", &o, &mut NoProgress).unwrap_err();
+        assert!(e.to_string().contains("pixel error -1"), "{e}");
+        o.pixel_errors = vec![1.0];
+        o.modes.clear();
+        let e = replay_on(rt, "s", &path.poses, "p", &o, &mut NoProgress).unwrap_err();
+        assert!(e.to_string().contains("no modes"), "{e}");
+        let o = options(&[1.0], 5, 0);
+        let e = replay_on(rt, "s", &[], "p", &o, &mut NoProgress).unwrap_err();
+        assert!(e.to_string().contains("no poses"), "{e}");
+    });
 }
 
 /// Every runtime knob replays with accuracy checks (the reference always
 /// runs sequentially at full detail, whatever the runs use).
 #[test]
 fn every_runtime_knob_replays_with_accuracy() {
-    let Some(devices) = devices_or_skip(2, "replay knobs") else {
-        return;
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (scene, path) = plant(dir.path(), 12);
-    let rt = Runtime::with_devices(&scene, devices).unwrap();
-    let base = RuntimeOptions {
-        width: W,
-        height: H,
-        ..Default::default()
-    };
-    let knobs = [
-        RuntimeOptions {
-            async_rvg: true,
-            ..base.clone()
-        },
-        RuntimeOptions {
-            occluder_scale: 0.25,
-            ..base.clone()
-        },
-        RuntimeOptions {
-            hzb_reduction: gigawalk_cull::Reduction::NthFarthest(3),
-            ..base.clone()
-        },
-        RuntimeOptions {
-            occluder_lag: 1,
-            ..base.clone()
-        },
-        RuntimeOptions {
-            occluder_budget: gigawalk_runtime::OccluderBudget::Triangles(500),
-            ..base.clone()
-        },
-    ];
-    for runtime in knobs {
-        let opts = ReplayOptions {
-            modes: vec![Mode::Occ, Mode::Och],
-            pixel_errors: vec![1.0],
-            runtime: runtime.clone(),
-            frames: Some(12),
-            accuracy_every: 4,
-            warmup: 2,
+    on_plant(2, "replay knobs", 12, |rt, path, _| {
+        let base = RuntimeOptions {
+            width: W,
+            height: H,
+            ..Default::default()
         };
-        let r = replay_on(
-            &rt,
-            "plant.gwk",
-            &path.poses,
-            "plant.path",
-            &opts,
-            &mut NoProgress,
-        )
-        .unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
-        assert_eq!(r.reference_frames, 3, "{runtime:?}");
-        for m in r.summary().modes {
-            assert_eq!(m.frames, 12, "{runtime:?} {}", m.name);
-            assert_eq!(m.accuracy_frames, 3, "{runtime:?} {}", m.name);
+        let knobs = [
+            RuntimeOptions {
+                async_rvg: true,
+                ..base.clone()
+            },
+            RuntimeOptions {
+                occluder_scale: 0.25,
+                ..base.clone()
+            },
+            RuntimeOptions {
+                hzb_reduction: gigawalk_cull::Reduction::NthFarthest(3),
+                ..base.clone()
+            },
+            RuntimeOptions {
+                occluder_lag: 1,
+                ..base.clone()
+            },
+            RuntimeOptions {
+                occluder_budget: gigawalk_runtime::OccluderBudget::Triangles(500),
+                ..base.clone()
+            },
+        ];
+        for runtime in knobs {
+            let opts = ReplayOptions {
+                modes: vec![Mode::Occ, Mode::Och],
+                pixel_errors: vec![1.0],
+                runtime: runtime.clone(),
+                frames: Some(12),
+                accuracy_every: 4,
+                warmup: 2,
+            };
+            let r = replay_on(
+                rt,
+                "plant.gwk",
+                &path.poses,
+                "plant.path",
+                &opts,
+                &mut NoProgress,
+            )
+            .unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
+            assert_eq!(r.reference_frames, 3, "{runtime:?}");
+            for m in r.summary().modes {
+                assert_eq!(m.frames, 12, "{runtime:?} {}", m.name);
+                assert_eq!(m.accuracy_frames, 3, "{runtime:?} {}", m.name);
+            }
         }
-    }
+    });
 }

@@ -82,6 +82,17 @@ fn fixture(shift: DVec3) -> Fixture {
     Fixture { _dir: dir, scene }
 }
 
+/// Runs `test` on a runtime over `devices` devices and the street scene
+/// shifted by `shift`, or skips it loudly without an adapter.
+fn on_street(devices: usize, name: &str, shift: DVec3, test: impl FnOnce(&Runtime)) {
+    let Some(devices) = devices_or_skip(devices, name) else {
+        return;
+    };
+    let f = fixture(shift);
+    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
+    test(&rt);
+}
+
 /// Pixels where the reference is nearer than the result (something that
 /// should show is missing). Reversed-Z: nearer = larger. The tolerance
 /// covers nothing but f32 noise: both images come from the same rasterizer.
@@ -94,56 +105,53 @@ fn wrongly_culled(reference: &[f32], result: &[f32]) -> usize {
 }
 
 fn check_conservative(shift: DVec3) {
-    let Some(devices) = devices_or_skip(2, "runtime conservativeness") else {
-        return;
-    };
-    let f = fixture(shift);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    let frames = 60;
-    let occ = run(
-        &rt,
-        &options(Schedule::Pipelined, true, false, 0.0),
-        walk(frames, shift, true),
-    )
-    .unwrap();
-    let vfc = run(
-        &rt,
-        &options(Schedule::Sequential, false, false, 0.0),
-        walk(frames, shift, true),
-    )
-    .unwrap();
-    assert_eq!((occ.len(), vfc.len()), (frames, frames));
-    let mut culled = 0;
-    let mut identical = 0;
-    for (o, v) in occ.iter().zip(&vfc) {
-        assert_eq!(o.frame, v.frame);
-        let (od, vd) = (
-            &o.image.as_ref().unwrap().depth.depth,
-            &v.image.as_ref().unwrap().depth.depth,
+    on_street(2, "runtime conservativeness", shift, |rt| {
+        let frames = 60;
+        let occ = run(
+            rt,
+            &options(Schedule::Pipelined, true, false, 0.0),
+            walk(frames, shift, true),
+        )
+        .unwrap();
+        let vfc = run(
+            rt,
+            &options(Schedule::Sequential, false, false, 0.0),
+            walk(frames, shift, true),
+        )
+        .unwrap();
+        assert_eq!((occ.len(), vfc.len()), (frames, frames));
+        let mut culled = 0;
+        let mut identical = 0;
+        for (o, v) in occ.iter().zip(&vfc) {
+            assert_eq!(o.frame, v.frame);
+            let (od, vd) = (
+                &o.image.as_ref().unwrap().depth.depth,
+                &v.image.as_ref().unwrap().depth.depth,
+            );
+            assert_eq!(
+                wrongly_culled(vd, od),
+                0,
+                "frame {}: occlusion culling removed visible pixels",
+                o.frame
+            );
+            identical += (od == vd) as usize;
+            culled += o.stats.occlusion_culled;
+            assert!(o.stats.drawn_triangles <= v.stats.drawn_triangles);
+        }
+        // The test means something only if occlusion culled nodes.
+        assert!(
+            culled > 100,
+            "only {culled} nodes occlusion-culled over the walk"
         );
-        assert_eq!(
-            wrongly_culled(vd, od),
-            0,
-            "frame {}: occlusion culling removed visible pixels",
-            o.frame
+        // Same rasterizer, same triangles for every visible pixel: the depth
+        // images are bit-identical (a culled box never wins a pixel).
+        assert_eq!(identical, frames);
+        assert!(
+            occ[0..2].iter().all(|r| !r.occlusion_used),
+            "startup bypass"
         );
-        identical += (od == vd) as usize;
-        culled += o.stats.occlusion_culled;
-        assert!(o.stats.drawn_triangles <= v.stats.drawn_triangles);
-    }
-    // The test means something only if occlusion culled nodes.
-    assert!(
-        culled > 100,
-        "only {culled} nodes occlusion-culled over the walk"
-    );
-    // Same rasterizer, same triangles for every visible pixel: the depth
-    // images are bit-identical (a culled box never wins a pixel).
-    assert_eq!(identical, frames);
-    assert!(
-        occ[0..2].iter().all(|r| !r.occlusion_used),
-        "startup bypass"
-    );
-    assert!(occ[2..].iter().all(|r| r.occlusion_used));
+        assert!(occ[2..].iter().all(|r| r.occlusion_used));
+    });
 }
 
 #[test]
@@ -158,303 +166,281 @@ fn pipelined_occlusion_is_conservative_far_from_origin() {
 
 #[test]
 fn pipelined_and_sequential_choose_the_same_nodes() {
-    let Some(devices) = devices_or_skip(2, "pipelined vs sequential") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    for lag in [1, 2] {
-        let mut p = options(Schedule::Pipelined, true, true, 2.0);
-        p.occluder_lag = lag;
-        let s = RuntimeOptions {
-            schedule: Schedule::Sequential,
-            ..p.clone()
-        };
-        let a = run(&rt, &p, walk(30, DVec3::ZERO, false)).unwrap();
-        let b = run(&rt, &s, walk(30, DVec3::ZERO, false)).unwrap();
-        assert_eq!(a.len(), 30);
-        for (x, y) in a.iter().zip(&b) {
-            assert_eq!(x.visible, y.visible, "lag {lag}, frame {}", x.frame);
-            assert_eq!(x.stats, y.stats);
+    on_street(2, "pipelined vs sequential", DVec3::ZERO, |rt| {
+        for lag in [1, 2] {
+            let mut p = options(Schedule::Pipelined, true, true, 2.0);
+            p.occluder_lag = lag;
+            let s = RuntimeOptions {
+                schedule: Schedule::Sequential,
+                ..p.clone()
+            };
+            let a = run(rt, &p, walk(30, DVec3::ZERO, false)).unwrap();
+            let b = run(rt, &s, walk(30, DVec3::ZERO, false)).unwrap();
+            assert_eq!(a.len(), 30);
+            for (x, y) in a.iter().zip(&b) {
+                assert_eq!(x.visible, y.visible, "lag {lag}, frame {}", x.frame);
+                assert_eq!(x.stats, y.stats);
+            }
+            assert!(a.iter().any(|r| r.stats.drawn_nodes < r.stats.visited));
         }
-        assert!(a.iter().any(|r| r.stats.drawn_nodes < r.stats.visited));
-    }
+    });
 }
 
 #[test]
 fn a_failure_in_any_stage_stops_the_run() {
-    let Some(devices) = devices_or_skip(2, "failure injection") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    for schedule in [Schedule::Pipelined, Schedule::Sequential] {
-        for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
-            let mut o = options(schedule, true, true, 1.0);
-            o.inject_failure = Some((stage, 5));
-            let t = Instant::now();
-            let mut seen = 0;
-            let mut cams = walk(1000, DVec3::ZERO, false);
-            let err = rt.run(&o, &mut cams, &mut |_| {
-                seen += 1;
-                true
-            });
-            let took = t.elapsed();
-            match err {
-                Err(RuntimeError::Injected { stage: s, frame: 5 }) => assert_eq!(s, stage),
-                other => panic!("{schedule:?} {stage}: expected the injected error, got {other:?}"),
+    on_street(2, "failure injection", DVec3::ZERO, |rt| {
+        for schedule in [Schedule::Pipelined, Schedule::Sequential] {
+            for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
+                let mut o = options(schedule, true, true, 1.0);
+                o.inject_failure = Some((stage, 5));
+                let t = Instant::now();
+                let mut seen = 0;
+                let mut cams = walk(1000, DVec3::ZERO, false);
+                let err = rt.run(&o, &mut cams, &mut |_| {
+                    seen += 1;
+                    true
+                });
+                let took = t.elapsed();
+                match err {
+                    Err(RuntimeError::Injected { stage: s, frame: 5 }) => assert_eq!(s, stage),
+                    other => {
+                        panic!("{schedule:?} {stage}: expected the injected error, got {other:?}")
+                    }
+                }
+                assert!(
+                    seen <= 5,
+                    "{stage}: {seen} frames finished after a failure at frame 5"
+                );
+                // Generous bound for a loaded 2-core CI machine; typically milliseconds.
+                assert!(
+                    took < Duration::from_secs(10),
+                    "{stage}: took {took:?} to stop"
+                );
             }
-            assert!(
-                seen <= 5,
-                "{stage}: {seen} frames finished after a failure at frame 5"
-            );
-            // Generous bound for a loaded 2-core CI machine; typically milliseconds.
-            assert!(
-                took < Duration::from_secs(10),
-                "{stage}: took {took:?} to stop"
-            );
         }
-    }
+    });
 }
 
 #[test]
 fn stopping_early_from_the_frame_callback() {
-    let Some(devices) = devices_or_skip(2, "early stop") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    let mut cams = walk(1000, DVec3::ZERO, false);
-    let mut seen = 0;
-    let n = rt
-        .run(
-            &options(Schedule::Pipelined, true, true, 1.0),
-            &mut cams,
-            &mut |_| {
-                seen += 1;
-                seen < 7
-            },
-        )
-        .unwrap();
-    assert_eq!((n, seen), (7, 7));
+    on_street(2, "early stop", DVec3::ZERO, |rt| {
+        let mut cams = walk(1000, DVec3::ZERO, false);
+        let mut seen = 0;
+        let n = rt
+            .run(
+                &options(Schedule::Pipelined, true, true, 1.0),
+                &mut cams,
+                &mut |_| {
+                    seen += 1;
+                    seen < 7
+                },
+            )
+            .unwrap();
+        assert_eq!((n, seen), (7, 7));
+    });
 }
 
 #[test]
 fn bad_options_and_cameras_are_errors() {
-    let Some(devices) = devices_or_skip(1, "bad options") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    let mut o = options(Schedule::Pipelined, true, true, 1.0);
-    o.occluder_scale = 0.0;
-    let e = rt
-        .run(&o, &mut walk(3, DVec3::ZERO, false), &mut |_| true)
-        .unwrap_err();
-    assert!(e.to_string().contains("occluder scale 0"), "{e}");
-    let mut cams = walk(3, DVec3::ZERO, false);
-    cams.cameras[1].camera.position.x = f64::NAN;
-    let e = rt
-        .run(
-            &options(Schedule::Pipelined, true, true, 1.0),
-            &mut cams,
-            &mut |_| true,
-        )
-        .unwrap_err();
-    assert!(
-        matches!(e, RuntimeError::Camera(ref m) if m.contains("frame 1")),
-        "{e}"
-    );
+    on_street(1, "bad options", DVec3::ZERO, |rt| {
+        let mut o = options(Schedule::Pipelined, true, true, 1.0);
+        o.occluder_scale = 0.0;
+        let e = rt
+            .run(&o, &mut walk(3, DVec3::ZERO, false), &mut |_| true)
+            .unwrap_err();
+        assert!(e.to_string().contains("occluder scale 0"), "{e}");
+        let mut cams = walk(3, DVec3::ZERO, false);
+        cams.cameras[1].camera.position.x = f64::NAN;
+        let e = rt
+            .run(
+                &options(Schedule::Pipelined, true, true, 1.0),
+                &mut cams,
+                &mut |_| true,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(e, RuntimeError::Camera(ref m) if m.contains("frame 1")),
+            "{e}"
+        );
+    });
 }
 
 #[test]
 fn held_culling_reuses_the_frozen_set_in_every_schedule() {
-    let Some(devices) = devices_or_skip(2, "hold culling") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    for (schedule, async_rvg) in [
-        (Schedule::Sequential, false),
-        (Schedule::Pipelined, false),
-        (Schedule::Pipelined, true),
-    ] {
-        let mut cams = walk(20, DVec3::ZERO, false);
-        for c in &mut cams.cameras[10..] {
-            c.hold_culling = true;
+    on_street(2, "hold culling", DVec3::ZERO, |rt| {
+        for (schedule, async_rvg) in [
+            (Schedule::Sequential, false),
+            (Schedule::Pipelined, false),
+            (Schedule::Pipelined, true),
+        ] {
+            let mut cams = walk(20, DVec3::ZERO, false);
+            for c in &mut cams.cameras[10..] {
+                c.hold_culling = true;
+            }
+            let mut o = options(schedule, true, true, 1.0);
+            o.async_rvg = async_rvg;
+            o.record_culled = true;
+            let frames = run(rt, &o, cams).unwrap();
+            assert_eq!(frames.len(), 20);
+            // Frames 10.. draw exactly what frame 9 drew (with async RVG, frame
+            // 9 may itself have drawn an earlier camera's set).
+            for r in &frames[10..] {
+                assert!(r.reused_visible_set);
+                assert_eq!(
+                    r.visible, frames[9].visible,
+                    "{schedule:?} async {async_rvg}, frame {}",
+                    r.frame
+                );
+            }
+            if !async_rvg {
+                assert!(frames[..10].iter().all(|r| !r.reused_visible_set));
+            }
+            for r in &frames {
+                assert_eq!(
+                    r.culled.len() as u64,
+                    r.stats.frustum_culled + r.stats.occlusion_culled
+                );
+            }
         }
-        let mut o = options(schedule, true, true, 1.0);
-        o.async_rvg = async_rvg;
-        o.record_culled = true;
-        let frames = run(&rt, &o, cams).unwrap();
-        assert_eq!(frames.len(), 20);
-        // Frames 10.. draw exactly what frame 9 drew (with async RVG, frame
-        // 9 may itself have drawn an earlier camera's set).
-        for r in &frames[10..] {
-            assert!(r.reused_visible_set);
-            assert_eq!(
-                r.visible, frames[9].visible,
-                "{schedule:?} async {async_rvg}, frame {}",
-                r.frame
-            );
-        }
-        if !async_rvg {
-            assert!(frames[..10].iter().all(|r| !r.reused_visible_set));
-        }
-        for r in &frames {
-            assert_eq!(
-                r.culled.len() as u64,
-                r.stats.frustum_culled + r.stats.occlusion_culled
-            );
-        }
-    }
+    });
 }
 
 #[test]
 fn async_rvg_renders_every_camera() {
-    let Some(devices) = devices_or_skip(2, "async RVG") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    let mut o = options(Schedule::Pipelined, true, true, 1.0);
-    o.async_rvg = true;
-    let frames = run(&rt, &o, walk(40, DVec3::ZERO, true)).unwrap();
-    assert_eq!(frames.len(), 40);
-    for (i, r) in frames.iter().enumerate() {
-        assert_eq!(r.frame, i as u64);
-        assert!(r.image.is_some());
-        assert!(!r.visible.is_empty());
-    }
-    // Failures stop the asynchronous schedule too.
-    for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
-        o.inject_failure = Some((stage, 3));
-        let e = run(&rt, &o, walk(1000, DVec3::ZERO, false)).unwrap_err();
-        assert!(
-            matches!(e, RuntimeError::Injected { stage: s, .. } if s == stage),
-            "{e}"
-        );
-    }
-    o.schedule = Schedule::Sequential;
-    o.inject_failure = None;
-    assert!(run(&rt, &o, walk(3, DVec3::ZERO, false))
-        .unwrap_err()
-        .to_string()
-        .contains("pipelined"));
+    on_street(2, "async RVG", DVec3::ZERO, |rt| {
+        let mut o = options(Schedule::Pipelined, true, true, 1.0);
+        o.async_rvg = true;
+        let frames = run(rt, &o, walk(40, DVec3::ZERO, true)).unwrap();
+        assert_eq!(frames.len(), 40);
+        for (i, r) in frames.iter().enumerate() {
+            assert_eq!(r.frame, i as u64);
+            assert!(r.image.is_some());
+            assert!(!r.visible.is_empty());
+        }
+        // Failures stop the asynchronous schedule too.
+        for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
+            o.inject_failure = Some((stage, 3));
+            let e = run(rt, &o, walk(1000, DVec3::ZERO, false)).unwrap_err();
+            assert!(
+                matches!(e, RuntimeError::Injected { stage: s, .. } if s == stage),
+                "{e}"
+            );
+        }
+        o.schedule = Schedule::Sequential;
+        o.inject_failure = None;
+        assert!(run(rt, &o, walk(3, DVec3::ZERO, false))
+            .unwrap_err()
+            .to_string()
+            .contains("pipelined"));
+    });
 }
 
 #[test]
 fn wireframe_frames_change_the_image_not_the_culling() {
-    let Some(devices) = devices_or_skip(2, "wireframe style") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    let wireframe = rt.device(0).supports_wireframe() && rt.device(1).supports_wireframe();
-    if !wireframe {
-        assert!(
-            std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none(),
-            "the CI adapter must support POLYGON_MODE_LINE"
-        );
-        eprintln!("!!! SKIPPING wireframe style: no POLYGON_MODE_LINE on this adapter");
-        return;
-    }
-    for (schedule, async_rvg) in [
-        (Schedule::Sequential, false),
-        (Schedule::Pipelined, false),
-        (Schedule::Pipelined, true),
-    ] {
-        let mut o = options(schedule, true, true, 1.0);
-        o.async_rvg = async_rvg;
-        let shaded = run(&rt, &o, walk(12, DVec3::ZERO, true)).unwrap();
-        // Odd frames in wireframe.
-        let mut cams = walk(12, DVec3::ZERO, true);
-        for c in cams.cameras.iter_mut().skip(1).step_by(2) {
-            c.style = DrawStyle::Wireframe;
+    on_street(2, "wireframe style", DVec3::ZERO, |rt| {
+        let wireframe = rt.device(0).supports_wireframe() && rt.device(1).supports_wireframe();
+        if !wireframe {
+            assert!(
+                std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none(),
+                "the CI adapter must support POLYGON_MODE_LINE"
+            );
+            eprintln!("!!! SKIPPING wireframe style: no POLYGON_MODE_LINE on this adapter");
+            return;
         }
-        let mixed = run(&rt, &o, cams).unwrap();
-        assert_eq!(mixed.len(), 12);
-        for (a, b) in shaded.iter().zip(&mixed) {
-            let what = format!("{schedule:?} async {async_rvg}, frame {}", a.frame);
-            let (ia, ib) = (a.image.as_ref().unwrap(), b.image.as_ref().unwrap());
-            if async_rvg {
-                // Which set a frame draws depends on timing; only the style is checked.
-            } else {
-                assert_eq!(a.visible, b.visible, "{what}");
+        for (schedule, async_rvg) in [
+            (Schedule::Sequential, false),
+            (Schedule::Pipelined, false),
+            (Schedule::Pipelined, true),
+        ] {
+            let mut o = options(schedule, true, true, 1.0);
+            o.async_rvg = async_rvg;
+            let shaded = run(rt, &o, walk(12, DVec3::ZERO, true)).unwrap();
+            // Odd frames in wireframe.
+            let mut cams = walk(12, DVec3::ZERO, true);
+            for c in cams.cameras.iter_mut().skip(1).step_by(2) {
+                c.style = DrawStyle::Wireframe;
             }
-            let differing = ia
-                .colour
-                .chunks(4)
-                .zip(ib.colour.chunks(4))
-                .filter(|(x, y)| x != y)
-                .count();
-            if b.frame % 2 == 0 && !async_rvg {
-                assert_eq!(differing, 0, "{what}: a shaded frame changed");
-            } else if b.frame % 2 == 1 {
-                // Lines leave most of what faces covered as background.
-                assert!(
-                    differing * 10 > ia.colour.len() / 4,
-                    "{what}: only {differing} pixels differ in wireframe"
-                );
+            let mixed = run(rt, &o, cams).unwrap();
+            assert_eq!(mixed.len(), 12);
+            for (a, b) in shaded.iter().zip(&mixed) {
+                let what = format!("{schedule:?} async {async_rvg}, frame {}", a.frame);
+                let (ia, ib) = (a.image.as_ref().unwrap(), b.image.as_ref().unwrap());
+                if async_rvg {
+                    // Which set a frame draws depends on timing; only the style is checked.
+                } else {
+                    assert_eq!(a.visible, b.visible, "{what}");
+                }
+                let differing = ia
+                    .colour
+                    .chunks(4)
+                    .zip(ib.colour.chunks(4))
+                    .filter(|(x, y)| x != y)
+                    .count();
+                if b.frame % 2 == 0 && !async_rvg {
+                    assert_eq!(differing, 0, "{what}: a shaded frame changed");
+                } else if b.frame % 2 == 1 {
+                    // Lines leave most of what faces covered as background.
+                    assert!(
+                        differing * 10 > ia.colour.len() / 4,
+                        "{what}: only {differing} pixels differ in wireframe"
+                    );
+                }
             }
         }
-    }
+    });
 }
 
 #[test]
 fn an_occluder_budget_culls_less_but_never_wrongly() {
-    let Some(devices) = devices_or_skip(2, "occluder budget") else {
-        return;
-    };
-    let f = fixture(DVec3::ZERO);
-    let rt = Runtime::with_devices(&f.scene, devices).unwrap();
-    let frames = 40;
-    let vfc = run(
-        &rt,
-        &options(Schedule::Sequential, false, false, 0.0),
-        walk(frames, DVec3::ZERO, true),
-    )
-    .unwrap();
-    let mut culled_by_budget = Vec::new();
-    for budget in [
-        OccluderBudget::All,
-        OccluderBudget::Triangles(2_000),
-        OccluderBudget::Triangles(200),
-        OccluderBudget::Triangles(0),
-    ] {
-        let mut o = options(Schedule::Pipelined, true, false, 0.0);
-        o.occluder_budget = budget;
-        let occ = run(&rt, &o, walk(frames, DVec3::ZERO, true)).unwrap();
-        assert_eq!(occ.len(), frames);
-        let mut culled = 0;
-        for (r, v) in occ.iter().zip(&vfc) {
-            let (rd, vd) = (
-                &r.image.as_ref().unwrap().depth.depth,
-                &v.image.as_ref().unwrap().depth.depth,
-            );
-            assert_eq!(
-                wrongly_culled(vd, rd),
-                0,
-                "budget {budget:?}, frame {}: visible pixels removed",
-                r.frame
-            );
-            assert_eq!(rd, vd, "budget {budget:?}, frame {}", r.frame);
-            culled += r.stats.occlusion_culled;
+    on_street(2, "occluder budget", DVec3::ZERO, |rt| {
+        let frames = 40;
+        let vfc = run(
+            rt,
+            &options(Schedule::Sequential, false, false, 0.0),
+            walk(frames, DVec3::ZERO, true),
+        )
+        .unwrap();
+        let mut culled_by_budget = Vec::new();
+        for budget in [
+            OccluderBudget::All,
+            OccluderBudget::Triangles(2_000),
+            OccluderBudget::Triangles(200),
+            OccluderBudget::Triangles(0),
+        ] {
+            let mut o = options(Schedule::Pipelined, true, false, 0.0);
+            o.occluder_budget = budget;
+            let occ = run(rt, &o, walk(frames, DVec3::ZERO, true)).unwrap();
+            assert_eq!(occ.len(), frames);
+            let mut culled = 0;
+            for (r, v) in occ.iter().zip(&vfc) {
+                let (rd, vd) = (
+                    &r.image.as_ref().unwrap().depth.depth,
+                    &v.image.as_ref().unwrap().depth.depth,
+                );
+                assert_eq!(
+                    wrongly_culled(vd, rd),
+                    0,
+                    "budget {budget:?}, frame {}: visible pixels removed",
+                    r.frame
+                );
+                assert_eq!(rd, vd, "budget {budget:?}, frame {}", r.frame);
+                culled += r.stats.occlusion_culled;
+            }
+            culled_by_budget.push((budget, culled));
         }
-        culled_by_budget.push((budget, culled));
-    }
-    // No occluders, no occlusion culling; a sensible budget still culls.
-    // (Totals need not shrink with the budget: each run's later occluders
-    // come from its own visible sets, and culling a parent counts once
-    // where culling its children counts each.)
-    assert!(culled_by_budget[0].1 > 0, "{culled_by_budget:?}");
-    assert_eq!(culled_by_budget[3].1, 0, "{culled_by_budget:?}");
-    assert!(culled_by_budget[1].1 > 0, "{culled_by_budget:?}");
-    // Auto: the CPU budget on a CPU rasterizer (lavapipe in CI), else all.
-    let cpu = rt.device(0).is_cpu() || rt.device(1).is_cpu();
-    assert_eq!(
-        rt.occluder_budget(OccluderBudget::Auto),
-        cpu.then_some(CPU_OCCLUDER_BUDGET)
-    );
-    assert_eq!(rt.occluder_budget(OccluderBudget::All), None);
+        // No occluders, no occlusion culling; a sensible budget still culls.
+        // (Totals need not shrink with the budget: each run's later occluders
+        // come from its own visible sets, and culling a parent counts once
+        // where culling its children counts each.)
+        assert!(culled_by_budget[0].1 > 0, "{culled_by_budget:?}");
+        assert_eq!(culled_by_budget[3].1, 0, "{culled_by_budget:?}");
+        assert!(culled_by_budget[1].1 > 0, "{culled_by_budget:?}");
+        // Auto: the CPU budget on a CPU rasterizer (lavapipe in CI), else all.
+        let cpu = rt.device(0).is_cpu() || rt.device(1).is_cpu();
+        assert_eq!(
+            rt.occluder_budget(OccluderBudget::Auto),
+            cpu.then_some(CPU_OCCLUDER_BUDGET)
+        );
+        assert_eq!(rt.occluder_budget(OccluderBudget::All), None);
+    });
 }

@@ -93,6 +93,11 @@ fn on_street(devices: usize, name: &str, shift: DVec3, test: impl FnOnce(&Runtim
     test(&rt);
 }
 
+/// A frame's read-back depth image.
+fn depth(r: &FrameReport) -> &[f32] {
+    &r.image.as_ref().expect("a read-back frame").depth.depth
+}
+
 /// Pixels where the reference is nearer than the result (something that
 /// should show is missing). Reversed-Z: nearer = larger. The tolerance
 /// covers nothing but f32 noise: both images come from the same rasterizer.
@@ -124,10 +129,7 @@ fn check_conservative(shift: DVec3) {
         let mut identical = 0;
         for (o, v) in occ.iter().zip(&vfc) {
             assert_eq!(o.frame, v.frame);
-            let (od, vd) = (
-                &o.image.as_ref().unwrap().depth.depth,
-                &v.image.as_ref().unwrap().depth.depth,
-            );
+            let (od, vd) = (depth(o), depth(v));
             assert_eq!(
                 wrongly_culled(vd, od),
                 0,
@@ -413,10 +415,7 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
             assert_eq!(occ.len(), frames);
             let mut culled = 0;
             for (r, v) in occ.iter().zip(&vfc) {
-                let (rd, vd) = (
-                    &r.image.as_ref().unwrap().depth.depth,
-                    &v.image.as_ref().unwrap().depth.depth,
-                );
+                let (rd, vd) = (depth(r), depth(v));
                 assert_eq!(
                     wrongly_culled(vd, rd),
                     0,

@@ -51,6 +51,22 @@ fn on_plant(
     test(&rt, &path, dir.path());
 }
 
+/// Replays `path` on the plant without progress reporting.
+fn replay_plant(
+    rt: &Runtime,
+    path: &CameraPath,
+    opts: &ReplayOptions,
+) -> Result<gigawalk_replay::Replay, gigawalk_replay::ReplayError> {
+    replay_on(
+        rt,
+        "plant.gwk",
+        &path.poses,
+        "plant.path",
+        opts,
+        &mut NoProgress,
+    )
+}
+
 fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
     ReplayOptions {
         modes: Mode::ALL.to_vec(),
@@ -71,15 +87,7 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
     on_plant(2, "replay report", 40, |rt, path, dir| {
         let frames = 24;
         let opts = options(&[0.0, 2.0], frames, 4);
-        let r = replay_on(
-            rt,
-            "plant.gwk",
-            &path.poses,
-            "plant.path",
-            &opts,
-            &mut NoProgress,
-        )
-        .unwrap();
+        let r = replay_plant(rt, path, &opts).unwrap();
         assert!(r.complete);
         // vfc, hlod 0, hlod 2, occ, och 0, och 2.
         assert_eq!(r.runs.len(), 6);
@@ -175,15 +183,7 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
 fn och_draws_less_and_conservative_modes_lose_no_pixel() {
     on_plant(2, "replay accuracy", 40, |rt, path, _| {
         let opts = options(&[0.0, 1.0], 30, 3);
-        let r = replay_on(
-            rt,
-            "plant.gwk",
-            &path.poses,
-            "plant.path",
-            &opts,
-            &mut NoProgress,
-        )
-        .unwrap();
+        let r = replay_plant(rt, path, &opts).unwrap();
         let s = r.summary();
         let get = |name: &str, px: f64| {
             s.modes
@@ -312,15 +312,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 accuracy_every: 4,
                 warmup: 2,
             };
-            let r = replay_on(
-                rt,
-                "plant.gwk",
-                &path.poses,
-                "plant.path",
-                &opts,
-                &mut NoProgress,
-            )
-            .unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
+            let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             assert_eq!(r.reference_frames, 3, "{runtime:?}");
             for m in r.summary().modes {
                 assert_eq!(m.frames, 12, "{runtime:?} {}", m.name);

@@ -1,18 +1,27 @@
-//! LODs and HLODs (GigaWalk Section 4.3), simplified with meshoptimizer.
+//! LODs and HLODs (GigaWalk Section 4.3), simplified with meshoptimizer,
+//! with measured errors.
 //!
-//! A leaf gets a chain of static LODs of its own geometry. An inner node
-//! gets HLODs built from its children's coarsest levels, merged and
-//! simplified further with meshopt's sloppy (vertex-clustering) mode, which
-//! joins disjoint objects as the paper's GAPS does. Every level records its
-//! object-space error in model units, accumulated along the chain, so a
-//! coarser level (and a parent) never claims less error than what it was
-//! built from.
+//! A leaf gets a chain of static LODs of its own geometry: edge collapse
+//! for the first levels, then sloppy vertex clustering, halving down to a
+//! floor. An inner node gets a chain of HLODs at every scale: its finest
+//! is its children's levels cut at a matching error, merged and simplified
+//! to a per-node triangle budget (sloppy clustering joins disjoint objects
+//! as the paper's GAPS does), then halved down to the floor. So switching
+//! from a node to its children at most multiplies the triangles drawn by
+//! about 1 / ratio, and a node is drawable as soon as its budget suffices,
+//! not only once it is a few pixels wide.
+//!
+//! Every level's error is measured ([`crate::hausdorff`]): an upper bound
+//! on the two-sided Hausdorff distance to the full-detail surface it
+//! stands for, non-decreasing along a chain and never below the errors of
+//! the child levels an HLOD was built from.
 
 use gigawalk_import::{Model, Object};
 use gigawalk_scene::{Colours, LodMesh};
 use glam::DVec3;
 use meshopt::{SimplifyOptions, VertexDataAdapter};
 
+use crate::hausdorff::{self, Nearest, Sampling, Surface};
 use crate::parts::Part;
 
 /// A level is accepted only if it has at most this fraction of the previous
@@ -50,16 +59,26 @@ impl WorkMesh {
             indices: self.indices.clone(),
         }
     }
+
+    /// The triangle surface, for error measurement.
+    pub fn surface(&self) -> Surface<'_> {
+        Surface {
+            positions: &self.positions,
+            indices: &self.indices,
+        }
+    }
 }
 
-/// One level of detail and its object-space error (model units).
+/// One level of detail and its error: an upper bound, in model units, on
+/// the Hausdorff distance between this level's surface and the
+/// full-detail surface it stands for (see [`crate::hausdorff`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Lod {
     pub mesh: WorkMesh,
     pub error: f32,
 }
 
-/// How LOD chains are cut.
+/// How LOD chains are cut and measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChainParams {
     /// Target triangles of a level as a fraction of the previous level's.
@@ -68,6 +87,29 @@ pub struct ChainParams {
     pub floor: usize,
     /// Levels 1..=collapse_levels of a leaf use edge collapse, the rest sloppy.
     pub collapse_levels: usize,
+    /// Triangles of an inner node's finest HLOD (at most).
+    pub node_budget: usize,
+    /// Cover of the error measurement's samples as a fraction of the
+    /// distance found ([`Sampling::spacing`]).
+    pub bound_spacing: f32,
+    /// The finest sample cover aimed for, as a fraction of the node's box
+    /// diagonal ([`Sampling::floor`]).
+    pub bound_floor: f64,
+}
+
+impl ChainParams {
+    fn sampling(&self, diagonal: f64) -> Sampling {
+        Sampling {
+            spacing: self.bound_spacing,
+            floor: (self.bound_floor * diagonal) as f32,
+        }
+    }
+
+    /// Most triangles an inner node's merged children may have: its
+    /// finest HLOD is one simplification step (by `ratio`) below them.
+    pub fn merge_budget(&self) -> usize {
+        ((self.node_budget as f64 / self.ratio).round() as usize).max(self.node_budget)
+    }
 }
 
 /// The full-detail mesh of a final object, relative to `origin`, with
@@ -101,95 +143,175 @@ pub fn leaf_mesh(model: &Model, part: &Part, origin: DVec3) -> WorkMesh {
         }
         for &t in &piece.triangles {
             for &v in &o.indices[3 * t as usize..3 * t as usize + 3] {
-                // `used` holds every index of these triangles, so the search hits.
-                let local = used.binary_search(&v).unwrap_or_default() as u32;
-                m.indices.push(base + local);
+                let local = used
+                    .binary_search(&v)
+                    .expect("`used` holds every index of these triangles");
+                m.indices.push(base + local as u32);
             }
         }
     }
     m
 }
 
-/// A leaf's chain: the mesh itself (error 0), then coarser levels.
-pub fn leaf_lods(mesh: WorkMesh, p: &ChainParams) -> Vec<Lod> {
-    chain(Lod { mesh, error: 0.0 }, p, false)
+/// A leaf's chain: the mesh itself (error 0), then coarser levels, each
+/// measured against the mesh. `diagonal` is the leaf box's.
+pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
+    let mut queries = Nearest::new(mesh.surface());
+    let mut lods = vec![Lod {
+        mesh: mesh.clone(),
+        error: 0.0,
+    }];
+    let reference = Reference {
+        mesh: &mesh,
+        queries: &mut queries,
+        base: 0.0,
+        sampling: p.sampling(diagonal),
+    };
+    extend_chain(&mut lods, reference, p, true);
+    lods
 }
 
-/// An inner node's HLODs from its children's coarsest levels, re-expressed
-/// relative to `origin`. The first HLOD's error is the largest error among
-/// those levels plus the simplification's own, so it is never below any
-/// child's.
-pub fn inner_lods(children: &[&Lod], origin: DVec3, p: &ChainParams) -> Vec<Lod> {
-    let merged = merge(children, origin);
-    let base_error = children.iter().map(|l| l.error).fold(0.0f32, f32::max);
-    if merged.triangles() <= p.floor {
-        // Too small to be worth simplifying: the union is the HLOD.
-        return vec![Lod {
-            mesh: merged,
-            error: base_error,
-        }];
+/// An inner node's HLOD chain (GigaWalk Section 4.3), re-expressed
+/// relative to `origin`. `children` are the children's chains (finest
+/// first, errors non-decreasing; a chain may have lost levels too fine for
+/// any parent). Each child contributes the coarsest of its levels whose
+/// error is within a threshold common to all children, the smallest
+/// threshold whose merged triangles fit [`ChainParams::merge_budget`], so
+/// the children are cut at a matching error. The merge is simplified to
+/// [`ChainParams::node_budget`] triangles and then halved down to the
+/// floor. Every level's error is the largest error of the picked child
+/// levels plus the measured distance between the merge and the level (by
+/// the triangle inequality, a bound on its distance to the original), so
+/// it is never below any picked child's.
+pub fn inner_lods(children: &[&[Lod]], origin: DVec3, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
+    let picked = pick_levels(children, p.merge_budget());
+    let parts: Vec<&Lod> = children
+        .iter()
+        .zip(&picked)
+        .filter_map(|(c, &k)| c.get(k))
+        .collect();
+    let merged = merge(&parts, origin);
+    let base = parts.iter().map(|l| l.error).fold(0.0f32, f32::max);
+    let mut lods = Vec::new();
+    if merged.triangles() > p.node_budget {
+        let first =
+            step(&merged, p.node_budget, true).or_else(|| step(&merged, p.node_budget, false));
+        if let Some(mesh) = first {
+            lods.push(Lod { mesh, error: 0.0 });
+        }
     }
-    let target = target_triangles(merged.triangles(), p);
-    match simplify(&merged, target, true) {
-        Some((mesh, e)) if mesh.triangles() < merged.triangles() => chain(
-            Lod {
-                mesh,
-                error: base_error + e,
-            },
-            p,
-            true,
-        ),
-        _ => vec![Lod {
-            mesh: merged,
-            error: base_error,
-        }],
+    let mut queries = Nearest::new(merged.surface());
+    let sampling = p.sampling(diagonal);
+    match lods.first_mut() {
+        Some(first) => {
+            first.error = base
+                + hausdorff::symmetric(
+                    merged.surface(),
+                    &mut queries,
+                    first.mesh.surface(),
+                    &sampling,
+                );
+        }
+        // Already within the budget (or the simplifier stalled): the
+        // union itself is the finest HLOD.
+        None => lods.push(Lod {
+            mesh: merged.clone(),
+            error: base,
+        }),
     }
+    if !lods[0].error.is_finite() {
+        lods[0] = Lod {
+            mesh: merged.clone(),
+            error: base,
+        };
+    }
+    let reference = Reference {
+        mesh: &merged,
+        queries: &mut queries,
+        base,
+        sampling,
+    };
+    extend_chain(&mut lods, reference, p, false);
+    lods
+}
+
+/// For each child chain, the index of the level to merge: the coarsest
+/// level with error <= E, for the smallest E (among the chains' errors)
+/// whose total triangles fit `budget`; the coarsest levels when nothing fits.
+pub fn pick_levels(children: &[&[Lod]], budget: usize) -> Vec<usize> {
+    let level = |c: &[Lod], e: f32| c.iter().rposition(|l| l.error <= e).unwrap_or(0);
+    let total = |e: f32| -> usize {
+        children
+            .iter()
+            .map(|c| c.get(level(c, e)).map_or(0, |l| l.mesh.triangles()))
+            .sum()
+    };
+    let mut errors: Vec<f32> = children
+        .iter()
+        .flat_map(|c| c.iter().map(|l| l.error))
+        .collect();
+    errors.sort_by(f32::total_cmp);
+    errors.dedup();
+    // `total` does not grow with E: the first fitting E is found by bisection.
+    let at = errors.partition_point(|&e| total(e) > budget);
+    match errors.get(at).or(errors.last()) {
+        Some(&e) => children.iter().map(|c| level(c, e)).collect(),
+        None => vec![0; children.len()],
+    }
+}
+
+/// What a chain's levels are measured against.
+struct Reference<'a> {
+    mesh: &'a WorkMesh,
+    queries: &'a mut Nearest,
+    /// Error of the reference itself against the original.
+    base: f32,
+    sampling: Sampling,
 }
 
 fn target_triangles(n: usize, p: &ChainParams) -> usize {
     ((n as f64 * p.ratio).round() as usize).clamp(1, n.saturating_sub(1).max(1))
 }
 
-/// Halves `first` repeatedly until the floor or until it stops shrinking.
-/// `sloppy` starts with topology-merging simplification; otherwise edge
-/// collapse is tried first and sloppy only when collapse stalls.
-fn chain(first: Lod, p: &ChainParams, sloppy: bool) -> Vec<Lod> {
-    let mut lods = vec![first];
+/// Halves the last level repeatedly until the floor or until it stops
+/// shrinking; each new level's error is `base` plus its measured distance
+/// to the reference, and never below the previous level's. Edge collapse
+/// is tried first for levels 1..=collapse_levels when `collapse` (leaves),
+/// sloppy otherwise or when collapse stalls.
+fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, collapse: bool) {
     loop {
-        let cur = lods.last().map(|l| (&l.mesh, l.error));
-        let Some((mesh, error)) = cur else { break };
-        let n = mesh.triangles();
+        let Some(last) = lods.last() else { break };
+        let n = last.mesh.triangles();
         if n <= p.floor {
             break;
         }
         let target = target_triangles(n, p);
         let limit = (MIN_SHRINK * n as f64) as usize;
-        let shrunk = |r: &Option<(WorkMesh, f32)>| matches!(r, Some((m, _)) if m.triangles() <= limit && m.triangles() > 0);
-        let collapse = !sloppy && lods.len() <= p.collapse_levels;
-        let mut next = if collapse {
-            simplify(mesh, target, false)
+        let shrunk = |m: &WorkMesh| m.triangles() <= limit && m.triangles() > 0;
+        let mut next = if collapse && lods.len() <= p.collapse_levels {
+            step(&last.mesh, target, false).filter(shrunk)
         } else {
             None
         };
-        if !shrunk(&next) {
-            next = simplify(mesh, target, true);
+        if next.is_none() {
+            next = step(&last.mesh, target, true).filter(shrunk);
         }
-        if !shrunk(&next) {
+        let Some(mesh) = next else { break };
+        let measured =
+            hausdorff::symmetric(r.mesh.surface(), r.queries, mesh.surface(), &r.sampling);
+        if !measured.is_finite() {
             break;
         }
-        let Some((mesh, e)) = next else { break };
-        lods.push(Lod {
-            mesh,
-            error: error + e,
-        });
+        let error = (r.base + measured).max(last.error);
+        lods.push(Lod { mesh, error });
     }
-    lods
 }
 
-/// One simplification step towards `target` triangles. The error returned
-/// is in model units: the distance meshopt estimates the result deviates
-/// from `mesh`.
-fn simplify(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<(WorkMesh, f32)> {
+/// One simplification step towards `target` triangles: sloppy vertex
+/// clustering (joins disjoint pieces, as the paper's GAPS does) or
+/// topology-preserving edge collapse. The simplifier's own error estimate
+/// is not used: errors are measured.
+fn step(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<WorkMesh> {
     if mesh.indices.is_empty() {
         return None;
     }
@@ -200,12 +322,8 @@ fn simplify(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<(WorkMesh, f
     // welded vertices' attributes.
     let weld = meshopt::generate_position_remap(&adapter);
     let welded: Vec<u32> = mesh.indices.iter().map(|&i| weld[i as usize]).collect();
-    let mut err = 0.0f32;
     let indices = if sloppy {
-        let r = meshopt::simplify_sloppy(&welded, &adapter, 3 * target, f32::MAX, Some(&mut err));
-        // Sloppy reports error relative to the mesh extent.
-        err *= meshopt::simplify_scale(&adapter);
-        r
+        meshopt::simplify_sloppy(&welded, &adapter, 3 * target, f32::MAX, None)
     } else {
         meshopt::simplify(
             &welded,
@@ -213,18 +331,13 @@ fn simplify(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<(WorkMesh, f
             3 * target,
             f32::MAX,
             SimplifyOptions::ErrorAbsolute,
-            Some(&mut err),
+            None,
         )
     };
     if indices.is_empty() {
         return None;
     }
-    let err = if err.is_finite() {
-        err.max(0.0)
-    } else {
-        return None;
-    };
-    Some((compact(mesh, &indices), err))
+    Some(compact(mesh, &indices))
 }
 
 /// The vertices `indices` use, in first-use order.
@@ -301,6 +414,9 @@ mod tests {
         ratio: 0.5,
         floor: 64,
         collapse_levels: 1,
+        node_budget: 256,
+        bound_spacing: 0.25,
+        bound_floor: 1e-3,
     };
 
     fn mesh_of(o: gigawalk_import::Object) -> WorkMesh {
@@ -322,7 +438,7 @@ mod tests {
     fn leaf_chain_halves_down_to_the_floor_with_growing_error() {
         let mesh = mesh_of(grid_object(DVec3::ZERO, 10.0, 64, 0.3));
         let full = mesh.triangles();
-        let lods = leaf_lods(mesh, &P);
+        let lods = leaf_lods(mesh, 15.0, &P);
         assert!(lods.len() >= 4, "{} levels", lods.len());
         assert_eq!(lods[0].error, 0.0);
         assert_eq!(lods[0].mesh.triangles(), full);
@@ -352,24 +468,27 @@ mod tests {
             all.normals.extend(p.normals);
             all.indices.extend(p.indices.iter().map(|i| i + base));
         }
-        let lods = leaf_lods(mesh_of(all), &P);
+        let lods = leaf_lods(mesh_of(all), 25.0, &P);
         assert!(lods.len() >= 2);
         assert!(lods.last().unwrap().mesh.triangles() < lods[0].mesh.triangles() / 2);
     }
 
     #[test]
-    fn inner_hlod_error_is_at_least_every_child_coarsest() {
-        let a = leaf_lods(mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.2)), &P);
+    fn inner_hlod_error_is_at_least_every_picked_child_level() {
+        let a = leaf_lods(mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.2)), 15.0, &P);
         let b = leaf_lods(
             mesh_of(grid_object(DVec3::new(12.0, 0.0, 0.0), 10.0, 32, 0.5)),
+            15.0,
             &P,
         );
-        let children = [a.last().unwrap(), b.last().unwrap()];
+        let children = [a.as_slice(), b.as_slice()];
         let origin = DVec3::new(11.0, 0.0, 5.0);
-        let lods = inner_lods(&children, origin, &P);
+        let picked = pick_levels(&children, P.merge_budget());
+        let lods = inner_lods(&children, origin, 30.0, &P);
         assert!(!lods.is_empty());
+        assert!(lods[0].mesh.triangles() <= P.node_budget);
         for l in &lods {
-            assert!(l.error >= children[0].error && l.error >= children[1].error);
+            assert!(l.error >= a[picked[0]].error && l.error >= b[picked[1]].error);
             assert_eq!(l.mesh.origin, origin);
         }
         for w in lods.windows(2) {

@@ -20,6 +20,7 @@
 //! of threads.
 
 pub mod cluster;
+pub mod hausdorff;
 pub mod hierarchy;
 pub mod hlod;
 pub mod params;
@@ -256,9 +257,14 @@ pub fn build<S: LodSink>(
         ratio: params.lod_ratio,
         floor: params.lod_floor as usize,
         collapse_levels: params.collapse_levels as usize,
+        node_budget: params.node_budget as usize,
+        bound_spacing: params.bound_spacing as f32,
+        bound_floor: params.bound_floor,
     };
+    let keep = chain.merge_budget();
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
-    let mut coarse: Vec<Option<Lod>> = vec![None; tree.len()];
+    // Each done node's levels a parent may still merge, until the parent is done.
+    let mut kept: Vec<Option<Vec<Lod>>> = vec![None; tree.len()];
     let mut emit = |ni: usize,
                     lods: Vec<(LodMesh, f32)>,
                     per_level: &mut Vec<u64>|
@@ -281,18 +287,21 @@ pub fn build<S: LodSink>(
         .filter(|&i| tree[i].object.is_some())
         .collect();
     for batch in leaves.chunks(HLOD_BATCH) {
-        let made: Vec<(Vec<(LodMesh, f32)>, Lod)> = batch
+        let made: Vec<(Vec<(LodMesh, f32)>, Vec<Lod>)> = batch
             .par_iter()
             .map(|&ni| {
                 let node = &tree[ni];
-                let part = &parts[node.object.unwrap_or_default() as usize];
+                let object = node
+                    .object
+                    .expect("the leaves were chosen by having an object");
+                let part = &parts[object as usize];
                 let mesh = hlod::leaf_mesh(model, part, node.bounds.center());
-                finish_chain(hlod::leaf_lods(mesh, &chain))
+                finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), &chain), keep)
             })
             .collect();
         for (&ni, (lods, c)) in batch.iter().zip(made) {
             emit(ni, lods, &mut stats.leaf_lod_triangles)?;
-            coarse[ni] = Some(c);
+            kept[ni] = Some(c);
         }
         progress.advance(batch.len() as u64);
     }
@@ -311,24 +320,30 @@ pub fn build<S: LodSink>(
                 .take_while(|&&i| tree[i].depth == depth)
                 .count();
         for batch in inner[at..level_end].chunks(HLOD_BATCH) {
-            let made: Vec<(Vec<(LodMesh, f32)>, Lod)> = batch
+            let made: Vec<(Vec<(LodMesh, f32)>, Vec<Lod>)> = batch
                 .par_iter()
                 .map(|&ni| {
                     let node = &tree[ni];
-                    let children: Vec<&Lod> = (node.first_child
+                    let children: Vec<&[Lod]> = (node.first_child
                         ..node.first_child + node.child_count)
-                        .filter_map(|c| coarse[c as usize].as_ref())
+                        .filter_map(|c| kept[c as usize].as_deref())
                         .collect();
-                    finish_chain(hlod::inner_lods(&children, node.bounds.center(), &chain))
+                    let lods = hlod::inner_lods(
+                        &children,
+                        node.bounds.center(),
+                        node.bounds.diagonal(),
+                        &chain,
+                    );
+                    finish_chain(lods, keep)
                 })
                 .collect();
             for (&ni, (lods, c)) in batch.iter().zip(made) {
                 emit(ni, lods, &mut stats.inner_lod_triangles)?;
                 let node = &tree[ni];
                 for ch in node.first_child..node.first_child + node.child_count {
-                    coarse[ch as usize] = None;
+                    kept[ch as usize] = None;
                 }
-                coarse[ni] = Some(c);
+                kept[ni] = Some(c);
             }
             progress.advance(batch.len() as u64);
         }
@@ -353,18 +368,22 @@ pub fn build<S: LodSink>(
     Ok(Built { nodes, stats })
 }
 
-/// The scene-file form of every level, and the coarsest level kept for the
+/// The scene-file form of every level, and the levels kept for the
 /// parent's HLODs.
-fn finish_chain(mut lods: Vec<Lod>) -> (Vec<(LodMesh, f32)>, Lod) {
+fn finish_chain(mut lods: Vec<Lod>, keep: usize) -> (Vec<(LodMesh, f32)>, Vec<Lod>) {
     let out = lods
         .iter()
         .map(|l| (l.mesh.to_lod_mesh(), l.error))
         .collect();
-    let coarsest = lods.pop().unwrap_or(Lod {
-        mesh: Default::default(),
-        error: 0.0,
-    });
-    (out, coarsest)
+    // A parent merges at most `keep` triangles of all its children, so a
+    // finer level is never picked; the coarsest always may be.
+    let coarsest = lods.len().saturating_sub(1);
+    let first = lods
+        .iter()
+        .position(|l| l.mesh.triangles() <= keep)
+        .unwrap_or(coarsest);
+    lods.drain(..first);
+    (out, lods)
 }
 
 /// One part per cluster: the union of its members' pieces, per object.

@@ -56,6 +56,24 @@ pub struct Params {
     /// slower and matters most for the levels seen up close; on a
     /// 10M-triangle plant, edge collapse on every level spent 8.7 s in HLODs.
     pub collapse_levels: u32,
+    /// Triangles of an inner node's finest HLOD, at most. Its children are
+    /// cut at a matching error so they hold about `node_budget / lod_ratio`
+    /// triangles together, and merged and simplified to this; so a node
+    /// becomes drawable once that many triangles reach the pixel
+    /// tolerance, and switching to its children multiplies the triangles
+    /// drawn by about 1 / lod_ratio. Larger: fewer, bigger draws and a
+    /// larger scene file; smaller: more nodes to traverse.
+    pub node_budget: u32,
+    /// Error measurement: the cover of the samples taken on each surface,
+    /// as a fraction of the largest distance found at the vertices
+    /// (`hausdorff::Sampling::spacing`). A stored error exceeds the true
+    /// Hausdorff distance by at most about this fraction (plus the floor);
+    /// smaller is tighter and slower.
+    pub bound_spacing: f64,
+    /// Error measurement: the finest sample cover aimed for, as a fraction
+    /// of the node's box diagonal (a kept surface still gets at least this
+    /// much error; 1e-3 is a pixel once the node spans 1000 pixels).
+    pub bound_floor: f64,
 }
 
 impl Default for Params {
@@ -73,6 +91,9 @@ impl Default for Params {
             lod_ratio: 0.5,
             lod_floor: 64,
             collapse_levels: 1,
+            node_budget: 2048,
+            bound_spacing: 0.25,
+            bound_floor: 1e-3,
         }
     }
 }
@@ -136,6 +157,27 @@ impl Params {
                 why: "must be between 0 and 1",
             });
         }
+        if self.node_budget == 0 {
+            return Err(ParamError {
+                name: "node-budget",
+                value: 0.0,
+                why: "must be at least 1",
+            });
+        }
+        if !(self.bound_spacing > 0.0 && self.bound_spacing <= 1.0) {
+            return Err(ParamError {
+                name: "bound-spacing",
+                value: self.bound_spacing,
+                why: "must be above 0 and at most 1",
+            });
+        }
+        if !(self.bound_floor > 0.0 && self.bound_floor <= 0.1) {
+            return Err(ParamError {
+                name: "bound-floor",
+                value: self.bound_floor,
+                why: "must be above 0 and at most 0.1",
+            });
+        }
         if self.lod_floor == 0 {
             return Err(ParamError {
                 name: "lod-floor",
@@ -190,6 +232,9 @@ impl Params {
             "lod_ratio": self.lod_ratio,
             "lod_floor": self.lod_floor,
             "collapse_levels": self.collapse_levels,
+            "node_budget": self.node_budget,
+            "bound_spacing": self.bound_spacing,
+            "bound_floor_fraction_of_node_diagonal": self.bound_floor,
         });
         match v {
             Value::Object(m) => m,

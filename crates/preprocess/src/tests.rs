@@ -203,3 +203,94 @@ fn bad_input_leaves_no_file() {
     assert!(matches!(e, PreprocessError::Params(_)), "{e}");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// Builds `objects` and checks every node's every stored error against
+/// brute-force samples; returns the check's figures.
+fn bounds_hold(objects: Vec<Object>, params: &Params) -> crate::verify::BoundCheck {
+    let model = Model {
+        objects,
+        ..Default::default()
+    };
+    let (built, sink) = build_in_memory(&model, params);
+    let errors: Vec<f32> = sink.0.iter().map(|l| l.1).collect();
+    let check = crate::verify::check_error_bounds(
+        &built.nodes,
+        &errors,
+        &mut |i| sink.0[i as usize].0.clone(),
+        None,
+        2000,
+        7,
+    )
+    .unwrap();
+    assert!(check.lods > 1, "{check:?}");
+    check
+}
+
+#[test]
+fn thin_box_errors_are_bounds() {
+    // 10 x 0.01 x 10: the slab's two faces are simplified onto each other
+    // early. Its 12 triangles are slivers on the sides; finely gridded top
+    // and bottom faces give the simplifier something to remove.
+    let objects = vec![
+        box_object(DVec3::ZERO, DVec3::new(10.0, 0.01, 10.0)),
+        grid_object(DVec3::new(0.0, 0.01, 0.0), 10.0, 40, 0.0),
+        grid_object(DVec3::ZERO, 10.0, 40, 0.0),
+    ];
+    bounds_hold(objects, &Params::default());
+}
+
+#[test]
+fn parallel_sheets_keep_both_or_pay_the_gap() {
+    let gap = 0.3;
+    let objects = vec![
+        grid_object(DVec3::ZERO, 10.0, 48, 0.0),
+        grid_object(DVec3::new(0.0, gap, 0.0), 10.0, 48, 0.0),
+    ];
+    let params = Params {
+        node_budget: 64,
+        ..Params::default()
+    };
+    let model = Model {
+        objects: objects.clone(),
+        ..Default::default()
+    };
+    let (built, sink) = build_in_memory(&model, &params);
+    // The root stands for both sheets.
+    for (mesh, error) in &sink.0[built.nodes[0].lods()] {
+        // A level that lost one sheet has no vertex near its height.
+        let ys: Vec<f64> = mesh
+            .positions
+            .iter()
+            .map(|p| mesh.origin.y + p[1] as f64)
+            .collect();
+        let near = |h: f64| ys.iter().any(|y| (y - h).abs() < gap / 4.0);
+        if !(near(0.0) && near(gap)) {
+            assert!(
+                *error as f64 >= gap * 0.99,
+                "a sheet vanished at error {error}"
+            );
+        }
+    }
+    bounds_hold(objects, &params);
+}
+
+#[test]
+fn ring_of_thin_pipes_errors_are_bounds() {
+    let objects: Vec<Object> = (0..24)
+        .map(|i| {
+            let a = i as f64 / 24.0 * std::f64::consts::TAU;
+            let start = DVec3::new(20.0 * a.cos(), 0.0, 20.0 * a.sin());
+            pipe_object(start, 6.0, 0.05, 40, 8)
+        })
+        .collect();
+    let check = bounds_hold(objects, &Params::default());
+    assert!(check.worst_ratio <= 1.0);
+}
+
+#[test]
+fn small_plant_errors_are_bounds() {
+    let model = small_plant();
+    let check = bounds_hold(model.objects, &small_params());
+    // How tight: some sample comes close to its bound.
+    assert!(check.worst_ratio > 0.3, "{check:?}");
+}

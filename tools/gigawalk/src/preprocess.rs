@@ -56,6 +56,15 @@ pub struct Args {
     /// LODs (4.3): leaf levels 1..=N use edge collapse (meshopt simplify), coarser ones sloppy vertex clustering
     #[arg(long, default_value_t = 1)]
     collapse_levels: u32,
+    /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it
+    #[arg(long, default_value_t = 2048)]
+    node_budget: u32,
+    /// LOD errors: each stored error is a measured bound on the Hausdorff distance to the full-detail surface; samples cover each surface to this fraction of the distance found (tighter = slower)
+    #[arg(long, default_value_t = 0.25)]
+    bound_spacing: f64,
+    /// LOD errors: the finest sample cover, as a fraction of the node's box diagonal
+    #[arg(long, default_value_t = 1e-3)]
+    bound_floor: f64,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -72,6 +81,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         lod_ratio: args.lod_ratio,
         lod_floor: args.lod_floor,
         collapse_levels: args.collapse_levels,
+        node_budget: args.node_budget,
+        bound_spacing: args.bound_spacing,
+        bound_floor: args.bound_floor,
     };
     // Bad flags fail before the (possibly long) import.
     params.validate().context("bad parameter")?;

@@ -149,6 +149,7 @@ pub(crate) fn import_gltf(
             }
         }
     }
+    check_draco_primitives(&root, &raw, file)?;
     let doc = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let mut m = String::new();
@@ -171,7 +172,6 @@ pub(crate) fn import_gltf(
             "node, buffer, bufferView or mesh list could not be re-read".into(),
         ));
     }
-    check_draco_primitives(&doc, &raw, file)?;
 
     let data = load_data(&doc, &raw, blob, file, base_dir)?;
     let mut stats = ImportStats::default();
@@ -258,19 +258,20 @@ fn local_transform(n: &RawNode, index: usize, file: &str) -> Result<DMat4, Impor
 
 /// A Draco primitive whose accessors have no uncompressed fallback (a
 /// file that lists the extension only as used, not required) would
-/// otherwise fail as "no bufferView"; name the extension instead.
+/// otherwise fail validation as "missing data"; name the extension
+/// instead. Runs before validation, on attribute indices already checked.
 fn check_draco_primitives(
-    doc: &gltf::Document,
+    root: &gltf::json::Root,
     raw: &RawRoot,
     file: &str,
 ) -> Result<(), ImportError> {
-    for mesh in doc.meshes() {
-        for prim in mesh.primitives() {
-            let Some(raw_prim) = raw.meshes[mesh.index()].primitives.get(prim.index()) else {
-                continue;
-            };
+    for (mesh, raw_mesh) in root.meshes.iter().zip(&raw.meshes) {
+        for (prim, raw_prim) in mesh.primitives.iter().zip(&raw_mesh.primitives) {
             if raw_prim.extensions.contains_key(gltf_extensions::DRACO)
-                && prim.attributes().any(|(_, acc)| acc.view().is_none())
+                && prim
+                    .attributes
+                    .values()
+                    .any(|a| root.accessors[a.value()].buffer_view.is_none())
             {
                 return Err(gltf_extensions::unsupported(gltf_extensions::DRACO, file));
             }
@@ -644,11 +645,11 @@ fn accessor_bytes<'b>(
         .view()
         .ok_or_else(|| bad("no bufferView (all-zero accessors are not supported)".into()))?;
     let view_bytes = data.view(&view).ok_or_else(|| {
-            bad(format!(
-                "bufferView {} runs past the end of its buffer",
-                view.index()
-            ))
-        })?;
+        bad(format!(
+            "bufferView {} runs past the end of its buffer",
+            view.index()
+        ))
+    })?;
     let elem = acc.data_type().size() * acc.dimensions().multiplicity();
     let stride = view.stride().unwrap_or(elem);
     if stride < elem {

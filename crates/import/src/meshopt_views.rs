@@ -16,9 +16,7 @@ const NAMES: [&str; 2] = ["KHR_meshopt_compression", "EXT_meshopt_compression"];
 
 /// The meshopt extension object in a buffer view's or buffer's
 /// `extensions`, with its name.
-pub(crate) fn find(
-    extensions: &serde_json::Map<String, Value>,
-) -> Option<(&'static str, &Value)> {
+pub(crate) fn find(extensions: &serde_json::Map<String, Value>) -> Option<(&'static str, &Value)> {
     NAMES
         .iter()
         .find_map(|&name| extensions.get(name).map(|v| (name, v)))
@@ -102,7 +100,8 @@ pub(crate) fn decode_view(
         extension,
         reason,
     };
-    let c = Compressed::deserialize(params).map_err(|e| bad(format!("bad extension object: {e}")))?;
+    let c =
+        Compressed::deserialize(params).map_err(|e| bad(format!("bad extension object: {e}")))?;
     let (stride, count) = (c.byte_stride, c.count);
     if count.checked_mul(stride) != Some(view_length) {
         return Err(bad(format!(
@@ -116,10 +115,7 @@ pub(crate) fn decode_view(
             )));
         }
         Mode::Triangles | Mode::Indices if stride != 2 && stride != 4 => {
-            return Err(bad(format!(
-                "{} byteStride {stride} is not 2 or 4",
-                c.mode
-            )));
+            return Err(bad(format!("{} byteStride {stride} is not 2 or 4", c.mode)));
         }
         Mode::Triangles if count % 3 != 0 => {
             return Err(bad(format!(
@@ -142,15 +138,13 @@ pub(crate) fn decode_view(
             c.filter
         )));
     }
-    let source = buffers
-        .get(c.buffer)
-        .ok_or_else(|| {
-            bad(format!(
-                "buffer {} does not exist ({} buffers)",
-                c.buffer,
-                buffers.len()
-            ))
-        })?;
+    let source = buffers.get(c.buffer).ok_or_else(|| {
+        bad(format!(
+            "buffer {} does not exist ({} buffers)",
+            c.buffer,
+            buffers.len()
+        ))
+    })?;
     let compressed = c
         .byte_offset
         .checked_add(c.byte_length)
@@ -289,9 +283,7 @@ fn apply_filter(filter: Filter, stride: usize, bytes: &mut [u8]) {
         (Filter::Color, _) => {
             let mut v: Vec<[u16; 4]> = bytes
                 .chunks_exact(8)
-                .map(|c| {
-                    [0, 2, 4, 6].map(|k| u16::from_le_bytes([c[k], c[k + 1]]))
-                })
+                .map(|c| [0, 2, 4, 6].map(|k| u16::from_le_bytes([c[k], c[k + 1]])))
                 .collect();
             meshopt::decode_filter_color(&mut v);
             store(bytes, v.iter().flatten().flat_map(|x| x.to_le_bytes()));
@@ -318,7 +310,8 @@ mod tests {
     use serde_json::json;
 
     fn decode(params: Value, view_length: usize, buffer: &[u8]) -> Result<Vec<u8>, String> {
-        decode_view(NAMES[1], &params, 7, view_length, &[buffer], "f.glb").map_err(|e| e.to_string())
+        decode_view(NAMES[1], &params, 7, view_length, &[buffer], "f.glb")
+            .map_err(|e| e.to_string())
     }
 
     #[test]
@@ -328,7 +321,11 @@ mod tests {
             let encoded = encode_at_stride(&data, stride);
             let params = json!({"buffer": 0, "byteLength": encoded.len(), "byteStride": stride,
                                 "count": 5, "mode": "ATTRIBUTES"});
-            assert_eq!(decode(params, data.len(), &encoded), Ok(data), "stride {stride}");
+            assert_eq!(
+                decode(params, data.len(), &encoded),
+                Ok(data),
+                "stride {stride}"
+            );
         }
     }
 
@@ -359,22 +356,164 @@ mod tests {
     #[test]
     fn bad_parameters_are_named() {
         let cases = [
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 6, "count": 2, "mode": "ATTRIBUTES"}), 12, "byteStride 6"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 2, "mode": "ATTRIBUTES"}), 12, "not the bufferView's byteLength 12"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 2, "count": 4, "mode": "TRIANGLES"}), 8, "not a multiple of 3"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 8, "count": 3, "mode": "INDICES"}), 24, "not 2 or 4"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES", "filter": "QUATERNION"}), 12, "filter QUATERNION"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "TRIANGLES", "filter": "EXPONENTIAL"}), 12, "cannot have a filter"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "SPIRAL"}), 12, "bad extension object"),
-            (json!({"buffer": 3, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES"}), 12, "buffer 3 does not exist"),
-            (json!({"buffer": 0, "byteOffset": 2, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES"}), 12, "run past the end of buffer 0"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 1 << 40, "mode": "ATTRIBUTES"}), 4 << 40, "cannot hold"),
-            (json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES"}), 12, "the data ends too early"),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 6, "count": 2, "mode": "ATTRIBUTES"}),
+                12,
+                "byteStride 6",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 2, "mode": "ATTRIBUTES"}),
+                12,
+                "not the bufferView's byteLength 12",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 2, "count": 4, "mode": "TRIANGLES"}),
+                8,
+                "not a multiple of 3",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 8, "count": 3, "mode": "INDICES"}),
+                24,
+                "not 2 or 4",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES", "filter": "QUATERNION"}),
+                12,
+                "filter QUATERNION",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "TRIANGLES", "filter": "EXPONENTIAL"}),
+                12,
+                "cannot have a filter",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "SPIRAL"}),
+                12,
+                "bad extension object",
+            ),
+            (
+                json!({"buffer": 3, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES"}),
+                12,
+                "buffer 3 does not exist",
+            ),
+            (
+                json!({"buffer": 0, "byteOffset": 2, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES"}),
+                12,
+                "run past the end of buffer 0",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 1u64 << 40, "mode": "ATTRIBUTES"}),
+                4usize << 40,
+                "cannot hold",
+            ),
+            (
+                json!({"buffer": 0, "byteLength": 4, "byteStride": 4, "count": 3, "mode": "ATTRIBUTES"}),
+                12,
+                "the data ends too early",
+            ),
         ];
         for (params, view_length, fragment) in cases {
             let e = decode(params.clone(), view_length, &[0xa0, 0, 0, 0]).unwrap_err();
-            assert!(e.starts_with("f.glb: bufferView 7 (EXT_meshopt_compression): "), "{e}");
+            assert!(
+                e.starts_with("f.glb: bufferView 7 (EXT_meshopt_compression): "),
+                "{e}"
+            );
             assert!(e.contains(fragment), "{params}: {e:?} lacks {fragment:?}");
+        }
+    }
+
+    /// Encodes `values` with a meshopt filter, undoes it through
+    /// `apply_filter` and returns the components as normalized integers
+    /// read back to f32 (signed when `signed`).
+    fn filter_round_trip(filter: Filter, stride: usize, values: &[[f32; 4]]) -> Vec<f32> {
+        let (bytes, size, signed): (Vec<u8>, usize, bool) = match (filter, stride) {
+            (Filter::Octahedral, 4) => {
+                let e = meshopt::encode_filter_oct::<i8>(values, 8);
+                (e.iter().flatten().map(|&x| x as u8).collect(), 1, true)
+            }
+            (Filter::Octahedral, _) => {
+                let e = meshopt::encode_filter_oct::<i16>(values, 16);
+                (
+                    e.iter().flatten().flat_map(|x| x.to_le_bytes()).collect(),
+                    2,
+                    true,
+                )
+            }
+            (Filter::Quaternion, _) => {
+                let e = meshopt::encode_filter_quat(values, 16);
+                (
+                    e.iter().flatten().flat_map(|x| x.to_le_bytes()).collect(),
+                    2,
+                    true,
+                )
+            }
+            (Filter::Color, 4) => {
+                let e = meshopt::encode_filter_color::<u8>(values, 8);
+                (e.into_iter().flatten().collect(), 1, false)
+            }
+            _ => {
+                let e = meshopt::encode_filter_color::<u16>(values, 16);
+                (
+                    e.iter().flatten().flat_map(|x| x.to_le_bytes()).collect(),
+                    2,
+                    false,
+                )
+            }
+        };
+        let mut bytes = bytes;
+        apply_filter(filter, stride, &mut bytes);
+        bytes
+            .chunks_exact(size)
+            .map(|c| match (size, signed) {
+                (1, true) => (c[0] as i8 as f32 / 127.0).max(-1.0),
+                (1, false) => c[0] as f32 / 255.0,
+                (_, true) => (i16::from_le_bytes([c[0], c[1]]) as f32 / 32767.0).max(-1.0),
+                (_, false) => u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn octahedral_quaternion_and_colour_filters_decode_in_place() {
+        let s = 0.5f32.sqrt();
+        let units = [
+            [0.0, 0.0, 1.0, 0.0],
+            [s, -s, 0.0, 0.0],
+            [0.6, 0.0, -0.8, 0.0],
+        ];
+        for stride in [4, 8] {
+            let got = filter_round_trip(Filter::Octahedral, stride, &units);
+            for (g, w) in got.chunks_exact(4).zip(&units) {
+                for k in 0..3 {
+                    assert!(
+                        (g[k] - w[k]).abs() < 0.02,
+                        "stride {stride}: {g:?} vs {w:?}"
+                    );
+                }
+            }
+        }
+        let quats = [[0.0, 0.0, 0.0, 1.0], [0.5, 0.5, 0.5, 0.5], [s, 0.0, 0.0, s]];
+        let got = filter_round_trip(Filter::Quaternion, 8, &quats);
+        for (g, w) in got.chunks_exact(4).zip(&quats) {
+            // q and -q are the same rotation.
+            let dot: f32 = g.iter().zip(w).map(|(a, b)| a * b).sum();
+            assert!(dot.abs() > 0.999, "{g:?} vs {w:?}");
+        }
+        let colours = [
+            [1.0, 0.0, 0.0, 1.0],
+            [0.2, 0.4, 0.6, 0.5],
+            [0.0, 0.0, 0.0, 0.0],
+        ];
+        for stride in [4, 8] {
+            let got = filter_round_trip(Filter::Color, stride, &colours);
+            for (g, w) in got.chunks_exact(4).zip(&colours) {
+                for k in 0..4 {
+                    assert!(
+                        (g[k] - w[k]).abs() < 0.02,
+                        "stride {stride}: {g:?} vs {w:?}"
+                    );
+                }
+            }
         }
     }
 
@@ -382,7 +521,11 @@ mod tests {
     fn exponential_filter_decodes_each_component() {
         let values = [[1.5f32, -0.25, 1000.0], [0.0, 3.0e-3, -7.0]];
         let encoded = meshopt::encode_filter_exp(&values, 20, meshopt::EncodeExpMode::Separate);
-        let mut bytes: Vec<u8> = encoded.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        let mut bytes: Vec<u8> = encoded
+            .iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
         apply_filter(Filter::Exponential, 12, &mut bytes);
         let got: Vec<f32> = bytes
             .chunks_exact(4)

@@ -29,6 +29,24 @@ pub enum ImportError {
         declared: usize,
         actual: usize,
     },
+    /// The file requires an extension gigawalk cannot read; `advice` says
+    /// what to do about it (starts with "; " or is empty).
+    #[error("{file}: requires glTF extension {extension}, which gigawalk cannot read{advice}")]
+    UnsupportedExtension {
+        file: String,
+        extension: String,
+        advice: String,
+    },
+    /// A meshopt-compressed buffer view (`extension` is
+    /// EXT_meshopt_compression or KHR_meshopt_compression) with bad
+    /// parameters or data that does not decode.
+    #[error("{file}: bufferView {view} ({extension}): {reason}")]
+    BadCompressedView {
+        file: String,
+        view: usize,
+        extension: &'static str,
+        reason: String,
+    },
     #[error("{file}: node {node}: {reason}")]
     BadNode {
         file: String,

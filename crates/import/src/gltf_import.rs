@@ -6,7 +6,15 @@
 //! node transforms are read again as f64 from the raw JSON. Accessors are
 //! read here, with every offset bounds-checked, rather than with the crate's
 //! reader, so that a lying file gives an error instead of a panic.
+//!
+//! Compressed files from gltfpack and friends: integer positions and normals
+//! (KHR_mesh_quantization) go through the same accessor reader, which
+//! dequantizes every integer type; meshopt-compressed buffer views are
+//! decoded first (`meshopt_views`) and then read like any other view.
+//! Required extensions are checked here (`gltf_extensions`), since the
+//! `gltf` crate knows none of these.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use base64::Engine as _;
@@ -17,6 +25,8 @@ use gltf::Semantic;
 use serde::Deserialize;
 
 use crate::error::ImportError;
+use crate::gltf_extensions;
+use crate::meshopt_views;
 use crate::model::{ImportStats, Model};
 use crate::triangles::{finish, RawObject};
 
@@ -45,10 +55,55 @@ struct RawNode {
     scale: Option<[f64; 3]>,
 }
 
+/// What the `gltf` crate drops: f64 node transforms and the extension
+/// objects this importer reads itself.
 #[derive(Deserialize)]
+#[serde(rename_all = "camelCase")]
 struct RawRoot {
     #[serde(default)]
     nodes: Vec<RawNode>,
+    #[serde(default)]
+    extensions_required: Vec<String>,
+    #[serde(default)]
+    buffers: Vec<RawExtensible>,
+    #[serde(default)]
+    buffer_views: Vec<RawExtensible>,
+    #[serde(default)]
+    meshes: Vec<RawMesh>,
+}
+
+/// Any object, for its `extensions`.
+#[derive(Deserialize)]
+struct RawExtensible {
+    #[serde(default)]
+    extensions: serde_json::Map<String, serde_json::Value>,
+}
+
+#[derive(Deserialize)]
+struct RawMesh {
+    #[serde(default)]
+    primitives: Vec<RawExtensible>,
+}
+
+/// The file's bytes as accessors see them: loaded buffers (a meshopt
+/// fallback buffer is empty) and decoded meshopt buffer views, which take
+/// the place of their view's bytes.
+struct BufferData<'a> {
+    buffers: Vec<Cow<'a, [u8]>>,
+    decoded: Vec<Option<Vec<u8>>>,
+}
+
+impl BufferData<'_> {
+    /// The bytes of a buffer view, `None` when they run past its buffer.
+    fn view(&self, view: &gltf::buffer::View) -> Option<&[u8]> {
+        if let Some(Some(bytes)) = self.decoded.get(view.index()) {
+            return Some(bytes);
+        }
+        let buffer = &self.buffers[view.buffer().index()];
+        view.offset()
+            .checked_add(view.length())
+            .and_then(|end| buffer.get(view.offset()..end))
+    }
 }
 
 /// At most this many validation messages go into an error: a fuzzed file can
@@ -71,8 +126,13 @@ pub(crate) fn import_gltf(
     } else {
         (bytes, None)
     };
-    let root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json_bytes)
+    let mut root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json_bytes)
         .map_err(|e| malformed(format!("{e}")))?;
+    let raw: RawRoot = serde_json::from_slice(json_bytes)
+        .map_err(|e| malformed(format!("node transforms and extensions: {e}")))?;
+    gltf_extensions::check_required(&raw.extensions_required, file)?;
+    // Checked above; the gltf crate would reject every one it does not know.
+    root.extensions_required.clear();
     // gltf-json's primitive validation indexes the accessor list with the
     // POSITION index before checking it (gltf-json 1.4.1, mesh.rs), so a
     // bad index would panic there: check every attribute index first.
@@ -89,6 +149,7 @@ pub(crate) fn import_gltf(
             }
         }
     }
+    check_draco_primitives(&root, &raw, file)?;
     let doc = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let mut m = String::new();
@@ -102,13 +163,17 @@ pub(crate) fn import_gltf(
         }
         other => malformed(format!("{other}")),
     })?;
-    let raw: RawRoot = serde_json::from_slice(json_bytes)
-        .map_err(|e| malformed(format!("node transforms: {e}")))?;
-    if raw.nodes.len() != doc.nodes().len() {
-        return Err(malformed("node list could not be re-read as f64".into()));
+    if raw.nodes.len() != doc.nodes().len()
+        || raw.buffers.len() != doc.buffers().len()
+        || raw.buffer_views.len() != doc.views().len()
+        || raw.meshes.len() != doc.meshes().len()
+    {
+        return Err(malformed(
+            "node, buffer, bufferView or mesh list could not be re-read".into(),
+        ));
     }
 
-    let buffers = load_buffers(&doc, blob, file, base_dir)?;
+    let data = load_data(&doc, &raw, blob, file, base_dir)?;
     let mut stats = ImportStats::default();
     let mut objects = Vec::new();
 
@@ -150,7 +215,7 @@ pub(crate) fn import_gltf(
         let Some(mesh) = node.mesh() else { continue };
         for prim in mesh.primitives() {
             if let Some(raw_obj) =
-                read_primitive(node, &mesh, &prim, &world, &buffers, file, &mut stats)?
+                read_primitive(node, &mesh, &prim, &world, &data, file, &mut stats)?
             {
                 if let Some(o) = finish(raw_obj, &mut stats) {
                     objects.push(o);
@@ -191,23 +256,114 @@ fn local_transform(n: &RawNode, index: usize, file: &str) -> Result<DMat4, Impor
     Ok(m)
 }
 
-fn load_buffers<'a>(
+/// A Draco primitive whose accessors have no uncompressed fallback (a
+/// file that lists the extension only as used, not required) would
+/// otherwise fail validation as "missing data"; name the extension
+/// instead. Runs before validation, on attribute indices already checked.
+fn check_draco_primitives(
+    root: &gltf::json::Root,
+    raw: &RawRoot,
+    file: &str,
+) -> Result<(), ImportError> {
+    for (mesh, raw_mesh) in root.meshes.iter().zip(&raw.meshes) {
+        for (prim, raw_prim) in mesh.primitives.iter().zip(&raw_mesh.primitives) {
+            if raw_prim.extensions.contains_key(gltf_extensions::DRACO)
+                && prim
+                    .attributes
+                    .values()
+                    .any(|a| root.accessors[a.value()].buffer_view.is_none())
+            {
+                return Err(gltf_extensions::unsupported(gltf_extensions::DRACO, file));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Loads the buffers, then decodes every meshopt-compressed view that a
+/// mesh primitive reads (views only animations read are left alone).
+fn load_data<'a>(
     doc: &gltf::Document,
+    raw: &RawRoot,
     blob: Option<&'a [u8]>,
     file: &str,
     base_dir: Option<&Path>,
-) -> Result<Vec<std::borrow::Cow<'a, [u8]>>, ImportError> {
+) -> Result<BufferData<'a>, ImportError> {
+    let buffers = load_buffers(doc, raw, blob, file, base_dir)?;
+    let mut decoded: Vec<Option<Vec<u8>>> = vec![None; doc.views().len()];
+    let sources: Vec<&[u8]> = buffers.iter().map(|b| &b[..]).collect();
+    for mesh in doc.meshes() {
+        for prim in mesh.primitives() {
+            let accessors = prim.attributes().map(|(_, a)| a).chain(prim.indices());
+            for view in accessors.filter_map(|a| a.view()) {
+                let vi = view.index();
+                if decoded[vi].is_some() {
+                    continue;
+                }
+                if let Some((extension, params)) =
+                    meshopt_views::find(&raw.buffer_views[vi].extensions)
+                {
+                    decoded[vi] = Some(meshopt_views::decode_view(
+                        extension,
+                        params,
+                        vi,
+                        view.length(),
+                        &sources,
+                        file,
+                    )?);
+                }
+            }
+        }
+    }
+    Ok(BufferData { buffers, decoded })
+}
+
+/// A buffer whose bytes nobody reads: tagged as a meshopt fallback, or
+/// with no URI (and not the GLB BIN chunk) and read only through
+/// meshopt-compressed views. gltfpack writes one with no data at all.
+fn is_placeholder(
+    doc: &gltf::Document,
+    raw: &RawRoot,
+    buffer: &gltf::Buffer,
+    has_blob: bool,
+) -> bool {
+    if meshopt_views::is_fallback_buffer(&raw.buffers[buffer.index()].extensions) {
+        return true;
+    }
+    let no_uri = matches!(buffer.source(), gltf::buffer::Source::Bin);
+    if !no_uri || (buffer.index() == 0 && has_blob) {
+        return false;
+    }
+    let mut views = doc
+        .views()
+        .filter(|v| v.buffer().index() == buffer.index())
+        .peekable();
+    views.peek().is_some()
+        && views.all(|v| meshopt_views::find(&raw.buffer_views[v.index()].extensions).is_some())
+}
+
+fn load_buffers<'a>(
+    doc: &gltf::Document,
+    raw: &RawRoot,
+    blob: Option<&'a [u8]>,
+    file: &str,
+    base_dir: Option<&Path>,
+) -> Result<Vec<Cow<'a, [u8]>>, ImportError> {
     let mut out = Vec::new();
     for buffer in doc.buffers() {
+        if is_placeholder(doc, raw, &buffer, blob.is_some()) {
+            out.push(Cow::Borrowed(&[][..]));
+            continue;
+        }
         let missing = |uri: &str, reason: String| ImportError::MissingBuffer {
             file: file.to_owned(),
             buffer: buffer.index(),
             uri: uri.to_owned(),
             reason,
         };
-        let data: std::borrow::Cow<[u8]> = match buffer.source() {
+        let data: Cow<[u8]> = match buffer.source() {
             gltf::buffer::Source::Bin => match blob {
-                Some(b) => std::borrow::Cow::Borrowed(b),
+                Some(b) => Cow::Borrowed(b),
                 None => return Err(missing("GLB BIN chunk", "the file has no BIN chunk".into())),
             },
             gltf::buffer::Source::Uri(uri) => {
@@ -218,7 +374,7 @@ fn load_buffers<'a>(
                     let decoded = base64::engine::general_purpose::STANDARD
                         .decode(payload)
                         .map_err(|e| missing("data: URI", format!("bad base64: {e}")))?;
-                    std::borrow::Cow::Owned(decoded)
+                    Cow::Owned(decoded)
                 } else if uri.contains("://") {
                     return Err(missing(
                         uri,
@@ -235,7 +391,7 @@ fn load_buffers<'a>(
                     let bytes = std::fs::read(&path).map_err(|e| {
                         missing(uri, format!("cannot read {}: {e}", path.display()))
                     })?;
-                    std::borrow::Cow::Owned(bytes)
+                    Cow::Owned(bytes)
                 }
             }
         };
@@ -291,7 +447,7 @@ fn read_primitive(
     mesh: &gltf::Mesh,
     prim: &gltf::Primitive,
     world: &DMat4,
-    buffers: &[std::borrow::Cow<[u8]>],
+    data: &BufferData,
     file: &str,
     stats: &mut ImportStats,
 ) -> Result<Option<RawObject>, ImportError> {
@@ -311,7 +467,7 @@ fn read_primitive(
     let pos_acc = prim
         .get(&Semantic::Positions)
         .ok_or_else(|| empty("no POSITION attribute"))?;
-    let local = read_floats(&pos_acc, 3, buffers, file, &object, "POSITION")?;
+    let local = read_floats(&pos_acc, 3, data, file, &object, "POSITION")?;
     let n = local.len() / 3;
     if n == 0 {
         return Err(empty("no vertices"));
@@ -341,7 +497,7 @@ fn read_primitive(
 
     let normals = match prim.get(&Semantic::Normals) {
         Some(acc) => {
-            let raw = read_floats(&acc, 3, buffers, file, &object, "NORMAL")?;
+            let raw = read_floats(&acc, 3, data, file, &object, "NORMAL")?;
             if raw.len() / 3 != n {
                 return Err(bad_accessor(
                     file,
@@ -373,7 +529,7 @@ fn read_primitive(
                     "must be VEC3 or VEC4".into(),
                 ));
             }
-            let raw = read_floats(&acc, dims, buffers, file, &object, "COLOR_0")?;
+            let raw = read_floats(&acc, dims, data, file, &object, "COLOR_0")?;
             if raw.len() / dims != n {
                 return Err(bad_accessor(
                     file,
@@ -393,7 +549,7 @@ fn read_primitive(
     };
 
     let source: Vec<u32> = match prim.indices() {
-        Some(acc) => read_indices(&acc, buffers, file, &object)?,
+        Some(acc) => read_indices(&acc, data, file, &object)?,
         None => (0..n as u32).collect(),
     };
     for (position, &value) in source.iter().enumerate() {
@@ -476,7 +632,7 @@ fn bad_accessor(
 /// every element `k < count`.
 fn accessor_bytes<'b>(
     acc: &gltf::Accessor,
-    buffers: &'b [std::borrow::Cow<[u8]>],
+    data: &'b BufferData,
     file: &str,
     object: &str,
     semantic: &'static str,
@@ -488,17 +644,12 @@ fn accessor_bytes<'b>(
     let view = acc
         .view()
         .ok_or_else(|| bad("no bufferView (all-zero accessors are not supported)".into()))?;
-    let buffer = &buffers[view.buffer().index()];
-    let view_bytes = view
-        .offset()
-        .checked_add(view.length())
-        .and_then(|end| buffer.get(view.offset()..end))
-        .ok_or_else(|| {
-            bad(format!(
-                "bufferView {} runs past the end of its buffer",
-                view.index()
-            ))
-        })?;
+    let view_bytes = data.view(&view).ok_or_else(|| {
+        bad(format!(
+            "bufferView {} runs past the end of its buffer",
+            view.index()
+        ))
+    })?;
     let elem = acc.data_type().size() * acc.dimensions().multiplicity();
     let stride = view.stride().unwrap_or(elem);
     if stride < elem {
@@ -530,7 +681,7 @@ fn accessor_bytes<'b>(
 fn read_floats(
     acc: &gltf::Accessor,
     dims: usize,
-    buffers: &[std::borrow::Cow<[u8]>],
+    data: &BufferData,
     file: &str,
     object: &str,
     semantic: &'static str,
@@ -549,14 +700,14 @@ fn read_floats(
             format!("expected {dims} components, found {:?}", acc.dimensions()),
         ));
     }
-    let (data, stride, elem) = accessor_bytes(acc, buffers, file, object, semantic)?;
+    let (bytes, stride, elem) = accessor_bytes(acc, data, file, object, semantic)?;
     let count = acc.count();
     let dt = acc.data_type();
     let cs = dt.size();
     let norm = acc.normalized();
     let mut out = Vec::with_capacity(count * dims);
     for k in 0..count {
-        let e = &data[k * stride..k * stride + elem];
+        let e = &bytes[k * stride..k * stride + elem];
         for c in 0..dims {
             let b = &e[c * cs..(c + 1) * cs];
             // Normalised integers map to [0, 1] or [-1, 1] (glTF 2.0 spec, 3.11).
@@ -582,7 +733,7 @@ fn read_floats(
 
 fn read_indices(
     acc: &gltf::Accessor,
-    buffers: &[std::borrow::Cow<[u8]>],
+    data: &BufferData,
     file: &str,
     object: &str,
 ) -> Result<Vec<u32>, ImportError> {
@@ -600,11 +751,11 @@ fn read_indices(
             "must be unsigned integer scalars".into(),
         ));
     }
-    let (data, stride, _) = accessor_bytes(acc, buffers, file, object, "indices")?;
+    let (bytes, stride, _) = accessor_bytes(acc, data, file, object, "indices")?;
     let count = acc.count();
     let mut out = Vec::with_capacity(count);
     for k in 0..count {
-        let b = &data[k * stride..];
+        let b = &bytes[k * stride..];
         out.push(match acc.data_type() {
             DataType::U8 => b[0] as u32,
             DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,

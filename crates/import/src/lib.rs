@@ -1,6 +1,12 @@
 //! Model import: glTF 2.0 and Wavefront OBJ into a flat [`Model`] of
 //! [`Object`]s in f64 world coordinates.
 //!
+//! glTF files may be compressed as gltfpack writes them: integer positions
+//! and normals (KHR_mesh_quantization) and meshopt-compressed buffer views
+//! (EXT_meshopt_compression, KHR_meshopt_compression). Draco
+//! (KHR_draco_mesh_compression) and any other required extension is an
+//! error naming it.
+//!
 //! Main entry point: [`import`] (by file extension). Byte-level entry points
 //! ([`import_gltf_bytes`], [`import_glb_bytes`], [`import_obj_str`]) serve
 //! the fuzz targets and in-memory callers. Every failure is an
@@ -8,7 +14,9 @@
 //! index; bad input never panics.
 
 mod error;
+mod gltf_extensions;
 mod gltf_import;
+mod meshopt_views;
 mod model;
 mod obj_import;
 mod triangles;

@@ -18,7 +18,9 @@ mod replay;
 mod report;
 mod summary;
 
-pub use accuracy::{Accuracy, WRONGLY_CULLED_RELATIVE_DEPTH};
+pub use accuracy::{
+    bound_violations, bound_window, Accuracy, BOUND_RELATIVE_DEPTH, WRONGLY_CULLED_RELATIVE_DEPTH,
+};
 pub use mode::{runs, Mode};
 pub use replay::{
     replay, replay_on, FrameRecord, NoProgress, Progress, Replay, ReplayError, ReplayOptions,

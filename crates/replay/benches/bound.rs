@@ -47,8 +47,10 @@ fn scene(seed: u32, shift: u32, drop_every: usize, moves: u32) -> DepthImage {
                 jitter.next(2 * shift + 1) as i64 - shift as i64
             }
         };
+        // Moved edges can cross on a small rectangle: then it is empty.
         let (x0, x1) = ((x + mv()).clamp(0, w), (x + bw + mv()).clamp(0, w));
         let (y0, y1) = ((y + mv()).clamp(0, h), (y + bh + mv()).clamp(0, h));
+        let x1 = x1.max(x0);
         for v in y0..y1 {
             for e in &mut depth[(v * w + x0) as usize..(v * w + x1) as usize] {
                 *e = e.max(d);

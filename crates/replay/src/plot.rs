@@ -157,10 +157,7 @@ pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
 /// place differs everywhere without breaking it.
 pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
     fonts();
-    let with_accuracy = s
-        .modes
-        .iter()
-        .all(|m| m.bound_violating_fraction.is_some());
+    let with_accuracy = s.modes.iter().all(|m| m.bound_violating_fraction.is_some());
     let x_of = |m: &crate::summary::ModeSummary| {
         if with_accuracy {
             100.0 * m.bound_violating_fraction.unwrap_or(0.0)

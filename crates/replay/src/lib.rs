@@ -8,7 +8,9 @@
 //! and [`Replay::write_report`] (the report directory,
 //! docs/report-format.md); [`Mode`]; [`Accuracy`]; [`demo::DemoScene`].
 //!
-//! The library prints nothing and draws no bars; the CLI does.
+//! The library prints nothing and draws no bars; the CLI does. It starts
+//! no threads of its own ([`bound_violations`] uses rayon's pool inside
+//! the call, after each run, like the cull crate's HZB build).
 
 mod accuracy;
 pub mod demo;

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Speed and image error of every runtime knob on the default demo scene,
+# Speed and image error (differing, wrongly culled and bound-violating
+# pixels) of every runtime knob on the default demo scene,
 # each knob against the defaults in the same session (docs/PERFORMANCE.md,
 # "Knobs"). Run `gigawalk demo` once first to build the cached scene.
 # Usage: benches/knob-sweep.sh [OUT_DIR]   (about 6 minutes on 2 cores with lavapipe)
@@ -16,7 +17,10 @@ run() {
   local log="$out/$name.log"
   mkdir -p "$out"
   if "$bin" replay "$scene.gwk" --path "$scene.path" --out "$out/$name" "$@" >"$log" 2>&1; then
-    grep -E '^\| (vfc|hlod|occ|och) ' "$log" || echo "(no table rows in $log)"
+    # The replay's table, header included so the columns can be told
+    # apart: "bound-violating px" (pixels breaking the pixel-error bound,
+    # docs/report-format.md) is the image error to compare knobs by.
+    grep -E '^\| (mode|vfc|hlod|occ|och) ' "$log" || echo "(no table rows in $log)"
   else
     echo "FAILED: $(grep '^error' "$log" | tail -1)"
     status=1

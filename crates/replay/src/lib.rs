@@ -8,7 +8,9 @@
 //! and [`Replay::write_report`] (the report directory,
 //! docs/report-format.md); [`Mode`]; [`Accuracy`]; [`demo::DemoScene`].
 //!
-//! The library prints nothing and draws no bars; the CLI does.
+//! The library prints nothing and draws no bars; the CLI does. It starts
+//! no threads of its own ([`bound_violations`] uses rayon's pool inside
+//! the call, after each run, like the cull crate's HZB build).
 
 mod accuracy;
 pub mod demo;
@@ -18,7 +20,9 @@ mod replay;
 mod report;
 mod summary;
 
-pub use accuracy::{Accuracy, WRONGLY_CULLED_RELATIVE_DEPTH};
+pub use accuracy::{
+    bound_violations, bound_window, Accuracy, BOUND_RELATIVE_DEPTH, WRONGLY_CULLED_RELATIVE_DEPTH,
+};
 pub use mode::{runs, Mode};
 pub use replay::{
     replay, replay_on, FrameRecord, NoProgress, Progress, Replay, ReplayError, ReplayOptions,

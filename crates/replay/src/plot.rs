@@ -149,18 +149,18 @@ pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
     root.present().map_err(err)
 }
 
-/// tradeoff.png: mean frame rate against the fraction of differing pixels
-/// (or against the pixel error when accuracy was not measured), one line
-/// per mode through its pixel errors.
+/// tradeoff.png: mean frame rate against the fraction of pixels breaking
+/// the pixel-error bound (or against the pixel error when accuracy was not
+/// measured), one line per mode through its pixel errors. The bound, not
+/// differing colour, because it says whether a tolerance of p pixels keeps
+/// its promise: a coarse LOD that shades slightly differently but stays in
+/// place differs everywhere without breaking it.
 pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
     fonts();
-    let with_accuracy = s
-        .modes
-        .iter()
-        .all(|m| m.differing_pixels_fraction.is_some());
+    let with_accuracy = s.modes.iter().all(|m| m.bound_violating_fraction.is_some());
     let x_of = |m: &crate::summary::ModeSummary| {
         if with_accuracy {
-            100.0 * m.differing_pixels_fraction.unwrap_or(0.0)
+            100.0 * m.bound_violating_fraction.unwrap_or(0.0)
         } else {
             m.pixel_error
         }
@@ -183,7 +183,7 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
     chart
         .configure_mesh()
         .x_desc(if with_accuracy {
-            "pixels differing from the full-detail reference (%)"
+            "pixels breaking the pixel-error bound against the full-detail reference (%)"
         } else {
             "pixel error tolerance (px)"
         })

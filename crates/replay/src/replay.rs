@@ -272,18 +272,16 @@ pub fn replay_on(
             cameras: cameras.clone(),
         };
         let mut frames: Vec<FrameRecord> = Vec::with_capacity(n);
+        // Compared frames' images, by index into `frames`: compared after
+        // the run, so that neither the comparison (the bound's window
+        // search is the costly part) nor rayon's threads running it share
+        // the CPU with the frames being timed.
+        let mut compared: Vec<(usize, FrameImage)> = Vec::new();
         let mut last_finish: Option<Instant> = None;
         let mut stopped = false;
         progress.start(&label, n as u64);
         let result = rt.run(&ro, &mut list, &mut |r: FrameReport| {
             let i = r.frame as usize;
-            let accuracy = match (&r.image, k) {
-                (Some(img), k) if k > 0 && i.is_multiple_of(k) => reference
-                    .get(i / k)
-                    .and_then(|x| x.as_ref())
-                    .and_then(|reference| Accuracy::compare(reference, img)),
-                _ => None,
-            };
             frames.push(FrameRecord {
                 frame: r.frame,
                 pose_time_s: poses.get(i).map_or(0.0, |p| p.time),
@@ -300,13 +298,26 @@ pub fn replay_on(
                 drawn_triangles: r.stats.drawn_triangles,
                 occlusion_used: r.occlusion_used,
                 warmup: i < opts.warmup,
-                accuracy,
+                accuracy: None,
             });
+            if let Some(img) = r.image {
+                if k > 0 && i.is_multiple_of(k) {
+                    compared.push((frames.len() - 1, img));
+                }
+            }
             last_finish = Some(r.finished_at);
             progress.frame();
             stopped = !progress.keep_going();
             !stopped
         });
+        let tolerance = ro.traversal.pixel_tolerance;
+        for (at, img) in compared {
+            let i = frames[at].frame as usize;
+            frames[at].accuracy = reference
+                .get(i / k)
+                .and_then(|x| x.as_ref())
+                .and_then(|reference| Accuracy::compare(reference, &img, tolerance));
+        }
         progress.finish(&label);
         out.runs.push(RunRecord {
             mode,

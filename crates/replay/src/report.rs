@@ -74,7 +74,8 @@ impl Replay {
         let mut s = String::from(
             "mode,pixel_error,frame,pose_time_s,frame_ms,fps,latency_ms,or_ms,hzb_ms,stc_ms,rvg_ms,\
              visited,frustum_culled,occlusion_culled,drawn_nodes,drawn_triangles,occlusion_used,warmup,\
-             accuracy_pixels,differing_pixels,wrongly_culled_pixels,psnr_db\n",
+             accuracy_pixels,differing_pixels,wrongly_culled_pixels,bound_violating_pixels,\
+             bound_violating_fraction,psnr_db\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -83,7 +84,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -105,6 +106,8 @@ impl Replay {
                     a.map_or(String::new(), |a| a.pixels.to_string()),
                     a.map_or(String::new(), |a| a.differing_pixels.to_string()),
                     a.map_or(String::new(), |a| a.wrongly_culled_pixels.to_string()),
+                    a.map_or(String::new(), |a| a.bound_violating_pixels.to_string()),
+                    opt(a.map(|a| a.bound_violating_fraction()), 6),
                     // Identical images: PSNR is infinite; written as "inf".
                     a.map_or(String::new(), |a| a
                         .psnr_db()
@@ -144,8 +147,9 @@ pub fn markdown(s: &Summary) -> String {
     if s.accuracy_every > 0 {
         let _ = writeln!(
             m,
-            "- accuracy: every {}th frame (read back, so those frames include a colour and depth read-back) against a full-detail, frustum-culling-only reference of the same camera; pixel counts summed over the compared frames, PSNR from their pooled mean squared error (\"identical\": every compared frame is bit-identical)",
-            s.accuracy_every
+            "- accuracy: every {}th frame (read back, so those frames include a colour and depth read-back) against a full-detail, frustum-culling-only reference of the same camera; pixel counts summed over the compared frames, PSNR from their pooled mean squared error (\"identical\": every compared frame is bit-identical); \"bound-violating\": pixels whose surface (view distance within {}%) appears nowhere within ceil(pixel error) + 1 pixels in the other image, either way (docs/report-format.md)",
+            s.accuracy_every,
+            100.0 * crate::accuracy::BOUND_RELATIVE_DEPTH
         );
     } else {
         let _ = writeln!(m, "- accuracy: not measured (`--accuracy-every 0`)");

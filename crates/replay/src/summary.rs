@@ -67,6 +67,11 @@ pub struct ModeSummary {
     pub wrongly_culled_pixels: Option<u64>,
     pub wrongly_culled_fraction: Option<f64>,
     pub differing_pixels_fraction: Option<f64>,
+    /// Pixels breaking the pixel-error bound (`bound_violations` at this
+    /// run's tolerance), summed over the compared frames.
+    pub bound_violating_pixels: Option<u64>,
+    /// bound_violating_pixels over all compared pixels.
+    pub bound_violating_fraction: Option<f64>,
     /// From the pooled mean squared error; null when every compared frame
     /// is identical to the reference (infinite PSNR) or nothing was compared.
     pub psnr_db: Option<f64>,
@@ -165,6 +170,8 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         wrongly_culled_pixels: has_acc.then_some(acc.wrongly_culled_pixels),
         wrongly_culled_fraction: has_acc.then(|| acc.wrongly_culled_fraction()),
         differing_pixels_fraction: has_acc.then(|| acc.differing_fraction()),
+        bound_violating_pixels: has_acc.then_some(acc.bound_violating_pixels),
+        bound_violating_fraction: has_acc.then(|| acc.bound_violating_fraction()),
         psnr_db: if has_acc { acc.psnr_db() } else { None },
     }
 }
@@ -219,12 +226,12 @@ impl Summary {
     /// `gigawalk demo` print.
     pub fn table(&self) -> String {
         let mut s = String::from(
-            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | PSNR dB |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | PSNR dB |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         );
         for m in &self.modes {
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 m.name,
                 m.pixel_error,
                 num(m.mean_fps, 2),
@@ -237,6 +244,9 @@ impl Summary {
                     .map_or("-".into(), |x| x.to_string()),
                 m.differing_pixels_fraction
                     .map_or("-".into(), |x| format!("{:.2}%", 100.0 * x)),
+                // Three decimals: a few pixels per frame are worth seeing.
+                m.bound_violating_fraction
+                    .map_or("-".into(), |x| format!("{:.3}%", 100.0 * x)),
                 match (m.accuracy_frames, m.psnr_db) {
                     (0, _) => "-".into(),
                     (_, None) => "identical".into(),

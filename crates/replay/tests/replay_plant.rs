@@ -147,15 +147,24 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
                 "mean_latency_ms",
                 "wrongly_culled_pixels",
                 "differing_pixels_fraction",
+                "bound_violating_pixels",
+                "bound_violating_fraction",
                 "psnr_db",
             ] {
                 assert!(m.get(key).is_some(), "{key} missing from {m}");
             }
+            // Every run was compared, so the bound is measured, not null.
+            assert!(m["bound_violating_pixels"].is_u64(), "{m}");
+            assert!(m["bound_violating_fraction"].is_f64(), "{m}");
             assert!(m["mean_fps"].as_f64().unwrap() > 0.0);
             assert_eq!(m["frames"], frames);
             assert_eq!(m["measured_frames"], frames - 3);
         }
         assert_eq!(modes[0]["speedup_vs_vfc"].as_f64(), Some(1.0));
+        // vfc against its own reference (the same render in another
+        // schedule): nothing breaks the bound.
+        assert_eq!(modes[0]["name"], "vfc");
+        assert_eq!(modes[0]["bound_violating_pixels"].as_u64(), Some(0));
 
         let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
         let mut lines = csv.lines();
@@ -163,7 +172,20 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
         let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
         assert_eq!(rows.len(), 6 * frames);
         assert!(rows.iter().all(|r| r.len() == header.len()));
-        let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        let col = |name: &str| {
+            header
+                .iter()
+                .position(|h| *h == name)
+                .unwrap_or_else(|| panic!("no {name} column in frames.csv"))
+        };
+        // Compared frames have the bound's columns, the others leave them
+        // empty.
+        for r in &rows {
+            let compared = !r[col("accuracy_pixels")].is_empty();
+            for c in ["bound_violating_pixels", "bound_violating_fraction"] {
+                assert_eq!(!r[col(c)].is_empty(), compared, "{c} in {r:?}");
+            }
+        }
         // Frame 0 has no interval; every later frame has one, and they parse.
         for r in &rows {
             let frame: u64 = r[col("frame")].parse().unwrap();
@@ -176,6 +198,7 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
         }
         let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
         assert!(md.contains("| och | 2 |") && md.contains("fps.png"), "{md}");
+        assert!(md.contains("bound-violating px"), "{md}");
     });
 }
 
@@ -202,12 +225,20 @@ fn och_draws_less_and_conservative_modes_lose_no_pixel() {
         // The reference is vfc itself (other schedule, same rasterizer): identical.
         assert_eq!(vfc.wrongly_culled_pixels, Some(0));
         assert_eq!(vfc.differing_pixels_fraction, Some(0.0));
+        assert_eq!(vfc.bound_violating_pixels, Some(0));
         for m in [get("occ", 0.0), get("och", 0.0)] {
             assert_eq!(m.accuracy_frames, 10, "{}", m.name);
             assert_eq!(
                 m.wrongly_culled_pixels,
                 Some(0),
                 "{} at 0px lost pixels",
+                m.name
+            );
+            // Full detail, only hidden nodes culled: the same depth.
+            assert_eq!(
+                m.bound_violating_pixels,
+                Some(0),
+                "{} at 0px breaks the bound",
                 m.name
             );
         }

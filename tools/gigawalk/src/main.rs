@@ -17,6 +17,7 @@ mod generate;
 mod info;
 mod preprocess;
 mod replay;
+mod signals;
 mod view;
 
 use clap::{Parser, Subcommand};
@@ -80,6 +81,9 @@ fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     // Keep the trace writer alive until the end: dropping it flushes the file.
     let _trace_guard = init_tracing(cli.trace.as_deref());
+    if let Err(e) = signals::install() {
+        eprintln!("warning: {}", error_chain(&e));
+    }
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Generate(a) => generate::run(a),
@@ -88,14 +92,17 @@ fn main() -> std::process::ExitCode {
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
     };
+    // A command that finished after a signal (a replay that stopped early
+    // and wrote what it measured) still reports the signal.
+    let interrupted = signals::exit_status().map(std::process::ExitCode::from);
     match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+        Ok(()) => interrupted.unwrap_or(std::process::ExitCode::SUCCESS),
         // The reader has what it wanted (`| head`); everything else was
         // already written.
         Err(e) if e.downcast_ref::<StdoutClosed>().is_some() => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_chain(&e));
-            std::process::ExitCode::FAILURE
+            interrupted.unwrap_or(std::process::ExitCode::FAILURE)
         }
     }
 }

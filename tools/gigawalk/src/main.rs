@@ -78,6 +78,8 @@ pub(crate) fn write_stdout(args: std::fmt::Arguments, line: bool) -> anyhow::Res
 }
 
 fn main() -> std::process::ExitCode {
+    // First, while this is the only thread (it changes the environment).
+    quiet_headless_vulkan_device_select();
     let cli = Cli::parse();
     // Keep the trace writer alive until the end: dropping it flushes the file.
     let _trace_guard = init_tracing(cli.trace.as_deref());
@@ -104,6 +106,32 @@ fn main() -> std::process::ExitCode {
             eprintln!("error: {}", error_chain(&e));
             interrupted.unwrap_or(std::process::ExitCode::FAILURE)
         }
+    }
+}
+
+/// Mesa's Vulkan device-selection layer (VK_LAYER_MESA_device_select, an
+/// implicit layer that Mesa's Vulkan drivers install) looks for the GPU
+/// that drives the desktop each time wgpu enumerates adapters: since wgpu
+/// enables VK_KHR_wayland_surface, the layer calls `wl_display_connect`,
+/// and without a desktop session libwayland-client prints "error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment." on every
+/// enumeration, although nothing failed. Without XDG_RUNTIME_DIR (or an
+/// absolute WAYLAND_DISPLAY) there is no Wayland display to ask, so this
+/// turns the layer off with its documented switch, NODEVICE_SELECT=1;
+/// gigawalk orders adapters itself (hardware first). Left alone when the
+/// user steers the layer (MESA_VK_DEVICE_SELECT, DRI_PRIME, NODEVICE_SELECT).
+fn quiet_headless_vulkan_device_select() {
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    let absolute =
+        |name: &str| std::env::var_os(name).is_some_and(|v| v.to_string_lossy().starts_with('/'));
+    let no_wayland = !absolute("XDG_RUNTIME_DIR") && !absolute("WAYLAND_DISPLAY");
+    let steered = ["MESA_VK_DEVICE_SELECT", "DRI_PRIME", "NODEVICE_SELECT"]
+        .iter()
+        .any(|v| set(v));
+    if no_wayland && !steered {
+        // Sound only while no other thread can read the environment: main
+        // calls this before anything else.
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }
 

@@ -1,5 +1,6 @@
-//! The pipeline's correctness test on generated scenes (BRIEF: "that
-//! equality is the correctness test of the whole pipeline"): on a plant and
+//! The pipeline's correctness test on generated scenes (conservative
+//! occlusion culling must never change the image, so this equality is the
+//! correctness test of the whole pipeline): on a plant and
 //! a city with a 60-frame walk, pipelined occlusion culling at full detail
 //! gives, every frame, the same depth image as drawing every
 //! frustum-visible leaf at full detail with the same camera.

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use gigawalk_cull::{Camera, TraversalOptions};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_runtime::{
-    CameraList, CameraRequest, DrawStyle, FrameReport, OccluderBudget, Runtime, RuntimeError,
-    RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
+    CameraError, CameraList, CameraRequest, DrawStyle, FrameReport, OccluderBudget, Runtime,
+    RuntimeError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
 };
 use gigawalk_scene::SceneReader;
 use gigawalk_suite::scenes::{street, write_boxes_scene};
@@ -91,6 +91,46 @@ fn on_street(devices: usize, name: &str, shift: DVec3, test: impl FnOnce(&Runtim
     let f = fixture(shift);
     let rt = Runtime::with_devices(&f.scene, devices).unwrap();
     test(&rt);
+}
+
+#[test]
+fn device_counts_other_than_one_or_two_are_setup_errors() {
+    // Checked before any device is opened: no adapter needed.
+    let f = fixture(DVec3::ZERO);
+    let e = Runtime::with_devices(&f.scene, Vec::new())
+        .err()
+        .expect("no devices is an error");
+    assert!(matches!(e, RuntimeError::DeviceCount { count: 0 }), "{e}");
+    assert!(e.to_string().starts_with("setup: 0 devices"), "{e}");
+    let e = Runtime::new(&f.scene, 3)
+        .err()
+        .expect("three devices is an error");
+    assert!(matches!(e, RuntimeError::DeviceCount { count: 3 }), "{e}");
+}
+
+#[test]
+fn a_corrupted_lod_found_while_loading_is_a_setup_error() {
+    let Some(devices) = devices_or_skip(1, "corrupted LOD at setup") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("street.gwk");
+    write_boxes_scene(&path, &street(20, DVec3::ZERO));
+    // Opening reads only the skeleton; the damage is found when the
+    // runtime loads the geometry.
+    let lods = SceneReader::open(&path).unwrap().skeleton().lods.clone();
+    let at = lods[lods.len() / 2].offset as usize + 5;
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes[at] ^= 0x5a;
+    std::fs::write(&path, bytes).unwrap();
+    let scene = SceneReader::open(&path).unwrap();
+    let e = Runtime::with_devices(&scene, devices)
+        .err()
+        .expect("a corrupted LOD is an error");
+    assert!(matches!(e, RuntimeError::Setup { .. }), "{e}");
+    let text = e.to_string();
+    assert!(text.starts_with("setup: scene geometry: "), "{text}");
+    assert!(!text.contains("OR:"), "not a stage's error: {text}");
 }
 
 /// A frame's read-back depth image.
@@ -261,7 +301,10 @@ fn bad_options_and_cameras_are_errors() {
             )
             .unwrap_err();
         assert!(
-            matches!(e, RuntimeError::Camera(ref m) if m.contains("frame 1")),
+            matches!(
+                e,
+                RuntimeError::Camera(CameraError::Invalid { frame: 1, .. })
+            ),
             "{e}"
         );
     });

@@ -147,8 +147,8 @@ impl Camera {
 
     /// Pixels per unit of object-space error at distance 1:
     /// viewport height / (2 tan(fovy / 2)). Pixel error = object-space error x
-    /// this / distance (GigaWalk Section 4.3; ../shared/design/BRIEF.md
-    /// "Numerics").
+    /// this / distance to the nearest point of the node's box (GigaWalk
+    /// Section 4.3).
     pub fn pixels_per_radian(&self, viewport: Viewport) -> f64 {
         viewport.height as f64 / (2.0 * self.tan_half_fovy())
     }

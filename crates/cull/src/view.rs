@@ -52,7 +52,8 @@ impl CullView {
     /// near plane, and `nearest_depth` is at least the depth of its nearest
     /// point, whatever f32 rounding did on the way.
     pub fn project_box(&self, b: &RelBox) -> BoxProjection {
-        // Eye inside the box: always visible (../shared/design/BRIEF.md "Numerics").
+        // Eye inside the box: always visible. Projecting it would divide by
+        // depths of either sign, and a box around the eye covers the view.
         if b.min.cmple(Vec3::ZERO).all() && b.max.cmpge(Vec3::ZERO).all() {
             return BoxProjection::CrossesNear;
         }

@@ -14,6 +14,8 @@ pub enum GpuError {
         adapter: String,
         source: wgpu::RequestDeviceError,
     },
+    #[error("cannot open {count} devices: the pipeline uses 1 or 2")]
+    DeviceCount { count: usize },
     #[error("GPU error on device {device}: {message}")]
     Device { device: String, message: String },
     #[error("scene geometry: {0}")]
@@ -61,6 +63,18 @@ impl GpuContext {
                 message,
             }),
         }
+    }
+}
+
+/// The devices' names in messages: OR's device first, RVG's second.
+const DEVICE_NAMES: [&str; 2] = ["A", "B"];
+
+/// The name of device `k` of `count`, or [`GpuError::DeviceCount`] when
+/// `count` is not 1 or 2 (a caller's option, so an error, not a panic).
+pub(crate) fn device_name(k: usize, count: usize) -> Result<&'static str, GpuError> {
+    match DEVICE_NAMES.get(k) {
+        Some(&name) if (1..=DEVICE_NAMES.len()).contains(&count) => Ok(name),
+        _ => Err(GpuError::DeviceCount { count }),
     }
 }
 
@@ -115,8 +129,9 @@ pub(crate) fn adapters(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
 
 /// Opens `count` (1 or 2) devices. With two, each gets its own hardware
 /// adapter when the machine has two GPUs, else both share the best adapter.
+/// Any other count is [`GpuError::DeviceCount`].
 pub fn open_devices(count: usize) -> Result<Vec<GpuContext>, GpuError> {
-    debug_assert!((1..=2).contains(&count));
+    device_name(0, count)?;
     let (instance, list, backends) = instance_with_adapters();
     let best = list.first().ok_or_else(|| GpuError::NoAdapter {
         backends: format!("{backends:?}"),
@@ -131,7 +146,7 @@ pub fn open_devices(count: usize) -> Result<Vec<GpuContext>, GpuError> {
         .collect();
     let mut out = Vec::with_capacity(count);
     for k in 0..count {
-        let name = ["A", "B"][k];
+        let name = device_name(k, count)?;
         let adapter = if count == 2 && hardware.len() >= 2 {
             hardware[k].clone()
         } else if k == 0 {
@@ -187,10 +202,11 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
     })
 }
 
-/// For tests and tools that need a GPU: opens `count` devices, or returns
-/// `None` after a loud message when no adapter exists, unless the
+/// For tests that need a GPU (feature `testing`): opens `count` devices, or
+/// returns `None` after a loud message when no adapter exists, unless the
 /// environment variable `GIGAWALK_REQUIRE_ADAPTER` is set (CI sets it), in
 /// which case a missing adapter panics so the test fails.
+#[cfg(feature = "testing")]
 pub fn devices_or_skip(count: usize, test: &str) -> Option<Vec<GpuContext>> {
     match open_devices(count) {
         Ok(d) => Some(d),
@@ -201,5 +217,27 @@ pub fn devices_or_skip(count: usize, test: &str) -> Option<Vec<GpuContext>> {
             None
         }
         Err(e) => panic!("{test}: {e}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn device_counts_other_than_one_or_two_are_errors() {
+        for count in [0, 3, usize::MAX] {
+            let e = open_devices(count).err().expect("an error");
+            assert!(
+                matches!(e, GpuError::DeviceCount { count: c } if c == count),
+                "{e}"
+            );
+            assert!(
+                e.to_string()
+                    .contains(&format!("cannot open {count} devices")),
+                "{e}"
+            );
+        }
+        assert_eq!(device_name(1, 2).unwrap(), "B");
     }
 }

@@ -19,7 +19,9 @@ mod present;
 mod residency;
 pub mod shader_types;
 
-pub use context::{devices_or_skip, open_devices, GpuContext, GpuError};
+#[cfg(feature = "testing")]
+pub use context::devices_or_skip;
+pub use context::{open_devices, GpuContext, GpuError};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
     DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,

@@ -279,6 +279,7 @@ pub struct DepthPass {
     drawer: Drawer,
     pipeline: wgpu::RenderPipeline,
     depth: wgpu::Texture,
+    readback: ReadBack,
     width: u32,
     height: u32,
 }
@@ -304,6 +305,7 @@ impl DepthPass {
             ),
             drawer,
             pipeline,
+            readback: ReadBack::default(),
             width: width.max(1),
             height: height.max(1),
         }
@@ -333,8 +335,8 @@ impl DepthPass {
             self.drawer.record(&mut pass, residency, &draws);
         }
         ctx.queue.submit([enc.finish()]);
-        let depth = read_depth(ctx, &self.depth, self.width, self.height)?;
-        Ok(depth)
+        self.readback
+            .depth(ctx, &self.depth, self.width, self.height)
     }
 }
 
@@ -367,6 +369,8 @@ pub struct VisiblePass {
     warned_no_wireframe: bool,
     colour: wgpu::Texture,
     depth: wgpu::Texture,
+    colour_readback: ReadBack,
+    depth_readback: ReadBack,
     width: u32,
     height: u32,
     /// Whether the current frame's targets have been cleared yet.
@@ -406,6 +410,8 @@ impl VisiblePass {
             warned_no_wireframe: false,
             colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
             depth: target(ctx, "visible depth", width, height, DEPTH_FORMAT),
+            colour_readback: ReadBack::default(),
+            depth_readback: ReadBack::default(),
             drawer,
             pipeline,
             width,
@@ -513,8 +519,8 @@ impl VisiblePass {
     }
 
     /// Reads back the last finished frame's colour and depth.
-    pub fn read_back(&self, ctx: &GpuContext) -> Result<FrameImage, GpuError> {
-        let colour = read_texture(
+    pub fn read_back(&mut self, ctx: &GpuContext) -> Result<FrameImage, GpuError> {
+        let colour = self.colour_readback.read(
             ctx,
             &self.colour,
             self.width,
@@ -522,7 +528,9 @@ impl VisiblePass {
             4,
             wgpu::TextureAspect::All,
         )?;
-        let depth = read_depth(ctx, &self.depth, self.width, self.height)?;
+        let depth = self
+            .depth_readback
+            .depth(ctx, &self.depth, self.width, self.height)?;
         Ok(FrameImage { colour, depth })
     }
 }
@@ -544,79 +552,109 @@ fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
     }
 }
 
-fn read_depth(
-    ctx: &GpuContext,
-    tex: &wgpu::Texture,
-    w: u32,
-    h: u32,
-) -> Result<DepthImage, GpuError> {
-    let bytes = read_texture(ctx, tex, w, h, 4, wgpu::TextureAspect::DepthOnly)?;
-    Ok(DepthImage {
-        width: w,
-        height: h,
-        depth: bytemuck::pod_collect_to_vec(&bytes),
-    })
+/// A mappable buffer that texture read-backs copy into, kept from one
+/// read-back to the next: OR reads its depth back every frame, and a new
+/// buffer each time would be an allocation (and a driver-side free) per
+/// frame. Made on first use, and again if the size changes.
+#[derive(Default)]
+struct ReadBack {
+    buffer: Option<wgpu::Buffer>,
 }
 
-/// Copies a texture into a mappable buffer, waits, and returns its rows
-/// tightly packed (the copy pads rows to 256 bytes).
-fn read_texture(
-    ctx: &GpuContext,
-    tex: &wgpu::Texture,
-    w: u32,
-    h: u32,
-    bpp: u32,
-    aspect: wgpu::TextureAspect,
-) -> Result<Vec<u8>, GpuError> {
-    let row = w * bpp;
-    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: padded as u64 * h as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture: tex,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buf,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
+impl ReadBack {
+    /// Reads a `Depth32Float` texture back as a [`DepthImage`].
+    fn depth(
+        &mut self,
+        ctx: &GpuContext,
+        tex: &wgpu::Texture,
+        w: u32,
+        h: u32,
+    ) -> Result<DepthImage, GpuError> {
+        let depth = self.read(ctx, tex, w, h, 4, wgpu::TextureAspect::DepthOnly)?;
+        Ok(DepthImage {
             width: w,
             height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    ctx.queue.submit([enc.finish()]);
-    let (tx, rx) = std::sync::mpsc::channel();
-    buf.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| device_error(ctx, e))?;
-    ctx.check()?;
-    rx.recv()
-        .map_err(|e| device_error(ctx, e))?
-        .map_err(|e| device_error(ctx, e))?;
-    let data = buf.get_mapped_range(..).map_err(|e| device_error(ctx, e))?;
-    let mut out = Vec::with_capacity((row * h) as usize);
-    for y in 0..h as usize {
-        let start = y * padded as usize;
-        out.extend_from_slice(&data[start..start + row as usize]);
+            depth,
+        })
     }
-    drop(data);
-    buf.unmap();
-    Ok(out)
+
+    /// Copies a texture of `bpp` bytes per texel into the buffer, waits,
+    /// and returns its rows tightly packed (the copy pads rows to 256
+    /// bytes) as `T`s.
+    fn read<T: bytemuck::Pod>(
+        &mut self,
+        ctx: &GpuContext,
+        tex: &wgpu::Texture,
+        w: u32,
+        h: u32,
+        bpp: u32,
+        aspect: wgpu::TextureAspect,
+    ) -> Result<Vec<T>, GpuError> {
+        let row = w * bpp;
+        let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let size = padded as u64 * h as u64;
+        // Taken out while in use: a read-back that fails part-way may leave
+        // the buffer mapped, so only a finished one is put back.
+        let buf = match self.buffer.take().filter(|b| b.size() == size) {
+            Some(b) => b,
+            None => ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+        };
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: tex,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buf,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        ctx.queue.submit([enc.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        buf.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        ctx.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| device_error(ctx, e))?;
+        ctx.check()?;
+        rx.recv()
+            .map_err(|e| device_error(ctx, e))?
+            .map_err(|e| device_error(ctx, e))?;
+        let data = buf.get_mapped_range(..).map_err(|e| device_error(ctx, e))?;
+        let mut out = Vec::with_capacity(row as usize * h as usize / std::mem::size_of::<T>());
+        for y in 0..h as usize {
+            let bytes = &data[y * padded as usize..][..row as usize];
+            match bytemuck::try_cast_slice(bytes) {
+                Ok(texels) => out.extend_from_slice(texels),
+                // Mapped memory is aligned in practice; copy if it is not.
+                Err(_) => out.extend(
+                    bytes
+                        .chunks_exact(std::mem::size_of::<T>())
+                        .map(bytemuck::pod_read_unaligned::<T>),
+                ),
+            }
+        }
+        drop(data);
+        buf.unmap();
+        self.buffer = Some(buf);
+        Ok(out)
+    }
 }

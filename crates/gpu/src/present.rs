@@ -4,7 +4,7 @@
 //! the offscreen colour into a composite target, the overlays on top, an
 //! optional read-back (screenshots) and a blit to the surface.
 
-use crate::context::{adapters, instance_with_adapters, open, rank};
+use crate::context::{adapters, device_name, instance_with_adapters, open, rank};
 use crate::overlay::{OverlayFrame, OverlayRenderer};
 use crate::{GpuContext, GpuError, VisiblePass, COLOUR_FORMAT};
 
@@ -23,12 +23,13 @@ pub enum WindowError {
 
 /// Opens `count` (1 or 2) devices, all on an adapter that can present to
 /// `window` (the surface and the adapters come from one wgpu instance, as
-/// wgpu requires), and the window's surface.
+/// wgpu requires), and the window's surface. Any other count is
+/// [`GpuError::DeviceCount`].
 pub fn open_devices_for_window(
     count: usize,
     window: impl Into<wgpu::SurfaceTarget<'static>>,
 ) -> Result<(Vec<GpuContext>, WindowSurface), WindowError> {
-    debug_assert!((1..=2).contains(&count));
+    device_name(0, count)?;
     let (instance, list, backends) = instance_with_adapters();
     if list.is_empty() {
         return Err(GpuError::NoAdapter {
@@ -57,7 +58,7 @@ pub fn open_devices_for_window(
     );
     let mut devices = Vec::with_capacity(count);
     for k in 0..count {
-        let name = ["A", "B"][k];
+        let name = device_name(k, count)?;
         // wgpu allows one device per Adapter object: enumerate again for
         // the second device on the same adapter.
         let adapter = if k == 0 {

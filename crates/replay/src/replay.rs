@@ -56,6 +56,8 @@ impl Default for ReplayOptions {
 pub enum ReplayError {
     #[error("bad replay option: {0}")]
     Options(String),
+    #[error("bad runtime option: {0}")]
+    RuntimeOptions(#[source] gigawalk_runtime::OptionsError),
     #[error("the camera path has no poses")]
     EmptyPath,
     #[error("cannot start the runtime: {0}")]
@@ -359,5 +361,5 @@ fn validate(opts: &ReplayOptions) -> Result<(), ReplayError> {
     if opts.frames == Some(0) {
         return bad("frames must be at least 1".into());
     }
-    opts.runtime.validate().map_err(ReplayError::Options)
+    opts.runtime.validate().map_err(ReplayError::RuntimeOptions)
 }

@@ -19,20 +19,29 @@ mod options;
 mod pipeline;
 mod stages;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 pub use gigawalk_cull::{
     Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
-pub use options::{OccluderBudget, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET};
+pub use options::{
+    OccluderBudget, OptionsError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
+};
 
 use gigawalk_gpu::{HostGeometry, ResidentGeometry};
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
 
-/// Why a run stopped early.
+/// Why the runtime could not start, or why a run stopped early.
 #[derive(Debug, thiserror::Error)]
 pub enum RuntimeError {
+    /// Opening the devices or loading the scene's geometry onto them,
+    /// before any stage runs.
+    #[error("setup: {source}")]
+    Setup { source: GpuError },
+    #[error("setup: {count} devices given, the pipeline uses 1 or 2")]
+    DeviceCount { count: usize },
     #[error("{stage}: {source}")]
     Gpu { stage: Stage, source: GpuError },
     #[error("STC, frame {frame}: {source}")]
@@ -41,13 +50,32 @@ pub enum RuntimeError {
         source: gigawalk_cull::HzbError,
     },
     #[error("bad runtime option: {0}")]
-    Options(String),
+    Options(#[from] OptionsError),
+    #[cfg(feature = "testing")]
     #[error("{stage}: injected failure at frame {frame}")]
     Injected { stage: Stage, frame: u64 },
     #[error("{stage} stage panicked: {message}")]
     Panic { stage: Stage, message: String },
+    #[error("cannot start the {stage} thread: {source}")]
+    Spawn {
+        stage: Stage,
+        source: std::io::Error,
+    },
     #[error("camera source: {0}")]
-    Camera(String),
+    Camera(#[from] CameraError),
+}
+
+/// Why a [`CameraSource`] gave no camera for a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum CameraError {
+    #[error("frame {frame}: camera {camera:?} is not valid (non-finite position, bad orientation or field of view)")]
+    Invalid { frame: u64, camera: Camera },
+    /// The source itself failed (e.g. the viewer's window thread is gone).
+    #[error("frame {frame}: {source}")]
+    Source {
+        frame: u64,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
 }
 
 /// One camera to render, as a [`CameraSource`] hands it out.
@@ -105,7 +133,7 @@ impl Presenter for NoPresenter {
 /// Where cameras come from: a replayed path, or the viewer's input. Called
 /// on the OR thread once per frame; `None` ends the run.
 pub trait CameraSource: Send {
-    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, String>;
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError>;
 }
 
 /// Cameras from a list (a replayed path), one frame each.
@@ -114,7 +142,7 @@ pub struct CameraList {
 }
 
 impl CameraSource for CameraList {
-    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, String> {
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
         Ok(self.cameras.get(frame as usize).copied())
     }
 }
@@ -136,10 +164,11 @@ pub struct FrameReport {
     pub stc_ms: f64,
     pub rvg_ms: f64,
     pub stats: TraversalStats,
-    /// The nodes drawn and their LODs, in STC's order.
-    pub visible: Vec<DrawItem>,
+    /// The nodes drawn and their LODs, in STC's order. Shared, not copied,
+    /// with the stages that use the same set (OR's occluders, held frames).
+    pub visible: Arc<[DrawItem]>,
     /// Nodes culled and why, when `RuntimeOptions::record_culled` is set.
-    pub culled: Vec<(u32, CullReason)>,
+    pub culled: Arc<[(u32, CullReason)]>,
     /// The frame reused an older visible set: culling was held (frozen), or
     /// asynchronous RVG drew before STC had this camera's set.
     pub reused_visible_set: bool,
@@ -165,35 +194,35 @@ pub struct Runtime<'s> {
 impl<'s> Runtime<'s> {
     /// Opens `devices` (1 or 2) wgpu devices and uploads every LOD to each.
     pub fn new<R: ReadAt>(scene: &'s SceneReader<R>, devices: usize) -> Result<Self, RuntimeError> {
-        let gpu = |source| RuntimeError::Gpu {
-            stage: Stage::Or,
-            source,
-        };
-        let ctxs = gigawalk_gpu::open_devices(devices).map_err(gpu)?;
+        if !(1..=2).contains(&devices) {
+            return Err(RuntimeError::DeviceCount { count: devices });
+        }
+        let ctxs = gigawalk_gpu::open_devices(devices).map_err(setup)?;
         Self::with_devices(scene, ctxs)
     }
 
-    /// Like [`Runtime::new`] with devices the caller opened.
+    /// Like [`Runtime::new`] with devices the caller opened (1 or 2).
     pub fn with_devices<R: ReadAt>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
     ) -> Result<Self, RuntimeError> {
-        let gpu = |source| RuntimeError::Gpu {
-            stage: Stage::Or,
-            source,
-        };
+        if !(1..=2).contains(&devices.len()) {
+            return Err(RuntimeError::DeviceCount {
+                count: devices.len(),
+            });
+        }
         let limit = devices
             .iter()
             .map(|d| d.device.limits().max_buffer_size)
             .min()
             .unwrap_or(1 << 28)
             .min(1 << 28);
-        let host = HostGeometry::load(scene, limit).map_err(gpu)?;
+        let host = HostGeometry::load(scene, limit).map_err(setup)?;
         let geometry = devices
             .iter()
             .map(|d| host.upload(d))
             .collect::<Result<Vec<_>, _>>()
-            .map_err(gpu)?;
+            .map_err(setup)?;
         Ok(Runtime {
             skeleton: scene.skeleton(),
             devices,
@@ -236,7 +265,7 @@ impl<'s> Runtime<'s> {
         on_frame: &mut dyn FnMut(FrameReport) -> bool,
         presenter: &mut dyn Presenter,
     ) -> Result<u64, RuntimeError> {
-        opts.validate().map_err(RuntimeError::Options)?;
+        opts.validate()?;
         let opts = &RuntimeOptions {
             occluder_budget: match self.occluder_budget(opts.occluder_budget) {
                 Some(t) => OccluderBudget::Triangles(t),
@@ -263,8 +292,14 @@ impl<'s> Runtime<'s> {
         budget.resolve(self.devices.iter().any(GpuContext::is_cpu))
     }
 
-    /// Device `i` (0 = OR's; RVG uses 1 when there are two).
+    /// Device `i` (0 = OR's; RVG uses 1 when there are two; the last one
+    /// for any larger `i`). A runtime always has one or two devices.
     pub fn device(&self, i: usize) -> &GpuContext {
-        &self.devices[i.min(self.devices.len() - 1)]
+        &self.devices[i.min(self.devices.len().saturating_sub(1))]
     }
+}
+
+/// A device-setup error: opening devices or loading geometry onto them.
+fn setup(source: GpuError) -> RuntimeError {
+    RuntimeError::Setup { source }
 }

@@ -141,9 +141,33 @@ pub struct RuntimeOptions {
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
-    /// Test hook: make a stage fail at a frame, to check that any stage's
-    /// error stops every stage.
+    /// Test hook (feature `testing`): make a stage fail at a frame, to
+    /// check that any stage's error stops every stage.
+    #[cfg(feature = "testing")]
     pub inject_failure: Option<(Stage, u64)>,
+}
+
+/// A runtime option out of its range, named with its value.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum OptionsError {
+    #[error("viewport {width}x{height} must be 1..=16384 on each side")]
+    Viewport { width: u32, height: u32 },
+    #[error("occluder lag {0} must be 1 or 2")]
+    OccluderLag(u32),
+    #[error("occluder scale {0} must be in (0, 1]")]
+    OccluderScale(f64),
+    #[error("devices {0} must be 1 or 2")]
+    Devices(usize),
+    #[error("pixel error {0} must be a finite number >= 0")]
+    PixelError(f64),
+    #[error("near plane {0} must be > 0")]
+    Near(f64),
+    #[error("n-th farthest HZB needs n in 1..=4, got {0}")]
+    NthFarthest(u8),
+    #[error("asynchronous RVG needs the pipelined schedule")]
+    AsyncNeedsPipelined,
+    #[error("chunk must be at least 1")]
+    Chunk,
 }
 
 impl Default for RuntimeOptions {
@@ -162,51 +186,46 @@ impl Default for RuntimeOptions {
             near: 0.05,
             async_rvg: false,
             record_culled: false,
+            #[cfg(feature = "testing")]
             inject_failure: None,
         }
     }
 }
 
 impl RuntimeOptions {
-    /// Checks the options; returns a message naming the bad one.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks the options; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), OptionsError> {
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
-            return Err(format!(
-                "viewport {}x{} must be 1..=16384 on each side",
-                self.width, self.height
-            ));
+            return Err(OptionsError::Viewport {
+                width: self.width,
+                height: self.height,
+            });
         }
         if !(1..=2).contains(&self.occluder_lag) {
-            return Err(format!("occluder lag {} must be 1 or 2", self.occluder_lag));
+            return Err(OptionsError::OccluderLag(self.occluder_lag));
         }
         if !(self.occluder_scale > 0.0 && self.occluder_scale <= 1.0) {
-            return Err(format!(
-                "occluder scale {} must be in (0, 1]",
-                self.occluder_scale
-            ));
+            return Err(OptionsError::OccluderScale(self.occluder_scale));
         }
         if !(1..=2).contains(&self.devices) {
-            return Err(format!("devices {} must be 1 or 2", self.devices));
+            return Err(OptionsError::Devices(self.devices));
         }
         if !(self.traversal.pixel_tolerance >= 0.0 && self.traversal.pixel_tolerance.is_finite()) {
-            return Err(format!(
-                "pixel error {} must be a finite number >= 0",
-                self.traversal.pixel_tolerance
-            ));
+            return Err(OptionsError::PixelError(self.traversal.pixel_tolerance));
         }
         if !(self.near > 0.0 && self.near.is_finite()) {
-            return Err(format!("near plane {} must be > 0", self.near));
+            return Err(OptionsError::Near(self.near));
         }
         if let Reduction::NthFarthest(n) = self.hzb_reduction {
             if !(1..=4).contains(&n) {
-                return Err(format!("n-th farthest HZB needs n in 1..=4, got {n}"));
+                return Err(OptionsError::NthFarthest(n));
             }
         }
         if self.async_rvg && self.schedule == Schedule::Sequential {
-            return Err("asynchronous RVG needs the pipelined schedule".into());
+            return Err(OptionsError::AsyncNeedsPipelined);
         }
         if self.chunk == 0 {
-            return Err("chunk must be at least 1".into());
+            return Err(OptionsError::Chunk);
         }
         Ok(())
     }
@@ -221,6 +240,51 @@ impl RuntimeOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bad_options_are_typed_errors_naming_the_option() {
+        let check = |edit: &dyn Fn(&mut RuntimeOptions), expected: OptionsError, text: &str| {
+            let mut o = RuntimeOptions::default();
+            edit(&mut o);
+            let e = o.validate().unwrap_err();
+            assert_eq!(e, expected);
+            assert!(e.to_string().contains(text), "{e}");
+        };
+        assert_eq!(RuntimeOptions::default().validate(), Ok(()));
+        check(
+            &|o| o.width = 0,
+            OptionsError::Viewport {
+                width: 0,
+                height: 360,
+            },
+            "viewport 0x360",
+        );
+        check(
+            &|o| o.occluder_lag = 3,
+            OptionsError::OccluderLag(3),
+            "occluder lag 3",
+        );
+        check(
+            &|o| o.occluder_scale = 0.0,
+            OptionsError::OccluderScale(0.0),
+            "occluder scale 0",
+        );
+        check(&|o| o.devices = 3, OptionsError::Devices(3), "devices 3");
+        check(&|o| o.chunk = 0, OptionsError::Chunk, "chunk");
+        check(
+            &|o| o.hzb_reduction = Reduction::NthFarthest(5),
+            OptionsError::NthFarthest(5),
+            "got 5",
+        );
+        check(
+            &|o| {
+                o.async_rvg = true;
+                o.schedule = Schedule::Sequential;
+            },
+            OptionsError::AsyncNeedsPipelined,
+            "asynchronous RVG",
+        );
+    }
 
     #[test]
     fn occluder_budget_parses_and_resolves() {

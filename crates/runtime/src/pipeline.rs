@@ -1,7 +1,7 @@
 //! The schedules: three threads joined by queues (synchronous or with
 //! asynchronous RVG), or one thread.
 
-use std::sync::{Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
 
 use crossbeam_channel::{bounded, unbounded, Receiver, Sender, TryRecvError};
@@ -9,7 +9,13 @@ use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
 use crate::stages::{lod_ids, OrStage, RvgStage, StcOutput, StcStage};
-use crate::{CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::{
+    CameraError, CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage,
+};
+
+/// A frame's visible set as OR gets it back for a later frame's occluders:
+/// shared with the frame's report, never copied.
+type VisibleSet = Arc<[DrawItem]>;
 
 /// Messages STC may queue for RVG: enough that STC never waits on RVG
 /// within a frame.
@@ -62,7 +68,7 @@ fn next_sample(
     frame: u64,
     opts: &RuntimeOptions,
 ) -> Result<Option<Sample>, RuntimeError> {
-    let Some(req) = source.next_camera(frame).map_err(RuntimeError::Camera)? else {
+    let Some(req) = source.next_camera(frame)? else {
         return Ok(None);
     };
     let viewport = Viewport::new(opts.width, opts.height);
@@ -71,9 +77,7 @@ fn next_sample(
         ..req.camera
     };
     if !camera.is_valid() {
-        return Err(RuntimeError::Camera(format!(
-            "frame {frame}: camera {camera:?} is not valid (non-finite position, bad orientation or field of view)"
-        )));
+        return Err(CameraError::Invalid { frame, camera }.into());
     }
     Ok(Some(Sample {
         frame,
@@ -90,13 +94,15 @@ fn wants_occluders(opts: &RuntimeOptions, frame: u64) -> bool {
     opts.traversal.occlusion && frame >= opts.occluder_lag as u64
 }
 
-/// The result of a held frame: the last culled set, unchanged. Before any
-/// frame was culled there is nothing to hold, so the frame culls normally.
-fn held(last: &Option<StcOutput>) -> Option<StcOutput> {
-    last.clone().map(|mut s| {
-        s.ms = 0.0;
-        s.hzb_ms = 0.0;
-        s
+/// The result of a frame that holds culling (`hold`): the last culled set,
+/// unchanged. Before any frame was culled there is nothing to hold, so the
+/// frame culls normally; a frame that does not hold gets `None`.
+fn held(hold: bool, last: &Option<StcOutput>) -> Option<StcOutput> {
+    let last = last.as_ref().filter(|_| hold)?;
+    Some(StcOutput {
+        ms: 0.0,
+        hzb_ms: 0.0,
+        ..last.clone()
     })
 }
 
@@ -154,16 +160,16 @@ pub(crate) fn run_sequential(
     let mut or = OrStage::new(ctx, geometry, rt.skeleton, opts);
     let mut stc = StcStage::new(rt.skeleton, opts);
     let mut rvg = RvgStage::new(ctx, geometry, opts);
-    let mut history: std::collections::VecDeque<Vec<DrawItem>> = Default::default();
+    let mut history: std::collections::VecDeque<VisibleSet> = Default::default();
     let mut last: Option<StcOutput> = None;
     let mut frame = 0u64;
     while let Some(sample) = next_sample(source, frame, opts)? {
         let view = sample.view.clone();
-        let (stc_out, o, reused) = match held(&last).filter(|_| sample.hold) {
+        let (stc_out, o, reused) = match held(sample.hold, &last) {
             Some(s) => (s, None, true),
             None => {
                 let occluders = wants_occluders(opts, frame)
-                    .then(|| history.front().map(|v| v.as_slice()).unwrap_or(&[]));
+                    .then(|| history.front().map(|v| &v[..]).unwrap_or(&[]));
                 let o = or.run(frame, &view, occluders)?;
                 let s = stc.run(frame, &view, o.depth.as_ref(), &mut |_| {})?;
                 (s, Some(o), false)
@@ -206,33 +212,41 @@ fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
 type StageBody<'scope> = Box<dyn FnOnce() -> Result<(), RuntimeError> + Send + 'scope>;
 
 /// Runs the three stage bodies on their own threads, feeds reports to
-/// `on_frame` on this thread, and returns the first stage error.
+/// `on_frame` on this thread, and returns the first stage error. A thread
+/// the system cannot start is an error too: its body is dropped unrun,
+/// which closes its queues, so the stages already started stop as they
+/// would after a stage error.
 fn run_threads<'scope, 'env>(
     s: &'scope std::thread::Scope<'scope, 'env>,
     stages: [(Stage, StageBody<'scope>); 3],
     reports: Receiver<FrameReport>,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
 ) -> Result<u64, RuntimeError> {
-    let handles: Vec<_> = stages
-        .into_iter()
-        .map(|(stage, body)| {
-            let h = std::thread::Builder::new()
-                .name(format!("gigawalk-{stage}"))
-                .spawn_scoped(s, body)
-                .expect("spawn stage thread");
-            (stage, h)
-        })
-        .collect();
+    let mut handles = Vec::with_capacity(stages.len());
+    let mut first_error = None;
+    for (stage, body) in stages {
+        if first_error.is_some() {
+            continue; // dropping the body closes its queues
+        }
+        match std::thread::Builder::new()
+            .name(format!("gigawalk-{stage}"))
+            .spawn_scoped(s, body)
+        {
+            Ok(h) => handles.push((stage, h)),
+            Err(source) => first_error = Some(RuntimeError::Spawn { stage, source }),
+        }
+    }
     let mut frames = 0;
-    for report in reports.iter() {
-        frames += 1;
-        if !on_frame(report) {
-            break;
+    if first_error.is_none() {
+        for report in reports.iter() {
+            frames += 1;
+            if !on_frame(report) {
+                break;
+            }
         }
     }
     // Closing the report queue stops RVG, whose queues closing stop the rest.
     drop(reports);
-    let mut first_error = None;
     for (stage, handle) in handles {
         let result = handle.join().unwrap_or_else(|p| {
             Err(RuntimeError::Panic {
@@ -271,7 +285,7 @@ pub(crate) fn run_pipelined(
     // so at most MAX_IN_FLIGHT frames are between camera and screen.
     let (or_tx, or_rx) = bounded::<OrToStc>(1);
     let (rvg_tx, rvg_rx) = bounded::<StcToRvg>(RVG_QUEUE);
-    let (feedback_tx, feedback_rx) = unbounded::<Vec<DrawItem>>();
+    let (feedback_tx, feedback_rx) = unbounded::<VisibleSet>();
     let (report_tx, report_rx) = bounded::<FrameReport>(1);
     let (token_tx, token_rx) = bounded::<()>(MAX_IN_FLIGHT);
     for _ in 0..MAX_IN_FLIGHT {
@@ -308,12 +322,12 @@ fn or_thread(
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     out: Sender<OrToStc>,
-    feedback: Receiver<Vec<DrawItem>>,
+    feedback: Receiver<VisibleSet>,
     tokens: Receiver<()>,
 ) -> Result<(), RuntimeError> {
     let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
     let mut frame = 0u64;
-    let mut occluders: Vec<DrawItem> = Vec::new();
+    let mut occluders: VisibleSet = Arc::new([]);
     loop {
         // Wait until fewer than MAX_IN_FLIGHT frames are on their way to
         // the screen; RVG gone means the run is over.
@@ -342,7 +356,7 @@ fn or_thread(
             let o = or.run(
                 frame,
                 &sample.view,
-                wants_occluders(opts, frame).then_some(occluders.as_slice()),
+                wants_occluders(opts, frame).then_some(&occluders[..]),
             )?;
             OrToStc {
                 sample,
@@ -364,7 +378,7 @@ fn stc_thread(
     opts: &RuntimeOptions,
     input: Receiver<OrToStc>,
     out: Sender<StcToRvg>,
-    feedback: Sender<Vec<DrawItem>>,
+    feedback: Sender<VisibleSet>,
 ) -> Result<(), RuntimeError> {
     let mut stc = StcStage::new(rt.skeleton, opts);
     let mut last: Option<StcOutput> = None;
@@ -380,7 +394,7 @@ fn stc_thread(
         {
             return Ok(());
         }
-        let (s, reused) = match held(&last).filter(|_| m.sample.hold) {
+        let (s, reused) = match held(m.sample.hold, &last) {
             Some(s) => {
                 for chunk in lod_ids(rt.skeleton, &s.visible).chunks(opts.chunk) {
                     if out.send(StcToRvg::Items(chunk.to_vec())).is_err() {
@@ -521,10 +535,13 @@ pub(crate) fn run_async(
     };
     let (or_tx, or_rx) = bounded::<OrToStc>(1);
     let (sets_tx, sets_rx) = bounded::<Box<FrameEnd>>(2);
-    let (feedback_tx, feedback_rx) = unbounded::<Vec<DrawItem>>();
+    let (feedback_tx, feedback_rx) = unbounded::<VisibleSet>();
     let (report_tx, report_rx) = bounded::<FrameReport>(1);
     let b = rvg_device(rt, opts);
     let latest = &latest;
+    // Owned by RVG's body, so the slot closes when RVG ends for any reason,
+    // or when its body is dropped without running.
+    let close = CloseOnDrop(latest);
     std::thread::scope(|s| {
         run_threads(
             s,
@@ -540,6 +557,7 @@ pub(crate) fn run_async(
                 (
                     Stage::Rvg,
                     Box::new(move || {
+                        let _close = close;
                         async_rvg_thread(rt, b, opts, source, latest, sets_rx, report_tx, presenter)
                     }),
                 ),
@@ -555,13 +573,13 @@ fn async_or_thread(
     opts: &RuntimeOptions,
     latest: &LatestSlot,
     out: Sender<OrToStc>,
-    feedback: Receiver<Vec<DrawItem>>,
+    feedback: Receiver<VisibleSet>,
 ) -> Result<(), RuntimeError> {
     let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
     let mut done: Option<u64> = None;
     let mut runs = 0u64;
     // The newest visible sets, most recent last; occluders lag by `lag` runs.
-    let mut sets: std::collections::VecDeque<Vec<DrawItem>> = Default::default();
+    let mut sets: std::collections::VecDeque<VisibleSet> = Default::default();
     while let Some(sample) = latest.take_newer(done) {
         done = Some(sample.frame);
         loop {
@@ -575,7 +593,7 @@ fn async_or_thread(
             sets.pop_front();
         }
         let occluders = (opts.traversal.occlusion && runs >= opts.occluder_lag as u64)
-            .then(|| sets.front().map(|v| v.as_slice()).unwrap_or(&[]));
+            .then(|| sets.front().map(|v| &v[..]).unwrap_or(&[]));
         let o = or.run(sample.frame, &sample.view, occluders)?;
         runs += 1;
         let msg = OrToStc {
@@ -596,7 +614,7 @@ fn async_stc_thread(
     opts: &RuntimeOptions,
     input: Receiver<OrToStc>,
     out: Sender<Box<FrameEnd>>,
-    feedback: Sender<Vec<DrawItem>>,
+    feedback: Sender<VisibleSet>,
 ) -> Result<(), RuntimeError> {
     let mut stc = StcStage::new(rt.skeleton, opts);
     for m in input.iter() {
@@ -632,7 +650,6 @@ fn async_rvg_thread(
     out: Sender<FrameReport>,
     presenter: &mut dyn Presenter,
 ) -> Result<(), RuntimeError> {
-    let _close = CloseOnDrop(latest);
     let mut rvg = RvgStage::new(&rt.devices[device], &rt.geometry[device], opts);
     let mut newest: Option<Box<FrameEnd>> = None;
     let mut frame = 0u64;

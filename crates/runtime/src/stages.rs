@@ -1,6 +1,7 @@
 //! The work of each stage for one frame, shared by the pipelined and the
 //! sequential schedule (so both run the same algorithms).
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use gigawalk_cull::{
@@ -35,6 +36,8 @@ pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
         .collect()
 }
 
+/// The test hook `RuntimeOptions::inject_failure` (feature `testing`).
+#[cfg(feature = "testing")]
 pub(crate) fn check_injected(
     opts: &RuntimeOptions,
     stage: Stage,
@@ -45,6 +48,12 @@ pub(crate) fn check_injected(
         Some((s, f)) if s == stage && frame >= f => Err(RuntimeError::Injected { stage, frame: f }),
         _ => Ok(()),
     }
+}
+
+/// Without the `testing` feature there is no hook: nothing to check.
+#[cfg(not(feature = "testing"))]
+pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(), RuntimeError> {
+    Ok(())
 }
 
 /// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
@@ -143,11 +152,13 @@ pub(crate) struct StcStage<'a> {
     hzb: Hzb,
 }
 
+/// One frame's culling result. Cheap to clone: the visible set is shared
+/// by RVG, OR's occluders of a later frame, a held frame and the report.
 #[derive(Clone)]
 pub(crate) struct StcOutput {
     pub stats: TraversalStats,
-    pub visible: Vec<DrawItem>,
-    pub culled: Vec<(u32, CullReason)>,
+    pub visible: Arc<[DrawItem]>,
+    pub culled: Arc<[(u32, CullReason)]>,
     pub occlusion_used: bool,
     pub hzb_ms: f64,
     pub ms: f64,
@@ -225,8 +236,8 @@ impl<'a> StcStage<'a> {
         };
         Ok(StcOutput {
             stats,
-            culled,
-            visible,
+            culled: culled.into(),
+            visible: visible.into(),
             occlusion_used: occlusion,
             hzb_ms,
             ms: ms_since(t),

@@ -26,7 +26,7 @@ mod validate;
 mod write;
 
 pub use aabb::Aabb;
-pub use atomic::{temp_file_for, write_atomic};
+pub use atomic::{remove_temp_files, temp_file_for, write_atomic, TempFile};
 pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};

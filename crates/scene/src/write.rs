@@ -28,7 +28,7 @@ pub struct WriteSummary {
 /// Writes a `.gwk` scene file. See the crate docs for the order of calls.
 pub struct SceneWriter {
     path: PathBuf,
-    out: BufWriter<tempfile::NamedTempFile>,
+    out: BufWriter<crate::TempFile>,
     pos: u64,
     geometry_crc: crc32fast::Hasher,
     lods: Vec<LodInfo>,
@@ -200,7 +200,7 @@ impl SceneWriter {
         };
         let tmp = self.out.into_inner().map_err(|e| io_err(e.into_error()))?;
         tmp.as_file().sync_all().map_err(io_err)?;
-        tmp.persist(&path).map_err(|e| io_err(e.error))?;
+        tmp.persist(&path).map_err(io_err)?;
         // Make the rename itself durable where the platform allows.
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             let _ = File::open(dir).and_then(|d| d.sync_all());

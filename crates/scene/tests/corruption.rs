@@ -1,9 +1,12 @@
 //! Damaged files: truncated at many lengths or with flipped bytes, every
-//! case is an error or a scene that passes validation, never a panic.
+//! damage that a checksum covers is reported as an error (never a panic,
+//! never a scene that reads as if nothing happened); damage that rewrites
+//! fields and fixes the checksums is an error or a scene that passes every
+//! check.
 
 mod common;
 
-use gigawalk_scene::SceneReader;
+use gigawalk_scene::{ReadError, SceneReader};
 use proptest::prelude::*;
 
 fn scene_bytes() -> Vec<u8> {
@@ -13,17 +16,50 @@ fn scene_bytes() -> Vec<u8> {
     std::fs::read(path).unwrap()
 }
 
-/// Opens, then reads every LOD: any outcome but a panic is fine, and a
-/// scene that opens must have a consistent skeleton.
-fn exercise(bytes: Vec<u8>) {
-    if let Ok(r) = SceneReader::from_source(bytes, "damaged.gwk") {
-        let s = r.skeleton();
-        assert!(!s.nodes.is_empty());
-        for l in 0..s.lods.len() as u32 {
-            let _ = r.read_lod(l);
-        }
-        let _ = r.verify();
+/// Opens, reads every LOD and verifies the whole file: the first error, or
+/// `Ok` for a scene that passes every check.
+fn exercise(bytes: Vec<u8>) -> Result<(), ReadError> {
+    let r = SceneReader::from_source(bytes, "damaged.gwk")?;
+    let s = r.skeleton();
+    assert!(!s.nodes.is_empty());
+    for l in 0..s.lods.len() as u32 {
+        r.read_lod(l)?;
     }
+    r.verify()
+}
+
+/// Flipped bytes of the undamaged scene: an error when any changed byte is
+/// under a checksum (header, TOC, a section); otherwise (alignment padding
+/// between sections, which no reader looks at) a scene that passes.
+fn check_flips(damaged: Vec<u8>) {
+    let original = scene_bytes_cached();
+    let changed: Vec<usize> = (0..damaged.len())
+        .filter(|&i| damaged[i] != original[i])
+        .collect();
+    let checked = changed.iter().any(|&i| covered()[i]);
+    let result = exercise(damaged);
+    if checked {
+        assert!(
+            result.is_err(),
+            "bytes {changed:?} changed, yet the scene reads and verifies"
+        );
+    } else {
+        assert!(
+            result.is_ok(),
+            "only padding bytes {changed:?} changed: {result:?}"
+        );
+    }
+}
+
+#[test]
+fn the_undamaged_scene_passes() {
+    exercise(scene_bytes_cached().clone()).unwrap();
+    // The checks below mean something only if nearly every byte is covered.
+    let uncovered = covered().iter().filter(|c| !**c).count();
+    assert!(
+        uncovered * 100 < covered().len(),
+        "{uncovered} bytes uncovered"
+    );
 }
 
 #[test]
@@ -41,30 +77,34 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(2000))]
 
     #[test]
-    fn flipped_bytes_never_panic(flips in prop::collection::vec((any::<prop::sample::Index>(), 1u8..=255), 1..6)) {
+    fn flipped_bytes_are_errors(flips in prop::collection::vec((any::<prop::sample::Index>(), 1u8..=255), 1..6)) {
         let mut bytes = scene_bytes_cached().clone();
         for (i, x) in flips {
             let i = i.index(bytes.len());
             bytes[i] ^= x;
         }
-        exercise(bytes);
+        check_flips(bytes);
     }
 
     #[test]
-    fn truncated_and_flipped_never_panic(cut in any::<prop::sample::Index>(), at in any::<prop::sample::Index>(), x in 1u8..=255) {
+    fn truncated_and_flipped_is_an_error(cut in any::<prop::sample::Index>(), at in any::<prop::sample::Index>(), x in 1u8..=255) {
         let mut bytes = scene_bytes_cached().clone();
         let len = cut.index(bytes.len());
         bytes.truncate(len.max(1));
         let i = at.index(bytes.len());
         bytes[i] ^= x;
-        exercise(bytes);
+        // Shorter than the header says: one flip cannot fix both the
+        // length and the header's checksum.
+        prop_assert!(exercise(bytes).is_err(), "cut at {}, byte {} flipped", len.max(1), i);
     }
 }
 
 /// Flips that keep every checksum valid: rewrite a field, then fix the
-/// checksums, so the validator itself (not the CRC) must catch it.
+/// checksums, so the validator itself (not the CRC) must catch it. Not every
+/// rewrite is damage (a vertex moved inside its box, another colour): those
+/// must pass every check, not only open; most rewrites must be caught.
 #[test]
-fn field_damage_with_fixed_checksums_never_panics() {
+fn field_damage_with_fixed_checksums_is_an_error_or_a_valid_scene() {
     let bytes = scene_bytes();
     let mut rng = 0x9e3779b97f4a7c15u64;
     let mut next = move || {
@@ -73,6 +113,7 @@ fn field_damage_with_fixed_checksums_never_panics() {
         rng ^= rng << 17;
         rng
     };
+    let mut errors = 0;
     for _ in 0..3000 {
         let mut b = bytes.clone();
         let at = 64 + (next() as usize % (b.len() - 64));
@@ -81,13 +122,43 @@ fn field_damage_with_fixed_checksums_never_panics() {
         let n = n.min(b.len() - at);
         b[at..at + n].copy_from_slice(&v[..n]);
         refresh_checksums(&mut b);
-        exercise(b);
+        if exercise(b).is_err() {
+            errors += 1;
+        }
     }
+    // A rewrite of random bytes mostly lands in offsets, counts, indices
+    // and boxes, which the validator checks.
+    assert!(
+        errors > 3000 / 2,
+        "only {errors} of 3000 rewrites were errors"
+    );
 }
 
 fn scene_bytes_cached() -> &'static Vec<u8> {
     static BYTES: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
     BYTES.get_or_init(scene_bytes)
+}
+
+/// Which bytes of the undamaged scene a checksum covers: the header, the
+/// TOC and every section the TOC lists (layout per docs/scene-format.md).
+fn covered() -> &'static Vec<bool> {
+    static COVERED: std::sync::OnceLock<Vec<bool>> = std::sync::OnceLock::new();
+    COVERED.get_or_init(|| {
+        let b = scene_bytes_cached();
+        let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap()) as usize;
+        let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
+        let mut covered = vec![false; b.len()];
+        let (count, toc) = (u32_at(12), u64_at(16));
+        let mut ranges = vec![(0, 64), (toc, toc + count * 32)];
+        for e in 0..count {
+            let at = toc + e * 32;
+            ranges.push((u64_at(at + 8), u64_at(at + 8) + u64_at(at + 16)));
+        }
+        for (start, end) in ranges {
+            covered[start..end].fill(true);
+        }
+        covered
+    })
 }
 
 /// Recomputes section, TOC and header CRCs after a deliberate edit (layout

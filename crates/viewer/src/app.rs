@@ -21,8 +21,8 @@ use gigawalk_gpu::{
     WindowError, WindowSurface,
 };
 use gigawalk_runtime::{
-    CameraRequest, CameraSource, CullReason, DrawStyle, FrameReport, OccluderBudget, Presenter,
-    Runtime, RuntimeError, RuntimeOptions,
+    CameraError, CameraRequest, CameraSource, CullReason, DrawStyle, FrameReport, OccluderBudget,
+    Presenter, Runtime, RuntimeError, RuntimeOptions,
 };
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
 use gigawalk_scene::{SceneReader, Skeleton};
@@ -560,9 +560,12 @@ struct LiveSource {
 }
 
 impl CameraSource for LiveSource {
-    fn next_camera(&mut self, _frame: u64) -> Result<Option<CameraRequest>, String> {
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
         let (camera, frozen, style, quit, minimised) = {
-            let s = self.shared.lock().map_err(|e| e.to_string())?;
+            let s = self.shared.lock().map_err(|_| CameraError::Source {
+                frame,
+                source: "the window's state is poisoned: its thread panicked".into(),
+            })?;
             (
                 s.camera,
                 s.frozen,
@@ -722,7 +725,7 @@ fn cull_sets(report: &FrameReport) -> CullSets {
         drawn: report.visible.iter().map(|d| d.node).collect(),
         ..Default::default()
     };
-    for &(node, why) in &report.culled {
+    for &(node, why) in report.culled.iter() {
         match why {
             CullReason::Frustum => sets.frustum_culled.push(node),
             CullReason::Occlusion => sets.occlusion_culled.push(node),

@@ -17,6 +17,7 @@ mod generate;
 mod info;
 mod preprocess;
 mod replay;
+mod signals;
 mod view;
 
 use clap::{Parser, Subcommand};
@@ -77,9 +78,14 @@ pub(crate) fn write_stdout(args: std::fmt::Arguments, line: bool) -> anyhow::Res
 }
 
 fn main() -> std::process::ExitCode {
+    // First, while this is the only thread (it changes the environment).
+    quiet_headless_vulkan_device_select();
     let cli = Cli::parse();
     // Keep the trace writer alive until the end: dropping it flushes the file.
     let _trace_guard = init_tracing(cli.trace.as_deref());
+    if let Err(e) = signals::install() {
+        eprintln!("warning: {}", error_chain(&e));
+    }
     let result = match cli.command {
         Command::Info(a) => info::run(a),
         Command::Generate(a) => generate::run(a),
@@ -88,15 +94,44 @@ fn main() -> std::process::ExitCode {
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
     };
+    // A command that finished after a signal (a replay that stopped early
+    // and wrote what it measured) still reports the signal.
+    let interrupted = signals::exit_status().map(std::process::ExitCode::from);
     match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+        Ok(()) => interrupted.unwrap_or(std::process::ExitCode::SUCCESS),
         // The reader has what it wanted (`| head`); everything else was
         // already written.
         Err(e) if e.downcast_ref::<StdoutClosed>().is_some() => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error_chain(&e));
-            std::process::ExitCode::FAILURE
+            interrupted.unwrap_or(std::process::ExitCode::FAILURE)
         }
+    }
+}
+
+/// Mesa's Vulkan device-selection layer (VK_LAYER_MESA_device_select, an
+/// implicit layer that Mesa's Vulkan drivers install) looks for the GPU
+/// that drives the desktop each time wgpu enumerates adapters: since wgpu
+/// enables VK_KHR_wayland_surface, the layer calls `wl_display_connect`,
+/// and without a desktop session libwayland-client prints "error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment." on every
+/// enumeration, although nothing failed. Without XDG_RUNTIME_DIR (or an
+/// absolute WAYLAND_DISPLAY) there is no Wayland display to ask, so this
+/// turns the layer off with its documented switch, NODEVICE_SELECT=1;
+/// gigawalk orders adapters itself (hardware first). Left alone when the
+/// user steers the layer (MESA_VK_DEVICE_SELECT, DRI_PRIME, NODEVICE_SELECT).
+fn quiet_headless_vulkan_device_select() {
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    let absolute =
+        |name: &str| std::env::var_os(name).is_some_and(|v| v.to_string_lossy().starts_with('/'));
+    let no_wayland = !absolute("XDG_RUNTIME_DIR") && !absolute("WAYLAND_DISPLAY");
+    let steered = ["MESA_VK_DEVICE_SELECT", "DRI_PRIME", "NODEVICE_SELECT"]
+        .iter()
+        .any(|v| set(v));
+    if no_wayland && !steered {
+        // Sound only while no other thread can read the environment: main
+        // calls this before anything else.
+        std::env::set_var("NODEVICE_SELECT", "1");
     }
 }
 

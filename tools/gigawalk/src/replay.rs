@@ -1,11 +1,9 @@
 //! `gigawalk replay`: a camera path through a scene in the Table 2 modes,
 //! written as a frame-time and accuracy report. Argument parsing, progress
-//! bars and Ctrl-C only; the work is in gigawalk-replay.
+//! bars and stopping on a signal only; the work is in gigawalk-replay.
 
 use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context as _;
@@ -133,7 +131,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_and_print(&replay, &args.out)
 }
 
-/// Replays with bars and Ctrl-C handling; shared with `gigawalk demo`.
+/// Replays with bars; once the first run starts, SIGINT or SIGTERM ends
+/// the current frame and the report holds what was measured (a second
+/// signal exits at once). Shared with `gigawalk demo`.
 pub fn run_replay(
     scene: &SceneReader,
     scene_name: &str,
@@ -141,20 +141,10 @@ pub fn run_replay(
     path_name: &str,
     opts: &ReplayOptions,
 ) -> anyhow::Result<Replay> {
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // From here on Ctrl-C ends the current frame and writes what was
-        // measured; a second Ctrl-C while stopping is ignored.
-        if let Err(e) = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst)) {
-            tracing::warn!("Ctrl-C will not stop the replay cleanly: {e}");
-        }
-    }
     let mut bars = Bars {
         terminal: std::io::stderr().is_terminal(),
         bar: None,
         started: Instant::now(),
-        stop,
     };
     gigawalk_replay::replay(scene, scene_name, &path.poses, path_name, opts, &mut bars)
         .with_context(|| format!("cannot replay {path_name} through {scene_name}"))
@@ -187,11 +177,14 @@ struct Bars {
     terminal: bool,
     bar: Option<ProgressBar>,
     started: Instant,
-    stop: Arc<AtomicBool>,
 }
 
 impl Progress for Bars {
     fn start(&mut self, label: &str, frames: u64) {
+        // Loading the scene (before the first run) is not worth keeping:
+        // a signal then exits at once. From the first frame on, it stops
+        // the replay and the report is written.
+        crate::signals::stop_gracefully();
         self.started = Instant::now();
         if !self.terminal {
             eprintln!("{label}: {frames} frames");
@@ -224,6 +217,6 @@ impl Progress for Bars {
     }
 
     fn keep_going(&self) -> bool {
-        !self.stop.load(Ordering::SeqCst)
+        !crate::signals::stop_requested()
     }
 }

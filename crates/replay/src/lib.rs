@@ -12,6 +12,7 @@
 
 mod accuracy;
 pub mod demo;
+pub mod gpu_run;
 mod mode;
 mod plot;
 mod replay;

@@ -131,8 +131,6 @@ pub struct RuntimeOptions {
     /// Visible items per RVG submission: RVG starts drawing a frame while
     /// STC is still traversing it.
     pub chunk: usize,
-    /// Near plane distance in model units.
-    pub near: f64,
     /// Asynchronous RVG (Section 5.3): RVG does not wait for STC's list of
     /// the current camera; it draws the newest finished list with the
     /// newest camera. Removes a frame of latency; may show brief occlusion
@@ -159,7 +157,6 @@ impl Default for RuntimeOptions {
             hzb_reduction: Reduction::Farthest,
             devices: 2,
             chunk: 256,
-            near: 0.05,
             async_rvg: false,
             record_culled: false,
             inject_failure: None,
@@ -193,9 +190,6 @@ impl RuntimeOptions {
                 "pixel error {} must be a finite number >= 0",
                 self.traversal.pixel_tolerance
             ));
-        }
-        if !(self.near > 0.0 && self.near.is_finite()) {
-            return Err(format!("near plane {} must be > 0", self.near));
         }
         if let Reduction::NthFarthest(n) = self.hzb_reduction {
             if !(1..=4).contains(&n) {

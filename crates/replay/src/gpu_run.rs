@@ -236,7 +236,13 @@ fn summary_figures(step: &str, summary: &Value, out: &mut Vec<Figure>) {
         // Settings, not figures.
         if !matches!(
             k.as_str(),
-            "width" | "height" | "warmup_frames" | "accuracy_every" | "occluder_lag"
+            "width"
+                | "height"
+                | "warmup_frames"
+                | "accuracy_every"
+                | "occluder_lag"
+                | "occluder_scale"
+                | "occluder_budget"
         ) && v.is_number()
         {
             push("all", k, v);

@@ -449,7 +449,10 @@ impl GpuRun {
         if !speedups.is_empty() {
             let _ = writeln!(m, "\n## Pipelined vs sequential (median frame time, och)\n");
             for f in speedups {
-                let _ = writeln!(m, "- {}: {}x", f.step, fmt(f.value, 2));
+                let v = f
+                    .value
+                    .map_or("not measured".into(), |v| format!("{v:.2}x"));
+                let _ = writeln!(m, "- {}: {v}", f.step);
             }
         }
         let bench: Vec<&Figure> = self

@@ -313,7 +313,8 @@ mod tests {
         m.toggle_walk();
         assert!((c.position.y - 1e3 * m.position.y).abs() < 1e-9);
         assert!((c.position.y - 1700.0).abs() < 1e-9);
-        for (ctl, base) in [(&mut m, m.base_speed), (&mut c, c.base_speed)] {
+        for ctl in [&mut m, &mut c] {
+            let base = ctl.base_speed;
             ctl.scroll(1e4);
             assert!((ctl.speed - base * SPEED_RANGE).abs() < 1e-6 * ctl.speed);
             ctl.scroll(-1e4);

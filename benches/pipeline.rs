@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 
-use gigawalk_cull::{Camera, TraversalOptions, Viewport};
+use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
 use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
@@ -75,13 +75,14 @@ fn main() {
     let scene = SceneReader::open(&scene_path).unwrap();
     let path = CameraPath::read(&path_path).unwrap();
     let rt = Runtime::new(&scene, 2).expect("this bench needs a GPU adapter (lavapipe is fine)");
+    let near = default_near(&scene.skeleton().bounds);
     let cameras: Vec<CameraRequest> = path
         .poses
         .iter()
         .take(frames)
         .map(|p| {
             CameraRequest::new(
-                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), 0.05),
+                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near),
                 false,
             )
         })

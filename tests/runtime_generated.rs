@@ -57,7 +57,6 @@ fn check(kind: Kind) {
         schedule,
         width: W,
         height: H,
-        near: 0.05,
         traversal: TraversalOptions {
             occlusion,
             hlod: false,

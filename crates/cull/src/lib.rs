@@ -38,7 +38,7 @@ mod occlusion;
 mod traverse;
 mod view;
 
-pub use camera::{Camera, Viewport};
+pub use camera::{default_near, Camera, Viewport, NEAR_FRACTION_OF_SCENE};
 pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
 pub use hzb::{Hzb, HzbError, HzbLevel, Reduction};
 pub use lod::select_lod;

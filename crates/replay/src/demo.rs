@@ -181,6 +181,7 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
             height,
             ..RuntimeOptions::default()
         },
+        near: None,
         frames: Some(frames),
         accuracy_every: 10,
         warmup: 5,

@@ -14,6 +14,7 @@
 
 mod accuracy;
 pub mod demo;
+pub mod gpu_run;
 mod mode;
 mod plot;
 mod replay;

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use gigawalk_cull::{Camera, Viewport};
+use gigawalk_cull::{default_near, Camera, Viewport};
 use gigawalk_gpu::FrameImage;
 use gigawalk_runtime::{
     CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule,
@@ -26,6 +26,11 @@ pub struct ReplayOptions {
     pub pixel_errors: Vec<f64>,
     /// Every runtime knob; `traversal` is set per mode.
     pub runtime: RuntimeOptions,
+    /// Near plane distance in model units, shared by the reference and
+    /// every run; `None`: [`gigawalk_cull::default_near`] of the scene's
+    /// bounds, so a model in millimetres replays like the same model in
+    /// metres.
+    pub near: Option<f64>,
     /// Replay at most this many poses (from the start of the path).
     pub frames: Option<usize>,
     /// Compare every K-th frame (0, K, 2K, ...) with the reference; 0 = no
@@ -44,6 +49,7 @@ impl Default for ReplayOptions {
             modes: Mode::ALL.to_vec(),
             pixel_errors: vec![1.0],
             runtime: RuntimeOptions::default(),
+            near: None,
             frames: None,
             accuracy_every: 10,
             warmup: 5,
@@ -128,6 +134,9 @@ pub struct Replay {
     pub path: String,
     /// Poses replayed per run.
     pub frames: usize,
+    /// The near plane every frame used, model units (`options.near`
+    /// resolved against the scene).
+    pub near: f64,
     pub options: ReplayOptions,
     /// The occluder budget the runs used on these devices, in triangles
     /// (`None`: all occluders); `options.runtime.occluder_budget` resolved.
@@ -201,17 +210,15 @@ pub fn replay_on(
     }
     let (w, h) = (opts.runtime.width, opts.runtime.height);
     let k = opts.accuracy_every;
+    let near = opts
+        .near
+        .unwrap_or_else(|| default_near(&rt.skeleton().bounds));
     let cameras: Vec<CameraRequest> = poses[..n]
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let camera = Camera::from_pose(
-                p.position,
-                p.orientation,
-                p.fovy,
-                Viewport::new(w, h),
-                opts.runtime.near,
-            );
+            let camera =
+                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near);
             CameraRequest::new(camera, k > 0 && i % k == 0)
         })
         .collect();
@@ -219,6 +226,7 @@ pub fn replay_on(
         scene: scene_name.to_string(),
         path: path_name.to_string(),
         frames: n,
+        near,
         options: opts.clone(),
         occluder_budget: rt.occluder_budget(opts.runtime.occluder_budget),
         devices: rt.device_names(),
@@ -357,6 +365,11 @@ fn validate(opts: &ReplayOptions) -> Result<(), ReplayError> {
         .find(|e| !(e.is_finite() && **e >= 0.0))
     {
         return bad(format!("pixel error {e} must be a finite number >= 0"));
+    }
+    if let Some(near) = opts.near {
+        if !(near > 0.0 && near.is_finite()) {
+            return bad(format!("near plane {near} must be a finite number > 0"));
+        }
     }
     if opts.frames == Some(0) {
         return bad("frames must be at least 1".into());

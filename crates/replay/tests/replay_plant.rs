@@ -76,6 +76,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
             height: H,
             ..Default::default()
         },
+        near: None,
         frames: Some(frames),
         accuracy_every: every,
         warmup: 3,
@@ -339,6 +340,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 modes: vec![Mode::Occ, Mode::Och],
                 pixel_errors: vec![1.0],
                 runtime: runtime.clone(),
+                near: None,
                 frames: Some(12),
                 accuracy_every: 4,
                 warmup: 2,

@@ -131,8 +131,6 @@ pub struct RuntimeOptions {
     /// Visible items per RVG submission: RVG starts drawing a frame while
     /// STC is still traversing it.
     pub chunk: usize,
-    /// Near plane distance in model units.
-    pub near: f64,
     /// Asynchronous RVG (Section 5.3): RVG does not wait for STC's list of
     /// the current camera; it draws the newest finished list with the
     /// newest camera. Removes a frame of latency; may show brief occlusion
@@ -160,8 +158,6 @@ pub enum OptionsError {
     Devices(usize),
     #[error("pixel error {0} must be a finite number >= 0")]
     PixelError(f64),
-    #[error("near plane {0} must be > 0")]
-    Near(f64),
     #[error("n-th farthest HZB needs n in 1..=4, got {0}")]
     NthFarthest(u8),
     #[error("asynchronous RVG needs the pipelined schedule")]
@@ -183,7 +179,6 @@ impl Default for RuntimeOptions {
             hzb_reduction: Reduction::Farthest,
             devices: 2,
             chunk: 256,
-            near: 0.05,
             async_rvg: false,
             record_culled: false,
             #[cfg(feature = "testing")]
@@ -212,9 +207,6 @@ impl RuntimeOptions {
         }
         if !(self.traversal.pixel_tolerance >= 0.0 && self.traversal.pixel_tolerance.is_finite()) {
             return Err(OptionsError::PixelError(self.traversal.pixel_tolerance));
-        }
-        if !(self.near > 0.0 && self.near.is_finite()) {
-            return Err(OptionsError::Near(self.near));
         }
         if let Reduction::NthFarthest(n) = self.hzb_reduction {
             if !(1..=4).contains(&n) {

@@ -56,7 +56,12 @@ pub struct ViewArgs {
     pub height: u32,
     /// wgpu devices for the pipeline (1 or 2).
     pub devices: usize,
-    pub near: f64,
+    /// Near plane, model units; `None`: `gigawalk_cull::default_near` of
+    /// the scene's bounds.
+    pub near: Option<f64>,
+    /// Metres per model unit (1 for glTF's metres, 0.001 for a model in
+    /// millimetres): walk mode's eye height follows.
+    pub metres_per_unit: f64,
     /// Occluder triangles OR draws a frame (`auto`: 30k on CPU rasterizers).
     pub occluder_budget: OccluderBudget,
     /// The starting toggles.
@@ -134,7 +139,11 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             FlyController::from_pose(q.position, q.orientation, q.fovy, &skeleton.bounds)
         }
         None => FlyController::overview(&skeleton.bounds, fovy),
-    };
+    }
+    .with_units(args.metres_per_unit);
+    let near = args
+        .near
+        .unwrap_or_else(|| gigawalk_cull::default_near(&skeleton.bounds));
 
     let mut event_loop = EventLoop::new().map_err(|e| ViewError::Display(e.to_string()))?;
     let mut app = App {
@@ -186,7 +195,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         screenshot: args.screenshot.clone(),
     });
     let shared = Arc::new(Mutex::new(Shared {
-        camera: controller.camera(aspect(app.size), args.near),
+        camera: controller.camera(aspect(app.size), near),
         frozen: settings.frozen,
         window_size: (app.size.width, app.size.height),
         capture: None,
@@ -200,7 +209,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         shared: shared.clone(),
         script: scripted.clone(),
         sent: 0,
-        near: args.near,
+        near,
     };
     let mut presenter = ViewerPresenter {
         surface,
@@ -221,7 +230,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         devices: device_names,
         occluder_budget: runtime.occluder_budget(args.occluder_budget),
         out_dir: args.out_dir.clone(),
-        near: args.near,
+        near,
         rendered: 0,
     };
     loop {
@@ -231,7 +240,6 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             width: render.width,
             height: render.height,
             devices: args.devices,
-            near: args.near,
             occluder_budget: args.occluder_budget,
             traversal: running.traversal(),
             async_rvg: running.async_rvg,

@@ -11,9 +11,14 @@ use glam::{DQuat, DVec3};
 
 use crate::controls::Movement;
 
-/// Eye height in walk mode: 1.7 model units, a person's eye in metres
-/// (glTF's unit, which the generated plants use).
+/// Eye height in walk mode, metres: a person's eye. In model units it is
+/// this over the model's metres per unit (`--units`; glTF's unit, which
+/// the generated plants use, is the metre).
 pub const EYE_HEIGHT: f64 = 1.7;
+/// Scrolling keeps the speed within this factor of the scene's default
+/// speed either way: any scene scale can be crossed, and a runaway scroll
+/// stays recoverable.
+const SPEED_RANGE: f64 = 1e6;
 /// Radians of turn per pixel of mouse drag (a full turn is ~2000 pixels).
 pub const LOOK_RADIANS_PER_PIXEL: f64 = 0.003;
 /// Shift multiplies the speed by this.
@@ -36,8 +41,13 @@ pub struct FlyController {
     pub pitch: f64,
     /// Model units per second.
     pub speed: f64,
+    /// The scene's default speed (crossing its diagonal in 40 s), which
+    /// scrolling stays within [`SPEED_RANGE`] of.
+    pub base_speed: f64,
+    /// Walk mode's eye height above the floor, model units.
+    pub eye_height: f64,
     pub fovy: f64,
-    /// Walk mode: the floor height the eye stays `EYE_HEIGHT` above.
+    /// Walk mode: the floor height the eye stays `eye_height` above.
     pub walk_floor: Option<f64>,
     /// The scene's floor (its bounds' lowest y), where walk mode puts you.
     pub floor: f64,
@@ -52,6 +62,8 @@ impl FlyController {
             yaw: 0.0,
             pitch: 0.0,
             speed: default_speed(scene),
+            base_speed: default_speed(scene),
+            eye_height: EYE_HEIGHT,
             fovy,
             walk_floor: None,
             floor: if scene.min.y.is_finite() {
@@ -62,6 +74,16 @@ impl FlyController {
         };
         c.look_along(f);
         c
+    }
+
+    /// The same controller for a model measured in `metres_per_unit`
+    /// (0.001 for millimetres): walk mode's eye height follows; speeds
+    /// already follow the scene's size.
+    pub fn with_units(mut self, metres_per_unit: f64) -> Self {
+        if metres_per_unit.is_finite() && metres_per_unit > 0.0 {
+            self.eye_height = EYE_HEIGHT / metres_per_unit;
+        }
+        self
     }
 
     /// An overview: outside the scene's bounds, looking at its centre.
@@ -108,7 +130,8 @@ impl FlyController {
 
     /// Scroll by `notches` (positive = away from the user = faster).
     pub fn scroll(&mut self, notches: f64) {
-        self.speed = (self.speed * SCROLL_FACTOR.powf(notches)).clamp(1e-4, 1e7);
+        self.speed = (self.speed * SCROLL_FACTOR.powf(notches))
+            .clamp(self.base_speed / SPEED_RANGE, self.base_speed * SPEED_RANGE);
     }
 
     pub fn walking(&self) -> bool {
@@ -120,7 +143,7 @@ impl FlyController {
         if self.walk_floor.take().is_none() {
             self.walk_floor = Some(self.floor);
             self.pitch = 0.0;
-            self.position.y = self.floor + EYE_HEIGHT;
+            self.position.y = self.floor + self.eye_height;
         }
     }
 
@@ -149,7 +172,7 @@ impl FlyController {
         }
         self.position += dir.normalize_or_zero() * v * dt;
         if let Some(floor) = self.walk_floor {
-            self.position.y = floor + EYE_HEIGHT;
+            self.position.y = floor + self.eye_height;
         }
     }
 }
@@ -277,5 +300,33 @@ mod tests {
     fn empty_scene_gives_a_usable_controller() {
         let c = FlyController::overview(&Aabb::EMPTY, 1.0);
         assert!(c.position.is_finite() && c.speed > 0.0 && c.floor == 0.0);
+    }
+
+    #[test]
+    fn millimetre_model_walks_at_1700_units_and_scrolls_in_its_own_range() {
+        let mm = |b: Aabb| Aabb::new(b.min * 1e3, b.max * 1e3);
+        let mut m = FlyController::from_pose(DVec3::ZERO, DQuat::IDENTITY, 1.0, &scene());
+        let mut c = FlyController::from_pose(DVec3::ZERO, DQuat::IDENTITY, 1.0, &mm(scene()))
+            .with_units(1e-3);
+        assert!((c.speed - 1e3 * m.speed).abs() < 1e-9 * c.speed);
+        c.toggle_walk();
+        m.toggle_walk();
+        assert!((c.position.y - 1e3 * m.position.y).abs() < 1e-9);
+        assert!((c.position.y - 1700.0).abs() < 1e-9);
+        for ctl in [&mut m, &mut c] {
+            let base = ctl.base_speed;
+            ctl.scroll(1e4);
+            assert!((ctl.speed - base * SPEED_RANGE).abs() < 1e-6 * ctl.speed);
+            ctl.scroll(-1e4);
+            assert!((ctl.speed - base / SPEED_RANGE).abs() < 1e-6 * ctl.speed);
+        }
+    }
+
+    #[test]
+    fn bad_units_keep_metres() {
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let c = FlyController::overview(&scene(), 1.0).with_units(bad);
+            assert_eq!(c.eye_height, EYE_HEIGHT);
+        }
     }
 }

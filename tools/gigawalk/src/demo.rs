@@ -51,6 +51,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let path = CameraPath::read(&prepared.path).context("cannot read the demo path")?;
     let mut opts = demo::replay_options(args.frames, args.runtime.width, args.runtime.height);
     opts.runtime = args.runtime.options();
+    opts.near = args.runtime.near;
     let replay = run_replay(
         &scene,
         &prepared.scene.display().to_string(),

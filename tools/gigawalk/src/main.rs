@@ -14,6 +14,7 @@ macro_rules! out {
 
 mod demo;
 mod generate;
+mod gpu_run;
 mod info;
 mod preprocess;
 mod replay;
@@ -48,6 +49,9 @@ enum Command {
     Demo(demo::Args),
     /// Walk through a scene in a window: fly, toggle culling and LODs, see what they do
     View(view::Args),
+    /// benches/gpu-run.sh's last step: results.json and summary.md from its step records
+    #[command(hide = true)]
+    GpuRunResults(gpu_run::Args),
 }
 
 /// Standard output was closed by its reader: not a failure of ours.
@@ -93,6 +97,7 @@ fn main() -> std::process::ExitCode {
         Command::Replay(a) => replay::run(a),
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
+        Command::GpuRunResults(a) => gpu_run::run(a),
     };
     // A command that finished after a signal (a replay that stopped early
     // and wrote what it measured) still reports the signal.

@@ -75,9 +75,9 @@ pub struct RuntimeArgs {
     /// Visible items per RVG submission
     #[arg(long, default_value_t = 256)]
     chunk: usize,
-    /// Near plane distance in model units
-    #[arg(long, default_value_t = 0.05)]
-    near: f64,
+    /// Near plane distance in model units [default: 1e-5 of the scene's bounding-box diagonal]
+    #[arg(long)]
+    pub near: Option<f64>,
 }
 
 impl RuntimeArgs {
@@ -99,7 +99,6 @@ impl RuntimeArgs {
             },
             devices: self.devices,
             chunk: self.chunk,
-            near: self.near,
             async_rvg: self.async_rvg,
             ..RuntimeOptions::default()
         }
@@ -117,6 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         modes: args.modes,
         pixel_errors: args.pixel_error,
         runtime: args.runtime.options(),
+        near: args.runtime.near,
         frames: args.frames,
         accuracy_every: args.accuracy_every,
         warmup: args.warmup,
@@ -156,10 +156,11 @@ pub fn write_and_print(replay: &Replay, out: &Path) -> anyhow::Result<()> {
         .context("cannot write the report")?;
     let summary = replay.summary();
     out!(
-        "{} frames per run, {}x{}, on {}",
+        "{} frames per run, {}x{}, near plane {:.3e} units, on {}",
         summary.frames,
         summary.width,
         summary.height,
+        replay.near,
         summary.devices.join(" + ")
     )?;
     crate::write_stdout(format_args!("{}", summary.table()), false)?;

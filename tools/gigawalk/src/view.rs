@@ -67,9 +67,12 @@ pub struct Args {
     /// Occluder triangles OR draws a frame, those hiding most per triangle first: a count (30k), all, or auto (30k on CPU rasterizers such as lavapipe, all on GPUs)
     #[arg(long, value_name = "TRIANGLES|all|auto", default_value = "auto")]
     occluder_budget: gigawalk_runtime::OccluderBudget,
-    /// Near plane distance in model units
-    #[arg(long, default_value_t = 0.05)]
-    near: f64,
+    /// Near plane distance in model units [default: 1e-5 of the scene's bounding-box diagonal]
+    #[arg(long)]
+    near: Option<f64>,
+    /// The model's unit, for walk mode's 1.7 m eye height: m (glTF's), cm, mm, km, in, ft, or metres per unit
+    #[arg(long, default_value = "m", value_parser = parse_units)]
+    units: f64,
     /// Directory for recorded paths and screenshots taken with keys
     #[arg(long, default_value = ".")]
     out_dir: PathBuf,
@@ -81,6 +84,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "--pixel-error {} must be a finite number >= 0",
             a.pixel_error
         );
+    }
+    if let Some(near) = a.near {
+        if !(near > 0.0 && near.is_finite()) {
+            anyhow::bail!("--near {near} must be a finite number > 0");
+        }
     }
     if a.width == 0 || a.height == 0 {
         anyhow::bail!("--width and --height must be at least 1");
@@ -95,6 +103,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         height: a.height,
         devices: a.devices as usize,
         near: a.near,
+        metres_per_unit: a.units,
         occluder_budget: a.occluder_budget,
         settings: Settings {
             occlusion: !a.no_occlusion,
@@ -109,4 +118,26 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         out_dir: a.out_dir,
     })
     .with_context(|| format!("viewing {}", scene.display()))
+}
+
+/// `--units`: a unit name or metres per model unit.
+fn parse_units(s: &str) -> Result<f64, String> {
+    let m = match s {
+        "m" => 1.0,
+        "cm" => 0.01,
+        "mm" => 0.001,
+        "km" => 1000.0,
+        "in" => 0.0254,
+        "ft" => 0.3048,
+        _ => s.parse().map_err(|_| {
+            format!("{s:?} is not m, cm, mm, km, in, ft or a number of metres per unit")
+        })?,
+    };
+    if m > 0.0 && f64::is_finite(m) {
+        Ok(m)
+    } else {
+        Err(format!(
+            "{s:?}: metres per unit must be a finite number > 0"
+        ))
+    }
 }

@@ -1,11 +1,12 @@
 //! The preprocessor's promises on generated plant, city and forest scenes:
 //! every triangle in exactly one leaf's finest LOD, a valid tree with
-//! nesting boxes and monotone errors, leaves meeting the Partition-II
-//! targets, and identical bytes for identical input.
+//! nesting boxes and monotone errors, stored LOD errors that are bounds
+//! on the distance to the original surface (brute force), leaves meeting
+//! the Partition-II targets, and identical bytes for identical input.
 
 use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::partition::{SplitAt, SplitRule};
-use gigawalk_preprocess::verify::verify;
+use gigawalk_preprocess::verify::{check_error_bounds, verify};
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_scene::SceneReader;
@@ -42,6 +43,23 @@ fn check(kind: Kind, triangles: u64) {
     .unwrap_or_else(|e| panic!("{}: {e}", kind.name()));
     assert_eq!(v.matched_triangles as u64, stats.triangles);
     assert_eq!(v.leaves, stats.objects_part2);
+
+    // Every stored error is a bound: points sampled on the original
+    // triangles under a node lie within each of its LODs' errors of the
+    // LOD, and points on the LOD within it of the original. Every tenth
+    // node (the root included), 300 random points per surface plus every
+    // vertex, to keep the debug build's brute force to seconds.
+    let nodes: Vec<u32> = (0..sk.nodes.len() as u32).step_by(10).collect();
+    let b = check_error_bounds(
+        &sk.nodes,
+        &errors,
+        &mut |i| reader.read_lod(i).unwrap(),
+        Some(&nodes),
+        300,
+        11,
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", kind.name()));
+    assert!(b.lods >= nodes.len(), "{}: {b:?}", kind.name());
 
     // Same input and flags: the same bytes.
     let again = dir.path().join("again.gwk");

@@ -23,6 +23,8 @@ pub struct SceneStats {
     /// Sum over nodes at tree depth d (root = 0) of their finest LOD's
     /// triangles: the scene drawn as a cut through the tree at depth d.
     pub hlod_triangles_per_depth: Vec<u64>,
+    /// The HLOD chains of the inner nodes at each tree depth (root = 0).
+    pub hlod_levels_per_depth: Vec<DepthLevels>,
     pub bounds_min: [f64; 3],
     pub bounds_max: [f64; 3],
     pub origin: [f64; 3],
@@ -31,6 +33,28 @@ pub struct SceneStats {
     /// Whole file size divided by the original triangle count.
     pub bytes_per_triangle: f64,
     pub provenance: Provenance,
+}
+
+/// The inner nodes at one tree depth: how many HLOD levels they have, and
+/// their finest HLOD's size and error.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct DepthLevels {
+    pub depth: usize,
+    pub inner_nodes: usize,
+    pub leaves: usize,
+    pub levels_min: usize,
+    pub levels_median: usize,
+    pub levels_max: usize,
+    /// Median triangles of the finest HLOD.
+    pub finest_triangles_median: u64,
+    /// Median finest-HLOD error as a fraction of the node's box diagonal.
+    pub finest_error_median: f64,
+}
+
+/// The median of `v` (sorted in place); the upper one of an even count.
+fn median<T: Copy + PartialOrd + Default>(v: &mut [T]) -> T {
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    v.get(v.len() / 2).copied().unwrap_or_default()
 }
 
 impl SceneStats {
@@ -66,6 +90,38 @@ impl SceneStats {
                 .first()
                 .map_or(0, |l| l.triangles as u64);
         }
+        let mut levels_per_depth = Vec::new();
+        for d in 0..per_depth.len() {
+            let at: Vec<usize> = (0..s.nodes.len()).filter(|&i| depth[i] == d).collect();
+            let inner: Vec<usize> = at
+                .iter()
+                .copied()
+                .filter(|&i| !s.nodes[i].is_leaf())
+                .collect();
+            let mut counts: Vec<usize> = inner.iter().map(|&i| s.nodes[i].lod_count as usize).collect();
+            let mut tris: Vec<u64> = inner
+                .iter()
+                .filter_map(|&i| s.node_lods(i as u32).first().map(|l| l.triangles as u64))
+                .collect();
+            let mut errs: Vec<f64> = inner
+                .iter()
+                .filter_map(|&i| {
+                    let diag = s.nodes[i].bounds.diagonal();
+                    let l = s.node_lods(i as u32).first()?;
+                    (diag > 0.0).then(|| l.error as f64 / diag)
+                })
+                .collect();
+            levels_per_depth.push(DepthLevels {
+                depth: d,
+                inner_nodes: inner.len(),
+                leaves: at.len() - inner.len(),
+                levels_min: counts.iter().copied().min().unwrap_or(0),
+                levels_max: counts.iter().copied().max().unwrap_or(0),
+                levels_median: median(&mut counts),
+                finest_triangles_median: median(&mut tris),
+                finest_error_median: median(&mut errs),
+            });
+        }
         let triangles = s.finest_triangles();
         let (major, minor) = r.version();
         SceneStats {
@@ -78,6 +134,7 @@ impl SceneStats {
             triangles,
             leaf_triangles_per_level: per_level,
             hlod_triangles_per_depth: per_depth,
+            hlod_levels_per_depth: levels_per_depth,
             bounds_min: s.bounds.min.to_array(),
             bounds_max: s.bounds.max.to_array(),
             origin: s.origin.to_array(),

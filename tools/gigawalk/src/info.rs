@@ -64,6 +64,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for (d, t) in s.hlod_triangles_per_depth.iter().enumerate() {
         out!("  depth {d:<3} {t:>14}")?;
     }
+    out!("HLOD levels per tree depth (inner nodes; finest HLOD's median triangles and error / box diagonal):")?;
+    out!("  depth  inner  leaves  levels min/median/max  finest tris  finest error")?;
+    for l in &s.hlod_levels_per_depth {
+        out!(
+            "  {:<5} {:>6} {:>7}  {:>6}/{}/{:<12} {:>11}  {:>11.2}%",
+            l.depth,
+            l.inner_nodes,
+            l.leaves,
+            l.levels_min,
+            l.levels_median,
+            l.levels_max,
+            l.finest_triangles_median,
+            100.0 * l.finest_error_median
+        )?;
+    }
     out!("sections:")?;
     for (name, len) in &s.sections {
         out!("  {name:<6} {:>12}", human_bytes(*len))?;

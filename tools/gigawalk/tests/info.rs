@@ -83,6 +83,7 @@ fn info_text_and_json() {
         "{out}"
     );
     assert!(out.contains("source    hand.glb"), "{out}");
+    assert!(out.contains("HLOD levels per tree depth"), "{out}");
 
     let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--json"]);
     assert!(ok, "{err}");
@@ -91,6 +92,15 @@ fn info_text_and_json() {
     assert_eq!(v["triangles"], 4);
     assert_eq!(v["leaf_triangles_per_level"], serde_json::json!([4, 2]));
     assert_eq!(v["hlod_triangles_per_depth"], serde_json::json!([1, 4]));
+    // The root: one inner node with one HLOD of 1 triangle, error 3 over a
+    // box diagonal of sqrt(13^2 + 1); depth 1: two leaves, no inner node.
+    let d = &v["hlod_levels_per_depth"];
+    assert_eq!(d[0]["inner_nodes"], 1);
+    assert_eq!(d[0]["levels_median"], 1);
+    assert_eq!(d[0]["finest_triangles_median"], 1);
+    let e = d[0]["finest_error_median"].as_f64().unwrap();
+    assert!((e - 3.0 / 170f64.sqrt()).abs() < 1e-9, "{e}");
+    assert_eq!((d[1]["inner_nodes"].clone(), d[1]["leaves"].clone()), (0.into(), 2.into()));
     assert_eq!(v["provenance"]["parameters"]["t1"], 1000);
     let bpt = v["bytes_per_triangle"].as_f64().unwrap();
     assert_eq!(bpt, std::fs::metadata(&path).unwrap().len() as f64 / 4.0);

@@ -235,6 +235,30 @@ pub fn inner_lods(children: &[&[Lod]], origin: DVec3, diagonal: f64, p: &ChainPa
     lods
 }
 
+/// The levels of an inner node's chain worth storing: from the first
+/// whose triangles are below what its children would draw instead at the
+/// same error (each child's coarsest level within that error, or its
+/// finest). Traversal draws a node's coarsest acceptable level as soon as
+/// one is acceptable; a finer level that costs more than refining would
+/// make a tolerance draw more triangles than full detail. The levels after
+/// the first worth storing are coarser still and stay.
+pub fn worth_drawing(lods: &[Lod], children: &[&[Lod]]) -> std::ops::Range<usize> {
+    let refine = |e: f32| -> usize {
+        children
+            .iter()
+            .map(|c| {
+                let k = c.iter().rposition(|l| l.error <= e).unwrap_or(0);
+                c.get(k).map_or(0, |l| l.mesh.triangles())
+            })
+            .sum()
+    };
+    let first = lods
+        .iter()
+        .position(|l| l.mesh.triangles() < refine(l.error))
+        .unwrap_or(lods.len());
+    first..lods.len()
+}
+
 /// For each child chain, the index of the level to merge: the coarsest
 /// level with error <= E, for the smallest E (among the chains' errors)
 /// whose total triangles fit `budget`; the coarsest levels when nothing fits.

@@ -265,6 +265,9 @@ pub fn build<S: LodSink>(
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
     // Each done node's levels a parent may still merge, until the parent is done.
     let mut kept: Vec<Option<Vec<Lod>>> = vec![None; tree.len()];
+    // Per done node: its finest stored error, or (without stored levels)
+    // the largest such error below it.
+    let mut lowest = vec![0.0f32; tree.len()];
     let mut emit = |ni: usize,
                     lods: Vec<(LodMesh, f32)>,
                     per_level: &mut Vec<u64>|
@@ -328,18 +331,35 @@ pub fn build<S: LodSink>(
                         ..node.first_child + node.child_count)
                         .filter_map(|c| kept[c as usize].as_deref())
                         .collect();
-                    let lods = hlod::inner_lods(
+                    let mut lods = hlod::inner_lods(
                         &children,
                         node.bounds.center(),
                         node.bounds.diagonal(),
                         &chain,
                     );
-                    finish_chain(lods, keep)
+                    // Never claim less error than a stored level below (the
+                    // scene file's rule: errors do not decrease from a
+                    // node to its nearest ancestor with LODs).
+                    let below = (node.first_child..node.first_child + node.child_count)
+                        .map(|c| lowest[c as usize])
+                        .fold(0.0f32, f32::max);
+                    for l in &mut lods {
+                        l.error = l.error.max(below);
+                    }
+                    let stored = hlod::worth_drawing(&lods, &children);
+                    let (out, kept) = finish_chain(lods, keep);
+                    (out.into_iter().skip(stored.start).collect(), kept)
                 })
                 .collect();
             for (&ni, (lods, c)) in batch.iter().zip(made) {
-                emit(ni, lods, &mut stats.inner_lod_triangles)?;
                 let node = &tree[ni];
+                lowest[ni] = match lods.first() {
+                    Some(l) => l.1,
+                    None => (node.first_child..node.first_child + node.child_count)
+                        .map(|c| lowest[c as usize])
+                        .fold(0.0f32, f32::max),
+                };
+                emit(ni, lods, &mut stats.inner_lod_triangles)?;
                 for ch in node.first_child..node.first_child + node.child_count {
                     kept[ch as usize] = None;
                 }

@@ -98,7 +98,10 @@ impl SceneStats {
                 .copied()
                 .filter(|&i| !s.nodes[i].is_leaf())
                 .collect();
-            let mut counts: Vec<usize> = inner.iter().map(|&i| s.nodes[i].lod_count as usize).collect();
+            let mut counts: Vec<usize> = inner
+                .iter()
+                .map(|&i| s.nodes[i].lod_count as usize)
+                .collect();
             let mut tris: Vec<u64> = inner
                 .iter()
                 .filter_map(|&i| s.node_lods(i as u32).first().map(|l| l.triangles as u64))

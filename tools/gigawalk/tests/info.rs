@@ -100,7 +100,10 @@ fn info_text_and_json() {
     assert_eq!(d[0]["finest_triangles_median"], 1);
     let e = d[0]["finest_error_median"].as_f64().unwrap();
     assert!((e - 3.0 / 170f64.sqrt()).abs() < 1e-9, "{e}");
-    assert_eq!((d[1]["inner_nodes"].clone(), d[1]["leaves"].clone()), (0.into(), 2.into()));
+    assert_eq!(
+        (d[1]["inner_nodes"].clone(), d[1]["leaves"].clone()),
+        (0.into(), 2.into())
+    );
     assert_eq!(v["provenance"]["parameters"]["t1"], 1000);
     let bpt = v["bytes_per_triangle"].as_f64().unwrap();
     assert_eq!(bpt, std::fs::metadata(&path).unwrap().len() as f64 / 4.0);

@@ -232,6 +232,10 @@ impl Nearest {
     }
 }
 
+/// A piece of a triangle being bounded: its corners, and each corner's
+/// distance bound and nearest triangle of the other surface.
+type Piece = ([Vec3A; 3], [(f32, u32); 3]);
+
 /// Upper bound on the one-sided Hausdorff distance from `a` to the surface
 /// `b` answers for: every point of `a` is within the result of `b`.
 /// Infinite when `b` is empty and `a` is not; 0 when `a` is empty.
@@ -280,7 +284,7 @@ pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
     // and the midpoint measured.
     let inv_sqrt3 = 1.0 / 3.0f32.sqrt();
     let mut bound = max;
-    let mut stack: Vec<([Vec3A; 3], [(f32, u32); 3])> = Vec::new();
+    let mut stack: Vec<Piece> = Vec::new();
     for (t, _) in skip.iter().enumerate().filter(|(_, s)| !**s) {
         let idx = &a.indices[3 * t..3 * t + 3];
         stack.push((a.triangle(t), [0, 1, 2].map(|k| at[idx[k] as usize])));
@@ -309,7 +313,8 @@ pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
                     piece = piece.min(convex);
                 }
             }
-            if !(piece > goal) || splits >= MAX_SPLITS {
+            // NaN-safe: a NaN bound is kept (and poisons the result).
+            if piece.is_nan() || piece <= goal || splits >= MAX_SPLITS {
                 bound = bound.max(piece);
                 continue;
             }
@@ -391,7 +396,7 @@ fn is_sliver(t: &[Vec3A; 3]) -> bool {
         .length_squared()
         .max((t[2] - t[1]).length_squared())
         .max((t[0] - t[2]).length_squared());
-    !(twice_area >= 0.1 * l2)
+    twice_area.is_nan() || twice_area < 0.1 * l2
 }
 
 /// One body, two precisions: Ericson's closest point on a triangle.
@@ -430,7 +435,7 @@ macro_rules! closest_sq {
                 return (p - (b + (c - b) * w)).length_squared();
             }
             let denom = va + vb + vc;
-            if !(denom.abs() > 0.0) || !denom.is_finite() {
+            if denom == 0.0 || !denom.is_finite() {
                 // Degenerate (zero-area) triangle: nearest of its edges.
                 return $seg(p, a, b).min($seg(p, b, c)).min($seg(p, c, a));
             }

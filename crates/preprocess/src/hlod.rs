@@ -303,8 +303,7 @@ fn target_triangles(n: usize, p: &ChainParams) -> usize {
 /// is tried first for levels 1..=collapse_levels when `collapse` (leaves),
 /// sloppy otherwise or when collapse stalls.
 fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, collapse: bool) {
-    loop {
-        let Some(last) = lods.last() else { break };
+    while let Some(last) = lods.last() {
         let n = last.mesh.triangles();
         if n <= p.floor {
             break;

@@ -290,7 +290,7 @@ pub fn build<S: LodSink>(
         .filter(|&i| tree[i].object.is_some())
         .collect();
     for batch in leaves.chunks(HLOD_BATCH) {
-        let made: Vec<(Vec<(LodMesh, f32)>, Vec<Lod>)> = batch
+        let made: Vec<Finished> = batch
             .par_iter()
             .map(|&ni| {
                 let node = &tree[ni];
@@ -323,7 +323,7 @@ pub fn build<S: LodSink>(
                 .take_while(|&&i| tree[i].depth == depth)
                 .count();
         for batch in inner[at..level_end].chunks(HLOD_BATCH) {
-            let made: Vec<(Vec<(LodMesh, f32)>, Vec<Lod>)> = batch
+            let made: Vec<Finished> = batch
                 .par_iter()
                 .map(|&ni| {
                     let node = &tree[ni];
@@ -388,9 +388,12 @@ pub fn build<S: LodSink>(
     Ok(Built { nodes, stats })
 }
 
+/// A node's levels in the scene file's form, and those kept for its parent.
+type Finished = (Vec<(LodMesh, f32)>, Vec<Lod>);
+
 /// The scene-file form of every level, and the levels kept for the
 /// parent's HLODs.
-fn finish_chain(mut lods: Vec<Lod>, keep: usize) -> (Vec<(LodMesh, f32)>, Vec<Lod>) {
+fn finish_chain(mut lods: Vec<Lod>, keep: usize) -> Finished {
     let out = lods
         .iter()
         .map(|l| (l.mesh.to_lod_mesh(), l.error))

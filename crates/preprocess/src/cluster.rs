@@ -163,7 +163,8 @@ fn merge(boxes: &[Aabb], edges: &[Edge], p: &ClusterParams) -> Vec<Vec<u32>> {
     clusters
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
+/// Union-find root of `x`, halving the path on the way.
+pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         let up = parent[parent[x as usize] as usize];
         parent[x as usize] = up;

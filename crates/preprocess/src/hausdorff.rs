@@ -89,10 +89,7 @@ impl Surface<'_> {
 
     /// The largest absolute coordinate, for the rounding slack.
     fn magnitude(&self) -> f32 {
-        self.positions
-            .iter()
-            .map(|p| p[0].abs().max(p[1].abs()).max(p[2].abs()))
-            .fold(0.0, f32::max)
+        max_abs(self.positions.iter().map(|&p| Vec3A::from_array(p)))
     }
 }
 
@@ -340,12 +337,13 @@ impl Nearest {
     }
 
     fn magnitude(&self) -> f32 {
-        self.tris
-            .iter()
-            .flatten()
-            .map(|p| p.abs().max_element())
-            .fold(0.0, f32::max)
+        max_abs(self.tris.iter().flatten().copied())
     }
+}
+
+/// The largest absolute coordinate of `points` (0 for none).
+fn max_abs(points: impl Iterator<Item = Vec3A>) -> f32 {
+    points.map(|p| p.abs().max_element()).fold(0.0, f32::max)
 }
 
 /// Upper bound on the symmetric Hausdorff distance between `reference`

@@ -20,6 +20,7 @@ use gigawalk_import::{Model, Object};
 use gigawalk_scene::{Colours, LodMesh};
 use glam::DVec3;
 use meshopt::{SimplifyOptions, VertexDataAdapter};
+use rustc_hash::FxHashMap;
 
 use crate::hausdorff::{self, Nearest, Sampling, Surface};
 use crate::parts::Part;
@@ -27,7 +28,7 @@ use crate::parts::Part;
 /// A level is accepted only if it has at most this fraction of the previous
 /// level's triangles; otherwise the simplifier has stalled (e.g. on many
 /// tiny disconnected pieces that edge collapses cannot remove).
-const MIN_SHRINK: f64 = 0.8;
+const MIN_SHRINK: f64 = 0.65;
 
 /// Geometry being simplified: f32 positions relative to `origin`.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -166,8 +167,9 @@ pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
         queries: &mut queries,
         base: 0.0,
         sampling: p.sampling(diagonal),
+        diagonal: diagonal as f32,
     };
-    extend_chain(&mut lods, reference, p, true);
+    extend_chain(&mut lods, reference, p, 0);
     lods
 }
 
@@ -194,8 +196,15 @@ pub fn inner_lods(children: &[&[Lod]], origin: DVec3, diagonal: f64, p: &ChainPa
     let base = parts.iter().map(|l| l.error).fold(0.0f32, f32::max);
     let mut lods = Vec::new();
     if merged.triangles() > p.node_budget {
-        let first =
-            step(&merged, p.node_budget, true).or_else(|| step(&merged, p.node_budget, false));
+        // Edge collapse keeps every piece (a thin pipe thins to a sliver
+        // rather than vanishing, which would cost its distance to the
+        // rest); sloppy clustering when collapse is off or stalls.
+        let limit = (MIN_SHRINK * merged.triangles() as f64) as usize;
+        let first = (p.collapse_levels > 0)
+            .then(|| step(&merged, p.node_budget, f32::MAX, false, false))
+            .flatten()
+            .filter(|m| m.triangles() <= limit && m.triangles() > 0)
+            .or_else(|| step(&merged, p.node_budget, f32::MAX, true, false));
         if let Some(mesh) = first {
             lods.push(Lod { mesh, error: 0.0 });
         }
@@ -230,8 +239,9 @@ pub fn inner_lods(children: &[&[Lod]], origin: DVec3, diagonal: f64, p: &ChainPa
         queries: &mut queries,
         base,
         sampling,
+        diagonal: diagonal as f32,
     };
-    extend_chain(&mut lods, reference, p, false);
+    extend_chain(&mut lods, reference, p, 1);
     lods
 }
 
@@ -291,18 +301,29 @@ struct Reference<'a> {
     /// Error of the reference itself against the original.
     base: f32,
     sampling: Sampling,
+    /// The node box's diagonal: the largest error limit tried before any.
+    diagonal: f32,
 }
 
 fn target_triangles(n: usize, p: &ChainParams) -> usize {
     ((n as f64 * p.ratio).round() as usize).clamp(1, n.saturating_sub(1).max(1))
 }
 
-/// Halves the last level repeatedly until the floor or until it stops
-/// shrinking; each new level's error is `base` plus its measured distance
-/// to the reference, and never below the previous level's. Edge collapse
-/// is tried first for levels 1..=collapse_levels when `collapse` (leaves),
-/// sloppy otherwise or when collapse stalls.
-fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, collapse: bool) {
+/// Extends the chain down to the floor or until it stops shrinking. Each
+/// next level is the first simplification of the last one, at growing
+/// error limits (doubling from the sample floor), that keeps at most
+/// MIN_SHRINK of its triangles, and never below `ratio` of them: so a
+/// level is as fine as the shrink allows, rather than forced to a triangle
+/// count whatever that costs (halving 40 small boxes moves surfaces by
+/// a third of the node). Its error is `base` plus its measured distance to
+/// the reference, and never below the previous level's. Edge collapse is
+/// tried first for the chain's simplified levels 1..=collapse_levels
+/// (level `lods.len() + offset` is made next: a leaf's level 0 is its own
+/// mesh, an inner node's is already simplified), sloppy clustering
+/// otherwise or when collapse stalls even at the node's diagonal.
+fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, offset: usize) {
+    let cap = r.diagonal.max(f32::MIN_POSITIVE);
+    let mut limit_error = r.sampling.floor.max(cap * 1e-6);
     while let Some(last) = lods.last() {
         let n = last.mesh.triangles();
         if n <= p.floor {
@@ -311,13 +332,27 @@ fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, collapse
         let target = target_triangles(n, p);
         let limit = (MIN_SHRINK * n as f64) as usize;
         let shrunk = |m: &WorkMesh| m.triangles() <= limit && m.triangles() > 0;
-        let mut next = if collapse && lods.len() <= p.collapse_levels {
-            step(&last.mesh, target, false).filter(shrunk)
-        } else {
-            None
-        };
-        if next.is_none() {
-            next = step(&last.mesh, target, true).filter(shrunk);
+        let collapse = lods.len() + offset <= p.collapse_levels;
+        let mut next = None;
+        for sloppy in [false, true] {
+            if !sloppy && !collapse {
+                continue;
+            }
+            let mut e = limit_error;
+            while next.is_none() && e <= cap {
+                next = step(&last.mesh, target, e, sloppy, offset == 0).filter(shrunk);
+                if next.is_none() {
+                    e *= 2.0;
+                }
+            }
+            if next.is_none() {
+                // Stalled within the diagonal: any error it takes.
+                next = step(&last.mesh, target, f32::MAX, sloppy, offset == 0).filter(shrunk);
+            }
+            if next.is_some() {
+                limit_error = e.min(cap);
+                break;
+            }
         }
         let Some(mesh) = next else { break };
         let measured =
@@ -330,11 +365,20 @@ fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, collapse
     }
 }
 
-/// One simplification step towards `target` triangles: sloppy vertex
+/// One simplification step towards `target` triangles, stopping early
+/// where it would move the surface by more than `max_error` model units
+/// (the simplifier's estimate; `f32::MAX` for none): sloppy vertex
 /// clustering (joins disjoint pieces, as the paper's GAPS does) or
-/// topology-preserving edge collapse. The simplifier's own error estimate
-/// is not used: errors are measured.
-fn step(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<WorkMesh> {
+/// topology-preserving edge collapse, which prunes pieces smaller than the
+/// error. Every piece keeps at least one triangle ([`keep_every_piece`]).
+/// The simplifier's own error estimate only guides: errors are measured.
+fn step(
+    mesh: &WorkMesh,
+    target: usize,
+    max_error: f32,
+    sloppy: bool,
+    keep_pieces: bool,
+) -> Option<WorkMesh> {
     if mesh.indices.is_empty() {
         return None;
     }
@@ -346,21 +390,75 @@ fn step(mesh: &WorkMesh, target: usize, sloppy: bool) -> Option<WorkMesh> {
     let weld = meshopt::generate_position_remap(&adapter);
     let welded: Vec<u32> = mesh.indices.iter().map(|&i| weld[i as usize]).collect();
     let indices = if sloppy {
-        meshopt::simplify_sloppy(&welded, &adapter, 3 * target, f32::MAX, None)
+        // Sloppy takes its error relative to the mesh's extent.
+        let scale = meshopt::simplify_scale(&adapter);
+        let relative = if max_error == f32::MAX || scale.is_nan() || scale <= 0.0 {
+            f32::MAX
+        } else {
+            max_error / scale
+        };
+        meshopt::simplify_sloppy(&welded, &adapter, 3 * target, relative, None)
     } else {
         meshopt::simplify(
             &welded,
             &adapter,
             3 * target,
-            f32::MAX,
-            SimplifyOptions::ErrorAbsolute,
+            max_error,
+            SimplifyOptions::ErrorAbsolute | SimplifyOptions::Prune,
             None,
         )
+    };
+    let indices = if keep_pieces {
+        keep_every_piece(mesh, &welded, indices)
+    } else {
+        indices
     };
     if indices.is_empty() {
         return None;
     }
     Some(compact(mesh, &indices))
+}
+
+/// `simplified` plus, for every connected piece of `welded` that lost all
+/// its triangles, that piece's largest triangle. Edge collapse prunes
+/// small pieces and sloppy clustering drops thin ones; a vanished piece
+/// would cost its distance to what remains (which may be far), a kept
+/// triangle of it at most its own diameter.
+fn keep_every_piece(mesh: &WorkMesh, welded: &[u32], mut simplified: Vec<u32>) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+    for t in welded.chunks_exact(3) {
+        let a = crate::cluster::find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let b = crate::cluster::find(&mut parent, v);
+            parent[b as usize] = a;
+        }
+    }
+    let mut survives = vec![false; parent.len()];
+    for &v in &simplified {
+        survives[crate::cluster::find(&mut parent, v) as usize] = true;
+    }
+    // Per vanished piece (by root): its largest triangle so far.
+    let mut best: FxHashMap<u32, (f32, usize)> = FxHashMap::default();
+    for (k, t) in welded.chunks_exact(3).enumerate() {
+        let root = crate::cluster::find(&mut parent, t[0]);
+        if survives[root as usize] {
+            continue;
+        }
+        let p = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
+        let area = (p(t[1]) - p(t[0]))
+            .cross(p(t[2]) - p(t[0]))
+            .length_squared();
+        let e = best.entry(root).or_insert((-1.0, k));
+        if area > e.0 {
+            *e = (area, k);
+        }
+    }
+    let mut added: Vec<usize> = best.values().map(|&(_, k)| k).collect();
+    added.sort_unstable();
+    for k in added {
+        simplified.extend_from_slice(&welded[3 * k..3 * k + 3]);
+    }
+    simplified
 }
 
 /// The vertices `indices` use, in first-use order.
@@ -431,7 +529,7 @@ pub fn srgb8(c: [f32; 4]) -> [u8; 4] {
 mod tests {
     use super::*;
     use crate::parts::initial_parts;
-    use crate::test_models::{grid_object, pipe_object};
+    use crate::test_models::{box_object, grid_object, pipe_object};
 
     const P: ChainParams = ChainParams {
         ratio: 0.5,
@@ -494,6 +592,57 @@ mod tests {
         let lods = leaf_lods(mesh_of(all), 25.0, &P);
         assert!(lods.len() >= 2);
         assert!(lods.last().unwrap().mesh.triangles() < lods[0].mesh.triangles() / 2);
+    }
+
+    /// Pieces of `m`, counting vertices with equal positions as one.
+    fn pieces(m: &WorkMesh) -> usize {
+        let bytes = meshopt::typed_to_bytes(&m.positions);
+        let adapter = VertexDataAdapter::new(bytes, 12, 0).unwrap();
+        let weld = meshopt::generate_position_remap(&adapter);
+        let mut parent: Vec<u32> = (0..m.positions.len() as u32).collect();
+        for t in m.indices.chunks_exact(3) {
+            let a = crate::cluster::find(&mut parent, weld[t[0] as usize]);
+            for &v in &t[1..] {
+                let b = crate::cluster::find(&mut parent, weld[v as usize]);
+                parent[b as usize] = a;
+            }
+        }
+        let mut roots: Vec<u32> = m
+            .indices
+            .iter()
+            .map(|&v| crate::cluster::find(&mut parent, weld[v as usize]))
+            .collect();
+        roots.sort_unstable();
+        roots.dedup();
+        roots.len()
+    }
+
+    #[test]
+    fn leaf_levels_keep_every_piece_and_grow_error_gently() {
+        // 40 small boxes spread over a 20-unit row, plus a dense plate:
+        // halving the triangles would have to drop boxes (each is 12
+        // triangles, a tetrahedron at least), moving surface by up to the
+        // gap between boxes.
+        let mut all = grid_object(DVec3::ZERO, 20.0, 24, 0.2);
+        for i in 0..40 {
+            let lo = DVec3::new(0.5 * i as f64, 3.0 + (i % 3) as f64, 0.0);
+            let b = box_object(lo, lo + DVec3::splat(0.1));
+            let base = all.positions.len() as u32;
+            all.positions.extend(b.positions);
+            all.normals.extend(b.normals);
+            all.indices.extend(b.indices.iter().map(|i| i + base));
+        }
+        let mesh = mesh_of(all);
+        let n = pieces(&mesh);
+        assert_eq!(n, 41);
+        let lods = leaf_lods(mesh, 21.0, &P);
+        assert!(lods.len() >= 3, "{} levels", lods.len());
+        for l in &lods {
+            assert_eq!(pieces(&l.mesh), n, "a level lost a piece");
+        }
+        // The first level only smooths the plate's bumps, far below the
+        // gaps between boxes and rows (0.4 and 1 unit).
+        assert!(lods[1].error < 0.3, "level 1 error {}", lods[1].error);
     }
 
     #[test]

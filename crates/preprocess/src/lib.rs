@@ -340,9 +340,7 @@ pub fn build<S: LodSink>(
                     // Never claim less error than a stored level below (the
                     // scene file's rule: errors do not decrease from a
                     // node to its nearest ancestor with LODs).
-                    let below = (node.first_child..node.first_child + node.child_count)
-                        .map(|c| lowest[c as usize])
-                        .fold(0.0f32, f32::max);
+                    let below = lowest_below(&lowest, node);
                     for l in &mut lods {
                         l.error = l.error.max(below);
                     }
@@ -355,9 +353,7 @@ pub fn build<S: LodSink>(
                 let node = &tree[ni];
                 lowest[ni] = match lods.first() {
                     Some(l) => l.1,
-                    None => (node.first_child..node.first_child + node.child_count)
-                        .map(|c| lowest[c as usize])
-                        .fold(0.0f32, f32::max),
+                    None => lowest_below(&lowest, node),
                 };
                 emit(ni, lods, &mut stats.inner_lod_triangles)?;
                 for ch in node.first_child..node.first_child + node.child_count {
@@ -390,6 +386,15 @@ pub fn build<S: LodSink>(
 
 /// A node's levels in the scene file's form, and those kept for its parent.
 type Finished = (Vec<(LodMesh, f32)>, Vec<Lod>);
+
+/// The largest of `node`'s children's `lowest` errors: what the node may
+/// never claim less than (the scene file's rule that errors do not
+/// decrease from a node to its nearest ancestor with LODs).
+fn lowest_below(lowest: &[f32], node: &hierarchy::HNode) -> f32 {
+    (node.first_child..node.first_child + node.child_count)
+        .map(|c| lowest[c as usize])
+        .fold(0.0f32, f32::max)
+}
 
 /// The scene-file form of every level, and the levels kept for the
 /// parent's HLODs.

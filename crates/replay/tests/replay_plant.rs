@@ -206,7 +206,8 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
 #[test]
 fn och_draws_less_and_conservative_modes_lose_no_pixel() {
     on_plant(2, "replay accuracy", 40, |rt, path, _| {
-        let opts = options(&[0.0, 1.0], 30, 3);
+        let mut opts = options(&[0.0, 1.0], 30, 3);
+        (opts.runtime.width, opts.runtime.height) = (4 * W, 4 * H);
         let r = replay_plant(rt, path, &opts).unwrap();
         let s = r.summary();
         let get = |name: &str, px: f64| {
@@ -246,16 +247,18 @@ fn och_draws_less_and_conservative_modes_lose_no_pixel() {
         // At 1 px the LODs' errors are measured bounds, so surfaces stay
         // within a pixel of the reference. What the metric may still count:
         // a surface moved along the view ray by up to a pixel's worth is
-        // beyond its 0.1% depth match wherever no neighbour matches, and
-        // at this 128x72 viewport a pixel is 1/62 of the distance (16x the
-        // match); measured 0.3% of pixels here (before honest errors, 1 px
-        // lost whole surfaces: 8-11% of pixels on the 5M plant). 1% is
-        // that figure with room for other seeds, far below a vanished
-        // surface's share.
+        // beyond its 0.1% depth match wherever no neighbour matches. A
+        // pixel's worth is 1/ppr of the distance (ppr = pixels per radian,
+        // H / (2 tan(fovy/2))): at 128x72 that is 16x the match and the
+        // fraction measured 1.0%; at this 512x288 viewport 4x, measured
+        // 0.05% (on the 4M plant at 1920x1080, where a pixel is the match,
+        // 0.006%). Before honest errors 1 px lost whole surfaces: 8-11% of
+        // pixels on the 5M plant. 0.2% is the measured figure with room
+        // for rasterizer differences, far below a vanished surface's share.
         for name in ["hlod", "och"] {
             let m = get(name, 1.0);
             let f = m.bound_violating_fraction.unwrap_or(1.0);
-            assert!(f <= 1e-2, "{name} at 1px: bound-violating fraction {f}");
+            assert!(f <= 2e-3, "{name} at 1px: bound-violating fraction {f}");
         }
         // ...and the 1 px runs did use coarser levels.
         let (t1, t0) = (

@@ -38,8 +38,8 @@ pub struct Args {
     /// Clustering: Felzenszwalb-Huttenlocher K, in thousandths of D (6.3.1: K = 1500; see docs/preprocess.md for the units)
     #[arg(long, default_value_t = 1500.0)]
     k: f64,
-    /// Partition-II triangle threshold as a multiple of t1 (4.2.3, 6.3.1: t2 = 10 t1)
-    #[arg(long, default_value_t = 10.0)]
+    /// Partition-II triangle threshold as a multiple of t1 (4.2.3; the paper's 6.3.1 uses 10). Default 1: long clusters near the eye would draw their full detail far away too
+    #[arg(long, default_value_t = 1.0)]
     t2_factor: f64,
     /// Partition-II size threshold as a multiple of s1 (6.3.1: s2 = 2 s1)
     #[arg(long, default_value_t = 2.0)]

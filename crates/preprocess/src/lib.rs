@@ -33,6 +33,12 @@ mod test_models;
 mod tests;
 pub mod verify;
 
+/// Changes whenever the same model and parameters give a different scene
+/// file (a new simplification or error measurement): caches of built
+/// scenes (`gigawalk demo`'s) compare it, and provenance records it.
+/// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1.
+pub const REVISION: u32 = 2;
+
 use std::path::Path;
 use std::time::Instant;
 
@@ -157,7 +163,10 @@ pub fn preprocess(
     }
     let provenance = Provenance {
         source: source.to_string(),
-        tool: format!("gigawalk-preprocess {}", env!("CARGO_PKG_VERSION")),
+        tool: format!(
+            "gigawalk-preprocess {} (revision {REVISION})",
+            env!("CARGO_PKG_VERSION")
+        ),
         parameters,
     };
     let summary = writer

@@ -91,6 +91,7 @@ impl DemoScene {
             "seed": self.seed,
             "poses": self.poses,
             "preprocess": params.to_json(),
+            "preprocess_revision": gigawalk_preprocess::REVISION,
             "gigawalk_replay": env!("CARGO_PKG_VERSION"),
             "scene_format": [gigawalk_scene::FORMAT_MAJOR, gigawalk_scene::FORMAT_MINOR],
         });

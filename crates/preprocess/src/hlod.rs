@@ -370,8 +370,11 @@ fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, offset: 
 /// (the simplifier's estimate; `f32::MAX` for none): sloppy vertex
 /// clustering (joins disjoint pieces, as the paper's GAPS does) or
 /// topology-preserving edge collapse, which prunes pieces smaller than the
-/// error. Every piece keeps at least one triangle ([`keep_every_piece`]).
-/// The simplifier's own error estimate only guides: errors are measured.
+/// error. With `keep_pieces` (a leaf's few pieces) every piece keeps at
+/// least one triangle ([`keep_every_piece`]); otherwise (an inner node's
+/// thousands) vanished pieces far from what remains are covered at the
+/// simplifier's error ([`cover_vanished`]). The simplifier's own error
+/// estimate only guides: errors are measured.
 fn step(
     mesh: &WorkMesh,
     target: usize,
@@ -389,6 +392,7 @@ fn step(
     // welded vertices' attributes.
     let weld = meshopt::generate_position_remap(&adapter);
     let welded: Vec<u32> = mesh.indices.iter().map(|&i| weld[i as usize]).collect();
+    let mut result_error = 0.0f32;
     let indices = if sloppy {
         // Sloppy takes its error relative to the mesh's extent.
         let scale = meshopt::simplify_scale(&adapter);
@@ -397,7 +401,15 @@ fn step(
         } else {
             max_error / scale
         };
-        meshopt::simplify_sloppy(&welded, &adapter, 3 * target, relative, None)
+        let out = meshopt::simplify_sloppy(
+            &welded,
+            &adapter,
+            3 * target,
+            relative,
+            Some(&mut result_error),
+        );
+        result_error *= scale;
+        out
     } else {
         meshopt::simplify(
             &welded,
@@ -405,18 +417,79 @@ fn step(
             3 * target,
             max_error,
             SimplifyOptions::ErrorAbsolute | SimplifyOptions::Prune,
-            None,
+            Some(&mut result_error),
         )
     };
     let indices = if keep_pieces {
         keep_every_piece(mesh, &welded, indices)
     } else {
-        indices
+        // The simplifier's own error, else the limit: the cell size.
+        let cell = if result_error.is_finite() && result_error > 0.0 {
+            result_error
+        } else if max_error < f32::MAX {
+            max_error
+        } else {
+            f32::MIN_POSITIVE.sqrt()
+        };
+        cover_vanished(mesh, &welded, indices, cell)
     };
     if indices.is_empty() {
         return None;
     }
     Some(compact(mesh, &indices))
+}
+
+/// `simplified` plus triangles of the pieces of `welded` that lost all
+/// their triangles, where nothing is left near them: a triangle of a
+/// vanished piece is added when one of its corners has no kept vertex
+/// within about a `cell` (same or neighbouring grid cell), so a vanished
+/// piece near kept geometry (a bolt on its flange) costs nothing and a
+/// far one (a pipe across an aisle) keeps about one triangle per cell it
+/// spans: about what it covers on screen at the error the cell stands for.
+fn cover_vanished(
+    mesh: &WorkMesh,
+    welded: &[u32],
+    mut simplified: Vec<u32>,
+    cell: f32,
+) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+    for t in welded.chunks_exact(3) {
+        let a = crate::cluster::find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let b = crate::cluster::find(&mut parent, v);
+            parent[b as usize] = a;
+        }
+    }
+    let mut survives = vec![false; parent.len()];
+    for &v in &simplified {
+        survives[crate::cluster::find(&mut parent, v) as usize] = true;
+    }
+    let inv = 1.0 / cell;
+    let key = |i: u32| {
+        let p = mesh.positions[i as usize];
+        [0, 1, 2].map(|k| (p[k] * inv).floor() as i32)
+    };
+    let mut occupied: rustc_hash::FxHashSet<[i32; 3]> =
+        simplified.iter().map(|&v| key(v)).collect();
+    let near = |occupied: &rustc_hash::FxHashSet<[i32; 3]>, c: [i32; 3]| {
+        (-1..=1).any(|x| {
+            (-1..=1).any(|y| (-1..=1).any(|z| occupied.contains(&[c[0] + x, c[1] + y, c[2] + z])))
+        })
+    };
+    let mut added = Vec::new();
+    for t in welded.chunks_exact(3) {
+        if survives[crate::cluster::find(&mut parent, t[0]) as usize] {
+            continue;
+        }
+        if t.iter().any(|&v| !near(&occupied, key(v))) {
+            added.extend_from_slice(t);
+            for &v in t {
+                occupied.insert(key(v));
+            }
+        }
+    }
+    simplified.extend(added);
+    simplified
 }
 
 /// `simplified` plus, for every connected piece of `welded` that lost all
@@ -643,6 +716,54 @@ mod tests {
         // The first level only smooths the plate's bumps, far below the
         // gaps between boxes and rows (0.4 and 1 unit).
         assert!(lods[1].error < 0.3, "level 1 error {}", lods[1].error);
+    }
+
+    #[test]
+    fn vanished_pieces_are_covered_only_where_nothing_is_left() {
+        // A plate, a bolt on it and a long pipe 3 units above it: with
+        // only the plate kept, the bolt is within a cell of it and stays
+        // gone; the pipe gets about one triangle per cell along it.
+        let mut all = grid_object(DVec3::ZERO, 4.0, 8, 0.0);
+        let plate = all.indices.len();
+        let mut add = |o: gigawalk_import::Object| {
+            let base = all.positions.len() as u32;
+            all.positions.extend(o.positions);
+            all.normals.extend(o.normals);
+            all.indices.extend(o.indices.iter().map(|i| i + base));
+        };
+        add(box_object(
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(1.1, 0.1, 1.1),
+        ));
+        add(pipe_object(DVec3::new(0.0, 3.0, 8.0), 20.0, 0.05, 40, 6));
+        let mesh = mesh_of(all);
+        let kept: Vec<u32> = mesh.indices[..plate].to_vec();
+        let out = cover_vanished(&mesh, &mesh.indices, kept.clone(), 0.5);
+        let added = &out[kept.len()..];
+        let pos = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
+        let origin = mesh.origin.as_vec3();
+        // Nothing of the bolt (its corners are within a cell of the plate).
+        assert!(added.iter().all(|&i| (pos(i) + origin).z > 6.0));
+        let n = added.len() / 3;
+        assert!(
+            (10..=200).contains(&n),
+            "{n} triangles cover a 20-unit pipe at cell 0.5"
+        );
+        // Every pipe vertex now has a kept vertex within two cells.
+        for &i in &mesh.indices[plate..] {
+            let p = pos(i);
+            if (p + origin).z < 6.0 {
+                continue;
+            }
+            let d = added
+                .iter()
+                .map(|&j| (pos(j) - p).length())
+                .fold(f32::MAX, f32::min);
+            assert!(
+                d <= 2.0 * 0.5 * 3f32.sqrt(),
+                "pipe vertex {p} is {d} from any kept vertex"
+            );
+        }
     }
 
     #[test]

@@ -36,8 +36,9 @@ pub mod verify;
 /// Changes whenever the same model and parameters give a different scene
 /// file (a new simplification or error measurement): caches of built
 /// scenes (`gigawalk demo`'s) compare it, and provenance records it.
-/// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1.
-pub const REVISION: u32 = 2;
+/// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1;
+/// 3: vanished pieces of inner nodes covered.
+pub const REVISION: u32 = 3;
 
 use std::path::Path;
 use std::time::Instant;

@@ -465,15 +465,18 @@ fn cover_vanished(
         survives[crate::cluster::find(&mut parent, v) as usize] = true;
     }
     let inv = 1.0 / cell;
+    // Cell coordinates saturate (`as` from f64), and so do their
+    // neighbours, so a tiny cell or a far vertex cannot overflow.
     let key = |i: u32| {
         let p = mesh.positions[i as usize];
-        [0, 1, 2].map(|k| (p[k] * inv).floor() as i32)
+        [0, 1, 2].map(|k| (p[k] as f64 * inv as f64).floor() as i64)
     };
-    let mut occupied: rustc_hash::FxHashSet<[i32; 3]> =
+    let mut occupied: rustc_hash::FxHashSet<[i64; 3]> =
         simplified.iter().map(|&v| key(v)).collect();
-    let near = |occupied: &rustc_hash::FxHashSet<[i32; 3]>, c: [i32; 3]| {
+    let near = |occupied: &rustc_hash::FxHashSet<[i64; 3]>, c: [i64; 3]| {
+        let at = |k: usize, d: i64| c[k].saturating_add(d);
         (-1..=1).any(|x| {
-            (-1..=1).any(|y| (-1..=1).any(|z| occupied.contains(&[c[0] + x, c[1] + y, c[2] + z])))
+            (-1..=1).any(|y| (-1..=1).any(|z| occupied.contains(&[at(0, x), at(1, y), at(2, z)])))
         })
     };
     let mut added = Vec::new();

@@ -55,11 +55,14 @@ pub struct Params {
     /// A LOD chain stops once a level has at most this many triangles: below
     /// a few dozen triangles a node costs more to traverse than to draw.
     pub lod_floor: u32,
-    /// Leaf LODs 1..=collapse_levels are made by edge collapse (meshopt's
-    /// topology-preserving simplify); coarser ones by sloppy vertex
-    /// clustering, as inner-node HLODs are. Edge collapse is several times
-    /// slower and matters most for the levels seen up close; on a
-    /// 10M-triangle plant, edge collapse on every level spent 8.7 s in HLODs.
+    /// The simplified levels 1..=collapse_levels of every chain (a leaf's
+    /// levels after its own mesh, an inner node's from its first HLOD) are
+    /// made by edge collapse (meshopt's topology-preserving simplify, which
+    /// thins pieces rather than dropping them); coarser ones by sloppy
+    /// vertex clustering. Measured on the 4M plant (frustum-only traversal
+    /// at 1 px, 640x360): 8 instead of 1 draws 18% fewer triangles for
+    /// 2.2x the preprocess time and a scene of 1.84x instead of 1.64x the
+    /// raw geometry.
     pub collapse_levels: u32,
     /// Triangles of an inner node's finest HLOD, at most. Its children are
     /// cut at a matching error so they hold about `node_budget / lod_ratio`

@@ -53,7 +53,7 @@ pub struct Args {
     /// LODs (4.3): a chain stops once a level has at most this many triangles
     #[arg(long, default_value_t = 64)]
     lod_floor: u32,
-    /// LODs (4.3): leaf levels 1..=N use edge collapse (meshopt simplify), coarser ones sloppy vertex clustering
+    /// LODs (4.3): simplified levels 1..=N of every chain use edge collapse (meshopt simplify), coarser ones sloppy vertex clustering; 8 draws ~18% fewer triangles for ~2x the preprocess time
     #[arg(long, default_value_t = 1)]
     collapse_levels: u32,
     /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it

@@ -439,6 +439,31 @@ fn step(
     Some(compact(mesh, &indices))
 }
 
+/// Per triangle of `welded`: its connected piece (a union-find root over
+/// `vertices` vertices) when no triangle of `simplified` uses any vertex of
+/// that piece, `None` when the piece survives.
+fn vanished_pieces(vertices: usize, welded: &[u32], simplified: &[u32]) -> Vec<Option<u32>> {
+    let mut parent: Vec<u32> = (0..vertices as u32).collect();
+    for t in welded.chunks_exact(3) {
+        let a = crate::cluster::find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let b = crate::cluster::find(&mut parent, v);
+            parent[b as usize] = a;
+        }
+    }
+    let mut survives = vec![false; vertices];
+    for &v in simplified {
+        survives[crate::cluster::find(&mut parent, v) as usize] = true;
+    }
+    welded
+        .chunks_exact(3)
+        .map(|t| {
+            let root = crate::cluster::find(&mut parent, t[0]);
+            (!survives[root as usize]).then_some(root)
+        })
+        .collect()
+}
+
 /// `simplified` plus triangles of the pieces of `welded` that lost all
 /// their triangles, where nothing is left near them: a triangle of a
 /// vanished piece is added when one of its corners has no kept vertex
@@ -452,18 +477,7 @@ fn cover_vanished(
     mut simplified: Vec<u32>,
     cell: f32,
 ) -> Vec<u32> {
-    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
-    for t in welded.chunks_exact(3) {
-        let a = crate::cluster::find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = crate::cluster::find(&mut parent, v);
-            parent[b as usize] = a;
-        }
-    }
-    let mut survives = vec![false; parent.len()];
-    for &v in &simplified {
-        survives[crate::cluster::find(&mut parent, v) as usize] = true;
-    }
+    let vanished = vanished_pieces(mesh.positions.len(), welded, &simplified);
     let inv = 1.0 / cell;
     // Cell coordinates saturate (`as` from f64), and so do their
     // neighbours, so a tiny cell or a far vertex cannot overflow.
@@ -480,8 +494,8 @@ fn cover_vanished(
         })
     };
     let mut added = Vec::new();
-    for t in welded.chunks_exact(3) {
-        if survives[crate::cluster::find(&mut parent, t[0]) as usize] {
+    for (t, gone) in welded.chunks_exact(3).zip(&vanished) {
+        if gone.is_none() {
             continue;
         }
         if t.iter().any(|&v| !near(&occupied, key(v))) {
@@ -501,25 +515,11 @@ fn cover_vanished(
 /// would cost its distance to what remains (which may be far), a kept
 /// triangle of it at most its own diameter.
 fn keep_every_piece(mesh: &WorkMesh, welded: &[u32], mut simplified: Vec<u32>) -> Vec<u32> {
-    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
-    for t in welded.chunks_exact(3) {
-        let a = crate::cluster::find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = crate::cluster::find(&mut parent, v);
-            parent[b as usize] = a;
-        }
-    }
-    let mut survives = vec![false; parent.len()];
-    for &v in &simplified {
-        survives[crate::cluster::find(&mut parent, v) as usize] = true;
-    }
+    let vanished = vanished_pieces(mesh.positions.len(), welded, &simplified);
     // Per vanished piece (by root): its largest triangle so far.
     let mut best: FxHashMap<u32, (f32, usize)> = FxHashMap::default();
-    for (k, t) in welded.chunks_exact(3).enumerate() {
-        let root = crate::cluster::find(&mut parent, t[0]);
-        if survives[root as usize] {
-            continue;
-        }
+    for (k, (t, gone)) in welded.chunks_exact(3).zip(&vanished).enumerate() {
+        let Some(root) = *gone else { continue };
         let p = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
         let area = (p(t[1]) - p(t[0]))
             .cross(p(t[2]) - p(t[0]))

@@ -322,7 +322,13 @@ fn target_triangles(n: usize, p: &ChainParams) -> usize {
 /// mesh, an inner node's is already simplified), sloppy clustering
 /// otherwise or when collapse stalls even at the node's diagonal.
 fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, offset: usize) {
-    let cap = r.diagonal.max(f32::MIN_POSITIVE);
+    // Finite, so the doubling below ends (a diagonal beyond f32's range
+    // would make it infinite).
+    let cap = if r.diagonal.is_finite() {
+        r.diagonal.max(f32::MIN_POSITIVE)
+    } else {
+        f32::MAX
+    };
     let mut limit_error = r.sampling.floor.max(cap * 1e-6);
     while let Some(last) = lods.last() {
         let n = last.mesh.triangles();
@@ -719,6 +725,24 @@ mod tests {
         // The first level only smooths the plate's bumps, far below the
         // gaps between boxes and rows (0.4 and 1 unit).
         assert!(lods[1].error < 0.3, "level 1 error {}", lods[1].error);
+    }
+
+    #[test]
+    fn chains_end_for_extreme_diagonals() {
+        // The error limits double up to the diagonal: an infinite one must
+        // still end, a zero one must still simplify.
+        for diagonal in [f64::INFINITY, 0.0, 1e-30, 1e30] {
+            let lods = leaf_lods(
+                mesh_of(grid_object(DVec3::ZERO, 10.0, 16, 0.3)),
+                diagonal,
+                &P,
+            );
+            assert_eq!(lods[0].error, 0.0, "diagonal {diagonal}");
+            for w in lods.windows(2) {
+                assert!(w[1].error >= w[0].error, "diagonal {diagonal}");
+                assert!(w[1].mesh.triangles() < w[0].mesh.triangles());
+            }
+        }
     }
 
     #[test]

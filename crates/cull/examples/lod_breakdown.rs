@@ -1,0 +1,130 @@
+//! Where the triangles of an HLOD traversal come from: frustum culling and
+//! LOD selection only (the `hlod` mode without a GPU), over a camera path,
+//! broken down by leaf/inner node, LOD level, tree depth and how far below
+//! the tolerance the drawn level's pixel error is. The "frustum-only"
+//! figures of docs/PERFORMANCE.md (issue 11) come from it.
+//!
+//! ```text
+//! cargo run --release -p gigawalk-cull --example lod_breakdown -- \
+//!     SCENE.gwk PATH.path [WIDTH HEIGHT PIXEL_ERROR EVERY]
+//! ```
+//! Defaults: 640 360 1 5 (every 5th pose).
+
+use std::error::Error;
+
+use gigawalk_cull::lod::{distance_to_rel_box, pixel_error};
+use gigawalk_cull::{
+    default_near, Camera, CullView, NoOcclusion, TraversalOptions, Traverser, Viewport,
+};
+use gigawalk_scene::path::CameraPath;
+use gigawalk_scene::SceneReader;
+
+const LEVELS: usize = 8;
+
+fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> Result<T, String> {
+    match args.get(i) {
+        None => Ok(default),
+        Some(s) => s
+            .parse()
+            .map_err(|_| format!("argument {i}: cannot parse {s:?}")),
+    }
+}
+
+fn main() -> Result<(), Box<dyn Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    if args.len() < 3 {
+        return Err(
+            "usage: lod_breakdown SCENE.gwk PATH.path [WIDTH HEIGHT PIXEL_ERROR EVERY]".into(),
+        );
+    }
+    let scene = SceneReader::open(args[1].as_ref())?;
+    let path = CameraPath::read(args[2].as_ref())?;
+    let (w, h): (u32, u32) = (arg(&args, 3, 640)?, arg(&args, 4, 360)?);
+    let tolerance: f64 = arg(&args, 5, 1.0)?;
+    let every: usize = arg::<usize>(&args, 6, 5)?.max(1);
+    let sk = scene.skeleton();
+    let mut depth = vec![0usize; sk.nodes.len()];
+    for i in 1..sk.nodes.len() {
+        let parent = sk.nodes[i].parent as usize;
+        if parent < i {
+            depth[i] = depth[parent] + 1;
+        }
+    }
+    let near = default_near(&sk.bounds);
+    let options = TraversalOptions {
+        occlusion: false,
+        hlod: true,
+        pixel_tolerance: tolerance,
+    };
+    let mut traverser = Traverser::new();
+    let (mut frames, mut leaf_nodes, mut inner_nodes) = (0u64, 0u64, 0u64);
+    let (mut leaf, mut inner) = ([0u64; LEVELS], [0u64; LEVELS]);
+    let mut by_depth = vec![0u64; depth.iter().max().map_or(1, |d| d + 1)];
+    // Drawn level's pixel error / tolerance: <= 1/4, 1/2, 3/4, 1, above
+    // (the finest is drawn when nothing is acceptable), exact (error 0).
+    let mut slack = [0u64; 6];
+    let mut items = Vec::new();
+    for pose in path.poses.iter().step_by(every) {
+        frames += 1;
+        let viewport = Viewport::new(w, h);
+        let camera = Camera::from_pose(pose.position, pose.orientation, pose.fovy, viewport, near);
+        let view = CullView::new(camera, viewport);
+        items.clear();
+        traverser.traverse(sk, &view, &NoOcclusion, &options, &mut |it| items.push(it));
+        for it in &items {
+            let n = &sk.nodes[it.node as usize];
+            let Some(l) = sk.lods.get(n.first_lod as usize + it.lod as usize) else {
+                continue;
+            };
+            let t = l.triangles as u64;
+            let (min, max) = view.rel_f64(&n.bounds);
+            let pe = pixel_error(
+                l.error,
+                distance_to_rel_box(min, max),
+                view.pixels_per_radian,
+            );
+            by_depth[depth[it.node as usize]] += t;
+            let bucket = if l.error == 0.0 {
+                5
+            } else if pe > tolerance {
+                4
+            } else {
+                ((pe / tolerance * 4.0).ceil() as usize).clamp(1, 4) - 1
+            };
+            slack[bucket] += t;
+            let level = (it.lod as usize).min(LEVELS - 1);
+            if n.is_leaf() {
+                leaf_nodes += 1;
+                leaf[level] += t;
+            } else {
+                inner_nodes += 1;
+                inner[level] += t;
+            }
+        }
+    }
+    let per = |x: u64| x / frames.max(1);
+    let row = |a: &[u64]| {
+        a.iter()
+            .map(|&x| per(x).to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    println!(
+        "{} poses (every {every}), {w}x{h}, pixel error {tolerance}, frustum culling only",
+        frames
+    );
+    println!("triangles a frame:       {}", per(by_depth.iter().sum()));
+    println!(
+        "drawn leaves / inner:    {} / {} a frame",
+        per(leaf_nodes),
+        per(inner_nodes)
+    );
+    println!("leaf triangles by level:  {}", row(&leaf));
+    println!("inner triangles by level: {}", row(&inner));
+    println!("triangles by tree depth:  {}", row(&by_depth));
+    println!(
+        "by drawn error / tolerance (<=1/4 <=1/2 <=3/4 <=1 >1 exact): {}",
+        row(&slack)
+    );
+    Ok(())
+}

@@ -199,12 +199,12 @@ pub fn inner_lods(children: &[&[Lod]], origin: DVec3, diagonal: f64, p: &ChainPa
         // Edge collapse keeps every piece (a thin pipe thins to a sliver
         // rather than vanishing, which would cost its distance to the
         // rest); sloppy clustering when collapse is off or stalls.
-        let limit = (MIN_SHRINK * merged.triangles() as f64) as usize;
+        let s = Simplifier::new(&merged, false);
         let first = (p.collapse_levels > 0)
-            .then(|| step(&merged, p.node_budget, f32::MAX, false, false))
+            .then(|| s.step(p.node_budget, f32::MAX, false))
             .flatten()
-            .filter(|m| m.triangles() <= limit && m.triangles() > 0)
-            .or_else(|| step(&merged, p.node_budget, f32::MAX, true, false));
+            .filter(|m| shrinks(m, merged.triangles()))
+            .or_else(|| s.step(p.node_budget, f32::MAX, true));
         if let Some(mesh) = first {
             lods.push(Lod { mesh, error: 0.0 });
         }
@@ -336,8 +336,9 @@ fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, offset: 
             break;
         }
         let target = target_triangles(n, p);
-        let limit = (MIN_SHRINK * n as f64) as usize;
-        let shrunk = |m: &WorkMesh| m.triangles() <= limit && m.triangles() > 0;
+        let shrunk = |m: &WorkMesh| shrinks(m, n);
+        // Welded and split into pieces once for every attempt below.
+        let s = Simplifier::new(&last.mesh, offset == 0);
         let collapse = lods.len() + offset <= p.collapse_levels;
         let mut next = None;
         for sloppy in [false, true] {
@@ -346,14 +347,14 @@ fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, offset: 
             }
             let mut e = limit_error;
             while next.is_none() && e <= cap {
-                next = step(&last.mesh, target, e, sloppy, offset == 0).filter(shrunk);
+                next = s.step(target, e, sloppy).filter(shrunk);
                 if next.is_none() {
                     e *= 2.0;
                 }
             }
             if next.is_none() {
                 // Stalled within the diagonal: any error it takes.
-                next = step(&last.mesh, target, f32::MAX, sloppy, offset == 0).filter(shrunk);
+                next = s.step(target, f32::MAX, sloppy).filter(shrunk);
             }
             if next.is_some() {
                 limit_error = e.min(cap);
@@ -371,176 +372,206 @@ fn extend_chain(lods: &mut Vec<Lod>, r: Reference<'_>, p: &ChainParams, offset: 
     }
 }
 
-/// One simplification step towards `target` triangles, stopping early
-/// where it would move the surface by more than `max_error` model units
-/// (the simplifier's estimate; `f32::MAX` for none): sloppy vertex
-/// clustering (joins disjoint pieces, as the paper's GAPS does) or
-/// topology-preserving edge collapse, which prunes pieces smaller than the
-/// error. With `keep_pieces` (a leaf's few pieces) every piece keeps at
-/// least one triangle ([`keep_every_piece`]); otherwise (an inner node's
-/// thousands) vanished pieces far from what remains are covered at the
-/// simplifier's error ([`cover_vanished`]). The simplifier's own error
-/// estimate only guides: errors are measured.
-fn step(
-    mesh: &WorkMesh,
-    target: usize,
-    max_error: f32,
-    sloppy: bool,
+/// Whether `m` is a level worth making from one of `n` triangles: not
+/// empty, and at most MIN_SHRINK of them.
+fn shrinks(m: &WorkMesh, n: usize) -> bool {
+    m.triangles() > 0 && m.triangles() <= (MIN_SHRINK * n as f64) as usize
+}
+
+/// One mesh prepared for simplification steps: vertices that share a
+/// position are welded (normal or colour seams would otherwise block the
+/// simplifier; the output keeps one of the welded vertices' attributes),
+/// and its connected pieces found, once for however many steps are tried.
+struct Simplifier<'a> {
+    mesh: &'a WorkMesh,
+    welded: Vec<u32>,
+    /// Per vertex, the root of its connected piece (over `welded`).
+    piece: Vec<u32>,
+    /// A leaf's few pieces each keep a triangle ([`Simplifier::keep_every_piece`]);
+    /// an inner node's thousands are covered ([`Simplifier::cover_vanished`]).
     keep_pieces: bool,
-) -> Option<WorkMesh> {
-    if mesh.indices.is_empty() {
-        return None;
-    }
-    let bytes = meshopt::typed_to_bytes(&mesh.positions);
-    let adapter = VertexDataAdapter::new(bytes, std::mem::size_of::<[f32; 3]>(), 0).ok()?;
-    // Weld vertices that share a position (normal or colour seams) so the
-    // simplifier sees one connected surface; the output keeps one of the
-    // welded vertices' attributes.
-    let weld = meshopt::generate_position_remap(&adapter);
-    let welded: Vec<u32> = mesh.indices.iter().map(|&i| weld[i as usize]).collect();
-    let mut result_error = 0.0f32;
-    let indices = if sloppy {
-        // Sloppy takes its error relative to the mesh's extent.
-        let scale = meshopt::simplify_scale(&adapter);
-        let relative = if max_error == f32::MAX || scale.is_nan() || scale <= 0.0 {
-            f32::MAX
-        } else {
-            max_error / scale
-        };
-        let out = meshopt::simplify_sloppy(
-            &welded,
-            &adapter,
-            3 * target,
-            relative,
-            Some(&mut result_error),
-        );
-        result_error *= scale;
-        out
-    } else {
-        meshopt::simplify(
-            &welded,
-            &adapter,
-            3 * target,
-            max_error,
-            SimplifyOptions::ErrorAbsolute | SimplifyOptions::Prune,
-            Some(&mut result_error),
-        )
-    };
-    let indices = if keep_pieces {
-        keep_every_piece(mesh, &welded, indices)
-    } else {
-        // The simplifier's own error, else the limit: the cell size.
-        let cell = if result_error.is_finite() && result_error > 0.0 {
-            result_error
-        } else if max_error < f32::MAX {
-            max_error
-        } else {
-            f32::MIN_POSITIVE.sqrt()
-        };
-        cover_vanished(mesh, &welded, indices, cell)
-    };
-    if indices.is_empty() {
-        return None;
-    }
-    Some(compact(mesh, &indices))
 }
 
-/// Per triangle of `welded`: its connected piece (a union-find root over
-/// `vertices` vertices) when no triangle of `simplified` uses any vertex of
-/// that piece, `None` when the piece survives.
-fn vanished_pieces(vertices: usize, welded: &[u32], simplified: &[u32]) -> Vec<Option<u32>> {
-    let mut parent: Vec<u32> = (0..vertices as u32).collect();
-    for t in welded.chunks_exact(3) {
-        let a = crate::cluster::find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = crate::cluster::find(&mut parent, v);
-            parent[b as usize] = a;
-        }
-    }
-    let mut survives = vec![false; vertices];
-    for &v in simplified {
-        survives[crate::cluster::find(&mut parent, v) as usize] = true;
-    }
-    welded
-        .chunks_exact(3)
-        .map(|t| {
-            let root = crate::cluster::find(&mut parent, t[0]);
-            (!survives[root as usize]).then_some(root)
-        })
-        .collect()
-}
-
-/// `simplified` plus triangles of the pieces of `welded` that lost all
-/// their triangles, where nothing is left near them: a triangle of a
-/// vanished piece is added when one of its corners has no kept vertex
-/// within about a `cell` (same or neighbouring grid cell), so a vanished
-/// piece near kept geometry (a bolt on its flange) costs nothing and a
-/// far one (a pipe across an aisle) keeps about one triangle per cell it
-/// spans: about what it covers on screen at the error the cell stands for.
-fn cover_vanished(
-    mesh: &WorkMesh,
-    welded: &[u32],
-    mut simplified: Vec<u32>,
-    cell: f32,
-) -> Vec<u32> {
-    let vanished = vanished_pieces(mesh.positions.len(), welded, &simplified);
-    let inv = 1.0 / cell;
-    // Cell coordinates saturate (`as` from f64), and so do their
-    // neighbours, so a tiny cell or a far vertex cannot overflow.
-    let key = |i: u32| {
-        let p = mesh.positions[i as usize];
-        [0, 1, 2].map(|k| (p[k] as f64 * inv as f64).floor() as i64)
-    };
-    let mut occupied: rustc_hash::FxHashSet<[i64; 3]> =
-        simplified.iter().map(|&v| key(v)).collect();
-    let near = |occupied: &rustc_hash::FxHashSet<[i64; 3]>, c: [i64; 3]| {
-        let at = |k: usize, d: i64| c[k].saturating_add(d);
-        (-1..=1).any(|x| {
-            (-1..=1).any(|y| (-1..=1).any(|z| occupied.contains(&[at(0, x), at(1, y), at(2, z)])))
-        })
-    };
-    let mut added = Vec::new();
-    for (t, gone) in welded.chunks_exact(3).zip(&vanished) {
-        if gone.is_none() {
-            continue;
-        }
-        if t.iter().any(|&v| !near(&occupied, key(v))) {
-            added.extend_from_slice(t);
-            for &v in t {
-                occupied.insert(key(v));
+impl<'a> Simplifier<'a> {
+    fn new(mesh: &'a WorkMesh, keep_pieces: bool) -> Self {
+        let welded: Vec<u32> = match Self::adapter(mesh) {
+            Some(adapter) => {
+                let weld = meshopt::generate_position_remap(&adapter);
+                mesh.indices.iter().map(|&i| weld[i as usize]).collect()
+            }
+            None => Vec::new(),
+        };
+        let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+        for t in welded.chunks_exact(3) {
+            let a = crate::cluster::find(&mut parent, t[0]);
+            for &v in &t[1..] {
+                let b = crate::cluster::find(&mut parent, v);
+                parent[b as usize] = a;
             }
         }
-    }
-    simplified.extend(added);
-    simplified
-}
-
-/// `simplified` plus, for every connected piece of `welded` that lost all
-/// its triangles, that piece's largest triangle. Edge collapse prunes
-/// small pieces and sloppy clustering drops thin ones; a vanished piece
-/// would cost its distance to what remains (which may be far), a kept
-/// triangle of it at most its own diameter.
-fn keep_every_piece(mesh: &WorkMesh, welded: &[u32], mut simplified: Vec<u32>) -> Vec<u32> {
-    let vanished = vanished_pieces(mesh.positions.len(), welded, &simplified);
-    // Per vanished piece (by root): its largest triangle so far.
-    let mut best: FxHashMap<u32, (f32, usize)> = FxHashMap::default();
-    for (k, (t, gone)) in welded.chunks_exact(3).zip(&vanished).enumerate() {
-        let Some(root) = *gone else { continue };
-        let p = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
-        let area = (p(t[1]) - p(t[0]))
-            .cross(p(t[2]) - p(t[0]))
-            .length_squared();
-        let e = best.entry(root).or_insert((-1.0, k));
-        if area > e.0 {
-            *e = (area, k);
+        let piece = (0..parent.len() as u32)
+            .map(|v| crate::cluster::find(&mut parent, v))
+            .collect();
+        Simplifier {
+            mesh,
+            welded,
+            piece,
+            keep_pieces,
         }
     }
-    let mut added: Vec<usize> = best.values().map(|&(_, k)| k).collect();
-    added.sort_unstable();
-    for k in added {
-        simplified.extend_from_slice(&welded[3 * k..3 * k + 3]);
+
+    fn adapter(mesh: &WorkMesh) -> Option<VertexDataAdapter<'_>> {
+        let bytes = meshopt::typed_to_bytes(&mesh.positions);
+        VertexDataAdapter::new(bytes, std::mem::size_of::<[f32; 3]>(), 0).ok()
     }
-    simplified
+
+    /// One simplification step towards `target` triangles, stopping early
+    /// where it would move the surface by more than `max_error` model
+    /// units (the simplifier's estimate; `f32::MAX` for none): sloppy
+    /// vertex clustering (joins disjoint pieces, as the paper's GAPS does)
+    /// or topology-preserving edge collapse, which prunes pieces smaller
+    /// than the error. Vanished pieces are kept or covered (`keep_pieces`).
+    /// The simplifier's own error estimate only guides: errors are
+    /// measured.
+    fn step(&self, target: usize, max_error: f32, sloppy: bool) -> Option<WorkMesh> {
+        if self.welded.is_empty() {
+            return None;
+        }
+        let adapter = Self::adapter(self.mesh)?;
+        let welded = &self.welded;
+        let mut result_error = 0.0f32;
+        let indices = if sloppy {
+            // Sloppy takes its error relative to the mesh's extent.
+            let scale = meshopt::simplify_scale(&adapter);
+            let relative = if max_error == f32::MAX || scale.is_nan() || scale <= 0.0 {
+                f32::MAX
+            } else {
+                max_error / scale
+            };
+            let out = meshopt::simplify_sloppy(
+                welded,
+                &adapter,
+                3 * target,
+                relative,
+                Some(&mut result_error),
+            );
+            result_error *= scale;
+            out
+        } else {
+            meshopt::simplify(
+                welded,
+                &adapter,
+                3 * target,
+                max_error,
+                SimplifyOptions::ErrorAbsolute | SimplifyOptions::Prune,
+                Some(&mut result_error),
+            )
+        };
+        let indices = if self.keep_pieces {
+            self.keep_every_piece(indices)
+        } else {
+            // The simplifier's own error, else the limit: the cell size.
+            let cell = if result_error.is_finite() && result_error > 0.0 {
+                result_error
+            } else if max_error < f32::MAX {
+                max_error
+            } else {
+                f32::MIN_POSITIVE.sqrt()
+            };
+            self.cover_vanished(indices, cell)
+        };
+        if indices.is_empty() {
+            return None;
+        }
+        Some(compact(self.mesh, &indices))
+    }
+
+    /// Per triangle of the welded mesh: its piece when no triangle of
+    /// `simplified` uses any vertex of that piece, `None` when the piece
+    /// survives.
+    fn vanished_pieces(&self, simplified: &[u32]) -> Vec<Option<u32>> {
+        let mut survives = vec![false; self.piece.len()];
+        for &v in simplified {
+            survives[self.piece[v as usize] as usize] = true;
+        }
+        self.welded
+            .chunks_exact(3)
+            .map(|t| {
+                let root = self.piece[t[0] as usize];
+                (!survives[root as usize]).then_some(root)
+            })
+            .collect()
+    }
+
+    /// `simplified` plus triangles of the pieces that lost all their
+    /// triangles, where nothing is left near them: a triangle of a
+    /// vanished piece is added when one of its corners has no kept vertex
+    /// within about a `cell` (same or neighbouring grid cell), so a
+    /// vanished piece near kept geometry (a bolt on its flange) costs
+    /// nothing and a far one (a pipe across an aisle) keeps about one
+    /// triangle per cell it spans: about what it covers on screen at the
+    /// error the cell stands for.
+    fn cover_vanished(&self, mut simplified: Vec<u32>, cell: f32) -> Vec<u32> {
+        let vanished = self.vanished_pieces(&simplified);
+        let inv = 1.0 / cell;
+        // Cell coordinates saturate (`as` from f64), and so do their
+        // neighbours, so a tiny cell or a far vertex cannot overflow.
+        let key = |i: u32| {
+            let p = self.mesh.positions[i as usize];
+            [0, 1, 2].map(|k| (p[k] as f64 * inv as f64).floor() as i64)
+        };
+        let mut occupied: rustc_hash::FxHashSet<[i64; 3]> =
+            simplified.iter().map(|&v| key(v)).collect();
+        let near = |occupied: &rustc_hash::FxHashSet<[i64; 3]>, c: [i64; 3]| {
+            let at = |k: usize, d: i64| c[k].saturating_add(d);
+            (-1..=1).any(|x| {
+                (-1..=1)
+                    .any(|y| (-1..=1).any(|z| occupied.contains(&[at(0, x), at(1, y), at(2, z)])))
+            })
+        };
+        let mut added = Vec::new();
+        for (t, gone) in self.welded.chunks_exact(3).zip(&vanished) {
+            if gone.is_none() {
+                continue;
+            }
+            if t.iter().any(|&v| !near(&occupied, key(v))) {
+                added.extend_from_slice(t);
+                for &v in t {
+                    occupied.insert(key(v));
+                }
+            }
+        }
+        simplified.extend(added);
+        simplified
+    }
+
+    /// `simplified` plus, for every piece that lost all its triangles, that
+    /// piece's largest triangle. Edge collapse prunes small pieces and
+    /// sloppy clustering drops thin ones; a vanished piece would cost its
+    /// distance to what remains (which may be far), a kept triangle of it
+    /// at most its own diameter.
+    fn keep_every_piece(&self, mut simplified: Vec<u32>) -> Vec<u32> {
+        let vanished = self.vanished_pieces(&simplified);
+        // Per vanished piece (by root): its largest triangle so far.
+        let mut best: FxHashMap<u32, (f32, usize)> = FxHashMap::default();
+        for (k, (t, gone)) in self.welded.chunks_exact(3).zip(&vanished).enumerate() {
+            let Some(root) = *gone else { continue };
+            let p = |i: u32| glam::Vec3::from_array(self.mesh.positions[i as usize]);
+            let area = (p(t[1]) - p(t[0]))
+                .cross(p(t[2]) - p(t[0]))
+                .length_squared();
+            let e = best.entry(root).or_insert((-1.0, k));
+            if area > e.0 {
+                *e = (area, k);
+            }
+        }
+        let mut added: Vec<usize> = best.values().map(|&(_, k)| k).collect();
+        added.sort_unstable();
+        for k in added {
+            simplified.extend_from_slice(&self.welded[3 * k..3 * k + 3]);
+        }
+        simplified
+    }
 }
 
 /// The vertices `indices` use, in first-use order.
@@ -678,22 +709,8 @@ mod tests {
 
     /// Pieces of `m`, counting vertices with equal positions as one.
     fn pieces(m: &WorkMesh) -> usize {
-        let bytes = meshopt::typed_to_bytes(&m.positions);
-        let adapter = VertexDataAdapter::new(bytes, 12, 0).unwrap();
-        let weld = meshopt::generate_position_remap(&adapter);
-        let mut parent: Vec<u32> = (0..m.positions.len() as u32).collect();
-        for t in m.indices.chunks_exact(3) {
-            let a = crate::cluster::find(&mut parent, weld[t[0] as usize]);
-            for &v in &t[1..] {
-                let b = crate::cluster::find(&mut parent, weld[v as usize]);
-                parent[b as usize] = a;
-            }
-        }
-        let mut roots: Vec<u32> = m
-            .indices
-            .iter()
-            .map(|&v| crate::cluster::find(&mut parent, weld[v as usize]))
-            .collect();
+        let s = Simplifier::new(m, true);
+        let mut roots: Vec<u32> = s.welded.iter().map(|&v| s.piece[v as usize]).collect();
         roots.sort_unstable();
         roots.dedup();
         roots.len()
@@ -764,8 +781,9 @@ mod tests {
         ));
         add(pipe_object(DVec3::new(0.0, 3.0, 8.0), 20.0, 0.05, 40, 6));
         let mesh = mesh_of(all);
-        let kept: Vec<u32> = mesh.indices[..plate].to_vec();
-        let out = cover_vanished(&mesh, &mesh.indices, kept.clone(), 0.5);
+        let s = Simplifier::new(&mesh, false);
+        let kept: Vec<u32> = s.welded[..plate].to_vec();
+        let out = s.cover_vanished(kept.clone(), 0.5);
         let added = &out[kept.len()..];
         let pos = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
         let origin = mesh.origin.as_vec3();

@@ -557,7 +557,7 @@ fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
 /// buffer each time would be an allocation (and a driver-side free) per
 /// frame. Made on first use, and again if the size changes.
 #[derive(Default)]
-struct ReadBack {
+pub(crate) struct ReadBack {
     buffer: Option<wgpu::Buffer>,
 }
 
@@ -581,7 +581,7 @@ impl ReadBack {
     /// Copies a texture of `bpp` bytes per texel into the buffer, waits,
     /// and returns its rows tightly packed (the copy pads rows to 256
     /// bytes) as `T`s.
-    fn read<T: bytemuck::Pod>(
+    pub(crate) fn read<T: bytemuck::Pod>(
         &mut self,
         ctx: &GpuContext,
         tex: &wgpu::Texture,

@@ -6,6 +6,7 @@
 
 use crate::context::{adapters, device_name, instance_with_adapters, open, rank};
 use crate::overlay::{OverlayFrame, OverlayRenderer};
+use crate::passes::ReadBack;
 use crate::{GpuContext, GpuError, VisiblePass, COLOUR_FORMAT};
 
 pub const BLIT_WGSL: &str = include_str!("../../../shaders/blit.wgsl");
@@ -422,53 +423,13 @@ fn blit_pipeline(
 
 /// Reads an RGBA8 texture back, rows tightly packed, row 0 at the top.
 fn read_rgba(ctx: &GpuContext, tex: &wgpu::Texture, size: (u32, u32)) -> Result<Vec<u8>, GpuError> {
-    let (w, h) = size;
-    let row = w * 4;
-    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("screenshot readback"),
-        size: padded as u64 * h as u64,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        tex.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buf,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(h),
+    ReadBack::default()
+        .read(ctx, tex, size.0, size.1, 4, wgpu::TextureAspect::All)
+        .map_err(|e| match e {
+            GpuError::Device { device, message } => GpuError::Device {
+                device,
+                message: format!("screenshot readback: {message}"),
             },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    ctx.queue.submit([enc.finish()]);
-    let err = |e: &dyn std::fmt::Display| GpuError::Device {
-        device: ctx.name.clone(),
-        message: format!("screenshot readback: {e}"),
-    };
-    let (tx, rx) = std::sync::mpsc::channel();
-    buf.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| err(&e))?;
-    ctx.check()?;
-    rx.recv().map_err(|e| err(&e))?.map_err(|e| err(&e))?;
-    let data = buf.get_mapped_range(..).map_err(|e| err(&e))?;
-    let mut out = Vec::with_capacity((row * h) as usize);
-    for y in 0..h as usize {
-        let start = y * padded as usize;
-        out.extend_from_slice(&data[start..start + row as usize]);
-    }
-    drop(data);
-    buf.unmap();
-    Ok(out)
+            other => other,
+        })
 }

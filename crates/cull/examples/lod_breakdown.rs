@@ -63,6 +63,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     // Drawn level's pixel error / tolerance: <= 1/4, 1/2, 3/4, 1, above
     // (the finest is drawn when nothing is acceptable), exact (error 0).
     let mut slack = [0u64; 6];
+    // The same, for items drawn at their node's coarsest level (the
+    // parent's finest HLOD was not acceptable: the switch from a node to
+    // its children is where error slack comes from).
+    let mut slack_coarsest = [0u64; 6];
     let mut items = Vec::new();
     for pose in path.poses.iter().step_by(every) {
         frames += 1;
@@ -92,6 +96,9 @@ fn main() -> Result<(), Box<dyn Error>> {
                 ((pe / tolerance * 4.0).ceil() as usize).clamp(1, 4) - 1
             };
             slack[bucket] += t;
+            if it.lod as u32 + 1 == n.lod_count {
+                slack_coarsest[bucket] += t;
+            }
             let level = (it.lod as usize).min(LEVELS - 1);
             if n.is_leaf() {
                 leaf_nodes += 1;
@@ -125,6 +132,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!(
         "by drawn error / tolerance (<=1/4 <=1/2 <=3/4 <=1 >1 exact): {}",
         row(&slack)
+    );
+    println!(
+        "  of which at the node's coarsest level:                      {}",
+        row(&slack_coarsest)
     );
     Ok(())
 }

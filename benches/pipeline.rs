@@ -50,7 +50,7 @@ fn main() {
     let (w, h): (u32, u32) = (env("WIDTH", 640), env("HEIGHT", 360));
     let pixel_error: f64 = env("PIXEL_ERROR", 1.0);
     // `auto` (the default: 30k triangles on lavapipe), `all`, or a count.
-    let occluder_budget: OccluderBudget = env("OCCLUDER_BUDGET", OccluderBudget::Auto);
+    let occluder_budget: OccluderBudget = env("OCCLUDER_BUDGET", OccluderBudget::All);
 
     let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/gigawalk-bench-cache");
     std::fs::create_dir_all(&cache).unwrap();

@@ -96,7 +96,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                 ((pe / tolerance * 4.0).ceil() as usize).clamp(1, 4) - 1
             };
             slack[bucket] += t;
-            if it.lod as u32 + 1 == n.lod_count {
+            if it.lod + 1 == n.lod_count {
                 slack_coarsest[bucket] += t;
             }
             let level = (it.lod as usize).min(LEVELS - 1);

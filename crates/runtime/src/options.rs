@@ -39,7 +39,12 @@ impl std::fmt::Display for Stage {
 /// wrongly.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum OccluderBudget {
-    /// All of frame i - lag's visible set (the paper).
+    /// All of frame i - lag's visible set (the paper). The default: with
+    /// HLODs whose errors are measured bounds (preprocess revision 3) the
+    /// visible set is small, and all occluders made `och` and `occ` faster
+    /// than a 30k or 100k budget on the 4M, 20M and 50M plants even on
+    /// lavapipe (docs/PERFORMANCE.md, "Occluder budget").
+    #[default]
     All,
     /// At most this many triangles, those hiding most per triangle first
     /// (`gigawalk_cull::select_occluders`).
@@ -47,13 +52,15 @@ pub enum OccluderBudget {
     /// [`CPU_OCCLUDER_BUDGET`] triangles when a device is a CPU rasterizer
     /// (lavapipe, llvmpipe, WARP), where OR's triangles come out of RVG's
     /// time on the same cores; `All` on GPUs, where OR has its own device.
-    #[default]
+    /// The default until the visible sets shrank (it made `och` 1.29x
+    /// faster on the 4M plant when och drew 335k triangles a frame).
     Auto,
 }
 
 /// The budget `OccluderBudget::Auto` uses on CPU rasterizers: on the 4M
-/// demo plant with lavapipe, 10k-30k triangles made `och` 1.29x faster
-/// than all occluders (docs/PERFORMANCE.md, "Occluder budget").
+/// demo plant with lavapipe and the estimated LOD errors of preprocess
+/// revision 1, 10k-30k triangles made `och` 1.29x faster than all
+/// occluders (docs/PERFORMANCE.md, "Occluder budget").
 pub const CPU_OCCLUDER_BUDGET: u64 = 30_000;
 
 impl OccluderBudget {
@@ -175,7 +182,7 @@ impl Default for RuntimeOptions {
             traversal: TraversalOptions::default(),
             occluder_lag: 2,
             occluder_scale: 1.0,
-            occluder_budget: OccluderBudget::Auto,
+            occluder_budget: OccluderBudget::All,
             hzb_reduction: Reduction::Farthest,
             devices: 2,
             chunk: 256,
@@ -308,7 +315,7 @@ mod tests {
         assert_eq!(OccluderBudget::Triangles(5).resolve(false), Some(5));
         assert_eq!(
             RuntimeOptions::default().occluder_budget,
-            OccluderBudget::Auto
+            OccluderBudget::All
         );
     }
 }

@@ -57,8 +57,8 @@ pub struct RuntimeArgs {
     /// Occluder depth resolution as a fraction of the viewport (1 = conservative)
     #[arg(long, default_value_t = 1.0)]
     occluder_scale: f64,
-    /// Occluder triangles OR draws a frame, those hiding most per triangle first (conservative): a count (30000, 30k), all (the paper), or auto = 30k on CPU rasterizers such as lavapipe, all on GPUs
-    #[arg(long, value_name = "TRIANGLES|all|auto", default_value = "auto")]
+    /// Occluder triangles OR draws a frame, those hiding most per triangle first (conservative): all (the paper; measured fastest with revision-3 HLODs, even on lavapipe), a count (30000, 30k), or auto = 30k on CPU rasterizers such as lavapipe, all on GPUs
+    #[arg(long, value_name = "all|TRIANGLES|auto", default_value = "all")]
     occluder_budget: OccluderBudget,
     /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest)
     #[arg(long)]

@@ -35,5 +35,5 @@ run nth-farthest-2 --modes occ,och --nth-farthest 2
 run nth-farthest-3 --modes occ,och --nth-farthest 3
 run occluder-lag-1 --modes occ,och --occluder-lag 1
 run async --modes occ,och --async
-run occluders-all --modes occ,och --occluder-budget all
+run occluders-30k --modes occ,och --occluder-budget 30k
 exit $status

@@ -27,4 +27,7 @@ pub use passes::{
     DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
 };
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
-pub use residency::{HostGeometry, LodRange, Residency, ResidentGeometry};
+pub use residency::{
+    DecodedLod, GeometryPool, HostGeometry, LodRange, Residency, ResidentGeometry, INDEX_BYTES,
+    VERTEX_BYTES,
+};

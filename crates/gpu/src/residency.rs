@@ -1,11 +1,16 @@
 //! Geometry residency: where each LOD's vertices and indices live on a
-//! device. Everything is loaded at start for now, into a few large buffers
-//! with per-LOD ranges (no buffer per node); the [`Residency`] trait is the
-//! seam where streaming will plug in.
+//! device, in a few large buffers with per-LOD ranges (no buffer per node).
+//! Two kinds behind the [`Residency`] trait: [`ResidentGeometry`], every
+//! LOD loaded at start, and [`GeometryPool`], a fixed amount of device
+//! memory that LODs are put into and taken out of while the walk runs
+//! (out-of-core streaming; the runtime decides what goes in and out).
+
+use std::ops::Range;
 
 use glam::DVec3;
+use range_alloc::RangeAllocator;
 
-use gigawalk_scene::{Colours, ReadAt, SceneReader};
+use gigawalk_scene::{Colours, LodMesh, ReadAt, SceneReader};
 
 use crate::shader_types::GpuVertex;
 use crate::{GpuContext, GpuError};
@@ -28,6 +33,53 @@ pub trait Residency {
     fn range(&self, lod: u32) -> Option<LodRange>;
     /// The vertex and index buffer of a buffer pair.
     fn buffers(&self, buffer: u32) -> (&wgpu::Buffer, &wgpu::Buffer);
+}
+
+/// A LOD's vertices in the GPU's layout.
+fn gpu_vertices(mesh: &LodMesh) -> impl Iterator<Item = GpuVertex> + '_ {
+    let colour = move |i: usize| match &mesh.colours {
+        Colours::Uniform(c) => *c,
+        Colours::PerVertex(v) => v[i],
+    };
+    mesh.positions
+        .iter()
+        .zip(&mesh.normals)
+        .enumerate()
+        .map(move |(i, (p, n))| GpuVertex {
+            position: *p,
+            normal: gigawalk_scene::encode_normal(*n),
+            colour: colour(i),
+        })
+}
+
+/// Bytes one vertex takes on a device.
+pub const VERTEX_BYTES: u64 = std::mem::size_of::<GpuVertex>() as u64;
+/// Bytes one index takes on a device.
+pub const INDEX_BYTES: u64 = 4;
+
+/// One LOD decoded into the GPU's layout in host memory: what a streaming
+/// loader hands to the devices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DecodedLod {
+    pub vertices: Vec<GpuVertex>,
+    pub indices: Vec<u32>,
+    /// World point the positions are relative to.
+    pub origin: DVec3,
+}
+
+impl DecodedLod {
+    pub fn new(mesh: &LodMesh) -> Self {
+        DecodedLod {
+            vertices: gpu_vertices(mesh).collect(),
+            indices: mesh.indices.clone(),
+            origin: mesh.origin,
+        }
+    }
+
+    /// Device bytes the LOD takes.
+    pub fn bytes(&self) -> u64 {
+        self.vertices.len() as u64 * VERTEX_BYTES + self.indices.len() as u64 * INDEX_BYTES
+    }
 }
 
 /// All of a scene's geometry decoded into GPU layout in host memory, split
@@ -78,22 +130,7 @@ impl HostGeometry {
                 base_vertex: c.vertices.len() as i32,
                 origin: mesh.origin,
             });
-            let colour = |i: usize| match &mesh.colours {
-                Colours::Uniform(c) => *c,
-                Colours::PerVertex(v) => v[i],
-            };
-            c.vertices
-                .extend(
-                    mesh.positions
-                        .iter()
-                        .zip(&mesh.normals)
-                        .enumerate()
-                        .map(|(i, (p, n))| GpuVertex {
-                            position: *p,
-                            normal: gigawalk_scene::encode_normal(*n),
-                            colour: colour(i),
-                        }),
-                );
+            c.vertices.extend(gpu_vertices(&mesh));
             c.indices.extend_from_slice(&mesh.indices);
         }
         Ok(HostGeometry { chunks, ranges })
@@ -161,5 +198,181 @@ impl Residency for ResidentGeometry {
     fn buffers(&self, buffer: u32) -> (&wgpu::Buffer, &wgpu::Buffer) {
         let (v, i) = &self.buffers[buffer as usize];
         (v, i)
+    }
+}
+
+/// One pair of pool buffers and what of them is taken, in elements.
+struct Page {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    free_vertices: RangeAllocator<u32>,
+    free_indices: RangeAllocator<u32>,
+}
+
+/// Where a resident LOD sits in the pool.
+#[derive(Clone, Debug)]
+struct Slot {
+    range: LodRange,
+    vertices: Range<u32>,
+    indices: Range<u32>,
+    bytes: u64,
+}
+
+/// A fixed amount of one device's memory for geometry (vertex and index
+/// buffers made once, at most the device's buffer limit each), that LODs
+/// are put into and taken out of one by one. It keeps no policy: the
+/// caller chooses what to insert and what to remove (the runtime's memory
+/// budget, least recently drawn first).
+///
+/// Overwriting a removed LOD's range is safe while earlier frames still
+/// draw from it on the GPU: `Queue::write_buffer` takes effect at the next
+/// submission, after every command already submitted on the queue.
+pub struct GeometryPool {
+    pages: Vec<Page>,
+    slots: Vec<Option<Slot>>,
+    used_bytes: u64,
+    capacity_bytes: u64,
+}
+
+impl GeometryPool {
+    /// A pool for a scene of `lods` LODs with room for `vertex_bytes` of
+    /// vertices and `index_bytes` of indices (rounded down to whole
+    /// elements), split into buffers of at most `max_buffer_bytes`.
+    pub fn new(
+        ctx: &GpuContext,
+        lods: usize,
+        vertex_bytes: u64,
+        index_bytes: u64,
+        max_buffer_bytes: u64,
+    ) -> Result<Self, GpuError> {
+        let max = max_buffer_bytes.min(u32::MAX as u64 * INDEX_BYTES);
+        // Element counts a buffer can address (u32 ranges, i32 base vertex).
+        let max_v = (max / VERTEX_BYTES).min(i32::MAX as u64);
+        let max_i = (max / INDEX_BYTES).min(u32::MAX as u64);
+        if max_v == 0 || max_i == 0 {
+            return Err(GpuError::TooLarge {
+                what: "a geometry pool buffer".into(),
+                needed: VERTEX_BYTES,
+                limit: max_buffer_bytes,
+            });
+        }
+        let (nv, ni) = (vertex_bytes / VERTEX_BYTES, index_bytes / INDEX_BYTES);
+        let pages = nv.div_ceil(max_v).max(ni.div_ceil(max_i)).max(1);
+        let (pv, pi) = (nv / pages, ni / pages);
+        let mut out = Vec::with_capacity(pages as usize);
+        for p in 0..pages {
+            let make = |what: &str, bytes: u64, usage| {
+                ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(&format!("pool {what} {p}")),
+                    // Zero-sized buffers are legal but binding them is not.
+                    size: bytes.max(4).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT),
+                    usage: usage | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            out.push(Page {
+                vertices: make("vertices", pv * VERTEX_BYTES, wgpu::BufferUsages::VERTEX),
+                indices: make("indices", pi * INDEX_BYTES, wgpu::BufferUsages::INDEX),
+                free_vertices: RangeAllocator::new(0..pv as u32),
+                free_indices: RangeAllocator::new(0..pi as u32),
+            });
+        }
+        ctx.check()?;
+        Ok(GeometryPool {
+            pages: out,
+            slots: vec![None; lods],
+            used_bytes: 0,
+            capacity_bytes: pages * (pv * VERTEX_BYTES + pi * INDEX_BYTES),
+        })
+    }
+
+    /// Device bytes the pool's buffers take, resident LODs or not.
+    pub fn capacity_bytes(&self) -> u64 {
+        self.capacity_bytes
+    }
+
+    /// Device bytes the resident LODs take.
+    pub fn used_bytes(&self) -> u64 {
+        self.used_bytes
+    }
+
+    pub fn contains(&self, lod: u32) -> bool {
+        matches!(self.slots.get(lod as usize), Some(Some(_)))
+    }
+
+    /// Whether `lod` could fit in an empty pool.
+    pub fn could_hold(&self, lod: &DecodedLod) -> bool {
+        self.pages.iter().any(|p| {
+            p.free_vertices.initial_range().len() >= lod.vertices.len()
+                && p.free_indices.initial_range().len() >= lod.indices.len()
+        })
+    }
+
+    /// Puts `lod` (id `id`) in the pool and writes it to the device; false
+    /// when no page has room for it (nothing changes then). A LOD already
+    /// resident stays where it is.
+    pub fn insert(&mut self, ctx: &GpuContext, id: u32, lod: &DecodedLod) -> bool {
+        if self.contains(id) {
+            return true;
+        }
+        if id as usize >= self.slots.len() {
+            return false;
+        }
+        let (nv, ni) = (lod.vertices.len() as u32, lod.indices.len() as u32);
+        for (b, page) in self.pages.iter_mut().enumerate() {
+            let Ok(v) = page.free_vertices.allocate_range(nv.max(1)) else {
+                continue;
+            };
+            let Ok(i) = page.free_indices.allocate_range(ni.max(1)) else {
+                page.free_vertices.free_range(v);
+                continue;
+            };
+            ctx.queue.write_buffer(
+                &page.vertices,
+                v.start as u64 * VERTEX_BYTES,
+                bytemuck::cast_slice(&lod.vertices),
+            );
+            ctx.queue.write_buffer(
+                &page.indices,
+                i.start as u64 * INDEX_BYTES,
+                bytemuck::cast_slice(&lod.indices),
+            );
+            self.slots[id as usize] = Some(Slot {
+                range: LodRange {
+                    buffer: b as u32,
+                    first_index: i.start,
+                    index_count: ni,
+                    base_vertex: v.start as i32,
+                    origin: lod.origin,
+                },
+                vertices: v,
+                indices: i,
+                bytes: lod.bytes(),
+            });
+            self.used_bytes += lod.bytes();
+            return true;
+        }
+        false
+    }
+
+    /// Takes `id` out of the pool (its memory is free for the next insert).
+    pub fn remove(&mut self, id: u32) {
+        let Some(slot) = self.slots.get_mut(id as usize).and_then(Option::take) else {
+            return;
+        };
+        let page = &mut self.pages[slot.range.buffer as usize];
+        self.used_bytes -= slot.bytes;
+        page.free_vertices.free_range(slot.vertices);
+        page.free_indices.free_range(slot.indices);
+    }
+}
+
+impl Residency for GeometryPool {
+    fn range(&self, lod: u32) -> Option<LodRange> {
+        self.slots.get(lod as usize)?.as_ref().map(|s| s.range)
+    }
+    fn buffers(&self, buffer: u32) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        let p = &self.pages[buffer as usize];
+        (&p.vertices, &p.indices)
     }
 }

@@ -18,8 +18,9 @@
 mod options;
 mod pipeline;
 mod stages;
+mod streaming;
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 pub use gigawalk_cull::{
@@ -30,8 +31,11 @@ pub use options::{
     OccluderBudget, OptionsError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
 };
 
-use gigawalk_gpu::{HostGeometry, ResidentGeometry};
+pub use streaming::{LodSource, StreamStats, PINNED_SHARE};
+
+use gigawalk_gpu::HostGeometry;
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
+use streaming::{DeviceStream, Geometry, Plan};
 
 /// Why the runtime could not start, or why a run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -63,7 +67,20 @@ pub enum RuntimeError {
     },
     #[error("camera source: {0}")]
     Camera(#[from] CameraError),
+    /// The loader could not read a LOD the walk needed (streaming).
+    #[error("loader: {source}")]
+    Load {
+        source: Box<gigawalk_scene::ReadError>,
+    },
+    /// A stage saw the loader stop; the loader's own error is the cause.
+    #[error("the loader stopped")]
+    LoaderStopped,
+    #[error("setup: memory budget of {budget} bytes is below the minimum of {min} bytes")]
+    MemoryBudget { budget: u64, min: u64 },
 }
+
+/// The smallest memory budget [`Runtime::streaming`] takes.
+pub const MIN_MEMORY_BUDGET: u64 = 1 << 20;
 
 /// Why a [`CameraSource`] gave no camera for a frame.
 #[derive(Debug, thiserror::Error)]
@@ -164,6 +181,9 @@ pub struct FrameReport {
     pub stc_ms: f64,
     pub rvg_ms: f64,
     pub stats: TraversalStats,
+    /// Streaming figures of the device that drew the frame (zeros when the
+    /// whole scene is resident).
+    pub streaming: StreamStats,
     /// The nodes drawn and their LODs, in STC's order. Shared, not copied,
     /// with the stages that use the same set (OR's occluders, held frames).
     pub visible: Arc<[DrawItem]>,
@@ -182,13 +202,16 @@ impl FrameReport {
     }
 }
 
-/// A scene ready to render: its skeleton, and its geometry resident on
-/// each device.
+/// A scene ready to render: its skeleton, and its geometry on each device
+/// (all of it, or streamed under a memory budget).
 pub struct Runtime<'s> {
     skeleton: &'s Skeleton,
     devices: Vec<GpuContext>,
-    geometry: Vec<ResidentGeometry>,
+    geometry: Vec<Geometry>,
     host_bytes: u64,
+    /// Streaming: where LODs come from, and the pinned set.
+    source: Option<&'s dyn LodSource>,
+    plan: Option<Plan>,
 }
 
 impl<'s> Runtime<'s> {
@@ -211,16 +234,10 @@ impl<'s> Runtime<'s> {
                 count: devices.len(),
             });
         }
-        let limit = devices
-            .iter()
-            .map(|d| d.device.limits().max_buffer_size)
-            .min()
-            .unwrap_or(1 << 28)
-            .min(1 << 28);
-        let host = HostGeometry::load(scene, limit).map_err(setup)?;
+        let host = HostGeometry::load(scene, buffer_limit(&devices)).map_err(setup)?;
         let geometry = devices
             .iter()
-            .map(|d| host.upload(d))
+            .map(|d| host.upload(d).map(Geometry::Resident))
             .collect::<Result<Vec<_>, _>>()
             .map_err(setup)?;
         Ok(Runtime {
@@ -228,16 +245,76 @@ impl<'s> Runtime<'s> {
             devices,
             geometry,
             host_bytes: host.bytes(),
+            source: None,
+            plan: None,
         })
+    }
+
+    /// Like [`Runtime::with_devices`], keeping at most `budget` bytes of
+    /// geometry on each device: the scene's LODs are read while the walk
+    /// runs (out of core). Only the pinned set is loaded here, so this
+    /// returns in about the time it takes to read that. A scene that fits
+    /// in the budget is loaded whole, as by [`Runtime::with_devices`].
+    pub fn streaming<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+        budget: u64,
+    ) -> Result<Self, RuntimeError> {
+        if !(1..=2).contains(&devices.len()) {
+            return Err(RuntimeError::DeviceCount {
+                count: devices.len(),
+            });
+        }
+        if budget < MIN_MEMORY_BUDGET {
+            return Err(RuntimeError::MemoryBudget {
+                budget,
+                min: MIN_MEMORY_BUDGET,
+            });
+        }
+        let skeleton = scene.skeleton();
+        let (v, i) = streaming::scene_bytes(skeleton);
+        if v + i <= budget {
+            return Self::with_devices(scene, devices);
+        }
+        let limit = buffer_limit(&devices);
+        let plan = Plan::new(skeleton, budget);
+        let geometry = devices
+            .iter()
+            .map(|d| {
+                DeviceStream::new(d, skeleton, &plan, scene, limit)
+                    .map(|s| Geometry::Streamed(Box::new(Mutex::new(s))))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Runtime {
+            skeleton,
+            devices,
+            geometry,
+            host_bytes: 0,
+            source: Some(scene),
+            plan: Some(plan),
+        })
+    }
+
+    /// Whether geometry is streamed under a memory budget.
+    pub fn is_streaming(&self) -> bool {
+        self.plan.is_some()
     }
 
     pub fn skeleton(&self) -> &Skeleton {
         self.skeleton
     }
 
-    /// Bytes of geometry resident on each device.
+    /// Bytes of geometry each device holds: the whole scene, or when
+    /// streaming the device memory of its pool (the budget, rounded down).
     pub fn resident_bytes(&self) -> u64 {
-        self.host_bytes
+        match self.geometry.first() {
+            Some(Geometry::Streamed(s)) => s
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .pool()
+                .capacity_bytes(),
+            _ => self.host_bytes,
+        }
     }
 
     pub fn device_names(&self) -> Vec<String> {
@@ -297,6 +374,16 @@ impl<'s> Runtime<'s> {
     pub fn device(&self, i: usize) -> &GpuContext {
         &self.devices[i.min(self.devices.len().saturating_sub(1))]
     }
+}
+
+/// The largest geometry buffer every device takes (at most 256 MiB).
+fn buffer_limit(devices: &[GpuContext]) -> u64 {
+    devices
+        .iter()
+        .map(|d| d.device.limits().max_buffer_size)
+        .min()
+        .unwrap_or(1 << 28)
+        .min(1 << 28)
 }
 
 /// A device-setup error: opening devices or loading geometry onto them.

@@ -22,6 +22,8 @@ pub enum Stage {
     Stc,
     /// Render visible geometry (GPU device B).
     Rvg,
+    /// Read streamed LODs from the scene file (out of core).
+    Loader,
 }
 
 impl std::fmt::Display for Stage {
@@ -30,6 +32,7 @@ impl std::fmt::Display for Stage {
             Stage::Or => "OR",
             Stage::Stc => "STC",
             Stage::Rvg => "RVG",
+            Stage::Loader => "loader",
         })
     }
 }

@@ -8,7 +8,8 @@ use crossbeam_channel::{bounded, unbounded, Receiver, Sender, TryRecvError};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
-use crate::stages::{lod_ids, OrStage, RvgStage, StcOutput, StcStage};
+use crate::stages::{lod_ids, DeviceGeometry, OrStage, RvgStage, StcOutput, StcStage};
+use crate::streaming::{self, Link, LodSource, Request, StreamStats, INBOX, REQUEST_QUEUE};
 use crate::{
     CameraError, CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage,
 };
@@ -106,7 +107,12 @@ fn held(hold: bool, last: &Option<StcOutput>) -> Option<StcOutput> {
     })
 }
 
-fn report(end: FrameEnd, image: Option<gigawalk_gpu::FrameImage>, rvg_ms: f64) -> FrameReport {
+fn report(
+    end: FrameEnd,
+    image: Option<gigawalk_gpu::FrameImage>,
+    rvg_ms: f64,
+    streaming: StreamStats,
+) -> FrameReport {
     FrameReport {
         frame: end.sample.frame,
         camera: end.sample.view.camera,
@@ -119,6 +125,7 @@ fn report(end: FrameEnd, image: Option<gigawalk_gpu::FrameImage>, rvg_ms: f64) -
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,
+        streaming,
         visible: end.stc.visible,
         culled: end.stc.culled,
         reused_visible_set: end.reused,
@@ -134,7 +141,7 @@ fn finish_frame(
 ) -> Result<FrameReport, RuntimeError> {
     let read_back = end.sample.read_back;
     let (_, rvg_ms) = rvg.finish(false)?;
-    let mut r = report(end, None, rvg_ms);
+    let mut r = report(end, None, rvg_ms, rvg.stream_stats());
     presenter
         .present(rvg.ctx, &rvg.pass, &r)
         .map_err(|source| RuntimeError::Gpu {
@@ -149,6 +156,60 @@ fn finish_frame(
     Ok(r)
 }
 
+/// One run's streaming queues: the loader's ends of them.
+struct LoaderQueues<'a> {
+    source: &'a dyn LodSource,
+    requests: Receiver<Request>,
+    devices: Vec<Sender<streaming::Loaded>>,
+}
+
+impl LoaderQueues<'_> {
+    fn body(self) -> Result<(), RuntimeError> {
+        streaming::loader(self.source, self.requests, self.devices)
+    }
+}
+
+/// When the runtime streams: the loader's queues, and OR's and RVG's
+/// links (OR on device `a`, RVG on `b`; one inbox per device, both
+/// stages' when they share one). Made per run, so the loader ends when
+/// the stages drop their links.
+fn stream_links<'a>(
+    rt: &'a Runtime<'_>,
+    a: usize,
+    b: usize,
+) -> (Option<LoaderQueues<'a>>, Option<Link>, Option<Link>) {
+    let Some(source) = rt.source.filter(|_| rt.is_streaming()) else {
+        return (None, None, None);
+    };
+    let (requests_tx, requests) = bounded(REQUEST_QUEUE);
+    let (a_tx, a_rx) = bounded(INBOX);
+    let mut devices = vec![a_tx];
+    let or_link = Link {
+        requests: None,
+        inbox: a_rx.clone(),
+    };
+    let rvg_inbox = if a == b {
+        a_rx
+    } else {
+        let (b_tx, b_rx) = bounded(INBOX);
+        devices.push(b_tx);
+        b_rx
+    };
+    let rvg_link = Link {
+        requests: Some(requests_tx),
+        inbox: rvg_inbox,
+    };
+    (
+        Some(LoaderQueues {
+            source,
+            requests,
+            devices,
+        }),
+        Some(or_link),
+        Some(rvg_link),
+    )
+}
+
 pub(crate) fn run_sequential(
     rt: &Runtime,
     opts: &RuntimeOptions,
@@ -156,10 +217,45 @@ pub(crate) fn run_sequential(
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
-    let (ctx, geometry) = (&rt.devices[0], &rt.geometry[0]);
-    let mut or = OrStage::new(ctx, geometry, rt.skeleton, opts);
+    let (loader, or_link, rvg_link) = stream_links(rt, 0, 0);
+    let Some(loader) = loader else {
+        return sequential_frames(rt, opts, source, on_frame, presenter, None, None);
+    };
+    std::thread::scope(|s| {
+        let handle = std::thread::Builder::new()
+            .name(format!("gigawalk-{}", Stage::Loader))
+            .spawn_scoped(s, move || loader.body())
+            .map_err(|source| RuntimeError::Spawn {
+                stage: Stage::Loader,
+                source,
+            })?;
+        // The links drop when the frames end, which ends the loader.
+        let frames = sequential_frames(rt, opts, source, on_frame, presenter, or_link, rvg_link);
+        let loaded = handle.join().unwrap_or_else(|p| {
+            Err(RuntimeError::Panic {
+                stage: Stage::Loader,
+                message: panic_message(p),
+            })
+        });
+        match (frames, loaded) {
+            (Err(RuntimeError::LoaderStopped), Err(e)) | (Ok(_), Err(e)) => Err(e),
+            (frames, _) => frames,
+        }
+    })
+}
+
+fn sequential_frames(
+    rt: &Runtime,
+    opts: &RuntimeOptions,
+    source: &mut dyn CameraSource,
+    on_frame: &mut dyn FnMut(FrameReport) -> bool,
+    presenter: &mut dyn Presenter,
+    or_link: Option<Link>,
+    rvg_link: Option<Link>,
+) -> Result<u64, RuntimeError> {
+    let mut or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
     let mut stc = StcStage::new(rt.skeleton, opts);
-    let mut rvg = RvgStage::new(ctx, geometry, opts);
+    let mut rvg = RvgStage::new(DeviceGeometry::new(rt, 0, rvg_link), opts);
     let mut history: std::collections::VecDeque<VisibleSet> = Default::default();
     let mut last: Option<StcOutput> = None;
     let mut frame = 0u64;
@@ -178,7 +274,7 @@ pub(crate) fn run_sequential(
         rvg.begin(frame, &view, sample.style)?;
         // The same chunks as the pipeline, drawn after traversal.
         for chunk in lod_ids(rt.skeleton, &stc_out.visible).chunks(opts.chunk) {
-            rvg.draw(chunk);
+            rvg.draw(chunk)?;
         }
         history.push_back(stc_out.visible.clone());
         if history.len() > opts.occluder_lag as usize {
@@ -211,14 +307,15 @@ fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
 /// One stage's thread body.
 type StageBody<'scope> = Box<dyn FnOnce() -> Result<(), RuntimeError> + Send + 'scope>;
 
-/// Runs the three stage bodies on their own threads, feeds reports to
+/// Runs the stage bodies (OR, STC, RVG, and the loader when streaming) on
+/// their own threads, feeds reports to
 /// `on_frame` on this thread, and returns the first stage error. A thread
 /// the system cannot start is an error too: its body is dropped unrun,
 /// which closes its queues, so the stages already started stop as they
 /// would after a stage error.
 fn run_threads<'scope, 'env>(
     s: &'scope std::thread::Scope<'scope, 'env>,
-    stages: [(Stage, StageBody<'scope>); 3],
+    stages: Vec<(Stage, StageBody<'scope>)>,
     reports: Receiver<FrameReport>,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
 ) -> Result<u64, RuntimeError> {
@@ -237,6 +334,7 @@ fn run_threads<'scope, 'env>(
         }
     }
     let mut frames = 0;
+    let mut stopped = false;
     if first_error.is_none() {
         for report in reports.iter() {
             frames += 1;
@@ -255,10 +353,20 @@ fn run_threads<'scope, 'env>(
             })
         });
         // A stage that merely saw its queue close returns Ok, so the error
-        // kept is the root cause.
-        if let Err(e) = result {
-            first_error.get_or_insert(e);
+        // kept is the root cause; one that saw the loader stop defers to
+        // the loader's error.
+        match result {
+            Err(RuntimeError::LoaderStopped) => {
+                stopped = true;
+            }
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+            Ok(()) => {}
         }
+    }
+    if stopped && first_error.is_none() {
+        first_error = Some(RuntimeError::LoaderStopped);
     }
     match first_error {
         Some(e) => Err(e),
@@ -292,40 +400,43 @@ pub(crate) fn run_pipelined(
         token_tx.send(()).expect("room for every token");
     }
     let b = rvg_device(rt, opts);
+    let (loader, or_link, rvg_link) = stream_links(rt, 0, b);
     std::thread::scope(|s| {
-        run_threads(
-            s,
-            [
-                (
-                    Stage::Or,
-                    Box::new(move || or_thread(rt, opts, source, or_tx, feedback_rx, token_rx)),
-                ),
-                (
-                    Stage::Stc,
-                    Box::new(move || stc_thread(rt, opts, or_rx, rvg_tx, feedback_tx)),
-                ),
-                (
-                    Stage::Rvg,
-                    Box::new(move || {
-                        rvg_thread(rt, b, opts, rvg_rx, report_tx, token_tx, presenter)
-                    }),
-                ),
-            ],
-            report_rx,
-            on_frame,
-        )
+        let mut stages: Vec<(Stage, StageBody)> = vec![
+            (
+                Stage::Or,
+                Box::new(move || {
+                    let or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
+                    or_thread(or, opts, source, or_tx, feedback_rx, token_rx)
+                }),
+            ),
+            (
+                Stage::Stc,
+                Box::new(move || stc_thread(rt, opts, or_rx, rvg_tx, feedback_tx)),
+            ),
+            (
+                Stage::Rvg,
+                Box::new(move || {
+                    let rvg = RvgStage::new(DeviceGeometry::new(rt, b, rvg_link), opts);
+                    rvg_thread(rvg, rvg_rx, report_tx, token_tx, presenter)
+                }),
+            ),
+        ];
+        if let Some(l) = loader {
+            stages.push((Stage::Loader, Box::new(move || l.body())));
+        }
+        run_threads(s, stages, report_rx, on_frame)
     })
 }
 
 fn or_thread(
-    rt: &Runtime,
+    mut or: OrStage,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     out: Sender<OrToStc>,
     feedback: Receiver<VisibleSet>,
     tokens: Receiver<()>,
 ) -> Result<(), RuntimeError> {
-    let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
     let mut frame = 0u64;
     let mut occluders: VisibleSet = Arc::new([]);
     loop {
@@ -437,15 +548,12 @@ fn stc_thread(
 }
 
 fn rvg_thread(
-    rt: &Runtime,
-    device: usize,
-    opts: &RuntimeOptions,
+    mut rvg: RvgStage,
     input: Receiver<StcToRvg>,
     out: Sender<FrameReport>,
     tokens: Sender<()>,
     presenter: &mut dyn Presenter,
 ) -> Result<(), RuntimeError> {
-    let mut rvg = RvgStage::new(&rt.devices[device], &rt.geometry[device], opts);
     let mut span = None;
     for m in input.iter() {
         match m {
@@ -453,7 +561,7 @@ fn rvg_thread(
                 span = Some(tracing::info_span!("RVG", frame).entered());
                 rvg.begin(frame, &view, style)?;
             }
-            StcToRvg::Items(lods) => rvg.draw(&lods),
+            StcToRvg::Items(lods) => rvg.draw(&lods)?,
             StcToRvg::End(end) => {
                 let r = finish_frame(&mut rvg, presenter, *end)?;
                 span = None;
@@ -542,40 +650,43 @@ pub(crate) fn run_async(
     // Owned by RVG's body, so the slot closes when RVG ends for any reason,
     // or when its body is dropped without running.
     let close = CloseOnDrop(latest);
+    let (loader, or_link, rvg_link) = stream_links(rt, 0, b);
     std::thread::scope(|s| {
-        run_threads(
-            s,
-            [
-                (
-                    Stage::Or,
-                    Box::new(move || async_or_thread(rt, opts, latest, or_tx, feedback_rx)),
-                ),
-                (
-                    Stage::Stc,
-                    Box::new(move || async_stc_thread(rt, opts, or_rx, sets_tx, feedback_tx)),
-                ),
-                (
-                    Stage::Rvg,
-                    Box::new(move || {
-                        let _close = close;
-                        async_rvg_thread(rt, b, opts, source, latest, sets_rx, report_tx, presenter)
-                    }),
-                ),
-            ],
-            report_rx,
-            on_frame,
-        )
+        let mut stages: Vec<(Stage, StageBody)> = vec![
+            (
+                Stage::Or,
+                Box::new(move || {
+                    let or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
+                    async_or_thread(or, opts, latest, or_tx, feedback_rx)
+                }),
+            ),
+            (
+                Stage::Stc,
+                Box::new(move || async_stc_thread(rt, opts, or_rx, sets_tx, feedback_tx)),
+            ),
+            (
+                Stage::Rvg,
+                Box::new(move || {
+                    let _close = close;
+                    let rvg = RvgStage::new(DeviceGeometry::new(rt, b, rvg_link), opts);
+                    async_rvg_thread(rvg, rt, opts, source, latest, sets_rx, report_tx, presenter)
+                }),
+            ),
+        ];
+        if let Some(l) = loader {
+            stages.push((Stage::Loader, Box::new(move || l.body())));
+        }
+        run_threads(s, stages, report_rx, on_frame)
     })
 }
 
 fn async_or_thread(
-    rt: &Runtime,
+    mut or: OrStage,
     opts: &RuntimeOptions,
     latest: &LatestSlot,
     out: Sender<OrToStc>,
     feedback: Receiver<VisibleSet>,
 ) -> Result<(), RuntimeError> {
-    let mut or = OrStage::new(&rt.devices[0], &rt.geometry[0], rt.skeleton, opts);
     let mut done: Option<u64> = None;
     let mut runs = 0u64;
     // The newest visible sets, most recent last; occluders lag by `lag` runs.
@@ -641,8 +752,8 @@ fn async_stc_thread(
 
 #[allow(clippy::too_many_arguments)]
 fn async_rvg_thread(
+    mut rvg: RvgStage,
     rt: &Runtime,
-    device: usize,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     latest: &LatestSlot,
@@ -650,7 +761,6 @@ fn async_rvg_thread(
     out: Sender<FrameReport>,
     presenter: &mut dyn Presenter,
 ) -> Result<(), RuntimeError> {
-    let mut rvg = RvgStage::new(&rt.devices[device], &rt.geometry[device], opts);
     let mut newest: Option<Box<FrameEnd>> = None;
     let mut frame = 0u64;
     while let Some(sample) = next_sample(source, frame, opts)? {
@@ -677,7 +787,7 @@ fn async_rvg_thread(
         let reused = set.sample.frame != frame;
         rvg.begin(frame, &sample.view, sample.style)?;
         for chunk in lod_ids(rt.skeleton, &set.stc.visible).chunks(opts.chunk) {
-            rvg.draw(chunk);
+            rvg.draw(chunk)?;
         }
         let end = FrameEnd {
             sample,

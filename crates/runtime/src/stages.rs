@@ -8,12 +8,60 @@ use gigawalk_cull::{
     reselect_lods, select_occluders, CullReason, CullView, DrawItem, Hzb, HzbOcclusion,
     NoOcclusion, TraversalOptions, TraversalStats, Traverser,
 };
-use gigawalk_gpu::{
-    DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, ResidentGeometry, View, VisiblePass,
-};
+use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
 
-use crate::{OccluderBudget, RuntimeError, RuntimeOptions, Stage};
+use crate::streaming::{Geometry, Link, Plan, StreamStats, Use};
+use crate::{OccluderBudget, Runtime, RuntimeError, RuntimeOptions, Stage};
+
+/// A stage's device, its geometry there, and (streaming) its end of the
+/// run's loader queues.
+pub(crate) struct DeviceGeometry<'a> {
+    pub ctx: &'a GpuContext,
+    pub geometry: &'a Geometry,
+    pub skeleton: &'a Skeleton,
+    pub plan: Option<&'a Plan>,
+    pub link: Option<Link>,
+}
+
+impl<'a> DeviceGeometry<'a> {
+    pub fn new(rt: &'a Runtime, device: usize, link: Option<Link>) -> Self {
+        DeviceGeometry {
+            ctx: &rt.devices[device],
+            geometry: &rt.geometry[device],
+            skeleton: rt.skeleton,
+            plan: rt.plan.as_ref(),
+            link,
+        }
+    }
+
+    /// Runs `f` with what to draw for `lods` (see `Geometry::with`); an
+    /// error when the loader has stopped (its own error is the cause).
+    fn with<T>(
+        &self,
+        frame: u64,
+        lods: &[u32],
+        usage: Use,
+        f: impl FnOnce(&dyn gigawalk_gpu::Residency, &[u32]) -> T,
+    ) -> Result<T, RuntimeError> {
+        self.geometry
+            .with(
+                self.ctx,
+                self.skeleton,
+                self.plan,
+                self.link.as_ref(),
+                frame,
+                lods,
+                usage,
+                f,
+            )
+            .ok_or(RuntimeError::LoaderStopped)
+    }
+
+    pub fn stats(&self) -> StreamStats {
+        self.geometry.stats()
+    }
+}
 
 pub(crate) fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -59,8 +107,7 @@ pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(),
 /// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
 /// camera i (Section 5.2), at the occluder resolution.
 pub(crate) struct OrStage<'a> {
-    pub ctx: &'a GpuContext,
-    pub geometry: &'a ResidentGeometry,
+    pub device: DeviceGeometry<'a>,
     pub skeleton: &'a Skeleton,
     pub opts: &'a RuntimeOptions,
     pub pass: DepthPass,
@@ -73,19 +120,13 @@ pub(crate) struct OrOutput {
 }
 
 impl<'a> OrStage<'a> {
-    pub fn new(
-        ctx: &'a GpuContext,
-        geometry: &'a ResidentGeometry,
-        skeleton: &'a Skeleton,
-        opts: &'a RuntimeOptions,
-    ) -> Self {
+    pub fn new(device: DeviceGeometry<'a>, opts: &'a RuntimeOptions) -> Self {
         let (w, h) = opts.occluder_size();
         OrStage {
-            ctx,
-            geometry,
-            skeleton,
+            pass: DepthPass::new(device.ctx, w, h),
+            skeleton: device.skeleton,
+            device,
             opts,
-            pass: DepthPass::new(ctx, w, h),
         }
     }
 
@@ -129,9 +170,13 @@ impl<'a> OrStage<'a> {
             });
         }
         let lods = lod_ids(self.skeleton, &items);
+        let (pass, ctx) = (&mut self.pass, self.device.ctx);
+        // Streaming: resident occluders only (culling stays conservative).
         let depth = self
-            .pass
-            .render(self.ctx, self.geometry, &gpu_view(view), &lods)
+            .device
+            .with(frame, &lods, Use::Occluders, |residency, lods| {
+                pass.render(ctx, residency, &gpu_view(view), lods)
+            })?
             .map_err(|source| RuntimeError::Gpu {
                 stage: Stage::Or,
                 source,
@@ -248,24 +293,22 @@ impl<'a> StcStage<'a> {
 /// RVG: draws a frame's items as they arrive.
 pub(crate) struct RvgStage<'a> {
     pub ctx: &'a GpuContext,
-    pub geometry: &'a ResidentGeometry,
+    pub device: DeviceGeometry<'a>,
     pub opts: &'a RuntimeOptions,
     pub pass: VisiblePass,
     started: Option<Instant>,
+    frame: u64,
 }
 
 impl<'a> RvgStage<'a> {
-    pub fn new(
-        ctx: &'a GpuContext,
-        geometry: &'a ResidentGeometry,
-        opts: &'a RuntimeOptions,
-    ) -> Self {
+    pub fn new(device: DeviceGeometry<'a>, opts: &'a RuntimeOptions) -> Self {
         RvgStage {
-            ctx,
-            geometry,
+            ctx: device.ctx,
+            pass: VisiblePass::new(device.ctx, opts.width, opts.height),
+            device,
             opts,
-            pass: VisiblePass::new(ctx, opts.width, opts.height),
             started: None,
+            frame: 0,
         }
     }
 
@@ -277,13 +320,25 @@ impl<'a> RvgStage<'a> {
     ) -> Result<(), RuntimeError> {
         check_injected(self.opts, Stage::Rvg, frame)?;
         self.started = Some(Instant::now());
+        self.frame = frame;
         self.pass.begin(self.ctx, &gpu_view(view), style);
         Ok(())
     }
 
-    pub fn draw(&mut self, lods: &[u32]) {
+    /// Draws a chunk of the frame's LODs (streaming: resident ones and
+    /// stand-ins for the rest).
+    pub fn draw(&mut self, lods: &[u32]) -> Result<(), RuntimeError> {
         let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
-        self.pass.draw(self.ctx, self.geometry, lods);
+        let (pass, ctx) = (&mut self.pass, self.ctx);
+        self.device
+            .with(self.frame, lods, Use::Visible, |residency, lods| {
+                pass.draw(ctx, residency, lods)
+            })
+    }
+
+    /// The frame's streaming figures.
+    pub fn stream_stats(&self) -> StreamStats {
+        self.device.stats()
     }
 
     /// Reads back the finished frame's colour and depth.

@@ -1,0 +1,483 @@
+//! Out-of-core geometry (GigaWalk Section 7.3's asynchronous fourth
+//! process, with the finite memory footprint its Section 8 names): each
+//! device keeps LODs in a fixed [`GeometryPool`] under a memory budget; a
+//! loader thread reads the LODs the visible render asks for, and every
+//! device takes them in between its draws; the least recently drawn LODs
+//! make room. Until a LOD arrives RVG draws the finest resident coarser
+//! stand-in (a coarser LOD of the node, else an ancestor's HLOD) and the
+//! frame counts it as substituted. OR draws only resident occluders, never
+//! a stand-in, so occlusion culling stays conservative.
+//!
+//! A small pinned set (the coarsest LOD of the nodes nearest the root, up
+//! to [`PINNED_SHARE`] of the budget) is loaded before the first frame and
+//! never evicted: the first frame draws from it, and a stand-in always
+//! exists for every node under it.
+
+use std::collections::{BTreeSet, HashMap, HashSet, VecDeque};
+use std::sync::{Arc, Mutex};
+
+use crossbeam_channel::{Receiver, Sender, TryRecvError, TrySendError};
+use gigawalk_gpu::{
+    DecodedLod, GeometryPool, GpuContext, Residency, ResidentGeometry, INDEX_BYTES, VERTEX_BYTES,
+};
+use gigawalk_scene::{LodMesh, ReadAt, ReadError, SceneReader, Skeleton};
+
+use crate::RuntimeError;
+
+/// Where LODs are read from while a walk runs: a scene file.
+pub trait LodSource: Sync {
+    fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError>;
+}
+
+impl<R: ReadAt + Sync> LodSource for SceneReader<R> {
+    fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
+        SceneReader::read_lod(self, lod)
+    }
+}
+
+/// Share of the memory budget the pinned set may take.
+pub const PINNED_SHARE: f64 = 0.125;
+
+/// Frames after which an unanswered request is asked again, and after
+/// which the loader drops a request the camera has moved away from.
+const STALE_FRAMES: u64 = 2;
+
+/// Requests RVG may queue for the loader; more in one frame wait for the
+/// next (a camera that jumps cannot leave a backlog longer than this).
+pub(crate) const REQUEST_QUEUE: usize = 256;
+
+/// Loaded LODs a device may have waiting to be put into its pool.
+pub(crate) const INBOX: usize = 64;
+
+/// Device bytes the whole scene would take resident: (vertex, index).
+pub(crate) fn scene_bytes(skeleton: &Skeleton) -> (u64, u64) {
+    skeleton.lods.iter().fold((0, 0), |(v, i), l| {
+        (
+            v + l.vertices as u64 * VERTEX_BYTES,
+            i + l.triangles as u64 * 3 * INDEX_BYTES,
+        )
+    })
+}
+
+/// Per-frame streaming figures of the device that draws the visible set.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamStats {
+    /// Device bytes the resident LODs take after the frame.
+    pub resident_bytes: u64,
+    /// Device bytes of the pool (fixed: the budget, rounded down).
+    pub pool_bytes: u64,
+    /// LODs that arrived on the device during the frame, and their bytes.
+    pub loaded_lods: u64,
+    pub loaded_bytes: u64,
+    /// LODs evicted during the frame.
+    pub evicted_lods: u64,
+    /// Requests sent to the loader during the frame.
+    pub requests: u64,
+    /// Draws of a coarser stand-in because the chosen LOD was not resident.
+    pub substituted: u64,
+    /// Chosen LODs with no resident stand-in at all (nothing drawn).
+    pub missing: u64,
+}
+
+/// A request for one LOD, from the frame that wanted it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Request {
+    pub lod: u32,
+    pub frame: u64,
+}
+
+/// A LOD the loader read, for every device.
+pub(crate) type Loaded = Arc<(u32, DecodedLod)>;
+
+/// What streaming needs of the scene, shared by the devices.
+pub(crate) struct Plan {
+    /// The node each LOD belongs to.
+    owner: Vec<u32>,
+    pinned: Vec<bool>,
+    pub budget: u64,
+}
+
+impl Plan {
+    pub fn new(skeleton: &Skeleton, budget: u64) -> Plan {
+        let mut owner = vec![0; skeleton.lods.len()];
+        for (n, node) in skeleton.nodes.iter().enumerate() {
+            for l in node.lods() {
+                if let Some(o) = owner.get_mut(l) {
+                    *o = n as u32;
+                }
+            }
+        }
+        // Breadth first from the root: each node's coarsest LOD, while the
+        // pinned set stays within its share of the budget.
+        let mut pinned = vec![false; skeleton.lods.len()];
+        let limit = (budget as f64 * PINNED_SHARE) as u64;
+        let mut bytes = 0u64;
+        let mut queue = VecDeque::from([0u32]);
+        while let Some(n) = queue.pop_front() {
+            let Some(node) = skeleton.nodes.get(n as usize) else {
+                continue;
+            };
+            if let Some(l) = node.lods().last() {
+                let info = &skeleton.lods[l];
+                let b = info.vertices as u64 * VERTEX_BYTES + info.triangles as u64 * 12;
+                if bytes + b > limit {
+                    break;
+                }
+                bytes += b;
+                pinned[l] = true;
+            }
+            queue.extend(node.children());
+        }
+        Plan {
+            owner,
+            pinned,
+            budget,
+        }
+    }
+
+    pub fn pinned(&self) -> impl Iterator<Item = u32> + '_ {
+        self.pinned
+            .iter()
+            .enumerate()
+            .filter(|(_, &p)| p)
+            .map(|(l, _)| l as u32)
+    }
+}
+
+/// One device's geometry: all of it, or a streamed pool.
+pub(crate) enum Geometry {
+    Resident(ResidentGeometry),
+    Streamed(Box<Mutex<DeviceStream>>),
+}
+
+/// How a stage uses the LODs it draws.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Use {
+    /// OR: resident LODs only, no requests, no stand-ins.
+    Occluders,
+    /// RVG: stand-ins for what is missing, requests for it.
+    Visible,
+}
+
+/// A stage's end of one run's streaming queues.
+#[derive(Clone)]
+pub(crate) struct Link {
+    pub requests: Option<Sender<Request>>,
+    pub inbox: Receiver<Loaded>,
+}
+
+/// A device's streamed geometry and its bookkeeping.
+pub(crate) struct DeviceStream {
+    pool: GeometryPool,
+    /// Frame + 1 when each LOD was last drawn (0: never).
+    last_used: Vec<u64>,
+    /// Resident, unpinned LODs by (last_used, lod): eviction order.
+    lru: BTreeSet<(u64, u32)>,
+    /// Frame + 1 of each LOD's last request (0: none).
+    requested: Vec<u64>,
+    /// The visible frame being drawn, its ancestor stand-ins, its figures.
+    frame: u64,
+    standins: HashSet<u32>,
+    stats: StreamStats,
+}
+
+impl DeviceStream {
+    /// A pool of `plan.budget` bytes on `ctx` holding the pinned set.
+    pub fn new(
+        ctx: &GpuContext,
+        skeleton: &Skeleton,
+        plan: &Plan,
+        source: &dyn LodSource,
+        max_buffer: u64,
+    ) -> Result<Self, RuntimeError> {
+        let (v, i) = scene_bytes(skeleton);
+        let vertex_bytes = (plan.budget as f64 * v as f64 / (v + i).max(1) as f64) as u64;
+        let pool = GeometryPool::new(
+            ctx,
+            skeleton.lods.len(),
+            vertex_bytes,
+            plan.budget - vertex_bytes.min(plan.budget),
+            max_buffer,
+        )
+        .map_err(|source| RuntimeError::Setup { source })?;
+        let n = skeleton.lods.len();
+        let mut s = DeviceStream {
+            pool,
+            last_used: vec![0; n],
+            lru: BTreeSet::new(),
+            requested: vec![0; n],
+            frame: 0,
+            standins: HashSet::new(),
+            stats: StreamStats::default(),
+        };
+        for l in plan.pinned() {
+            let mesh = source.read_lod(l).map_err(|source| RuntimeError::Load {
+                source: Box::new(source),
+            })?;
+            // Within its share of an empty pool, a pinned LOD always fits
+            // unless the pool is split into pages smaller than the LOD.
+            if !s.pool.insert(ctx, l, &DecodedLod::new(&mesh)) {
+                break;
+            }
+        }
+        ctx.queue.submit([]);
+        Ok(s)
+    }
+
+    pub fn pool(&self) -> &GeometryPool {
+        &self.pool
+    }
+
+    /// The figures of the visible frame drawn last.
+    pub fn stats(&self) -> StreamStats {
+        StreamStats {
+            resident_bytes: self.pool.used_bytes(),
+            pool_bytes: self.pool.capacity_bytes(),
+            ..self.stats
+        }
+    }
+
+    fn touch(&mut self, plan: &Plan, lod: u32, frame: u64) {
+        let l = lod as usize;
+        if self.last_used[l] != frame + 1 {
+            if !plan.pinned[l] {
+                self.lru.remove(&(self.last_used[l], lod));
+                self.lru.insert((frame + 1, lod));
+            }
+            self.last_used[l] = frame + 1;
+        }
+    }
+
+    /// Puts a loaded LOD in the pool, evicting the least recently drawn
+    /// LODs not drawn in the frame being drawn; drops it when even that
+    /// leaves no room (it is asked for again later).
+    fn take(&mut self, ctx: &GpuContext, plan: &Plan, loaded: &Loaded) {
+        let (id, lod) = (&loaded.0, &loaded.1);
+        if self.pool.contains(*id) || !self.pool.could_hold(lod) {
+            return;
+        }
+        loop {
+            if self.pool.insert(ctx, *id, lod) {
+                self.stats.loaded_lods += 1;
+                self.stats.loaded_bytes += lod.bytes();
+                if !plan.pinned[*id as usize] {
+                    self.lru.insert((self.last_used[*id as usize], *id));
+                }
+                return;
+            }
+            // Evict in batches about the size of what is needed.
+            let mut freed = 0;
+            while freed < 2 * lod.bytes() {
+                match self.lru.first().copied() {
+                    Some((used, victim)) if used < self.frame + 1 => {
+                        self.lru.remove(&(used, victim));
+                        let before = self.pool.used_bytes();
+                        self.pool.remove(victim);
+                        freed += before - self.pool.used_bytes();
+                        self.stats.evicted_lods += 1;
+                    }
+                    _ => break,
+                }
+            }
+            if freed == 0 {
+                return;
+            }
+        }
+    }
+
+    /// The LODs to draw for `lods` (chosen by STC) this frame: resident
+    /// ones, and with [`Use::Visible`] stand-ins for the rest, which are
+    /// requested from the loader. Loads that arrived go in first. `None`
+    /// when the loader has stopped (its inbox is closed).
+    #[allow(clippy::too_many_arguments)]
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        skeleton: &Skeleton,
+        plan: &Plan,
+        link: &Link,
+        frame: u64,
+        lods: &[u32],
+        usage: Use,
+    ) -> Option<Vec<u32>> {
+        if usage == Use::Visible && frame != self.frame {
+            self.frame = frame;
+            self.standins.clear();
+            self.stats = StreamStats::default();
+        }
+        loop {
+            match link.inbox.try_recv() {
+                Ok(loaded) => self.take(ctx, plan, &loaded),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return None,
+            }
+        }
+        let mut out = Vec::with_capacity(lods.len());
+        for &lod in lods {
+            if self.pool.contains(lod) {
+                self.touch(plan, lod, frame);
+                out.push(lod);
+                continue;
+            }
+            if usage == Use::Occluders || lod as usize >= self.requested.len() {
+                continue;
+            }
+            if self.requested[lod as usize] + STALE_FRAMES <= frame + 1 {
+                if let Some(tx) = &link.requests {
+                    match tx.try_send(Request { lod, frame }) {
+                        Ok(()) => {
+                            self.requested[lod as usize] = frame + 1;
+                            self.stats.requests += 1;
+                        }
+                        Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {}
+                    }
+                }
+            }
+            match self.stand_in(skeleton, plan, lod) {
+                StandIn::Draw(s) => {
+                    self.stats.substituted += 1;
+                    self.touch(plan, s, frame);
+                    out.push(s);
+                }
+                StandIn::Drawn => self.stats.substituted += 1,
+                StandIn::None => self.stats.missing += 1,
+            }
+        }
+        Some(out)
+    }
+
+    /// The finest resident LOD coarser than `lod` of its node, else the
+    /// finest resident LOD of the nearest ancestor, drawn once a frame
+    /// however many of its descendants it stands in for.
+    fn stand_in(&mut self, skeleton: &Skeleton, plan: &Plan, lod: u32) -> StandIn {
+        let Some(&(mut node)) = plan.owner.get(lod as usize) else {
+            return StandIn::None;
+        };
+        let n = &skeleton.nodes[node as usize];
+        if let Some(l) = (lod + 1..n.first_lod + n.lod_count).find(|&l| self.pool.contains(l)) {
+            return StandIn::Draw(l);
+        }
+        while node != 0 {
+            let parent = skeleton.nodes[node as usize].parent;
+            if parent >= node {
+                return StandIn::None; // malformed: children come after their parent
+            }
+            node = parent;
+            let p = &skeleton.nodes[node as usize];
+            if let Some(l) = p.lods().map(|l| l as u32).find(|&l| self.pool.contains(l)) {
+                return if self.standins.insert(l) {
+                    StandIn::Draw(l)
+                } else {
+                    StandIn::Drawn
+                };
+            }
+        }
+        StandIn::None
+    }
+}
+
+/// What stands in for a LOD that is not resident.
+enum StandIn {
+    Draw(u32),
+    /// An ancestor's LOD this frame already drew.
+    Drawn,
+    None,
+}
+
+impl Geometry {
+    /// Runs `f` with the residency to draw from and the LODs to draw for
+    /// `lods`: as they are when everything is resident; streamed, after
+    /// taking in what the loader delivered, with stand-ins (see
+    /// [`DeviceStream::prepare`]). `None` when the loader has stopped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn with<T>(
+        &self,
+        ctx: &GpuContext,
+        skeleton: &Skeleton,
+        plan: Option<&Plan>,
+        link: Option<&Link>,
+        frame: u64,
+        lods: &[u32],
+        usage: Use,
+        f: impl FnOnce(&dyn Residency, &[u32]) -> T,
+    ) -> Option<T> {
+        match (self, plan, link) {
+            (Geometry::Streamed(s), Some(plan), Some(link)) => {
+                let mut s = s.lock().unwrap_or_else(|p| p.into_inner());
+                let draw = s.prepare(ctx, skeleton, plan, link, frame, lods, usage)?;
+                Some(f(s.pool(), &draw))
+            }
+            (Geometry::Resident(g), _, _) => Some(f(g, lods)),
+            // Streamed without this run's queues: what is resident.
+            (Geometry::Streamed(s), _, _) => {
+                let s = s.lock().unwrap_or_else(|p| p.into_inner());
+                let draw: Vec<u32> = lods
+                    .iter()
+                    .copied()
+                    .filter(|&l| s.pool().contains(l))
+                    .collect();
+                Some(f(s.pool(), &draw))
+            }
+        }
+    }
+
+    /// The visible frame's streaming figures (zeros when all is resident).
+    pub fn stats(&self) -> StreamStats {
+        match self {
+            Geometry::Resident(_) => StreamStats::default(),
+            Geometry::Streamed(s) => s.lock().unwrap_or_else(|p| p.into_inner()).stats(),
+        }
+    }
+}
+
+/// The loader (the fourth stage): reads requested LODs, newest frame's
+/// first, and hands each to every device. Requests more than
+/// [`STALE_FRAMES`] older than the newest frame asked for are dropped
+/// (the camera has moved on; they are asked again if still needed). Ends
+/// when the stages' request queues close, or a device's inbox does.
+pub(crate) fn loader(
+    source: &dyn LodSource,
+    requests: Receiver<Request>,
+    devices: Vec<Sender<Loaded>>,
+) -> Result<(), RuntimeError> {
+    // The newest frame any request came from.
+    let mut newest = 0u64;
+    // Pending requests: LOD -> (frame, arrival); one per LOD, its newest.
+    let mut pending: HashMap<u32, (u64, u64)> = HashMap::new();
+    let mut arrivals = 0u64;
+    loop {
+        if pending.is_empty() {
+            match requests.recv() {
+                Ok(r) => {
+                    pending.insert(r.lod, (r.frame, arrivals));
+                    arrivals += 1;
+                }
+                Err(_) => return Ok(()),
+            }
+        }
+        for r in requests.try_iter() {
+            let e = pending.entry(r.lod).or_insert((r.frame, arrivals));
+            e.0 = e.0.max(r.frame);
+            arrivals += 1;
+        }
+        newest = pending.values().map(|p| p.0).fold(newest, u64::max);
+        pending.retain(|_, p| p.0 + STALE_FRAMES >= newest);
+        // The newest frame's first request (STC's order: near before far).
+        let Some((&lod, _)) = pending
+            .iter()
+            .max_by_key(|(_, &(frame, arrival))| (frame, std::cmp::Reverse(arrival)))
+        else {
+            continue;
+        };
+        pending.remove(&lod);
+        let mesh = source.read_lod(lod).map_err(|source| RuntimeError::Load {
+            source: Box::new(source),
+        })?;
+        let loaded: Loaded = Arc::new((lod, DecodedLod::new(&mesh)));
+        for d in &devices {
+            if d.send(loaded.clone()).is_err() {
+                return Ok(());
+            }
+        }
+    }
+}

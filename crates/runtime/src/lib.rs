@@ -80,7 +80,7 @@ pub enum RuntimeError {
 }
 
 /// The smallest memory budget [`Runtime::streaming`] takes.
-pub const MIN_MEMORY_BUDGET: u64 = 1 << 20;
+pub const MIN_MEMORY_BUDGET: u64 = 1 << 16;
 
 /// Why a [`CameraSource`] gave no camera for a frame.
 #[derive(Debug, thiserror::Error)]
@@ -298,6 +298,26 @@ impl<'s> Runtime<'s> {
     /// Whether geometry is streamed under a memory budget.
     pub fn is_streaming(&self) -> bool {
         self.plan.is_some()
+    }
+
+    /// LODs of the pinned set (empty when not streaming).
+    pub fn pinned_lods(&self) -> Vec<u32> {
+        self.plan
+            .as_ref()
+            .map_or(Vec::new(), |p| p.pinned().collect())
+    }
+
+    /// Whether every device holds every pinned LOD (the invariant that
+    /// eviction never breaks; trivially true when not streaming).
+    pub fn pinned_resident(&self) -> bool {
+        let pinned = self.pinned_lods();
+        self.geometry.iter().all(|g| match g {
+            Geometry::Resident(_) => true,
+            Geometry::Streamed(s) => {
+                let s = s.lock().unwrap_or_else(|p| p.into_inner());
+                pinned.iter().all(|&l| s.pool().contains(l))
+            }
+        })
     }
 
     pub fn skeleton(&self) -> &Skeleton {

@@ -58,8 +58,8 @@ impl<'a> DeviceGeometry<'a> {
             .ok_or(RuntimeError::LoaderStopped)
     }
 
-    pub fn stats(&self) -> StreamStats {
-        self.geometry.stats()
+    pub fn take_stats(&self) -> StreamStats {
+        self.geometry.take_stats()
     }
 }
 
@@ -336,9 +336,9 @@ impl<'a> RvgStage<'a> {
             })
     }
 
-    /// The frame's streaming figures.
+    /// The frame's streaming figures (call once, as the frame ends).
     pub fn stream_stats(&self) -> StreamStats {
-        self.device.stats()
+        self.device.take_stats()
     }
 
     /// Reads back the finished frame's colour and depth.

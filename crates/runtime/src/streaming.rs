@@ -59,7 +59,8 @@ pub(crate) fn scene_bytes(skeleton: &Skeleton) -> (u64, u64) {
     })
 }
 
-/// Per-frame streaming figures of the device that draws the visible set.
+/// Per-frame streaming figures of the device that draws the visible set
+/// (when OR shares it, loads OR took in count for the frame RVG ends next).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StreamStats {
     /// Device bytes the resident LODs take after the frame.
@@ -228,12 +229,12 @@ impl DeviceStream {
         &self.pool
     }
 
-    /// The figures of the visible frame drawn last.
-    pub fn stats(&self) -> StreamStats {
+    /// The figures since the last call (a frame's, called as it ends).
+    pub fn take_stats(&mut self) -> StreamStats {
         StreamStats {
             resident_bytes: self.pool.used_bytes(),
             pool_bytes: self.pool.capacity_bytes(),
-            ..self.stats
+            ..std::mem::take(&mut self.stats)
         }
     }
 
@@ -303,7 +304,6 @@ impl DeviceStream {
         if usage == Use::Visible && frame != self.frame {
             self.frame = frame;
             self.standins.clear();
-            self.stats = StreamStats::default();
         }
         loop {
             match link.inbox.try_recv() {
@@ -322,7 +322,8 @@ impl DeviceStream {
             if usage == Use::Occluders || lod as usize >= self.requested.len() {
                 continue;
             }
-            if self.requested[lod as usize] + STALE_FRAMES <= frame + 1 {
+            let asked = self.requested[lod as usize];
+            if asked == 0 || asked + STALE_FRAMES <= frame + 1 {
                 if let Some(tx) = &link.requests {
                     match tx.try_send(Request { lod, frame }) {
                         Ok(()) => {
@@ -421,11 +422,12 @@ impl Geometry {
         }
     }
 
-    /// The visible frame's streaming figures (zeros when all is resident).
-    pub fn stats(&self) -> StreamStats {
+    /// The streaming figures since the last call: the frame's, when RVG
+    /// calls it as the frame ends (zeros when all is resident).
+    pub fn take_stats(&self) -> StreamStats {
         match self {
             Geometry::Resident(_) => StreamStats::default(),
-            Geometry::Streamed(s) => s.lock().unwrap_or_else(|p| p.into_inner()).stats(),
+            Geometry::Streamed(s) => s.lock().unwrap_or_else(|p| p.into_inner()).take_stats(),
         }
     }
 }
@@ -434,11 +436,13 @@ impl Geometry {
 /// first, and hands each to every device. Requests more than
 /// [`STALE_FRAMES`] older than the newest frame asked for are dropped
 /// (the camera has moved on; they are asked again if still needed). Ends
-/// when the stages' request queues close, or a device's inbox does.
+/// when RVG's request queue closes, or every device's inbox has; a read
+/// error ends it with that error, and the stages see their inboxes close
+/// and stop.
 pub(crate) fn loader(
     source: &dyn LodSource,
     requests: Receiver<Request>,
-    devices: Vec<Sender<Loaded>>,
+    mut devices: Vec<Sender<Loaded>>,
 ) -> Result<(), RuntimeError> {
     // The newest frame any request came from.
     let mut newest = 0u64;
@@ -474,10 +478,11 @@ pub(crate) fn loader(
             source: Box::new(source),
         })?;
         let loaded: Loaded = Arc::new((lod, DecodedLod::new(&mesh)));
-        for d in &devices {
-            if d.send(loaded.clone()).is_err() {
-                return Ok(());
-            }
+        // A stage that has finished (OR at the end of the cameras) closes
+        // its inbox; the others still take loads.
+        devices.retain(|d| d.send(loaded.clone()).is_ok());
+        if devices.is_empty() {
+            return Ok(());
         }
     }
 }

@@ -1,0 +1,281 @@
+//! Out-of-core walkthroughs (issue 13): the runtime streaming a generated
+//! plant's LODs under a memory budget, against the fully resident runtime.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
+use gigawalk_gpu::{devices_or_skip, FrameImage, GpuContext};
+use gigawalk_import::import_glb_bytes;
+use gigawalk_preprocess::{preprocess, NoProgress, Params};
+use gigawalk_procgen::{generate, Kind};
+use gigawalk_runtime::{
+    CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule,
+    StreamStats, MIN_MEMORY_BUDGET,
+};
+use gigawalk_scene::path::Pose;
+use gigawalk_scene::SceneReader;
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+/// A 60k-triangle plant preprocessed into `dir`, and its walk.
+fn plant(dir: &Path, frames: usize) -> (std::path::PathBuf, Vec<Pose>) {
+    let g = generate(Kind::Plant, 60_000, 2, frames);
+    let model = import_glb_bytes(&g.glb_bytes(), "plant").unwrap();
+    let file = dir.join("plant.gwk");
+    preprocess(&model, &Params::default(), &file, "plant", &NoProgress).unwrap();
+    (file, g.path.poses)
+}
+
+/// Device bytes of the whole scene (what the resident runtime holds).
+fn scene_bytes(scene: &SceneReader) -> u64 {
+    scene
+        .skeleton()
+        .lods
+        .iter()
+        .map(|l| l.vertices as u64 * 20 + l.triangles as u64 * 12)
+        .sum()
+}
+
+fn options(schedule: Schedule, devices: usize, pixel_error: f64) -> RuntimeOptions {
+    RuntimeOptions {
+        schedule,
+        devices,
+        width: W,
+        height: H,
+        traversal: TraversalOptions {
+            occlusion: true,
+            hlod: pixel_error > 0.0,
+            pixel_tolerance: pixel_error,
+        },
+        ..Default::default()
+    }
+}
+
+fn cameras(scene: &SceneReader, poses: &[Pose]) -> CameraList {
+    let near = default_near(&scene.skeleton().bounds);
+    CameraList {
+        cameras: poses
+            .iter()
+            .map(|p| {
+                let c =
+                    Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), near);
+                CameraRequest::new(c, true)
+            })
+            .collect(),
+    }
+}
+
+fn run(
+    rt: &Runtime,
+    opts: &RuntimeOptions,
+    scene: &SceneReader,
+    poses: &[Pose],
+    check: &mut dyn FnMut(&FrameReport),
+) -> Result<Vec<FrameReport>, RuntimeError> {
+    let mut frames = Vec::new();
+    rt.run(opts, &mut cameras(scene, poses), &mut |r| {
+        check(&r);
+        frames.push(r);
+        true
+    })?;
+    Ok(frames)
+}
+
+fn depth(r: &FrameReport) -> &[f32] {
+    &r.image.as_ref().expect("read back").depth.depth
+}
+
+fn image(r: &FrameReport) -> &FrameImage {
+    r.image.as_ref().expect("read back")
+}
+
+fn devices(n: usize) -> Option<Vec<GpuContext>> {
+    devices_or_skip(n, "streaming")
+}
+
+#[test]
+fn a_scene_that_fits_the_budget_is_loaded_whole_and_draws_the_same() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, poses) = plant(dir.path(), 6);
+    let scene = SceneReader::open(&file).unwrap();
+    let (Some(a), Some(b)) = (devices(1), devices(1)) else {
+        return;
+    };
+    let whole = Runtime::with_devices(&scene, a).unwrap();
+    let fits = Runtime::streaming(&scene, b, scene_bytes(&scene)).unwrap();
+    assert!(!fits.is_streaming());
+    let o = options(Schedule::Sequential, 1, 0.0);
+    let x = run(&whole, &o, &scene, &poses, &mut |_| {}).unwrap();
+    let y = run(&fits, &o, &scene, &poses, &mut |_| {}).unwrap();
+    for (x, y) in x.iter().zip(&y) {
+        assert_eq!(depth(x), depth(y), "frame {}", x.frame);
+        assert_eq!(y.streaming, StreamStats::default());
+    }
+}
+
+#[test]
+fn a_budget_below_the_minimum_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, _) = plant(dir.path(), 2);
+    let scene = SceneReader::open(&file).unwrap();
+    let Some(d) = devices(1) else { return };
+    let e = Runtime::streaming(&scene, d, MIN_MEMORY_BUDGET - 1)
+        .err()
+        .expect("too small a budget");
+    assert!(e.to_string().contains("memory budget"), "{e}");
+}
+
+/// Streams with a budget of a fraction of the scene, in each schedule:
+/// the pool never exceeds the budget, the pinned set stays resident, no
+/// chosen LOD goes without a stand-in, and a camera that stays put
+/// converges to the fully resident image.
+#[test]
+fn streaming_stays_in_budget_and_converges_to_the_resident_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, poses) = plant(dir.path(), 12);
+    let scene = SceneReader::open(&file).unwrap();
+    let total = scene_bytes(&scene);
+    let Some(d) = devices(2) else { return };
+    let whole = Runtime::with_devices(&scene, d).unwrap();
+    // The camera holds still at pose 6 for 40 frames.
+    let still: Vec<Pose> = vec![poses[6]; 40];
+    let reference = run(
+        &whole,
+        &options(Schedule::Sequential, 1, 0.0),
+        &scene,
+        &still[..1],
+        &mut |_| {},
+    )
+    .unwrap();
+    for (schedule, devices) in [
+        (Schedule::Sequential, 1),
+        (Schedule::Pipelined, 2),
+        (Schedule::Pipelined, 1),
+    ] {
+        let budget = (total / 2).max(MIN_MEMORY_BUDGET);
+        let Some(d) = gigawalk_gpu::devices_or_skip(2, "streaming") else {
+            return;
+        };
+        let rt = Runtime::streaming(&scene, d, budget).unwrap();
+        assert!(rt.is_streaming(), "{budget} of {total} bytes");
+        assert!(!rt.pinned_lods().is_empty());
+        assert!(rt.resident_bytes() <= budget);
+        let o = options(schedule, devices, 0.0);
+        let mut check = |r: &FrameReport| {
+            assert!(r.streaming.pool_bytes <= budget, "{:?}", r.streaming);
+            assert!(r.streaming.resident_bytes <= r.streaming.pool_bytes);
+            assert_eq!(r.streaming.missing, 0, "frame {}: a hole", r.frame);
+            assert!(rt.pinned_resident(), "frame {}", r.frame);
+        };
+        let walk = run(&rt, &o, &scene, &poses, &mut check).unwrap();
+        assert!(
+            walk.iter().any(|r| r.streaming.substituted > 0),
+            "{schedule:?}: nothing was ever substituted: the test streams nothing"
+        );
+        assert!(walk.iter().map(|r| r.streaming.loaded_lods).sum::<u64>() > 0);
+        let held = run(&rt, &o, &scene, &still, &mut check).unwrap();
+        let last = held.last().unwrap();
+        assert_eq!(
+            last.streaming.substituted, 0,
+            "{schedule:?}: {:?}",
+            last.streaming
+        );
+        assert_eq!(
+            depth(last),
+            depth(&reference[0]),
+            "{schedule:?}, {devices} devices: converged depth differs from the resident runtime's"
+        );
+        assert_eq!(image(last).colour, image(&reference[0]).colour);
+    }
+}
+
+/// A budget far below the walk's working set: LODs are evicted and loaded
+/// again all the time, every frame still draws a stand-in for what is
+/// missing, and nothing fails.
+#[test]
+fn an_eviction_storm_keeps_drawing_stand_ins() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, poses) = plant(dir.path(), 24);
+    let scene = SceneReader::open(&file).unwrap();
+    let Some(d) = devices(2) else { return };
+    let budget = scene_bytes(&scene) / 16;
+    assert!(
+        budget >= MIN_MEMORY_BUDGET,
+        "the plant is too small for this test"
+    );
+    let rt = Runtime::streaming(&scene, d, budget).unwrap();
+    // Full detail: the largest working set.
+    let o = options(Schedule::Pipelined, 2, 0.0);
+    let mut evicted = 0;
+    let frames = run(&rt, &o, &scene, &poses, &mut |r| {
+        assert!(r.streaming.pool_bytes <= budget);
+        assert_eq!(r.streaming.missing, 0, "frame {}: a hole", r.frame);
+        assert!(rt.pinned_resident());
+        evicted += r.streaming.evicted_lods;
+    })
+    .unwrap();
+    assert_eq!(frames.len(), poses.len());
+    assert!(evicted > 0, "the budget never forced an eviction");
+    for r in &frames {
+        let drawn = image(r)
+            .colour
+            .chunks_exact(4)
+            .filter(|p| p[..3] != [0; 3])
+            .count();
+        assert!(
+            drawn > 0 || r.stats.drawn_triangles == 0,
+            "frame {} is empty",
+            r.frame
+        );
+    }
+}
+
+/// A LOD blob corrupted on disk, found by the loader in the middle of a
+/// walk: the run ends promptly with an error naming the file and the LOD.
+#[test]
+fn a_corrupted_lod_found_by_the_loader_ends_the_run_with_its_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, poses) = plant(dir.path(), 12);
+    // The first LOD frame 0 draws that is not pinned.
+    let victim = {
+        let scene = SceneReader::open(&file).unwrap();
+        let Some(d) = devices(1) else { return };
+        let rt = Runtime::streaming(&scene, d, (scene_bytes(&scene) / 2).max(MIN_MEMORY_BUDGET))
+            .unwrap();
+        let pinned = rt.pinned_lods();
+        let sk = scene.skeleton();
+        let o = options(Schedule::Sequential, 1, 0.0);
+        let first = run(&rt, &o, &scene, &poses[..1], &mut |_| {}).unwrap();
+        let lod = first[0]
+            .visible
+            .iter()
+            .map(|i| sk.nodes[i.node as usize].first_lod + i.lod)
+            .find(|l| !pinned.contains(l))
+            .expect("a LOD to stream");
+        (lod, sk.lods[lod as usize].offset, sk.lods[lod as usize].len)
+    };
+    let mut bytes = std::fs::read(&file).unwrap();
+    let at = (victim.1 + victim.2 / 2) as usize;
+    bytes[at] ^= 0x5a;
+    std::fs::write(&file, &bytes).unwrap();
+    let scene = SceneReader::open(&file).unwrap();
+    for (schedule, n) in [(Schedule::Sequential, 1), (Schedule::Pipelined, 2)] {
+        let Some(d) = devices(n) else { return };
+        let rt = Runtime::streaming(&scene, d, (scene_bytes(&scene) / 2).max(MIN_MEMORY_BUDGET))
+            .unwrap();
+        let t = Instant::now();
+        let e = run(&rt, &options(schedule, n, 0.0), &scene, &poses, &mut |_| {})
+            .err()
+            .expect("the corrupted LOD is an error");
+        let msg = e.to_string();
+        assert!(
+            matches!(e, RuntimeError::Load { .. }),
+            "{schedule:?}: {msg}"
+        );
+        assert!(msg.contains("plant.gwk"), "{msg}");
+        assert!(msg.contains(&format!("LOD {}", victim.0)), "{msg}");
+        assert!(t.elapsed() < Duration::from_secs(30));
+    }
+}

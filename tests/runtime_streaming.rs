@@ -267,8 +267,7 @@ fn a_corrupted_lod_found_by_the_loader_ends_the_run_with_its_name() {
             .unwrap();
         let t = Instant::now();
         let e = run(&rt, &options(schedule, n, 0.0), &scene, &poses, &mut |_| {})
-            .err()
-            .expect("the corrupted LOD is an error");
+            .expect_err("the corrupted LOD is an error");
         let msg = e.to_string();
         assert!(
             matches!(e, RuntimeError::Load { .. }),

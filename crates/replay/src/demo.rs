@@ -182,6 +182,7 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
             height,
             ..RuntimeOptions::default()
         },
+        memory_budget: Default::default(),
         near: None,
         frames: Some(frames),
         accuracy_every: 10,

@@ -6,8 +6,12 @@ use std::time::Instant;
 
 use gigawalk_cull::{default_near, Camera, Viewport};
 use gigawalk_gpu::FrameImage;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
 use gigawalk_runtime::{
-    CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule,
+    CameraError, CameraList, CameraRequest, CameraSource, FrameReport, MemoryBudget, Runtime,
+    RuntimeError, RuntimeOptions, Schedule,
 };
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::{ReadAt, SceneReader};
@@ -26,6 +30,8 @@ pub struct ReplayOptions {
     pub pixel_errors: Vec<f64>,
     /// Every runtime knob; `traversal` is set per mode.
     pub runtime: RuntimeOptions,
+    /// Geometry a device may hold; a scene that does not fit is streamed.
+    pub memory_budget: MemoryBudget,
     /// Near plane distance in model units, shared by the reference and
     /// every run; `None`: [`gigawalk_cull::default_near`] of the scene's
     /// bounds, so a model in millimetres replays like the same model in
@@ -49,6 +55,7 @@ impl Default for ReplayOptions {
             modes: Mode::ALL.to_vec(),
             pixel_errors: vec![1.0],
             runtime: RuntimeOptions::default(),
+            memory_budget: MemoryBudget::All,
             near: None,
             frames: None,
             accuracy_every: 10,
@@ -97,6 +104,15 @@ pub struct FrameRecord {
     pub drawn_nodes: u64,
     pub drawn_triangles: u64,
     pub occlusion_used: bool,
+    /// Streaming (zeros when the scene is resident): device bytes the
+    /// resident LODs take after the frame, bytes that arrived, loader
+    /// requests sent, stand-ins drawn for LODs not resident, and chosen
+    /// LODs with no stand-in at all.
+    pub resident_bytes: u64,
+    pub loaded_bytes: u64,
+    pub requests: u64,
+    pub substituted_draws: u64,
+    pub missing_draws: u64,
     /// Left out of the statistics (see [`ReplayOptions::warmup`]).
     pub warmup: bool,
     /// Against the reference, on every K-th frame.
@@ -147,8 +163,17 @@ pub struct Replay {
     pub complete: bool,
     /// Reference frames rendered (every K-th pose).
     pub reference_frames: usize,
+    /// Streaming: device bytes a device may hold (`None`: the whole scene
+    /// is resident), and reference frames that did not settle (still drew
+    /// a stand-in after [`SETTLE_FRAMES`] frames at their pose).
+    pub memory_budget: Option<u64>,
+    pub unsettled_reference_frames: usize,
     pub seconds: f64,
 }
+
+/// Frames a streamed reference camera is held still for its LODs to
+/// arrive before its image is taken as it is.
+pub const SETTLE_FRAMES: usize = 200;
 
 /// Watches a replay; every method has a do-nothing default. The library
 /// prints nothing: the CLI draws bars.
@@ -172,7 +197,7 @@ impl Progress for NoProgress {}
 
 /// Replays `poses` over `scene` in every run of `opts`. `scene_name` and
 /// `path_name` go into the report.
-pub fn replay<R: ReadAt>(
+pub fn replay<R: ReadAt + Sync>(
     scene: &SceneReader<R>,
     scene_name: &str,
     poses: &[Pose],
@@ -188,7 +213,8 @@ pub fn replay<R: ReadAt>(
         Schedule::Sequential => 1,
         Schedule::Pipelined => opts.runtime.devices,
     };
-    let rt = Runtime::new(scene, devices).map_err(|e| ReplayError::Start(Box::new(e)))?;
+    let rt = Runtime::open(scene, devices, opts.memory_budget)
+        .map_err(|e| ReplayError::Start(Box::new(e)))?;
     replay_on(&rt, scene_name, poses, path_name, opts, progress)
 }
 
@@ -233,15 +259,23 @@ pub fn replay_on(
         runs: Vec::new(),
         complete: true,
         reference_frames: 0,
+        memory_budget: rt.is_streaming().then(|| rt.resident_bytes()),
+        unsettled_reference_frames: 0,
         seconds: 0.0,
     };
 
     // The reference: full detail, frustum culling only, one thread, one
-    // device, only the frames that are compared.
+    // device, only the frames that are compared. Streamed, each camera is
+    // held until its frame draws no stand-in, so the reference is the
+    // full-detail image and the runs' accuracy includes what streaming
+    // costs them.
     let mut reference: Vec<Option<FrameImage>> = Vec::new();
     if k > 0 {
-        let mut list = CameraList {
+        let advance = Arc::new(AtomicBool::new(false));
+        let mut list = Settle {
             cameras: cameras.iter().step_by(k).copied().collect(),
+            next: 0,
+            advance: advance.clone(),
         };
         let ro = RuntimeOptions {
             schedule: Schedule::Sequential,
@@ -252,9 +286,18 @@ pub fn replay_on(
         };
         progress.start("reference", list.cameras.len() as u64);
         let mut stopped = false;
+        let (mut held, mut unsettled) = (0, 0);
         rt.run(&ro, &mut list, &mut |r: FrameReport| {
-            reference.push(r.image);
-            progress.frame();
+            let settled = r.streaming.substituted == 0 && r.streaming.missing == 0;
+            held += 1;
+            let take = settled || held >= SETTLE_FRAMES;
+            if take {
+                unsettled += usize::from(!settled);
+                reference.push(r.image);
+                held = 0;
+                progress.frame();
+            }
+            advance.store(take, Ordering::Relaxed);
             stopped = !progress.keep_going();
             !stopped
         })
@@ -264,6 +307,7 @@ pub fn replay_on(
         })?;
         progress.finish("reference");
         out.reference_frames = reference.len();
+        out.unsettled_reference_frames = unsettled;
         if stopped {
             out.complete = false;
             out.seconds = start.elapsed().as_secs_f64();
@@ -307,6 +351,11 @@ pub fn replay_on(
                 drawn_nodes: r.stats.drawn_nodes,
                 drawn_triangles: r.stats.drawn_triangles,
                 occlusion_used: r.occlusion_used,
+                resident_bytes: r.streaming.resident_bytes,
+                loaded_bytes: r.streaming.loaded_bytes,
+                requests: r.streaming.requests,
+                substituted_draws: r.streaming.substituted,
+                missing_draws: r.streaming.missing,
                 warmup: i < opts.warmup,
                 accuracy: None,
             });
@@ -349,6 +398,26 @@ pub fn replay_on(
         && (k == 0 || out.reference_frames == n.div_ceil(k));
     out.seconds = start.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// The reference's cameras, each handed out again until the frame report
+/// says to move on (`advance`: it drew no stand-in, or was held for
+/// [`SETTLE_FRAMES`]). The sequential schedule reports a frame before it
+/// asks for the next camera, so `advance` speaks of the camera handed out
+/// last.
+struct Settle {
+    cameras: Vec<CameraRequest>,
+    next: usize,
+    advance: Arc<AtomicBool>,
+}
+
+impl CameraSource for Settle {
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
+        if frame > 0 && self.advance.load(Ordering::Relaxed) {
+            self.next += 1;
+        }
+        Ok(self.cameras.get(self.next).copied())
+    }
 }
 
 fn validate(opts: &ReplayOptions) -> Result<(), ReplayError> {

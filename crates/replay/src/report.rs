@@ -75,7 +75,8 @@ impl Replay {
             "mode,pixel_error,frame,pose_time_s,frame_ms,fps,latency_ms,or_ms,hzb_ms,stc_ms,rvg_ms,\
              visited,frustum_culled,occlusion_culled,drawn_nodes,drawn_triangles,occlusion_used,warmup,\
              accuracy_pixels,differing_pixels,wrongly_culled_pixels,bound_violating_pixels,\
-             bound_violating_fraction,psnr_db\n",
+             bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
+             missing_draws\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -84,7 +85,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -112,6 +113,11 @@ impl Replay {
                     a.map_or(String::new(), |a| a
                         .psnr_db()
                         .map_or("inf".into(), |p| format!("{p:.2}"))),
+                    f.resident_bytes,
+                    f.loaded_bytes,
+                    f.requests,
+                    f.substituted_draws,
+                    f.missing_draws,
                 );
             }
         }
@@ -165,6 +171,10 @@ pub fn markdown(s: &Summary) -> String {
     m += &s.table();
     let _ = writeln!(m, "\n## Stages (medians) and nodes (means)\n");
     m += &s.stage_table();
+    if s.memory_budget.is_some() {
+        let _ = writeln!(m, "\n## Streaming (out of core)\n");
+        m += &s.streaming_table();
+    }
     let _ = writeln!(m, "\n![frame rate along the path](fps.png)");
     if crate::plot::is_sweep(s) {
         let _ = writeln!(m, "\n![frame rate against image error](tradeoff.png)");

@@ -30,6 +30,13 @@ pub struct Summary {
     /// frame i - lag's visible set).
     pub occluder_budget: Option<u64>,
     pub hzb_reduction: String,
+    /// Streaming: device bytes a device may hold; null when the whole
+    /// scene is resident (no `--memory-budget`, or the scene fits it).
+    #[serde(default)]
+    pub memory_budget: Option<u64>,
+    /// Streamed reference frames still drawing a stand-in when taken.
+    #[serde(default)]
+    pub unsettled_reference_frames: usize,
     pub seconds: f64,
     pub modes: Vec<ModeSummary>,
 }
@@ -75,6 +82,22 @@ pub struct ModeSummary {
     /// From the pooled mean squared error; null when every compared frame
     /// is identical to the reference (infinite PSNR) or nothing was compared.
     pub psnr_db: Option<f64>,
+    /// Streaming, over every frame of the run (warm-up included; zeros
+    /// when the scene is resident): the most device bytes resident LODs
+    /// took, bytes loaded, loader requests, stand-ins drawn, chosen LODs
+    /// with no stand-in, and frames that drew a stand-in.
+    #[serde(default)]
+    pub peak_resident_bytes: u64,
+    #[serde(default)]
+    pub loaded_bytes: u64,
+    #[serde(default)]
+    pub requests: u64,
+    #[serde(default)]
+    pub substituted_draws: u64,
+    #[serde(default)]
+    pub missing_draws: u64,
+    #[serde(default)]
+    pub substituted_frames: usize,
 }
 
 impl ModeSummary {
@@ -173,6 +196,21 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         bound_violating_pixels: has_acc.then_some(acc.bound_violating_pixels),
         bound_violating_fraction: has_acc.then(|| acc.bound_violating_fraction()),
         psnr_db: if has_acc { acc.psnr_db() } else { None },
+        peak_resident_bytes: run
+            .frames
+            .iter()
+            .map(|f| f.resident_bytes)
+            .max()
+            .unwrap_or(0),
+        loaded_bytes: run.frames.iter().map(|f| f.loaded_bytes).sum(),
+        requests: run.frames.iter().map(|f| f.requests).sum(),
+        substituted_draws: run.frames.iter().map(|f| f.substituted_draws).sum(),
+        missing_draws: run.frames.iter().map(|f| f.missing_draws).sum(),
+        substituted_frames: run
+            .frames
+            .iter()
+            .filter(|f| f.substituted_draws > 0)
+            .count(),
     }
 }
 
@@ -215,6 +253,8 @@ impl Replay {
                 gigawalk_cull::Reduction::Farthest => "farthest".into(),
                 gigawalk_cull::Reduction::NthFarthest(n) => format!("{n}-th farthest"),
             },
+            memory_budget: self.memory_budget,
+            unsettled_reference_frames: self.unsettled_reference_frames,
             seconds: self.seconds,
             modes,
         }
@@ -277,6 +317,35 @@ impl Summary {
                 thousands(m.mean_drawn_nodes),
                 m.median_speedup_vs_vfc
                     .map_or("-".into(), |x| format!("{x:.2}x")),
+            );
+        }
+        s
+    }
+
+    /// The streaming table of summary.md (empty when nothing streamed).
+    pub fn streaming_table(&self) -> String {
+        let Some(budget) = self.memory_budget else {
+            return String::new();
+        };
+        let mib = |b: u64| format!("{:.1}", b as f64 / (1u64 << 20) as f64);
+        let mut s = format!(
+            "Memory budget {} MiB a device; {} reference frames still drew a stand-in when taken.\n\n\
+             | mode | pixel error | peak resident MiB | loaded MiB | requests | substituted draws | frames with stand-ins | missing draws |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|\n",
+            mib(budget),
+            self.unsettled_reference_frames
+        );
+        for m in &self.modes {
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                m.name,
+                m.pixel_error,
+                mib(m.peak_resident_bytes),
+                mib(m.loaded_bytes),
+                m.requests,
+                m.substituted_draws,
+                m.substituted_frames,
+                m.missing_draws,
             );
         }
         s

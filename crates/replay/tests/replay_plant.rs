@@ -76,6 +76,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
             height: H,
             ..Default::default()
         },
+        memory_budget: Default::default(),
         near: None,
         frames: Some(frames),
         accuracy_every: every,
@@ -363,6 +364,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 modes: vec![Mode::Occ, Mode::Och],
                 pixel_errors: vec![1.0],
                 runtime: runtime.clone(),
+                memory_budget: Default::default(),
                 near: None,
                 frames: Some(12),
                 accuracy_every: 4,
@@ -376,4 +378,73 @@ fn every_runtime_knob_replays_with_accuracy() {
             }
         }
     });
+}
+
+#[test]
+fn a_streamed_replay_reports_its_memory_and_stand_ins_against_a_settled_reference() {
+    let Some(devices) = devices_or_skip(2, "streamed replay") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, path) = plant(dir.path(), 30);
+    let total: u64 = scene
+        .skeleton()
+        .lods
+        .iter()
+        .map(|l| l.vertices as u64 * gigawalk_gpu::VERTEX_BYTES + l.triangles as u64 * 12)
+        .sum();
+    let budget = total / 3;
+    let rt = Runtime::streaming(&scene, devices, budget).unwrap();
+    assert!(rt.is_streaming());
+    let mut opts = options(&[1.0], 20, 5);
+    opts.modes = vec![Mode::Occ, Mode::Och];
+    let r = replay_plant(&rt, &path, &opts).unwrap();
+    assert!(r.complete);
+    let s = r.summary();
+    assert!(
+        s.memory_budget.is_some_and(|b| b <= budget),
+        "{:?}",
+        s.memory_budget
+    );
+    // Each reference camera was held until it drew no stand-in.
+    assert_eq!(s.unsettled_reference_frames, 0);
+    assert_eq!(r.reference_frames, 4);
+    for m in &s.modes {
+        assert!(
+            m.peak_resident_bytes > 0 && m.peak_resident_bytes <= budget,
+            "{m:?}"
+        );
+        assert_eq!(m.missing_draws, 0, "{}", m.name);
+        assert!(m.accuracy_frames > 0);
+    }
+    // The first run starts from the pinned set: it loads and substitutes.
+    let occ = &s.modes[0];
+    assert!(occ.loaded_bytes > 0 && occ.requests > 0, "{occ:?}");
+    assert!(
+        occ.substituted_draws > 0 && occ.substituted_frames > 0,
+        "{occ:?}"
+    );
+    // Report files carry the streaming figures.
+    let out = dir.path().join("report");
+    r.write_report(&out).unwrap();
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    for col in [
+        "resident_bytes",
+        "loaded_bytes",
+        "requests",
+        "substituted_draws",
+        "missing_draws",
+    ] {
+        assert!(
+            header.split(',').any(|c| c == col),
+            "{col} missing: {header}"
+        );
+    }
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("## Streaming (out of core)"), "{md}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(json["memory_budget"].as_u64().is_some());
+    assert!(json["modes"][0]["substituted_draws"].as_u64().unwrap() > 0);
 }

@@ -28,7 +28,8 @@ pub use gigawalk_cull::{
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{
-    OccluderBudget, OptionsError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
+    MemoryBudget, OccluderBudget, OptionsError, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE,
+    CPU_OCCLUDER_BUDGET,
 };
 
 pub use streaming::{LodSource, StreamStats, PINNED_SHARE};
@@ -77,6 +78,8 @@ pub enum RuntimeError {
     LoaderStopped,
     #[error("setup: memory budget of {budget} bytes is below the minimum of {min} bytes")]
     MemoryBudget { budget: u64, min: u64 },
+    #[error("setup: {0}")]
+    MemoryBudgetUnknown(String),
 }
 
 /// The smallest memory budget [`Runtime::streaming`] takes.
@@ -293,6 +296,27 @@ impl<'s> Runtime<'s> {
             source: Some(scene),
             plan: Some(plan),
         })
+    }
+
+    /// Opens `devices` (1 or 2) wgpu devices and loads the scene whole
+    /// ([`Runtime::new`]) or streams it under `budget` a device
+    /// ([`Runtime::streaming`]).
+    pub fn open<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: usize,
+        budget: MemoryBudget,
+    ) -> Result<Self, RuntimeError> {
+        let bytes = budget
+            .resolve()
+            .map_err(RuntimeError::MemoryBudgetUnknown)?;
+        let Some(bytes) = bytes else {
+            return Self::new(scene, devices);
+        };
+        if !(1..=2).contains(&devices) {
+            return Err(RuntimeError::DeviceCount { count: devices });
+        }
+        let ctxs = gigawalk_gpu::open_devices(devices).map_err(setup)?;
+        Self::streaming(scene, ctxs, bytes)
     }
 
     /// Whether geometry is streamed under a memory budget.

@@ -322,3 +322,119 @@ mod tests {
         );
     }
 }
+
+/// Device memory for geometry, per device (`--memory-budget`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MemoryBudget {
+    /// The whole scene, loaded before the first frame.
+    #[default]
+    All,
+    /// At most this many bytes a device; a scene that does not fit is
+    /// streamed (out of core), one that fits is loaded whole.
+    Bytes(u64),
+    /// [`AUTO_MEMORY_SHARE`] of the machine's physical memory a device.
+    Auto,
+}
+
+/// The share of physical memory `MemoryBudget::Auto` gives each device.
+/// lavapipe's devices live in host memory, so two of them take half.
+pub const AUTO_MEMORY_SHARE: f64 = 0.25;
+
+impl MemoryBudget {
+    /// Bytes a device may hold, `None` for all of the scene.
+    pub fn resolve(self) -> Result<Option<u64>, String> {
+        match self {
+            MemoryBudget::All => Ok(None),
+            MemoryBudget::Bytes(b) => Ok(Some(b)),
+            MemoryBudget::Auto => physical_memory()
+                .map(|m| Some((m as f64 * AUTO_MEMORY_SHARE) as u64))
+                .ok_or_else(|| {
+                    "memory budget auto: cannot read this machine's memory size \
+                     (/proc/meminfo); give a size such as 4G"
+                        .to_string()
+                }),
+        }
+    }
+}
+
+/// Physical memory in bytes (Linux: MemTotal of /proc/meminfo).
+fn physical_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+impl std::fmt::Display for MemoryBudget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MemoryBudget::All => f.write_str("all"),
+            MemoryBudget::Bytes(b) => write!(f, "{b}"),
+            MemoryBudget::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+impl std::str::FromStr for MemoryBudget {
+    type Err = String;
+    /// `all`, `auto`, or bytes with an optional K, M or G suffix (powers
+    /// of 1024: `256M`, `1.5G`, `1000000`).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => return Ok(MemoryBudget::All),
+            "auto" => return Ok(MemoryBudget::Auto),
+            _ => {}
+        }
+        let (num, mul) = match s.as_bytes().last() {
+            Some(b'k' | b'K') => (&s[..s.len() - 1], 1024.0),
+            Some(b'm' | b'M') => (&s[..s.len() - 1], 1024.0 * 1024.0),
+            Some(b'g' | b'G') => (&s[..s.len() - 1], 1024.0 * 1024.0 * 1024.0),
+            _ => (s, 1.0),
+        };
+        let v: f64 = num.parse().map_err(|_| {
+            format!("memory budget {s:?} is not all, auto or a size in bytes (e.g. 256M, 1G)")
+        })?;
+        let bytes = v * mul;
+        if !(bytes.is_finite() && bytes >= 1.0) || bytes >= 9.2e18 {
+            return Err(format!(
+                "memory budget {s:?} is out of range (1 byte to 8 EiB)"
+            ));
+        }
+        Ok(MemoryBudget::Bytes(bytes as u64))
+    }
+}
+
+#[cfg(test)]
+mod budget_tests {
+    use super::*;
+
+    #[test]
+    fn memory_budgets_parse_with_suffixes_and_reject_nonsense() {
+        let p = |s: &str| s.parse::<MemoryBudget>();
+        assert_eq!(p("all"), Ok(MemoryBudget::All));
+        assert_eq!(p("auto"), Ok(MemoryBudget::Auto));
+        assert_eq!(p("1000"), Ok(MemoryBudget::Bytes(1000)));
+        assert_eq!(p("64k"), Ok(MemoryBudget::Bytes(65536)));
+        assert_eq!(p("256M"), Ok(MemoryBudget::Bytes(256 << 20)));
+        assert_eq!(p("1G"), Ok(MemoryBudget::Bytes(1 << 30)));
+        assert_eq!(p("1.5g"), Ok(MemoryBudget::Bytes(3 << 29)));
+        for bad in [
+            "", "G", "-1G", "0", "nan", "inf", "1e30", "lots", "ALL", "1T",
+        ] {
+            let e = p(bad).unwrap_err();
+            assert!(e.contains("memory budget"), "{bad:?}: {e}");
+        }
+        for b in [
+            MemoryBudget::All,
+            MemoryBudget::Auto,
+            MemoryBudget::Bytes(12345),
+        ] {
+            assert_eq!(p(&b.to_string()), Ok(b));
+        }
+        assert_eq!(MemoryBudget::All.resolve(), Ok(None));
+        assert_eq!(MemoryBudget::Bytes(7).resolve(), Ok(Some(7)));
+        if std::path::Path::new("/proc/meminfo").exists() {
+            assert!(MemoryBudget::Auto.resolve().unwrap().unwrap() > 1 << 20);
+        }
+    }
+}

@@ -64,6 +64,8 @@ pub struct ViewArgs {
     pub metres_per_unit: f64,
     /// Occluder triangles OR draws a frame (`auto`: 30k on CPU rasterizers).
     pub occluder_budget: OccluderBudget,
+    /// Geometry memory a device may hold (`all`: the whole scene).
+    pub memory_budget: gigawalk_runtime::MemoryBudget,
     /// The starting toggles.
     pub settings: Settings,
     /// Where recorded paths and key screenshots go.
@@ -186,7 +188,11 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((WIREFRAME_UNSUPPORTED.to_string(), Instant::now()));
         eprintln!("{WIREFRAME_UNSUPPORTED}");
     }
-    let runtime = Runtime::with_devices(&scene, devices)?;
+    let runtime = match args.memory_budget.resolve() {
+        Ok(Some(bytes)) => Runtime::streaming(&scene, devices, bytes)?,
+        Ok(None) => Runtime::with_devices(&scene, devices)?,
+        Err(e) => return Err(gigawalk_runtime::RuntimeError::MemoryBudgetUnknown(e).into()),
+    };
     tracing::info!("viewing {} on {device_names}", args.scene.display());
 
     let scripted = args.frames.map(|n| Script {
@@ -663,6 +669,7 @@ impl Presenter for ViewerPresenter<'_> {
             latency_ms: report.latency_ms(),
             occlusion_used: report.occlusion_used,
             stats: report.stats,
+            streaming: report.streaming,
         };
         let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
         if let Some(script) = &self.script {

@@ -52,6 +52,8 @@ pub struct FrameNumbers {
     pub latency_ms: f64,
     pub occlusion_used: bool,
     pub stats: TraversalStats,
+    /// Streaming figures (zeros when the scene is resident).
+    pub streaming: gigawalk_runtime::StreamStats,
 }
 
 /// The viewer's state the HUD shows besides the frame's numbers.
@@ -99,6 +101,22 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
             _ => format!("mode: {}", s.mode()),
         },
     ];
+    let sm = &n.streaming;
+    if sm.pool_bytes > 0 {
+        let mb = |b: u64| b as f64 / (1u64 << 20) as f64;
+        lines.push(format!(
+            "stream: {:.0}/{:.0} MB resident, {} loads asked, {} stand-ins{}",
+            mb(sm.resident_bytes),
+            mb(sm.pool_bytes),
+            sm.requests,
+            sm.substituted,
+            if sm.missing > 0 {
+                format!(", {} missing", sm.missing)
+            } else {
+                String::new()
+            }
+        ));
+    }
     let mut flags = Vec::new();
     if s.async_rvg {
         flags.push("async");
@@ -180,6 +198,13 @@ mod tests {
                 occlusion_culled: 42,
                 ..Default::default()
             },
+            streaming: gigawalk_runtime::StreamStats {
+                resident_bytes: 300 << 20,
+                pool_bytes: 1 << 30,
+                requests: 12,
+                substituted: 5,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let s = Settings {
@@ -196,6 +221,7 @@ mod tests {
             "60.0 fps",
             "STC 2.5",
             "1,500,000 tris",
+            "stream: 300/1024 MB resident, 12 loads asked, 5 stand-ins",
             "42 occlusion",
             "occlusion + HLOD",
             "FROZEN",

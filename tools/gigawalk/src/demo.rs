@@ -52,6 +52,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut opts = demo::replay_options(args.frames, args.runtime.width, args.runtime.height);
     opts.runtime = args.runtime.options();
     opts.near = args.runtime.near;
+    opts.memory_budget = args.runtime.memory_budget;
     let replay = run_replay(
         &scene,
         &prepared.scene.display().to_string(),

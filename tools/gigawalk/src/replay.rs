@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
-use gigawalk_runtime::{OccluderBudget, Reduction, RuntimeOptions, Schedule};
+use gigawalk_runtime::{MemoryBudget, OccluderBudget, Reduction, RuntimeOptions, Schedule};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -78,6 +78,9 @@ pub struct RuntimeArgs {
     /// Near plane distance in model units [default: 1e-5 of the scene's bounding-box diagonal]
     #[arg(long)]
     pub near: Option<f64>,
+    /// Geometry memory a device may hold: all (load the whole scene first), a size (256M, 1G; K/M/G are powers of 1024) or auto (a quarter of RAM); a scene bigger than the budget is streamed from disk while the walk runs, drawing coarser stand-ins until LODs arrive
+    #[arg(long, value_name = "all|BYTES|auto", default_value = "all")]
+    pub memory_budget: MemoryBudget,
 }
 
 impl RuntimeArgs {
@@ -116,6 +119,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         modes: args.modes,
         pixel_errors: args.pixel_error,
         runtime: args.runtime.options(),
+        memory_budget: args.runtime.memory_budget,
         near: args.runtime.near,
         frames: args.frames,
         accuracy_every: args.accuracy_every,

@@ -67,6 +67,9 @@ pub struct Args {
     /// Occluder triangles OR draws a frame, those hiding most per triangle first: all (the paper; measured fastest), a count (30k), or auto (30k on CPU rasterizers such as lavapipe, all on GPUs)
     #[arg(long, value_name = "all|TRIANGLES|auto", default_value = "all")]
     occluder_budget: gigawalk_runtime::OccluderBudget,
+    /// Geometry memory a device may hold: all (load the whole scene first), a size (256M, 1G) or auto (a quarter of RAM); bigger scenes stream while you walk (the HUD shows resident MB and stand-ins)
+    #[arg(long, value_name = "all|BYTES|auto", default_value = "all")]
+    memory_budget: gigawalk_runtime::MemoryBudget,
     /// Near plane distance in model units [default: 1e-5 of the scene's bounding-box diagonal]
     #[arg(long)]
     near: Option<f64>,
@@ -105,6 +108,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         near: a.near,
         metres_per_unit: a.units,
         occluder_budget: a.occluder_budget,
+        memory_budget: a.memory_budget,
         settings: Settings {
             occlusion: !a.no_occlusion,
             hlod: !a.no_hlod,

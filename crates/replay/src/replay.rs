@@ -165,15 +165,18 @@ pub struct Replay {
     pub reference_frames: usize,
     /// Streaming: device bytes a device may hold (`None`: the whole scene
     /// is resident), and reference frames that did not settle (still drew
-    /// a stand-in after [`SETTLE_FRAMES`] frames at their pose).
+    /// a stand-in when taken: [`SETTLE_FRAMES`] frames at their pose, or
+    /// [`STALLED_FRAMES`] without progress).
     pub memory_budget: Option<u64>,
     pub unsettled_reference_frames: usize,
     pub seconds: f64,
 }
 
 /// Frames a streamed reference camera is held still for its LODs to
-/// arrive before its image is taken as it is.
+/// arrive before its image is taken as it is ...
 pub const SETTLE_FRAMES: usize = 200;
+/// ... or frames without fewer stand-ins than its best frame so far.
+pub const STALLED_FRAMES: usize = 8;
 
 /// Watches a replay; every method has a do-nothing default. The library
 /// prints nothing: the CLI draws bars.
@@ -287,14 +290,24 @@ pub fn replay_on(
         progress.start("reference", list.cameras.len() as u64);
         let mut stopped = false;
         let (mut held, mut unsettled) = (0, 0);
+        // The fewest stand-ins a held camera drew, and frames since.
+        let (mut best, mut since_best) = (u64::MAX, 0);
         rt.run(&ro, &mut list, &mut |r: FrameReport| {
-            let settled = r.streaming.substituted == 0 && r.streaming.missing == 0;
+            let waiting = r.streaming.substituted + r.streaming.missing;
+            let settled = waiting == 0;
             held += 1;
-            let take = settled || held >= SETTLE_FRAMES;
+            if waiting < best {
+                (best, since_best) = (waiting, 0);
+            } else {
+                since_best += 1;
+            }
+            // A full-detail view bigger than the budget never settles:
+            // stop holding when it stops getting better.
+            let take = settled || held >= SETTLE_FRAMES || since_best >= STALLED_FRAMES;
             if take {
                 unsettled += usize::from(!settled);
                 reference.push(r.image);
-                held = 0;
+                (held, best, since_best) = (0, u64::MAX, 0);
                 progress.frame();
             }
             advance.store(take, Ordering::Relaxed);

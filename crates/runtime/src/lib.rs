@@ -32,7 +32,7 @@ pub use options::{
     CPU_OCCLUDER_BUDGET,
 };
 
-pub use streaming::{LodSource, StreamStats, PINNED_SHARE};
+pub use streaming::{LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
 use gigawalk_gpu::HostGeometry;
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
@@ -281,13 +281,27 @@ impl<'s> Runtime<'s> {
         }
         let limit = buffer_limit(&devices);
         let plan = Plan::new(skeleton, budget);
-        let geometry = devices
+        let mut streams = devices
             .iter()
-            .map(|d| {
-                DeviceStream::new(d, skeleton, &plan, scene, limit)
-                    .map(|s| Geometry::Streamed(Box::new(Mutex::new(s))))
-            })
+            .map(|d| DeviceStream::new(d, skeleton, &plan, limit))
             .collect::<Result<Vec<_>, _>>()?;
+        // The pinned set, read once for every device.
+        for l in plan.pinned() {
+            let mesh = scene.read_lod(l).map_err(|source| RuntimeError::Load {
+                source: Box::new(source),
+            })?;
+            let lod = gigawalk_gpu::DecodedLod::new(&mesh);
+            for (s, d) in streams.iter_mut().zip(&devices) {
+                s.pin(d, l, &lod);
+            }
+        }
+        for d in &devices {
+            d.queue.submit([]);
+        }
+        let geometry = streams
+            .into_iter()
+            .map(|s| Geometry::Streamed(Box::new(Mutex::new(s))))
+            .collect();
         Ok(Runtime {
             skeleton,
             devices,

@@ -9,7 +9,8 @@
 //! a stand-in, so occlusion culling stays conservative.
 //!
 //! A small pinned set (the coarsest LOD of the nodes nearest the root, up
-//! to [`PINNED_SHARE`] of the budget) is loaded before the first frame and
+//! to [`PINNED_SHARE`] of the budget and at most [`PINNED_MAX`]) is loaded
+//! before the first frame and
 //! never evicted: the first frame draws from it, and a stand-in always
 //! exists for every node under it.
 
@@ -35,8 +36,10 @@ impl<R: ReadAt + Sync> LodSource for SceneReader<R> {
     }
 }
 
-/// Share of the memory budget the pinned set may take.
+/// Share of the memory budget the pinned set may take ...
 pub const PINNED_SHARE: f64 = 0.125;
+/// ... and at most this many bytes: it is read before the first frame.
+pub const PINNED_MAX: u64 = 32 << 20;
 
 /// Frames after which an unanswered request is asked again, and after
 /// which the loader drops a request the camera has moved away from.
@@ -111,7 +114,7 @@ impl Plan {
         // Breadth first from the root: each node's coarsest LOD, while the
         // pinned set stays within its share of the budget.
         let mut pinned = vec![false; skeleton.lods.len()];
-        let limit = (budget as f64 * PINNED_SHARE) as u64;
+        let limit = ((budget as f64 * PINNED_SHARE) as u64).min(PINNED_MAX);
         let mut bytes = 0u64;
         let mut queue = VecDeque::from([0u32]);
         while let Some(n) = queue.pop_front() {
@@ -183,12 +186,12 @@ pub(crate) struct DeviceStream {
 }
 
 impl DeviceStream {
-    /// A pool of `plan.budget` bytes on `ctx` holding the pinned set.
+    /// An empty pool of `plan.budget` bytes on `ctx`; [`DeviceStream::pin`]
+    /// puts the pinned set in.
     pub fn new(
         ctx: &GpuContext,
         skeleton: &Skeleton,
         plan: &Plan,
-        source: &dyn LodSource,
         max_buffer: u64,
     ) -> Result<Self, RuntimeError> {
         let (v, i) = scene_bytes(skeleton);
@@ -202,7 +205,7 @@ impl DeviceStream {
         )
         .map_err(|source| RuntimeError::Setup { source })?;
         let n = skeleton.lods.len();
-        let mut s = DeviceStream {
+        Ok(DeviceStream {
             pool,
             last_used: vec![0; n],
             lru: BTreeSet::new(),
@@ -210,19 +213,15 @@ impl DeviceStream {
             frame: 0,
             standins: HashSet::new(),
             stats: StreamStats::default(),
-        };
-        for l in plan.pinned() {
-            let mesh = source.read_lod(l).map_err(|source| RuntimeError::Load {
-                source: Box::new(source),
-            })?;
-            // Within its share of an empty pool, a pinned LOD always fits
-            // unless the pool is split into pages smaller than the LOD.
-            if !s.pool.insert(ctx, l, &DecodedLod::new(&mesh)) {
-                break;
-            }
-        }
-        ctx.queue.submit([]);
-        Ok(s)
+        })
+    }
+
+    /// Puts pinned LOD `id` in the pool for good. Within its share of an
+    /// empty pool a pinned LOD fits unless the pool's pages are smaller
+    /// than the LOD; one that does not is left out (it is then streamed
+    /// like any other).
+    pub fn pin(&mut self, ctx: &GpuContext, id: u32, lod: &DecodedLod) {
+        self.pool.insert(ctx, id, lod);
     }
 
     pub fn pool(&self) -> &GeometryPool {

@@ -46,11 +46,17 @@ pub const PINNED_MAX: u64 = 32 << 20;
 const STALE_FRAMES: u64 = 2;
 
 /// Requests RVG may queue for the loader; more in one frame wait for the
-/// next (a camera that jumps cannot leave a backlog longer than this).
-pub(crate) const REQUEST_QUEUE: usize = 256;
+/// next. A camera that jumps leaves no backlog: the loader drops requests
+/// more than [`STALE_FRAMES`] older than the newest. (256 held the 50M
+/// plant's first frames to about 300 loads a frame.)
+pub(crate) const REQUEST_QUEUE: usize = 4096;
 
-/// Loaded LODs a device may have waiting to be put into its pool.
-pub(crate) const INBOX: usize = 64;
+/// Loaded LODs a device may have waiting to be put into its pool. OR
+/// empties its inbox once a frame, and the loader waits while an inbox is
+/// full: 64 held the loader to about 1.5 MB a frame on the 50M plant.
+/// LODs are at most a few tens of KB (`--node-budget` triangles), so this
+/// bounds the host memory in flight to tens of MB.
+pub(crate) const INBOX: usize = 1024;
 
 /// Device bytes the whole scene would take resident: (vertex, index).
 pub(crate) fn scene_bytes(skeleton: &Skeleton) -> (u64, u64) {

@@ -283,7 +283,8 @@ impl<'s> Runtime<'s> {
         let plan = Plan::new(skeleton, budget);
         let mut streams = devices
             .iter()
-            .map(|d| DeviceStream::new(d, skeleton, &plan, limit))
+            .enumerate()
+            .map(|(i, d)| DeviceStream::new(d, i, skeleton, &plan, limit))
             .collect::<Result<Vec<_>, _>>()?;
         // The pinned set, read once for every device.
         for l in plan.pinned() {
@@ -292,7 +293,7 @@ impl<'s> Runtime<'s> {
             })?;
             let lod = gigawalk_gpu::DecodedLod::new(&mesh);
             for (s, d) in streams.iter_mut().zip(&devices) {
-                s.pin(d, l, &lod);
+                s.pin(d, &plan, l, &lod);
             }
         }
         for d in &devices {

@@ -146,6 +146,12 @@ pub struct RuntimeOptions {
     /// newest camera. Removes a frame of latency; may show brief occlusion
     /// errors when the camera moves fast. Pipelined schedule only.
     pub async_rvg: bool,
+    /// Streaming: STC asks the loader ahead of time for the LODs that
+    /// chosen ones near their switching distance will switch to. Off by
+    /// default: on the 50M plant's walk it cut frames with a stand-in
+    /// (35 of 55 instead of 48) but drew more stand-ins (212-233 instead of
+    /// 120) and loaded 20% more (docs/PERFORMANCE.md, "Out of core").
+    pub prefetch: bool,
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
@@ -190,6 +196,7 @@ impl Default for RuntimeOptions {
             devices: 2,
             chunk: 256,
             async_rvg: false,
+            prefetch: false,
             record_culled: false,
             #[cfg(feature = "testing")]
             inject_failure: None,

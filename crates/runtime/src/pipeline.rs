@@ -8,8 +8,10 @@ use crossbeam_channel::{bounded, unbounded, Receiver, Sender, TryRecvError};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
-use crate::stages::{lod_ids, DeviceGeometry, OrStage, RvgStage, StcOutput, StcStage};
-use crate::streaming::{self, Link, LodSource, Request, StreamStats, INBOX, REQUEST_QUEUE};
+use crate::stages::{lod_ids, DeviceGeometry, OrStage, Prefetch, RvgStage, StcOutput, StcStage};
+use crate::streaming::{
+    self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
+};
 use crate::{
     CameraError, CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage,
 };
@@ -160,27 +162,48 @@ fn finish_frame(
 struct LoaderQueues<'a> {
     source: &'a dyn LodSource,
     requests: Receiver<Request>,
+    prefetches: Receiver<Request>,
     devices: Vec<Sender<streaming::Loaded>>,
+    plan: &'a streaming::Plan,
+    mask: u8,
 }
 
 impl LoaderQueues<'_> {
     fn body(self) -> Result<(), RuntimeError> {
-        streaming::loader(self.source, self.requests, self.devices)
+        streaming::loader(
+            self.source,
+            self.requests,
+            self.prefetches,
+            self.devices,
+            self.plan,
+            self.mask,
+        )
     }
 }
 
-/// When the runtime streams: the loader's queues, and OR's and RVG's
-/// links (OR on device `a`, RVG on `b`; one inbox per device, both
+/// One run's streaming ends: the loader's, OR's, RVG's and STC's
+/// (prefetch, when on).
+struct StreamLinks<'a> {
+    loader: LoaderQueues<'a>,
+    or: Link,
+    rvg: Link,
+    stc: Option<Prefetch<'a>>,
+}
+
+/// When the runtime streams: the loader's queues, and OR's, RVG's and
+/// STC's links (OR on device `a`, RVG on `b`; one inbox per device, both
 /// stages' when they share one). Made per run, so the loader ends when
 /// the stages drop their links.
 fn stream_links<'a>(
     rt: &'a Runtime<'_>,
+    opts: &RuntimeOptions,
     a: usize,
     b: usize,
-) -> (Option<LoaderQueues<'a>>, Option<Link>, Option<Link>) {
-    let Some(source) = rt.source.filter(|_| rt.is_streaming()) else {
-        return (None, None, None);
+) -> Option<StreamLinks<'a>> {
+    let (Some(source), Some(plan)) = (rt.source, rt.plan.as_ref()) else {
+        return None;
     };
+    let mask = (1u8 << a.min(7)) | (1u8 << b.min(7));
     let (requests_tx, requests) = bounded(REQUEST_QUEUE);
     let (a_tx, a_rx) = bounded(INBOX);
     let mut devices = vec![a_tx];
@@ -195,19 +218,45 @@ fn stream_links<'a>(
         devices.push(b_tx);
         b_rx
     };
+    let (prefetch_tx, prefetches) = bounded(PREFETCH_QUEUE);
+    let stc = opts.prefetch.then(|| Prefetch {
+        requests: prefetch_tx,
+        plan,
+        mask,
+    });
     let rvg_link = Link {
         requests: Some(requests_tx),
         inbox: rvg_inbox,
     };
-    (
-        Some(LoaderQueues {
+    Some(StreamLinks {
+        loader: LoaderQueues {
             source,
             requests,
+            prefetches,
             devices,
-        }),
-        Some(or_link),
-        Some(rvg_link),
-    )
+            plan,
+            mask,
+        },
+        or: or_link,
+        rvg: rvg_link,
+        stc,
+    })
+}
+
+/// Splits a run's optional streaming ends for the stages.
+#[allow(clippy::type_complexity)]
+fn split(
+    links: Option<StreamLinks<'_>>,
+) -> (
+    Option<LoaderQueues<'_>>,
+    Option<Link>,
+    Option<Link>,
+    Option<Prefetch<'_>>,
+) {
+    match links {
+        None => (None, None, None, None),
+        Some(l) => (Some(l.loader), Some(l.or), Some(l.rvg), l.stc),
+    }
 }
 
 pub(crate) fn run_sequential(
@@ -217,9 +266,9 @@ pub(crate) fn run_sequential(
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
-    let (loader, or_link, rvg_link) = stream_links(rt, 0, 0);
+    let (loader, or_link, rvg_link, prefetch) = split(stream_links(rt, opts, 0, 0));
     let Some(loader) = loader else {
-        return sequential_frames(rt, opts, source, on_frame, presenter, None, None);
+        return sequential_frames(rt, opts, source, on_frame, presenter, None, None, None);
     };
     std::thread::scope(|s| {
         let handle = std::thread::Builder::new()
@@ -230,7 +279,9 @@ pub(crate) fn run_sequential(
                 source,
             })?;
         // The links drop when the frames end, which ends the loader.
-        let frames = sequential_frames(rt, opts, source, on_frame, presenter, or_link, rvg_link);
+        let frames = sequential_frames(
+            rt, opts, source, on_frame, presenter, or_link, rvg_link, prefetch,
+        );
         let loaded = handle.join().unwrap_or_else(|p| {
             Err(RuntimeError::Panic {
                 stage: Stage::Loader,
@@ -244,17 +295,19 @@ pub(crate) fn run_sequential(
     })
 }
 
-fn sequential_frames(
-    rt: &Runtime,
-    opts: &RuntimeOptions,
+#[allow(clippy::too_many_arguments)]
+fn sequential_frames<'a>(
+    rt: &'a Runtime,
+    opts: &'a RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
     or_link: Option<Link>,
     rvg_link: Option<Link>,
+    prefetch: Option<Prefetch<'a>>,
 ) -> Result<u64, RuntimeError> {
     let mut or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
-    let mut stc = StcStage::new(rt.skeleton, opts);
+    let mut stc = StcStage::new(rt.skeleton, opts, prefetch);
     let mut rvg = RvgStage::new(DeviceGeometry::new(rt, 0, rvg_link), opts);
     let mut history: std::collections::VecDeque<VisibleSet> = Default::default();
     let mut last: Option<StcOutput> = None;
@@ -400,7 +453,7 @@ pub(crate) fn run_pipelined(
         token_tx.send(()).expect("room for every token");
     }
     let b = rvg_device(rt, opts);
-    let (loader, or_link, rvg_link) = stream_links(rt, 0, b);
+    let (loader, or_link, rvg_link, prefetch) = split(stream_links(rt, opts, 0, b));
     std::thread::scope(|s| {
         let mut stages: Vec<(Stage, StageBody)> = vec![
             (
@@ -412,7 +465,10 @@ pub(crate) fn run_pipelined(
             ),
             (
                 Stage::Stc,
-                Box::new(move || stc_thread(rt, opts, or_rx, rvg_tx, feedback_tx)),
+                Box::new(move || {
+                    let stc = StcStage::new(rt.skeleton, opts, prefetch);
+                    stc_thread(stc, rt, opts, or_rx, rvg_tx, feedback_tx)
+                }),
             ),
             (
                 Stage::Rvg,
@@ -485,13 +541,13 @@ fn or_thread(
 }
 
 fn stc_thread(
+    mut stc: StcStage,
     rt: &Runtime,
     opts: &RuntimeOptions,
     input: Receiver<OrToStc>,
     out: Sender<StcToRvg>,
     feedback: Sender<VisibleSet>,
 ) -> Result<(), RuntimeError> {
-    let mut stc = StcStage::new(rt.skeleton, opts);
     let mut last: Option<StcOutput> = None;
     for m in input.iter() {
         let frame = m.sample.frame;
@@ -650,7 +706,7 @@ pub(crate) fn run_async(
     // Owned by RVG's body, so the slot closes when RVG ends for any reason,
     // or when its body is dropped without running.
     let close = CloseOnDrop(latest);
-    let (loader, or_link, rvg_link) = stream_links(rt, 0, b);
+    let (loader, or_link, rvg_link, prefetch) = split(stream_links(rt, opts, 0, b));
     std::thread::scope(|s| {
         let mut stages: Vec<(Stage, StageBody)> = vec![
             (
@@ -662,7 +718,10 @@ pub(crate) fn run_async(
             ),
             (
                 Stage::Stc,
-                Box::new(move || async_stc_thread(rt, opts, or_rx, sets_tx, feedback_tx)),
+                Box::new(move || {
+                    let stc = StcStage::new(rt.skeleton, opts, prefetch);
+                    async_stc_thread(stc, or_rx, sets_tx, feedback_tx)
+                }),
             ),
             (
                 Stage::Rvg,
@@ -721,13 +780,11 @@ fn async_or_thread(
 }
 
 fn async_stc_thread(
-    rt: &Runtime,
-    opts: &RuntimeOptions,
+    mut stc: StcStage,
     input: Receiver<OrToStc>,
     out: Sender<Box<FrameEnd>>,
     feedback: Sender<VisibleSet>,
 ) -> Result<(), RuntimeError> {
-    let mut stc = StcStage::new(rt.skeleton, opts);
     for m in input.iter() {
         let s = stc.run(
             m.sample.frame,

@@ -11,7 +11,7 @@ use gigawalk_cull::{
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
 
-use crate::streaming::{Geometry, Link, Plan, StreamStats, Use};
+use crate::streaming::{Geometry, Link, Plan, Request, StreamStats, Use, PREFETCH_BAND};
 use crate::{OccluderBudget, Runtime, RuntimeError, RuntimeOptions, Stage};
 
 /// A stage's device, its geometry there, and (streaming) its end of the
@@ -189,12 +189,67 @@ impl<'a> OrStage<'a> {
     }
 }
 
+/// STC's end of the loader's request queue (streaming with prefetch).
+pub(crate) struct Prefetch<'a> {
+    pub requests: crossbeam_channel::Sender<Request>,
+    pub plan: &'a Plan,
+    /// The run's devices (bits of `Plan::held`).
+    pub mask: u8,
+}
+
+impl Prefetch<'_> {
+    /// Asks for what `item` switches to when the camera comes closer, if
+    /// its pixel error is within [`PREFETCH_BAND`] of the tolerance: the
+    /// node's next finer LOD, or for an inner node's finest HLOD its
+    /// children's coarsest LODs.
+    fn item(
+        &self,
+        skeleton: &Skeleton,
+        view: &CullView,
+        tolerance: f64,
+        frame: u64,
+        item: DrawItem,
+    ) {
+        let n = &skeleton.nodes[item.node as usize];
+        let Some(l) = skeleton.lods.get((n.first_lod + item.lod) as usize) else {
+            return;
+        };
+        let (min, max) = view.rel_f64(&n.bounds);
+        let distance = gigawalk_cull::lod::distance_to_rel_box(min, max);
+        let pe = gigawalk_cull::lod::pixel_error(l.error, distance, view.pixels_per_radian);
+        if pe <= PREFETCH_BAND * tolerance {
+            return;
+        }
+        let ask = |lod: u32| {
+            if !self.plan.held_by(lod, self.mask) {
+                // A full queue drops it: prefetching is best effort.
+                let _ = self.requests.try_send(Request {
+                    lod,
+                    frame,
+                    prefetch: true,
+                });
+            }
+        };
+        if item.lod > 0 {
+            ask(n.first_lod + item.lod - 1);
+        } else {
+            for c in n.children() {
+                let c = &skeleton.nodes[c as usize];
+                if c.lod_count > 0 {
+                    ask(c.first_lod + c.lod_count - 1);
+                }
+            }
+        }
+    }
+}
+
 /// STC: HZB from OR's depth, then traversal (Algorithm 5.2).
 pub(crate) struct StcStage<'a> {
     pub skeleton: &'a Skeleton,
     pub opts: &'a RuntimeOptions,
     traverser: Traverser,
     hzb: Hzb,
+    prefetch: Option<Prefetch<'a>>,
 }
 
 /// One frame's culling result. Cheap to clone: the visible set is shared
@@ -210,12 +265,17 @@ pub(crate) struct StcOutput {
 }
 
 impl<'a> StcStage<'a> {
-    pub fn new(skeleton: &'a Skeleton, opts: &'a RuntimeOptions) -> Self {
+    pub fn new(
+        skeleton: &'a Skeleton,
+        opts: &'a RuntimeOptions,
+        prefetch: Option<Prefetch<'a>>,
+    ) -> Self {
         StcStage {
             skeleton,
             opts,
             traverser: Traverser::new(),
             hzb: Hzb::new(),
+            prefetch,
         }
     }
 
@@ -248,9 +308,18 @@ impl<'a> StcStage<'a> {
             ..self.opts.traversal
         };
         let mut visible = Vec::new();
+        let tolerance = options.pixel_tolerance;
+        let prefetch = self
+            .prefetch
+            .as_ref()
+            .filter(|_| options.hlod && tolerance > 0.0);
+        let skeleton = self.skeleton;
         let mut sink = |item: DrawItem| {
             visible.push(item);
             emit(item);
+            if let Some(p) = prefetch {
+                p.item(skeleton, view, tolerance, frame, item);
+            }
         };
         let mut culled = Vec::new();
         let record = self.opts.record_culled;

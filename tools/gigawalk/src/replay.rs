@@ -81,6 +81,9 @@ pub struct RuntimeArgs {
     /// Geometry memory a device may hold: all (load the whole scene first), a size (256M, 1G; K/M/G are powers of 1024) or auto (a quarter of RAM); a scene bigger than the budget is streamed from disk while the walk runs, drawing coarser stand-ins until LODs arrive
     #[arg(long, value_name = "all|BYTES|auto", default_value = "all")]
     pub memory_budget: MemoryBudget,
+    /// Streaming: STC asks for the next finer LOD of what it draws near its switching distance before it is chosen (fewer frames with stand-ins, more stand-ins and loads on the 50M plant; off by default)
+    #[arg(long)]
+    prefetch: bool,
 }
 
 impl RuntimeArgs {
@@ -103,6 +106,7 @@ impl RuntimeArgs {
             devices: self.devices,
             chunk: self.chunk,
             async_rvg: self.async_rvg,
+            prefetch: self.prefetch,
             ..RuntimeOptions::default()
         }
     }

@@ -80,6 +80,9 @@ pub enum ReplayError {
         run: String,
         #[source]
         source: Box<RuntimeError>,
+        /// What was measured before the error (`complete` false), for a
+        /// report of it.
+        partial: Option<Box<Replay>>,
     },
 }
 
@@ -317,6 +320,7 @@ pub fn replay_on(
         .map_err(|source| ReplayError::Run {
             run: "reference".into(),
             source: Box::new(source),
+            partial: None,
         })?;
         progress.finish("reference");
         out.reference_frames = reference.len();
@@ -396,10 +400,16 @@ pub fn replay_on(
             pixel_error,
             frames,
         });
-        result.map_err(|source| ReplayError::Run {
-            run: label,
-            source: Box::new(source),
-        })?;
+        if let Err(source) = result {
+            out.complete = false;
+            out.reference_frames = out.reference_frames.min(reference.len());
+            out.seconds = start.elapsed().as_secs_f64();
+            return Err(ReplayError::Run {
+                run: label,
+                source: Box::new(source),
+                partial: Some(Box::new(out)),
+            });
+        }
         if stopped {
             break;
         }

@@ -59,6 +59,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &path,
         &prepared.path.display().to_string(),
         &opts,
+        &args.out,
     )?;
     write_and_print(&replay, &args.out)
 }

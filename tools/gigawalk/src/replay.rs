@@ -135,27 +135,42 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &path,
         &args.path.display().to_string(),
         &opts,
+        &args.out,
     )?;
     write_and_print(&replay, &args.out)
 }
 
 /// Replays with bars; once the first run starts, SIGINT or SIGTERM ends
 /// the current frame and the report holds what was measured (a second
-/// signal exits at once). Shared with `gigawalk demo`.
+/// signal exits at once). A run that fails (a corrupted LOD the streaming
+/// loader found) still gets the report of what was measured before it,
+/// in `out`, and then the error. Shared with `gigawalk demo`.
 pub fn run_replay(
     scene: &SceneReader,
     scene_name: &str,
     path: &CameraPath,
     path_name: &str,
     opts: &ReplayOptions,
+    out: &Path,
 ) -> anyhow::Result<Replay> {
     let mut bars = Bars {
         terminal: std::io::stderr().is_terminal(),
         bar: None,
         started: Instant::now(),
     };
-    gigawalk_replay::replay(scene, scene_name, &path.poses, path_name, opts, &mut bars)
-        .with_context(|| format!("cannot replay {path_name} through {scene_name}"))
+    match gigawalk_replay::replay(scene, scene_name, &path.poses, path_name, opts, &mut bars) {
+        Ok(r) => Ok(r),
+        Err(mut e) => {
+            if let gigawalk_replay::ReplayError::Run { partial, .. } = &mut e {
+                if let Some(p) = partial.take() {
+                    eprintln!("the replay failed; writing the report of what was measured first");
+                    write_and_print(&p, out)?;
+                }
+            }
+            Err(anyhow::Error::new(e))
+                .with_context(|| format!("cannot replay {path_name} through {scene_name}"))
+        }
+    }
 }
 
 pub fn write_and_print(replay: &Replay, out: &Path) -> anyhow::Result<()> {

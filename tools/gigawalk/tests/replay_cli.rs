@@ -148,3 +148,73 @@ fn small_plant_replays_into_a_report() {
         .count();
     assert_eq!(rows, 1 + 2 * 12);
 }
+
+#[test]
+fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report() {
+    if gigawalk_gpu::devices_or_skip(2, "gigawalk replay CLI, streaming").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (glb, path, gwk, out) = (
+        dir.path().join("p.glb"),
+        dir.path().join("p.path"),
+        dir.path().join("p.gwk"),
+        dir.path().join("report"),
+    );
+    let (ok, _, err) = gigawalk(&[
+        "generate",
+        "plant",
+        "--triangles",
+        "60k",
+        "--seed",
+        "2",
+        "-o",
+        s(&glb),
+        "--path",
+        s(&path),
+        "--poses",
+        "12",
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)]);
+    assert!(ok, "{err}");
+    // Corrupt the full-detail LOD of every leaf with coarser ones (never
+    // pinned, which would fail the start instead); the first
+    // frames at full detail ask for some of them.
+    let mut bytes = std::fs::read(&gwk).unwrap();
+    {
+        let scene = gigawalk_scene::SceneReader::open(&gwk).unwrap();
+        let sk = scene.skeleton();
+        for n in sk.nodes.iter().filter(|n| n.is_leaf() && n.lod_count > 1) {
+            let l = &sk.lods[n.first_lod as usize];
+            bytes[(l.offset + l.len / 2) as usize] ^= 0x5a;
+        }
+    }
+    std::fs::write(&gwk, &bytes).unwrap();
+    let (ok, _, err) = gigawalk(&[
+        "replay",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--out",
+        s(&out),
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--accuracy-every",
+        "0",
+        "--modes",
+        "occ",
+        "--memory-budget",
+        "256k",
+    ]);
+    assert!(!ok, "a corrupted LOD must fail the replay");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("p.gwk") && err.contains("LOD "), "{err}");
+    assert!(err.contains("loader"), "{err}");
+    // The report of what was measured before the error.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["complete"], false);
+}

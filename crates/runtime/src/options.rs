@@ -97,12 +97,7 @@ impl std::str::FromStr for OccluderBudget {
             "auto" => return Ok(OccluderBudget::Auto),
             _ => {}
         }
-        let (num, mul) = match s.as_bytes().last() {
-            Some(b'k' | b'K') => (&s[..s.len() - 1], 1e3),
-            Some(b'm' | b'M') => (&s[..s.len() - 1], 1e6),
-            _ => (s, 1.0),
-        };
-        let v: f64 = num.parse().map_err(|_| {
+        let (v, mul) = scaled(s, &[(b'k', 1e3), (b'm', 1e6)]).ok_or_else(|| {
             format!("occluder budget {s:?} is not all, auto or a triangle count (e.g. 30000, 30k)")
         })?;
         // Below 2^63: every count that fits prints and parses back.
@@ -364,6 +359,17 @@ impl MemoryBudget {
     }
 }
 
+/// A number with an optional one-letter suffix from `suffixes` (either
+/// case): the number and the suffix's multiplier (1 without one).
+fn scaled(s: &str, suffixes: &[(u8, f64)]) -> Option<(f64, f64)> {
+    let last = s.as_bytes().last()?.to_ascii_lowercase();
+    let (num, mul) = match suffixes.iter().find(|(c, _)| *c == last) {
+        Some(&(_, m)) => (&s[..s.len() - 1], m),
+        None => (s, 1.0),
+    };
+    Some((num.parse().ok()?, mul))
+}
+
 /// Physical memory in bytes (Linux: MemTotal of /proc/meminfo).
 fn physical_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -392,15 +398,11 @@ impl std::str::FromStr for MemoryBudget {
             "auto" => return Ok(MemoryBudget::Auto),
             _ => {}
         }
-        let (num, mul) = match s.as_bytes().last() {
-            Some(b'k' | b'K') => (&s[..s.len() - 1], 1024.0),
-            Some(b'm' | b'M') => (&s[..s.len() - 1], 1024.0 * 1024.0),
-            Some(b'g' | b'G') => (&s[..s.len() - 1], 1024.0 * 1024.0 * 1024.0),
-            _ => (s, 1.0),
-        };
-        let v: f64 = num.parse().map_err(|_| {
-            format!("memory budget {s:?} is not all, auto or a size in bytes (e.g. 256M, 1G)")
-        })?;
+        let k = 1024.0;
+        let (v, mul) =
+            scaled(s, &[(b'k', k), (b'm', k * k), (b'g', k * k * k)]).ok_or_else(|| {
+                format!("memory budget {s:?} is not all, auto or a size in bytes (e.g. 256M, 1G)")
+            })?;
         let bytes = v * mul;
         if !(bytes.is_finite() && bytes >= 1.0) || bytes >= 9.2e18 {
             return Err(format!(

@@ -1,7 +1,7 @@
 //! `gigawalk replay` end to end: bad path and scene files are clear errors
 //! with a non-zero exit code; a small generated plant replays into a report.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn gigawalk(args: &[&str]) -> (bool, String, String) {
@@ -18,6 +18,30 @@ fn gigawalk(args: &[&str]) -> (bool, String, String) {
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
+}
+
+/// A generated plant of `triangles` with a 12-pose walk, preprocessed in
+/// `dir`: its path and scene files, and a report directory.
+fn plant(dir: &Path, triangles: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
+    let (ok, _, err) = gigawalk(&[
+        "generate",
+        "plant",
+        "--triangles",
+        triangles,
+        "--seed",
+        "2",
+        "-o",
+        s(&glb),
+        "--path",
+        s(&path),
+        "--poses",
+        "12",
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)]);
+    assert!(ok, "{err}");
+    (path, gwk, dir.join("report"))
 }
 
 const ONE_POSE: &str = "0 0 1.7 5 0 0 0 1 60\n";
@@ -86,29 +110,7 @@ fn small_plant_replays_into_a_report() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let (glb, path, gwk, out) = (
-        dir.path().join("p.glb"),
-        dir.path().join("p.path"),
-        dir.path().join("p.gwk"),
-        dir.path().join("report"),
-    );
-    let (ok, _, err) = gigawalk(&[
-        "generate",
-        "plant",
-        "--triangles",
-        "20k",
-        "--seed",
-        "2",
-        "-o",
-        s(&glb),
-        "--path",
-        s(&path),
-        "--poses",
-        "12",
-    ]);
-    assert!(ok, "{err}");
-    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)]);
-    assert!(ok, "{err}");
+    let (path, gwk, out) = plant(dir.path(), "20k");
     let (ok, stdout, err) = gigawalk(&[
         "replay",
         s(&gwk),
@@ -155,29 +157,7 @@ fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report()
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let (glb, path, gwk, out) = (
-        dir.path().join("p.glb"),
-        dir.path().join("p.path"),
-        dir.path().join("p.gwk"),
-        dir.path().join("report"),
-    );
-    let (ok, _, err) = gigawalk(&[
-        "generate",
-        "plant",
-        "--triangles",
-        "60k",
-        "--seed",
-        "2",
-        "-o",
-        s(&glb),
-        "--path",
-        s(&path),
-        "--poses",
-        "12",
-    ]);
-    assert!(ok, "{err}");
-    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)]);
-    assert!(ok, "{err}");
+    let (path, gwk, out) = plant(dir.path(), "60k");
     // Corrupt the full-detail LOD of every leaf with coarser ones (never
     // pinned, which would fail the start instead); the first
     // frames at full detail ask for some of them.

@@ -274,6 +274,27 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
         differing * 4 > shaded.len() / 4,
         "only {differing} pixels differ from the shaded frame"
     );
+
+    // Streamed under a budget far below the scene (out of core): six
+    // frames at a still start are enough for the view to fill in.
+    let streamed = shot(
+        &dir.path().join("streamed.png"),
+        &["--memory-budget", "200k"],
+    );
+    let sstats = gigawalk_viewer::image_stats(&streamed);
+    assert!(sstats.distinct_colours > 100, "{sstats:?}");
+    assert!(sstats.non_background > 0.2, "{sstats:?}");
+}
+
+#[test]
+fn bad_memory_budget_is_a_clear_error() {
+    for bad in ["lots", "-1G", "12T"] {
+        let flag = format!("--memory-budget={bad}");
+        let (ok, _, err) = gigawalk(&["view", "x.gwk", "--frames", "1", &flag], None);
+        assert!(!ok);
+        assert!(err.contains("memory budget"), "{bad}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
 }
 
 /// A running `gigawalk view`, killed if the test fails before it quits.

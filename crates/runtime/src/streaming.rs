@@ -225,6 +225,8 @@ pub(crate) struct DeviceStream {
     requested: Vec<u64>,
     /// The visible frame being drawn, its ancestor stand-ins, its figures.
     frame: u64,
+    /// The newest frame any stage drew on this device.
+    newest: u64,
     standins: HashSet<u32>,
     stats: StreamStats,
 }
@@ -257,6 +259,7 @@ impl DeviceStream {
             lru: BTreeSet::new(),
             requested: vec![0; n],
             frame: 0,
+            newest: 0,
             standins: HashSet::new(),
             stats: StreamStats::default(),
         })
@@ -287,7 +290,9 @@ impl DeviceStream {
 
     fn touch(&mut self, plan: &Plan, lod: u32, frame: u64) {
         let l = lod as usize;
-        if self.last_used[l] != frame + 1 {
+        // Stages on one device draw different frames (OR i + 1, RVG i):
+        // keep the newest.
+        if self.last_used[l] < frame + 1 {
             if !plan.pinned[l] {
                 self.lru.remove(&(self.last_used[l], lod));
                 self.lru.insert((frame + 1, lod));
@@ -297,7 +302,7 @@ impl DeviceStream {
     }
 
     /// Puts a loaded LOD in the pool, evicting the least recently drawn
-    /// LODs not drawn in the frame being drawn; drops it when even that
+    /// LODs not drawn in the newest two frames; drops it when even that
     /// leaves no room (it is asked for again later).
     fn take(&mut self, ctx: &GpuContext, plan: &Plan, loaded: &Loaded) {
         let (id, lod) = (&loaded.0, &loaded.1);
@@ -318,7 +323,9 @@ impl DeviceStream {
             let mut freed = 0;
             while freed < 2 * lod.bytes() {
                 match self.lru.first().copied() {
-                    Some((used, victim)) if used < self.frame + 1 => {
+                    // Never what the newest two frames drew: OR's frame
+                    // i + 1 and RVG's frame i share one device's pool.
+                    Some((used, victim)) if used < self.newest => {
                         self.lru.remove(&(used, victim));
                         let before = self.pool.used_bytes();
                         self.pool.remove(victim);
@@ -350,6 +357,7 @@ impl DeviceStream {
         lods: &[u32],
         usage: Use,
     ) -> Option<Vec<u32>> {
+        self.newest = self.newest.max(frame);
         if usage == Use::Visible && frame != self.frame {
             self.frame = frame;
             self.standins.clear();

@@ -55,11 +55,11 @@ elapsed() { secs $(($(now_ms) - t0)); }
 
 if [ $quick = 1 ]; then
   budget=${GIGAWALK_GPU_RUN_BUDGET:-600}
-  demo_tri=150000 big_tri=400000 poses=24 big_poses=24
+  demo_tri=150000 big_tri=400000 poses=24 big_poses=24 stream_budget=2M
   hi=320x180 lo=160x90 every=4 shot_frames=8 pipe_frames=24
 else
   budget=${GIGAWALK_GPU_RUN_BUDGET:-450}
-  demo_tri=4000000 big_tri=50000000 poses=200 big_poses=200
+  demo_tri=4000000 big_tri=50000000 poses=200 big_poses=200 stream_budget=1G
   hi=1920x1080 lo=640x360 every=10 shot_frames=60 pipe_frames=200
 fi
 deadline=$((t0 + budget * 1000))
@@ -171,8 +171,13 @@ fi
 if prepare prepare-big "$big_tri" "$big_poses" 180; then
   replay "replay-big-$hi" "$scene" "$hi" "$big_poses" 90
   replay "replay-big-$lo" "$scene" "$lo" "$big_poses" 60
+  # Out of core: the same walk with the geometry streamed under a budget.
+  replay "replay-big-stream-$lo" "$scene" "$lo" "$big_poses" 60 \
+    --modes occ,och --memory-budget "$stream_budget"
 else
-  for n in "replay-big-$hi" "replay-big-$lo"; do skip "$n" replay "no big scene"; done
+  for n in "replay-big-$hi" "replay-big-$lo" "replay-big-stream-$lo"; do
+    skip "$n" replay "no big scene"
+  done
 fi
 
 # 5. A viewer screenshot: on the display there is, or on Xvfb, or none.

@@ -95,6 +95,8 @@ pub fn unit_of(field: &str) -> &'static str {
         "psnr_db" => "dB",
         "frames" | "measured_frames" | "accuracy_frames" => "frames",
         "pixel_error" => "px",
+        "memory_budget" => "bytes",
+        f if f.ends_with("_bytes") => "bytes",
         f if f.ends_with("_ms") => "ms",
         f if f.ends_with("_fraction") => "fraction of compared pixels",
         f if f.contains("speedup") => "x",

@@ -105,6 +105,13 @@ fn quick_gpu_run_records_every_step_and_figure() {
     {
         assert_eq!(status(&name), "ok", "step {name}:\n{log}");
     }
+    // Streamed under a budget: its memory figures, in bytes.
+    let stream = format!("replay-big-stream-{LO}");
+    assert_eq!(status(&stream), "ok", "step {stream}:\n{log}");
+    let peak = figure(&results, &stream, "och 1px", "peak_resident_bytes")
+        .unwrap_or_else(|| panic!("{stream}: no peak_resident_bytes:\n{log}"));
+    assert_eq!(peak["unit"], "bytes");
+    assert!(peak["value"].as_f64().is_some_and(|v| v > 0.0), "{peak}");
     // Under CI there is Xvfb; elsewhere the step may skip, never fail.
     let viewer = status("viewer");
     assert!(

@@ -204,6 +204,7 @@ fn stream_links<'a>(
         return None;
     };
     let mask = (1u8 << a.min(7)) | (1u8 << b.min(7));
+    plan.start_run();
     let (requests_tx, requests) = bounded(REQUEST_QUEUE);
     let (a_tx, a_rx) = bounded(INBOX);
     let mut devices = vec![a_tx];

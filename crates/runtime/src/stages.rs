@@ -220,6 +220,7 @@ impl Prefetch<'_> {
         if pe <= PREFETCH_BAND * tolerance {
             return;
         }
+        let frame = self.plan.frame(frame);
         let ask = |lod: u32| {
             if !self.plan.held_by(lod, self.mask) {
                 // A full queue drops it: prefetching is best effort.

@@ -15,7 +15,7 @@
 //! exists for every node under it.
 
 use std::collections::{BTreeSet, HashMap, HashSet, VecDeque};
-use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
 
 use crossbeam_channel::{Receiver, Sender, TryRecvError, TrySendError};
@@ -121,6 +121,11 @@ pub(crate) struct Plan {
     /// Per LOD, a bit per device holding it (device i: bit i), so that
     /// STC and the loader skip what every device of a run already has.
     held: Vec<AtomicU8>,
+    /// Frame numbers restart at 0 with every run, but what the devices
+    /// remember (last drawn, last asked for) spans runs: a run's frame f
+    /// is `base + f`, `base` past every frame an earlier run used.
+    base: AtomicU64,
+    seen: AtomicU64,
     pub budget: u64,
 }
 
@@ -159,8 +164,25 @@ impl Plan {
             owner,
             held: (0..skeleton.lods.len()).map(|_| AtomicU8::new(0)).collect(),
             pinned,
+            base: AtomicU64::new(0),
+            seen: AtomicU64::new(0),
             budget,
         }
+    }
+
+    /// A new run begins: its frames come after every earlier one's, far
+    /// enough that nothing of the last run counts as recent.
+    pub fn start_run(&self) {
+        let next = self.seen.load(Ordering::Relaxed) + STALE_FRAMES + 2;
+        self.base.store(next, Ordering::Relaxed);
+        self.seen.fetch_max(next, Ordering::Relaxed);
+    }
+
+    /// The run's frame `frame` on the clock that spans runs.
+    pub fn frame(&self, frame: u64) -> u64 {
+        let f = self.base.load(Ordering::Relaxed) + frame;
+        self.seen.fetch_max(f, Ordering::Relaxed);
+        f
     }
 
     /// Whether every device in `mask` holds `lod`.
@@ -357,6 +379,7 @@ impl DeviceStream {
         lods: &[u32],
         usage: Use,
     ) -> Option<Vec<u32>> {
+        let frame = plan.frame(frame);
         self.newest = self.newest.max(frame);
         if usage == Use::Visible && frame != self.frame {
             self.frame = frame;
@@ -606,6 +629,8 @@ mod tests {
             owner: vec![0; lods],
             pinned: vec![false; lods],
             held: (0..lods).map(|_| AtomicU8::new(0)).collect(),
+            base: AtomicU64::new(0),
+            seen: AtomicU64::new(0),
             budget: 1 << 20,
         }
     }

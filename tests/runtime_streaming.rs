@@ -299,3 +299,40 @@ fn a_corrupted_lod_found_by_the_loader_ends_the_run_with_its_name() {
         assert!(t.elapsed() < Duration::from_secs(30));
     }
 }
+
+/// OR's device takes what the loader delivers too, and must keep it: a
+/// pool full of an earlier run's full-detail LODs (the replay reference
+/// runs on OR's device) still makes room for the occluders, so a held och
+/// camera culls as much as on the resident runtime.
+#[test]
+fn the_occluder_device_keeps_new_loads_over_an_earlier_runs_leftovers() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, poses) = plant(dir.path(), 12);
+    let scene = SceneReader::open(&file).unwrap();
+    let (Some(a), Some(b)) = (devices(2), devices(2)) else {
+        return;
+    };
+    let whole = Runtime::with_devices(&scene, a).unwrap();
+    let rt = Runtime::streaming(&scene, b, scene_bytes(&scene) / 4).unwrap();
+    // Full detail along the walk on device 0 only: it fills device 0.
+    run(
+        &rt,
+        &options(Schedule::Sequential, 1, 0.0),
+        &scene,
+        &poses,
+        &mut |_| {},
+    )
+    .unwrap();
+    let still = vec![poses[3]; 20];
+    let o = options(Schedule::Pipelined, 2, 1.0);
+    let resident = run(&whole, &o, &scene, &still, &mut |_| {}).unwrap();
+    let streamed = run(&rt, &o, &scene, &still, &mut |_| {}).unwrap();
+    let (x, y) = (resident.last().unwrap(), streamed.last().unwrap());
+    assert_eq!(y.streaming.substituted, 0, "{:?}", y.streaming);
+    assert_eq!(
+        (x.stats.drawn_triangles, x.stats.occlusion_culled),
+        (y.stats.drawn_triangles, y.stats.occlusion_culled),
+        "the streamed och culls differently from the resident one"
+    );
+    assert_eq!(depth(x), depth(y));
+}

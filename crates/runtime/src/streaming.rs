@@ -336,8 +336,15 @@ impl DeviceStream {
                 plan.set_held(*id, self.device, true);
                 self.stats.loaded_lods += 1;
                 self.stats.loaded_bytes += lod.bytes();
-                if !plan.pinned[*id as usize] {
-                    self.lru.insert((self.last_used[*id as usize], *id));
+                // A LOD that just arrived counts as drawn in the newest
+                // frame: it was asked for to be drawn. (Counted as never
+                // drawn, it went first, before LODs of long-past frames:
+                // OR's device, which draws it only a frame later as an
+                // occluder, evicted it before it was ever used.)
+                let l = *id as usize;
+                self.last_used[l] = self.last_used[l].max(self.newest + 1);
+                if !plan.pinned[l] {
+                    self.lru.insert((self.last_used[l], *id));
                 }
                 return;
             }

@@ -10,8 +10,8 @@ use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_runtime::{
-    CameraList, CameraRequest, FrameReport, Runtime, RuntimeError, RuntimeOptions, Schedule,
-    StreamStats, MIN_MEMORY_BUDGET,
+    scene_device_bytes, CameraList, CameraRequest, FrameReport, Runtime, RuntimeError,
+    RuntimeOptions, Schedule, StreamStats, MIN_MEMORY_BUDGET,
 };
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::SceneReader;
@@ -30,12 +30,7 @@ fn plant(dir: &Path, frames: usize) -> (std::path::PathBuf, Vec<Pose>) {
 
 /// Device bytes of the whole scene (what the resident runtime holds).
 fn scene_bytes(scene: &SceneReader) -> u64 {
-    scene
-        .skeleton()
-        .lods
-        .iter()
-        .map(|l| l.vertices as u64 * 20 + l.triangles as u64 * 12)
-        .sum()
+    scene_device_bytes(scene.skeleton())
 }
 
 fn options(schedule: Schedule, devices: usize, pixel_error: f64) -> RuntimeOptions {

@@ -150,16 +150,8 @@ impl HostGeometry {
         let mut buffers = Vec::with_capacity(self.chunks.len());
         for (i, c) in self.chunks.iter().enumerate() {
             let make = |what: &str, bytes: &[u8], usage| {
-                // Zero-sized buffers are legal but binding them is not; keep 4 bytes.
-                let size = (bytes.len() as u64)
-                    .max(4)
-                    .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
-                let b = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(&format!("{what} chunk {i}")),
-                    size,
-                    usage: usage | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+                let b =
+                    geometry_buffer(ctx, &format!("{what} chunk {i}"), bytes.len() as u64, usage);
                 ctx.queue.write_buffer(&b, 0, bytes);
                 b
             };
@@ -183,6 +175,22 @@ impl HostGeometry {
             ranges: self.ranges.clone(),
         })
     }
+}
+
+/// A vertex or index buffer of `bytes` that geometry is written into.
+fn geometry_buffer(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        // Zero-sized buffers are legal but binding them is not; keep 4 bytes.
+        size: bytes.max(4).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT),
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// A whole scene resident on one device.
@@ -261,14 +269,8 @@ impl GeometryPool {
         let (pv, pi) = (nv / pages, ni / pages);
         let mut out = Vec::with_capacity(pages as usize);
         for p in 0..pages {
-            let make = |what: &str, bytes: u64, usage| {
-                ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(&format!("pool {what} {p}")),
-                    // Zero-sized buffers are legal but binding them is not.
-                    size: bytes.max(4).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT),
-                    usage: usage | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
+            let make = |what: &str, bytes, usage| {
+                geometry_buffer(ctx, &format!("pool {what} {p}"), bytes, usage)
             };
             out.push(Page {
                 vertices: make("vertices", pv * VERTEX_BYTES, wgpu::BufferUsages::VERTEX),

@@ -387,12 +387,7 @@ fn a_streamed_replay_reports_its_memory_and_stand_ins_against_a_settled_referenc
     };
     let dir = tempfile::tempdir().unwrap();
     let (scene, path) = plant(dir.path(), 30);
-    let total: u64 = scene
-        .skeleton()
-        .lods
-        .iter()
-        .map(|l| l.vertices as u64 * gigawalk_gpu::VERTEX_BYTES + l.triangles as u64 * 12)
-        .sum();
+    let total = gigawalk_runtime::scene_device_bytes(scene.skeleton());
     let budget = total / 3;
     let rt = Runtime::streaming(&scene, devices, budget).unwrap();
     assert!(rt.is_streaming());

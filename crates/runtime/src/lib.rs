@@ -32,7 +32,7 @@ pub use options::{
     CPU_OCCLUDER_BUDGET,
 };
 
-pub use streaming::{LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
+pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
 use gigawalk_gpu::HostGeometry;
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
@@ -220,11 +220,7 @@ pub struct Runtime<'s> {
 impl<'s> Runtime<'s> {
     /// Opens `devices` (1 or 2) wgpu devices and uploads every LOD to each.
     pub fn new<R: ReadAt>(scene: &'s SceneReader<R>, devices: usize) -> Result<Self, RuntimeError> {
-        if !(1..=2).contains(&devices) {
-            return Err(RuntimeError::DeviceCount { count: devices });
-        }
-        let ctxs = gigawalk_gpu::open_devices(devices).map_err(setup)?;
-        Self::with_devices(scene, ctxs)
+        Self::with_devices(scene, open_devices(devices)?)
     }
 
     /// Like [`Runtime::new`] with devices the caller opened (1 or 2).
@@ -232,11 +228,7 @@ impl<'s> Runtime<'s> {
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
     ) -> Result<Self, RuntimeError> {
-        if !(1..=2).contains(&devices.len()) {
-            return Err(RuntimeError::DeviceCount {
-                count: devices.len(),
-            });
-        }
+        check_device_count(devices.len())?;
         let host = HostGeometry::load(scene, buffer_limit(&devices)).map_err(setup)?;
         let geometry = devices
             .iter()
@@ -263,11 +255,7 @@ impl<'s> Runtime<'s> {
         devices: Vec<GpuContext>,
         budget: u64,
     ) -> Result<Self, RuntimeError> {
-        if !(1..=2).contains(&devices.len()) {
-            return Err(RuntimeError::DeviceCount {
-                count: devices.len(),
-            });
-        }
+        check_device_count(devices.len())?;
         if budget < MIN_MEMORY_BUDGET {
             return Err(RuntimeError::MemoryBudget {
                 budget,
@@ -275,8 +263,7 @@ impl<'s> Runtime<'s> {
             });
         }
         let skeleton = scene.skeleton();
-        let (v, i) = streaming::scene_bytes(skeleton);
-        if v + i <= budget {
+        if scene_device_bytes(skeleton) <= budget {
             return Self::with_devices(scene, devices);
         }
         let limit = buffer_limit(&devices);
@@ -313,25 +300,30 @@ impl<'s> Runtime<'s> {
         })
     }
 
-    /// Opens `devices` (1 or 2) wgpu devices and loads the scene whole
-    /// ([`Runtime::new`]) or streams it under `budget` a device
-    /// ([`Runtime::streaming`]).
+    /// Opens `devices` (1 or 2) wgpu devices, then as
+    /// [`Runtime::with_budget`].
     pub fn open<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: usize,
         budget: MemoryBudget,
     ) -> Result<Self, RuntimeError> {
-        let bytes = budget
+        Self::with_budget(scene, open_devices(devices)?, budget)
+    }
+
+    /// Loads the scene whole onto `devices` ([`Runtime::with_devices`]) or
+    /// streams it under `budget` a device ([`Runtime::streaming`]).
+    pub fn with_budget<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+        budget: MemoryBudget,
+    ) -> Result<Self, RuntimeError> {
+        match budget
             .resolve()
-            .map_err(RuntimeError::MemoryBudgetUnknown)?;
-        let Some(bytes) = bytes else {
-            return Self::new(scene, devices);
-        };
-        if !(1..=2).contains(&devices) {
-            return Err(RuntimeError::DeviceCount { count: devices });
+            .map_err(RuntimeError::MemoryBudgetUnknown)?
+        {
+            None => Self::with_devices(scene, devices),
+            Some(bytes) => Self::streaming(scene, devices, bytes),
         }
-        let ctxs = gigawalk_gpu::open_devices(devices).map_err(setup)?;
-        Self::streaming(scene, ctxs, bytes)
     }
 
     /// Whether geometry is streamed under a memory budget.
@@ -433,6 +425,21 @@ impl<'s> Runtime<'s> {
     pub fn device(&self, i: usize) -> &GpuContext {
         &self.devices[i.min(self.devices.len().saturating_sub(1))]
     }
+}
+
+/// The pipeline uses one or two devices.
+fn check_device_count(count: usize) -> Result<(), RuntimeError> {
+    if (1..=2).contains(&count) {
+        Ok(())
+    } else {
+        Err(RuntimeError::DeviceCount { count })
+    }
+}
+
+/// Opens `count` (1 or 2) wgpu devices.
+fn open_devices(count: usize) -> Result<Vec<GpuContext>, RuntimeError> {
+    check_device_count(count)?;
+    gigawalk_gpu::open_devices(count).map_err(setup)
 }
 
 /// The largest geometry buffer every device takes (at most 256 MiB).

@@ -145,7 +145,7 @@ fn finish_frame(
     let (_, rvg_ms) = rvg.finish(false)?;
     let mut r = report(end, None, rvg_ms, rvg.stream_stats());
     presenter
-        .present(rvg.ctx, &rvg.pass, &r)
+        .present(rvg.device.ctx, &rvg.pass, &r)
         .map_err(|source| RuntimeError::Gpu {
             stage: Stage::Rvg,
             source,
@@ -182,11 +182,12 @@ impl LoaderQueues<'_> {
 }
 
 /// One run's streaming ends: the loader's, OR's, RVG's and STC's
-/// (prefetch, when on).
+/// (prefetch, when on); all `None` when the scene is resident.
+#[derive(Default)]
 struct StreamLinks<'a> {
-    loader: LoaderQueues<'a>,
-    or: Link,
-    rvg: Link,
+    loader: Option<LoaderQueues<'a>>,
+    or: Option<Link>,
+    rvg: Option<Link>,
     stc: Option<Prefetch<'a>>,
 }
 
@@ -199,9 +200,9 @@ fn stream_links<'a>(
     opts: &RuntimeOptions,
     a: usize,
     b: usize,
-) -> Option<StreamLinks<'a>> {
+) -> StreamLinks<'a> {
     let (Some(source), Some(plan)) = (rt.source, rt.plan.as_ref()) else {
-        return None;
+        return StreamLinks::default();
     };
     let mask = (1u8 << a.min(7)) | (1u8 << b.min(7));
     plan.start_run();
@@ -229,34 +230,18 @@ fn stream_links<'a>(
         requests: Some(requests_tx),
         inbox: rvg_inbox,
     };
-    Some(StreamLinks {
-        loader: LoaderQueues {
+    StreamLinks {
+        loader: Some(LoaderQueues {
             source,
             requests,
             prefetches,
             devices,
             plan,
             mask,
-        },
-        or: or_link,
-        rvg: rvg_link,
+        }),
+        or: Some(or_link),
+        rvg: Some(rvg_link),
         stc,
-    })
-}
-
-/// Splits a run's optional streaming ends for the stages.
-#[allow(clippy::type_complexity)]
-fn split(
-    links: Option<StreamLinks<'_>>,
-) -> (
-    Option<LoaderQueues<'_>>,
-    Option<Link>,
-    Option<Link>,
-    Option<Prefetch<'_>>,
-) {
-    match links {
-        None => (None, None, None, None),
-        Some(l) => (Some(l.loader), Some(l.or), Some(l.rvg), l.stc),
     }
 }
 
@@ -267,7 +252,12 @@ pub(crate) fn run_sequential(
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
-    let (loader, or_link, rvg_link, prefetch) = split(stream_links(rt, opts, 0, 0));
+    let StreamLinks {
+        loader,
+        or: or_link,
+        rvg: rvg_link,
+        stc: prefetch,
+    } = stream_links(rt, opts, 0, 0);
     let Some(loader) = loader else {
         return sequential_frames(rt, opts, source, on_frame, presenter, None, None, None);
     };
@@ -454,7 +444,12 @@ pub(crate) fn run_pipelined(
         token_tx.send(()).expect("room for every token");
     }
     let b = rvg_device(rt, opts);
-    let (loader, or_link, rvg_link, prefetch) = split(stream_links(rt, opts, 0, b));
+    let StreamLinks {
+        loader,
+        or: or_link,
+        rvg: rvg_link,
+        stc: prefetch,
+    } = stream_links(rt, opts, 0, b);
     std::thread::scope(|s| {
         let mut stages: Vec<(Stage, StageBody)> = vec![
             (
@@ -707,7 +702,12 @@ pub(crate) fn run_async(
     // Owned by RVG's body, so the slot closes when RVG ends for any reason,
     // or when its body is dropped without running.
     let close = CloseOnDrop(latest);
-    let (loader, or_link, rvg_link, prefetch) = split(stream_links(rt, opts, 0, b));
+    let StreamLinks {
+        loader,
+        or: or_link,
+        rvg: rvg_link,
+        stc: prefetch,
+    } = stream_links(rt, opts, 0, b);
     std::thread::scope(|s| {
         let mut stages: Vec<(Stage, StageBody)> = vec![
             (

@@ -108,7 +108,6 @@ pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(),
 /// camera i (Section 5.2), at the occluder resolution.
 pub(crate) struct OrStage<'a> {
     pub device: DeviceGeometry<'a>,
-    pub skeleton: &'a Skeleton,
     pub opts: &'a RuntimeOptions,
     pub pass: DepthPass,
 }
@@ -124,7 +123,6 @@ impl<'a> OrStage<'a> {
         let (w, h) = opts.occluder_size();
         OrStage {
             pass: DepthPass::new(device.ctx, w, h),
-            skeleton: device.skeleton,
             device,
             opts,
         }
@@ -150,7 +148,7 @@ impl<'a> OrStage<'a> {
         // The same LOD choice STC makes for this camera (conservative mode).
         let mut items = Vec::with_capacity(occluders.len());
         reselect_lods(
-            self.skeleton,
+            self.device.skeleton,
             view,
             &self.opts.traversal,
             occluders,
@@ -158,7 +156,7 @@ impl<'a> OrStage<'a> {
         );
         // `run_presenting` resolved `Auto` for these devices.
         if let OccluderBudget::Triangles(budget) = self.opts.occluder_budget {
-            select_occluders(self.skeleton, view, &mut items, budget);
+            select_occluders(self.device.skeleton, view, &mut items, budget);
         }
         if items.is_empty() {
             // No occluder (a budget of 0, or nothing in view): an all-far
@@ -169,7 +167,7 @@ impl<'a> OrStage<'a> {
                 ms: ms_since(t),
             });
         }
-        let lods = lod_ids(self.skeleton, &items);
+        let lods = lod_ids(self.device.skeleton, &items);
         let (pass, ctx) = (&mut self.pass, self.device.ctx);
         // Streaming: resident occluders only (culling stays conservative).
         let depth = self
@@ -362,7 +360,6 @@ impl<'a> StcStage<'a> {
 
 /// RVG: draws a frame's items as they arrive.
 pub(crate) struct RvgStage<'a> {
-    pub ctx: &'a GpuContext,
     pub device: DeviceGeometry<'a>,
     pub opts: &'a RuntimeOptions,
     pub pass: VisiblePass,
@@ -373,7 +370,6 @@ pub(crate) struct RvgStage<'a> {
 impl<'a> RvgStage<'a> {
     pub fn new(device: DeviceGeometry<'a>, opts: &'a RuntimeOptions) -> Self {
         RvgStage {
-            ctx: device.ctx,
             pass: VisiblePass::new(device.ctx, opts.width, opts.height),
             device,
             opts,
@@ -391,7 +387,7 @@ impl<'a> RvgStage<'a> {
         check_injected(self.opts, Stage::Rvg, frame)?;
         self.started = Some(Instant::now());
         self.frame = frame;
-        self.pass.begin(self.ctx, &gpu_view(view), style);
+        self.pass.begin(self.device.ctx, &gpu_view(view), style);
         Ok(())
     }
 
@@ -399,7 +395,7 @@ impl<'a> RvgStage<'a> {
     /// stand-ins for the rest).
     pub fn draw(&mut self, lods: &[u32]) -> Result<(), RuntimeError> {
         let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
-        let (pass, ctx) = (&mut self.pass, self.ctx);
+        let (pass, ctx) = (&mut self.pass, self.device.ctx);
         self.device
             .with(self.frame, lods, Use::Visible, |residency, lods| {
                 pass.draw(ctx, residency, lods)
@@ -414,7 +410,7 @@ impl<'a> RvgStage<'a> {
     /// Reads back the finished frame's colour and depth.
     pub fn read_back(&mut self) -> Result<Option<FrameImage>, RuntimeError> {
         self.pass
-            .read_back(self.ctx)
+            .read_back(self.device.ctx)
             .map(Some)
             .map_err(|source| RuntimeError::Gpu {
                 stage: Stage::Rvg,
@@ -426,7 +422,7 @@ impl<'a> RvgStage<'a> {
     pub fn finish(&mut self, read_back: bool) -> Result<(Option<FrameImage>, f64), RuntimeError> {
         let image = self
             .pass
-            .finish(self.ctx, read_back)
+            .finish(self.device.ctx, read_back)
             .map_err(|source| RuntimeError::Gpu {
                 stage: Stage::Rvg,
                 source,

@@ -22,7 +22,7 @@ use crossbeam_channel::{Receiver, Sender, TryRecvError, TrySendError};
 use gigawalk_gpu::{
     DecodedLod, GeometryPool, GpuContext, Residency, ResidentGeometry, INDEX_BYTES, VERTEX_BYTES,
 };
-use gigawalk_scene::{LodMesh, ReadAt, ReadError, SceneReader, Skeleton};
+use gigawalk_scene::{LodInfo, LodMesh, ReadAt, ReadError, SceneReader, Skeleton};
 
 use crate::RuntimeError;
 
@@ -64,14 +64,28 @@ pub(crate) const REQUEST_QUEUE: usize = 4096;
 /// bounds the host memory in flight to tens of MB.
 pub(crate) const INBOX: usize = 1024;
 
+/// Device bytes a LOD takes: (vertices, indices).
+fn lod_bytes(l: &LodInfo) -> (u64, u64) {
+    (
+        l.vertices as u64 * VERTEX_BYTES,
+        l.triangles as u64 * 3 * INDEX_BYTES,
+    )
+}
+
 /// Device bytes the whole scene would take resident: (vertex, index).
 pub(crate) fn scene_bytes(skeleton: &Skeleton) -> (u64, u64) {
-    skeleton.lods.iter().fold((0, 0), |(v, i), l| {
-        (
-            v + l.vertices as u64 * VERTEX_BYTES,
-            i + l.triangles as u64 * 3 * INDEX_BYTES,
-        )
-    })
+    skeleton
+        .lods
+        .iter()
+        .map(lod_bytes)
+        .fold((0, 0), |(v, i), (lv, li)| (v + lv, i + li))
+}
+
+/// Device bytes the whole scene takes resident on one device: a memory
+/// budget at least this large loads it whole.
+pub fn scene_device_bytes(skeleton: &Skeleton) -> u64 {
+    let (v, i) = scene_bytes(skeleton);
+    v + i
 }
 
 /// Per-frame streaming figures of the device that draws the visible set
@@ -150,8 +164,8 @@ impl Plan {
                 continue;
             };
             if let Some(l) = node.lods().last() {
-                let info = &skeleton.lods[l];
-                let b = info.vertices as u64 * VERTEX_BYTES + info.triangles as u64 * 12;
+                let (v, i) = lod_bytes(&skeleton.lods[l]);
+                let b = v + i;
                 if bytes + b > limit {
                     break;
                 }

@@ -188,11 +188,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((WIREFRAME_UNSUPPORTED.to_string(), Instant::now()));
         eprintln!("{WIREFRAME_UNSUPPORTED}");
     }
-    let runtime = match args.memory_budget.resolve() {
-        Ok(Some(bytes)) => Runtime::streaming(&scene, devices, bytes)?,
-        Ok(None) => Runtime::with_devices(&scene, devices)?,
-        Err(e) => return Err(gigawalk_runtime::RuntimeError::MemoryBudgetUnknown(e).into()),
-    };
+    let runtime = Runtime::with_budget(&scene, devices, args.memory_budget)?;
     tracing::info!("viewing {} on {device_names}", args.scene.display());
 
     let scripted = args.frames.map(|n| Script {

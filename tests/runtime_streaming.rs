@@ -10,7 +10,7 @@ use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_runtime::{
-    scene_device_bytes, CameraList, CameraRequest, FrameReport, Runtime, RuntimeError,
+    scene_device_bytes, CameraList, CameraRequest, FrameReport, Prefetching, Runtime, RuntimeError,
     RuntimeOptions, Schedule, StreamStats, MIN_MEMORY_BUDGET,
 };
 use gigawalk_scene::path::Pose;
@@ -138,10 +138,10 @@ fn streaming_stays_in_budget_and_converges_to_the_resident_image() {
     // runtime's last frame there is the reference.
     let still: Vec<Pose> = vec![poses[6]; 40];
     for (schedule, devices, pixel_error, prefetch) in [
-        (Schedule::Sequential, 1, 0.0, false),
-        (Schedule::Pipelined, 2, 0.0, false),
-        (Schedule::Pipelined, 1, 0.0, false),
-        (Schedule::Pipelined, 2, 1.0, true),
+        (Schedule::Sequential, 1, 0.0, Prefetching::Ring),
+        (Schedule::Pipelined, 2, 0.0, Prefetching::Off),
+        (Schedule::Pipelined, 1, 0.0, Prefetching::Off),
+        (Schedule::Pipelined, 2, 1.0, Prefetching::Both),
     ] {
         let mut o = options(schedule, devices, pixel_error);
         o.prefetch = prefetch;

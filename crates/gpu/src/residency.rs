@@ -100,6 +100,16 @@ impl HostGeometry {
     /// Reads every LOD of the scene. `max_chunk_bytes` bounds each vertex
     /// and index buffer (use the smaller of the devices' limits).
     pub fn load<R: ReadAt>(scene: &SceneReader<R>, max_chunk_bytes: u64) -> Result<Self, GpuError> {
+        Self::load_reporting(scene, max_chunk_bytes, &mut |_, _| {})
+    }
+
+    /// Like [`HostGeometry::load`], telling `progress` (LODs read, LODs in
+    /// all) after every LOD.
+    pub fn load_reporting<R: ReadAt>(
+        scene: &SceneReader<R>,
+        max_chunk_bytes: u64,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Self, GpuError> {
         let lods = scene.skeleton().lods.len();
         let mut chunks = vec![Chunk::default()];
         let mut ranges = Vec::with_capacity(lods);
@@ -132,6 +142,7 @@ impl HostGeometry {
             });
             c.vertices.extend(gpu_vertices(&mesh));
             c.indices.extend_from_slice(&mesh.indices);
+            progress(lod as u64 + 1, lods as u64);
         }
         Ok(HostGeometry { chunks, ranges })
     }

@@ -190,6 +190,10 @@ pub trait Progress {
     fn frame(&mut self) {}
     /// The current run ended.
     fn finish(&mut self, _label: &str) {}
+    /// Before the first run: `done` of the `total` LODs read before the
+    /// first frame can be drawn (all of them when resident, the pinned set
+    /// under a memory budget).
+    fn loading(&mut self, _done: u64, _total: u64) {}
     /// False stops the replay after the current frame (Ctrl-C); what was
     /// measured so far is kept.
     fn keep_going(&self) -> bool {
@@ -219,8 +223,10 @@ pub fn replay<R: ReadAt + Sync>(
         Schedule::Sequential => 1,
         Schedule::Pipelined => opts.runtime.devices,
     };
-    let rt = Runtime::open(scene, devices, opts.memory_budget)
-        .map_err(|e| ReplayError::Start(Box::new(e)))?;
+    let rt = Runtime::open(scene, devices, opts.memory_budget, &mut |done, total| {
+        progress.loading(done, total)
+    })
+    .map_err(|e| ReplayError::Start(Box::new(e)))?;
     replay_on(&rt, scene_name, poses, path_name, opts, progress)
 }
 

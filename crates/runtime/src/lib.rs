@@ -28,8 +28,8 @@ pub use gigawalk_cull::{
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{
-    MemoryBudget, OccluderBudget, OptionsError, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE,
-    CPU_OCCLUDER_BUDGET,
+    MemoryBudget, OccluderBudget, OptionsError, Prefetching, RuntimeOptions, Schedule, Stage,
+    AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
@@ -228,8 +228,17 @@ impl<'s> Runtime<'s> {
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
     ) -> Result<Self, RuntimeError> {
+        Self::resident_reporting(scene, devices, &mut |_, _| {})
+    }
+
+    fn resident_reporting<R: ReadAt>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Self, RuntimeError> {
         check_device_count(devices.len())?;
-        let host = HostGeometry::load(scene, buffer_limit(&devices)).map_err(setup)?;
+        let host =
+            HostGeometry::load_reporting(scene, buffer_limit(&devices), progress).map_err(setup)?;
         let geometry = devices
             .iter()
             .map(|d| host.upload(d).map(Geometry::Resident))
@@ -255,6 +264,15 @@ impl<'s> Runtime<'s> {
         devices: Vec<GpuContext>,
         budget: u64,
     ) -> Result<Self, RuntimeError> {
+        Self::streaming_reporting(scene, devices, budget, &mut |_, _| {})
+    }
+
+    fn streaming_reporting<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+        budget: u64,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Self, RuntimeError> {
         check_device_count(devices.len())?;
         if budget < MIN_MEMORY_BUDGET {
             return Err(RuntimeError::MemoryBudget {
@@ -264,7 +282,7 @@ impl<'s> Runtime<'s> {
         }
         let skeleton = scene.skeleton();
         if scene_device_bytes(skeleton) <= budget {
-            return Self::with_devices(scene, devices);
+            return Self::resident_reporting(scene, devices, progress);
         }
         let limit = buffer_limit(&devices);
         let plan = Plan::new(skeleton, budget);
@@ -274,7 +292,8 @@ impl<'s> Runtime<'s> {
             .map(|(i, d)| DeviceStream::new(d, i, skeleton, &plan, limit))
             .collect::<Result<Vec<_>, _>>()?;
         // The pinned set, read once for every device.
-        for l in plan.pinned() {
+        let total = plan.pinned().count() as u64;
+        for (done, l) in (1..).zip(plan.pinned()) {
             let mesh = scene.read_lod(l).map_err(|source| RuntimeError::Load {
                 source: Box::new(source),
             })?;
@@ -282,6 +301,7 @@ impl<'s> Runtime<'s> {
             for (s, d) in streams.iter_mut().zip(&devices) {
                 s.pin(d, &plan, l, &lod);
             }
+            progress(done, total);
         }
         for d in &devices {
             d.queue.submit([]);
@@ -306,23 +326,28 @@ impl<'s> Runtime<'s> {
         scene: &'s SceneReader<R>,
         devices: usize,
         budget: MemoryBudget,
+        progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
-        Self::with_budget(scene, open_devices(devices)?, budget)
+        Self::with_budget(scene, open_devices(devices)?, budget, progress)
     }
 
     /// Loads the scene whole onto `devices` ([`Runtime::with_devices`]) or
     /// streams it under `budget` a device ([`Runtime::streaming`]).
+    /// `progress` hears (LODs read, LODs to read) after each LOD read before
+    /// the first frame: every LOD when resident, the pinned set when
+    /// streamed.
     pub fn with_budget<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
         budget: MemoryBudget,
+        progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
         match budget
             .resolve()
             .map_err(RuntimeError::MemoryBudgetUnknown)?
         {
-            None => Self::with_devices(scene, devices),
-            Some(bytes) => Self::streaming(scene, devices, bytes),
+            None => Self::resident_reporting(scene, devices, progress),
+            Some(bytes) => Self::streaming_reporting(scene, devices, bytes, progress),
         }
     }
 

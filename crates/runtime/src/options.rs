@@ -110,6 +110,59 @@ impl std::str::FromStr for OccluderBudget {
     }
 }
 
+/// What STC asks the loader for ahead of need when streaming
+/// (docs/PERFORMANCE.md, "Out of core", has what each costs and buys).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Prefetching {
+    /// Nothing: the loader reads what frames had to stand in for.
+    #[default]
+    Off,
+    /// The distance band: what a drawn LOD near its switching distance
+    /// will switch to as the camera approaches.
+    Band,
+    /// The ring a quarter wider than the frustum, at the view's pixel
+    /// scale: what a turn or a sideways step brings into view.
+    Ring,
+    /// Both.
+    Both,
+}
+
+impl Prefetching {
+    pub fn band(self) -> bool {
+        matches!(self, Prefetching::Band | Prefetching::Both)
+    }
+    pub fn ring(self) -> bool {
+        matches!(self, Prefetching::Ring | Prefetching::Both)
+    }
+    pub fn any(self) -> bool {
+        self != Prefetching::Off
+    }
+}
+
+impl std::fmt::Display for Prefetching {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Prefetching::Off => "off",
+            Prefetching::Band => "band",
+            Prefetching::Ring => "ring",
+            Prefetching::Both => "both",
+        })
+    }
+}
+
+impl std::str::FromStr for Prefetching {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Ok(match s {
+            "off" => Prefetching::Off,
+            "band" => Prefetching::Band,
+            "ring" => Prefetching::Ring,
+            "both" => Prefetching::Both,
+            _ => return Err(format!("prefetch {s:?} is not off, band, ring or both")),
+        })
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {
     pub schedule: Schedule,
@@ -141,12 +194,12 @@ pub struct RuntimeOptions {
     /// newest camera. Removes a frame of latency; may show brief occlusion
     /// errors when the camera moves fast. Pipelined schedule only.
     pub async_rvg: bool,
-    /// Streaming: STC asks the loader ahead of time for the LODs that
-    /// chosen ones near their switching distance will switch to. Off by
-    /// default: on the 50M plant's walk it cut frames with a stand-in
-    /// (35 of 55 instead of 48) but drew more stand-ins (212-233 instead of
-    /// 120) and loaded 20% more (docs/PERFORMANCE.md, "Out of core").
-    pub prefetch: bool,
+    /// Streaming: what STC asks the loader for ahead of need. Off by
+    /// default: on the 50M plant's walk the band cut frames with a
+    /// stand-in (35-38 of 55 instead of 48) but drew more stand-ins and
+    /// loaded 30% more; the ring loaded 85% more for no fewer stand-ins
+    /// (docs/PERFORMANCE.md, "Out of core").
+    pub prefetch: Prefetching,
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
@@ -191,7 +244,7 @@ impl Default for RuntimeOptions {
             devices: 2,
             chunk: 256,
             async_rvg: false,
-            prefetch: false,
+            prefetch: Prefetching::Off,
             record_culled: false,
             #[cfg(feature = "testing")]
             inject_failure: None,
@@ -444,6 +497,30 @@ mod budget_tests {
         assert_eq!(MemoryBudget::Bytes(7).resolve(), Ok(Some(7)));
         if std::path::Path::new("/proc/meminfo").exists() {
             assert!(MemoryBudget::Auto.resolve().unwrap().unwrap() > 1 << 20);
+        }
+    }
+}
+
+#[cfg(test)]
+mod prefetch_tests {
+    use super::*;
+
+    #[test]
+    fn prefetch_modes_parse_print_and_say_what_they_ask_for() {
+        for m in [
+            Prefetching::Off,
+            Prefetching::Band,
+            Prefetching::Ring,
+            Prefetching::Both,
+        ] {
+            assert_eq!(m.to_string().parse::<Prefetching>(), Ok(m));
+            assert_eq!(m.any(), m.band() || m.ring());
+        }
+        assert!(Prefetching::Both.band() && Prefetching::Both.ring());
+        assert!(!Prefetching::Band.ring() && !Prefetching::Ring.band());
+        for bad in ["", "on", "BAND", "band,ring"] {
+            let e = bad.parse::<Prefetching>().unwrap_err();
+            assert!(e.contains("off, band, ring or both"), "{bad:?}: {e}");
         }
     }
 }

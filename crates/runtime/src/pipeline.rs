@@ -221,7 +221,7 @@ fn stream_links<'a>(
         b_rx
     };
     let (prefetch_tx, prefetches) = bounded(PREFETCH_QUEUE);
-    let stc = opts.prefetch.then(|| Prefetch {
+    let stc = opts.prefetch.any().then(|| Prefetch {
         requests: prefetch_tx,
         plan,
         mask,

@@ -188,7 +188,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((WIREFRAME_UNSUPPORTED.to_string(), Instant::now()));
         eprintln!("{WIREFRAME_UNSUPPORTED}");
     }
-    let runtime = Runtime::with_budget(&scene, devices, args.memory_budget)?;
+    let runtime = Runtime::with_budget(&scene, devices, args.memory_budget, &mut load_lines())?;
     tracing::info!("viewing {} on {device_names}", args.scene.display());
 
     let scripted = args.frames.map(|n| Script {
@@ -743,4 +743,22 @@ fn cull_sets(report: &FrameReport) -> CullSets {
         }
     }
     sets
+}
+
+/// Loading progress for the terminal: a line a second while the LODs the
+/// first frame needs are read, and one when done (nothing for a load
+/// under a second).
+fn load_lines() -> impl FnMut(u64, u64) {
+    let started = Instant::now();
+    let mut printed = Instant::now();
+    move |done, total| {
+        if printed.elapsed().as_secs_f64() >= 1.0 {
+            eprintln!("loading: {done}/{total} LODs");
+            printed = Instant::now();
+        }
+        let secs = started.elapsed().as_secs_f64();
+        if done == total && secs >= 1.0 {
+            eprintln!("loaded {total} LODs in {secs:.1} s");
+        }
+    }
 }

@@ -8,7 +8,9 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
-use gigawalk_runtime::{MemoryBudget, OccluderBudget, Reduction, RuntimeOptions, Schedule};
+use gigawalk_runtime::{
+    MemoryBudget, OccluderBudget, Prefetching, Reduction, RuntimeOptions, Schedule,
+};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -81,9 +83,9 @@ pub struct RuntimeArgs {
     /// Geometry memory a device may hold: all (load the whole scene first), a size (256M, 1G; K/M/G are powers of 1024) or auto (a quarter of RAM); a scene bigger than the budget is streamed from disk while the walk runs, drawing coarser stand-ins until LODs arrive
     #[arg(long, value_name = "all|BYTES|auto", default_value = "all")]
     pub memory_budget: MemoryBudget,
-    /// Streaming: STC asks for the next finer LOD of what it draws near its switching distance before it is chosen (fewer frames with stand-ins, more stand-ins and loads on the 50M plant; off by default)
-    #[arg(long)]
-    prefetch: bool,
+    /// Streaming: what STC asks the loader for before it is needed: band = the next finer LOD of what is drawn near its switching distance, ring = what a frustum a quarter wider would draw, both, or off (on the 50M plant's walk neither drew fewer stand-ins; band drew fewer frames with one)
+    #[arg(long, value_name = "off|band|ring|both", default_value = "off")]
+    prefetch: Prefetching,
 }
 
 impl RuntimeArgs {
@@ -238,6 +240,30 @@ impl Progress for Bars {
             "{label:>10} done in {:.1} s",
             self.started.elapsed().as_secs_f64()
         );
+    }
+
+    fn loading(&mut self, done: u64, total: u64) {
+        if done <= 1 {
+            self.started = Instant::now();
+            if self.terminal {
+                let bar = ProgressBar::new(total);
+                if let Ok(style) = ProgressStyle::with_template(
+                    "{prefix:>10} [{bar:40}] {pos}/{len} LODs eta {eta}",
+                ) {
+                    bar.set_style(style.progress_chars("=> "));
+                }
+                bar.set_prefix("loading");
+                self.bar = Some(bar);
+            } else {
+                eprintln!("loading: {total} LODs before the first frame");
+            }
+        }
+        if let Some(b) = &self.bar {
+            b.set_position(done);
+        }
+        if done == total {
+            self.finish("loading");
+        }
     }
 
     fn keep_going(&self) -> bool {

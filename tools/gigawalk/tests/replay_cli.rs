@@ -94,12 +94,17 @@ fn unknown_mode_is_rejected() {
 }
 
 #[test]
-fn bad_occluder_budget_is_rejected() {
-    for bad in ["lots", "-3", "1e19"] {
-        let flag = format!("--occluder-budget={bad}");
+fn bad_occluder_budget_and_prefetch_are_rejected() {
+    for (flag, bad, says) in [
+        ("occluder-budget", "lots", "occluder budget"),
+        ("occluder-budget", "-3", "occluder budget"),
+        ("occluder-budget", "1e19", "occluder budget"),
+        ("prefetch", "on", "off, band, ring or both"),
+    ] {
+        let flag = format!("--{flag}={bad}");
         let (ok, _, err) = gigawalk(&["replay", "x.gwk", "--path", "x.path", &flag]);
         assert!(!ok);
-        assert!(err.contains("occluder budget"), "{bad}: {err}");
+        assert!(err.contains(says), "{bad}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
 }
@@ -130,6 +135,8 @@ fn small_plant_replays_into_a_report() {
         "vfc,och",
     ]);
     assert!(ok, "{err}");
+    // Loading the whole scene before the first frame is reported too.
+    assert!(err.contains("LODs before the first frame"), "{err}");
     assert!(stdout.contains("| och |"), "{stdout}");
     for f in ["summary.md", "summary.json", "frames.csv", "fps.png"] {
         assert!(out.join(f).is_file(), "{f} missing");
@@ -190,6 +197,9 @@ fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report()
         "256k",
     ]);
     assert!(!ok, "a corrupted LOD must fail the replay");
+    // Progress while the pinned set loads (one line each way off a terminal).
+    assert!(err.contains("LODs before the first frame"), "{err}");
+    assert!(err.contains("loading done in"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(err.contains("p.gwk") && err.contains("LOD "), "{err}");
     assert!(err.contains("loader"), "{err}");

@@ -1,7 +1,7 @@
 //! The occlusion-test interface traversal uses, and its first implementation:
 //! the conservative box-vs-HZB test (GigaWalk Section 5.1.2).
 
-use crate::{BoxProjection, CullView, Hzb, RelBox};
+use crate::{BoxProjection, CullView, Hzb, PixelRect, RelBox};
 
 /// Decides whether a box may be visible. Traversal is generic over it, so
 /// other culling methods (a lazy occlusion grid, object-space occluders, GPU
@@ -57,42 +57,72 @@ impl<'a> HzbOcclusion<'a> {
 
 impl OcclusionTest for HzbOcclusion<'_> {
     fn is_visible(&self, view: &CullView, b: &RelBox) -> bool {
-        let (w, h) = (self.hzb.width(), self.hzb.height());
-        if w == 0 || h == 0 {
-            return true;
+        match footprint(view, b, self.hzb.width(), self.hzb.height()) {
+            Footprint::Visible => true,
+            Footprint::Beside => false,
+            Footprint::Pixels { rect: r, nearest } => {
+                !occludes(nearest, self.hzb.farthest_in_rect(r.x0, r.y0, r.x1, r.y1))
+            }
         }
-        let BoxProjection::Screen {
-            ndc_min,
-            ndc_max,
-            nearest_depth,
-        } = view.project_box(b)
-        else {
-            return true;
-        };
-        let (wf, hf) = (w as f32, h as f32);
-        // NDC -> pixels; y flips because row 0 is the top.
-        let px_min = (ndc_min[0] * 0.5 + 0.5) * wf;
-        let px_max = (ndc_max[0] * 0.5 + 0.5) * wf;
-        let py_min = (0.5 - ndc_max[1] * 0.5) * hf;
-        let py_max = (0.5 - ndc_min[1] * 0.5) * hf;
-        // NaN anywhere fails these comparisons: visible.
-        if !(px_min <= px_max && py_min <= py_max && nearest_depth.is_finite()) {
-            return true;
-        }
-        if px_max < 0.0 || py_max < 0.0 || px_min >= wf || py_min >= hf {
-            // Entirely beside the image: no pixel to show in.
-            return false;
-        }
-        // Saturating float -> int casts; the clamps keep the rectangle inside.
-        let x0 = (px_min.floor() as i64).max(0) as u32;
-        let y0 = (py_min.floor() as i64).max(0) as u32;
-        let x1 = (px_max.floor() as i64).min(w as i64 - 1) as u32;
-        let y1 = (py_max.floor() as i64).min(h as i64 - 1) as u32;
-        let farthest = self.hzb.farthest_in_rect(x0, y0, x1, y1);
-        // NaN in the HZB fails the `<`, so it counts as visible.
-        let occluded = nearest_depth * (1.0 + DEPTH_SLACK) < farthest;
-        !occluded
     }
+}
+
+/// Where a box lands in a `w x h` depth image.
+pub(crate) enum Footprint {
+    /// Crosses the near plane, contains the eye, an empty image, or the
+    /// math could not decide: visible.
+    Visible,
+    /// Entirely beside the image: no pixel to show in.
+    Beside,
+    /// Every pixel its projection touches (a superset of the pixels whose
+    /// centres it covers), and its nearest depth.
+    Pixels { rect: PixelRect, nearest: f32 },
+}
+
+/// The pixel footprint of a box in a `w x h` image of the view (any
+/// resolution: computed from NDC in the image's own pixel grid).
+pub(crate) fn footprint(view: &CullView, b: &RelBox, w: u32, h: u32) -> Footprint {
+    if w == 0 || h == 0 {
+        return Footprint::Visible;
+    }
+    let BoxProjection::Screen {
+        ndc_min,
+        ndc_max,
+        nearest_depth,
+    } = view.project_box(b)
+    else {
+        return Footprint::Visible;
+    };
+    let (wf, hf) = (w as f32, h as f32);
+    // NDC -> pixels; y flips because row 0 is the top.
+    let px_min = (ndc_min[0] * 0.5 + 0.5) * wf;
+    let px_max = (ndc_max[0] * 0.5 + 0.5) * wf;
+    let py_min = (0.5 - ndc_max[1] * 0.5) * hf;
+    let py_max = (0.5 - ndc_min[1] * 0.5) * hf;
+    // NaN anywhere fails these comparisons: visible.
+    if !(px_min <= px_max && py_min <= py_max && nearest_depth.is_finite()) {
+        return Footprint::Visible;
+    }
+    if px_max < 0.0 || py_max < 0.0 || px_min >= wf || py_min >= hf {
+        return Footprint::Beside;
+    }
+    // Saturating float -> int casts; the clamps keep the rectangle inside.
+    Footprint::Pixels {
+        rect: PixelRect {
+            x0: (px_min.floor() as i64).max(0) as u32,
+            y0: (py_min.floor() as i64).max(0) as u32,
+            x1: (px_max.floor() as i64).min(w as i64 - 1) as u32,
+            y1: (py_max.floor() as i64).min(h as i64 - 1) as u32,
+        },
+        nearest: nearest_depth,
+    }
+}
+
+/// Whether a box whose nearest depth is `nearest` hides behind stored
+/// depth `farthest` (with [`DEPTH_SLACK`]; NaN and ties: not hidden).
+#[inline]
+pub(crate) fn occludes(nearest: f32, farthest: f32) -> bool {
+    nearest * (1.0 + DEPTH_SLACK) < farthest
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ use std::collections::BinaryHeap;
 use gigawalk_scene::Skeleton;
 
 use crate::lod::{distance_to_rel_box, select_lod};
-use crate::{Containment, CullView, OcclusionTest, PlaneMask, ALL_PLANES};
+use crate::{BoxTest, Containment, CullView, Culler, OcclusionTest, PlaneMask, Verdict, ALL_PLANES};
 
 /// Traversal settings; the modes of GigaWalk Table 2 are combinations of
 /// `occlusion` and `hlod` (VFC: neither, tolerance 0).
@@ -80,6 +80,10 @@ struct Entry {
     distance: f64,
     node: u32,
     mask: PlaneMask,
+    /// False below a node the culler called [`Verdict::VisibleBelow`].
+    test: bool,
+    /// Index of the culler context the node was queued with.
+    ctx: u32,
 }
 
 impl PartialEq for Entry {
@@ -195,16 +199,73 @@ impl Traverser {
         S: DrawSink + ?Sized,
         C: FnMut(u32, CullReason) + ?Sized,
     {
+        self.traverse_culled(
+            skeleton,
+            view,
+            &mut BoxTest(occlusion),
+            options,
+            sink,
+            culled,
+        )
+    }
+
+    /// Algorithm 5.2 with any [`Culler`]: it hears every queued node, tests
+    /// each popped one (unless an ancestor was [`Verdict::VisibleBelow`])
+    /// and every emitted item; the context its test returns goes to the
+    /// node's children. With `options.occlusion` off the culler is not
+    /// asked at all.
+    pub fn traverse_culled<K, S, C>(
+        &mut self,
+        skeleton: &Skeleton,
+        view: &CullView,
+        culler: &mut K,
+        options: &TraversalOptions,
+        sink: &mut S,
+        culled: &mut C,
+    ) -> TraversalStats
+    where
+        K: Culler + ?Sized,
+        S: DrawSink + ?Sized,
+        C: FnMut(u32, CullReason) + ?Sized,
+    {
         let mut stats = TraversalStats::default();
         self.heap.clear();
         if skeleton.nodes.is_empty() {
             return stats;
         }
-        self.push(skeleton, view, 0, ALL_PLANES);
+        let occlusion = options.occlusion;
+        // Contexts by index; a node's children share their parent's.
+        let mut contexts: Vec<K::Ctx> = vec![K::Ctx::default()];
+        if occlusion {
+            culler.begin(view);
+        }
+        let queue = |heap: &mut BinaryHeap<Entry>,
+                         culler: &mut K,
+                         contexts: &[K::Ctx],
+                         node: u32,
+                         mask: PlaneMask,
+                         test: bool,
+                         ctx: u32| {
+            let (min, max) = view.rel_f64(&skeleton.nodes[node as usize].bounds);
+            if K::HEARS_QUEUED && occlusion && test {
+                let b = crate::RelBox::from_f64(min, max);
+                culler.queued(view, node, &b, &contexts[ctx as usize]);
+            }
+            heap.push(Entry {
+                distance: distance_to_rel_box(min, max),
+                node,
+                mask,
+                test,
+                ctx,
+            });
+        };
+        queue(&mut self.heap, culler, &contexts, 0, ALL_PLANES, true, 0);
         while let Some(Entry {
             distance,
             node,
             mask,
+            test,
+            ctx,
         }) = self.heap.pop()
         {
             stats.visited += 1;
@@ -220,23 +281,47 @@ impl Traverser {
                 culled(node, CullReason::Frustum);
                 continue;
             }
-            if options.occlusion && !occlusion.is_visible(view, &crate::RelBox::from_f64(min, max))
-            {
-                stats.occlusion_culled += 1;
-                culled(node, CullReason::Occlusion);
-                continue;
+            let (mut child_test, mut child_ctx) = (test, ctx);
+            if occlusion && test {
+                let b = crate::RelBox::from_f64(min, max);
+                let (verdict, next) = culler.test(view, node, &b, &contexts[ctx as usize]);
+                match verdict {
+                    Verdict::Occluded => {
+                        stats.occlusion_culled += 1;
+                        culled(node, CullReason::Occlusion);
+                        continue;
+                    }
+                    Verdict::Visible => {}
+                    Verdict::VisibleBelow => child_test = false,
+                }
+                if !n.is_leaf() && child_test {
+                    child_ctx = contexts.len() as u32;
+                    contexts.push(next);
+                }
             }
             match choose(skeleton, node, distance, view, options) {
                 Choice::Draw(lod) => {
                     stats.drawn_nodes += 1;
                     let l = skeleton.lods.get(n.first_lod as usize + lod as usize);
                     stats.drawn_triangles += l.map_or(0, |l| l.triangles as u64);
-                    sink.draw(DrawItem { node, lod });
+                    let item = DrawItem { node, lod };
+                    sink.draw(item);
+                    if occlusion {
+                        culler.drawn(view, item);
+                    }
                 }
                 Choice::Refine => {
                     for child in n.children() {
                         if child > node && (child as usize) < skeleton.nodes.len() {
-                            self.push(skeleton, view, child, child_mask);
+                            queue(
+                                &mut self.heap,
+                                culler,
+                                &contexts,
+                                child,
+                                child_mask,
+                                child_test,
+                                child_ctx,
+                            );
                         }
                     }
                 }
@@ -244,15 +329,6 @@ impl Traverser {
             }
         }
         stats
-    }
-
-    fn push(&mut self, skeleton: &Skeleton, view: &CullView, node: u32, mask: PlaneMask) {
-        let (min, max) = view.rel_f64(&skeleton.nodes[node as usize].bounds);
-        self.heap.push(Entry {
-            distance: distance_to_rel_box(min, max),
-            node,
-            mask,
-        });
     }
 }
 

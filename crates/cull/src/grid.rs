@@ -214,7 +214,7 @@ pub struct LodTriangles<'a> {
 /// (by the LOD's index in `Skeleton::lods`). `None`: not at hand (it is
 /// then not drawn into the grid, which only makes culling weaker).
 pub trait TriangleSource {
-    fn lod_triangles(&self, lod: u32) -> Option<LodTriangles<'_>>;
+    fn lod_triangles(&mut self, lod: u32) -> Option<LodTriangles<'_>>;
 }
 
 /// The lazy occlusion grid as a [`Culler`]: every emitted item is
@@ -223,7 +223,7 @@ pub trait TriangleSource {
 pub struct GridCuller<'a> {
     pub grid: &'a mut OcclusionGrid,
     skeleton: &'a Skeleton,
-    source: &'a dyn TriangleSource,
+    source: &'a mut dyn TriangleSource,
     budget: u64,
     used: u64,
     view_proj: DMat4,
@@ -235,7 +235,7 @@ impl<'a> GridCuller<'a> {
     pub fn new(
         grid: &'a mut OcclusionGrid,
         skeleton: &'a Skeleton,
-        source: &'a dyn TriangleSource,
+        source: &'a mut dyn TriangleSource,
         budget: u64,
     ) -> Self {
         GridCuller {
@@ -316,7 +316,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn next(&mut self) -> u32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (self.0 >> 33) as u32
         }
         fn upto(&mut self, n: u32) -> u32 {
@@ -346,7 +349,10 @@ mod tests {
                 if rng.upto(3) == 0 {
                     // Draw a random quad somewhere in front.
                     let z = -(0.6 + 20.0 * rng.unit()) as f32;
-                    let (x, y) = ((rng.unit() * 2.0 - 1.0) * 1.5, (rng.unit() * 2.0 - 1.0) * 1.5);
+                    let (x, y) = (
+                        (rng.unit() * 2.0 - 1.0) * 1.5,
+                        (rng.unit() * 2.0 - 1.0) * 1.5,
+                    );
                     let s = (rng.unit() * 0.8) as f32;
                     let p = [
                         [x as f32 - s, y as f32 - s, z],
@@ -383,7 +389,12 @@ mod tests {
         // Many overlapping draws near the eye, then one far test.
         for i in 0..20 {
             let z = -1.0 - i as f32 * 0.01;
-            let p = [[-2.0, -2.0, z], [2.0, -2.0, z], [2.0, 2.0, z], [-2.0, 2.0, z]];
+            let p = [
+                [-2.0, -2.0, z],
+                [2.0, -2.0, z],
+                [2.0, 2.0, z],
+                [-2.0, 2.0, z],
+            ];
             for g in [&mut lazy, &mut eager] {
                 g.draw_mesh(&proj(), DVec3::ZERO, &p, &[0, 1, 2, 0, 2, 3]);
             }

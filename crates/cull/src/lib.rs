@@ -41,16 +41,16 @@ mod raster;
 mod traverse;
 mod view;
 
-pub use culler::{BoxTest, Culler, Verdict};
 pub use camera::{default_near, Camera, Viewport, NEAR_FRACTION_OF_SCENE};
+pub use culler::{BoxTest, Culler, Verdict};
+pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
 pub use grid::{
     GridCuller, GridStats, LodTriangles, OcclusionGrid, TriangleSource, DEFAULT_GRID_CELL,
 };
-pub use raster::{PixelRect, SoftDepth, DEPTH_REL_SLACK, DEPTH_SLOPE_PX, INNER_MARGIN_PX};
-pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
 pub use hzb::{Hzb, HzbError, HzbLevel, Reduction};
 pub use lod::select_lod;
 pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK};
+pub use raster::{PixelRect, SoftDepth, DEPTH_REL_SLACK, DEPTH_SLOPE_PX, INNER_MARGIN_PX};
 pub use traverse::{
     reselect_lods, select_occluders, traverse, CullReason, DrawItem, DrawSink, TraversalOptions,
     TraversalStats, Traverser,

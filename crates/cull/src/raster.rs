@@ -130,7 +130,10 @@ impl SoftDepth {
         // Wholly beside the view: nothing to draw (w > 0 is implied by
         // these for points in front; behind-the-eye points fail z <= w).
         let out = |f: &dyn Fn(DVec4) -> bool| clip.iter().all(|&v| f(v));
-        if out(&|v| v.x > v.w) || out(&|v| v.x < -v.w) || out(&|v| v.y > v.w) || out(&|v| v.y < -v.w)
+        if out(&|v| v.x > v.w)
+            || out(&|v| v.x < -v.w)
+            || out(&|v| v.y > v.w)
+            || out(&|v| v.y < -v.w)
         {
             return None;
         }
@@ -304,7 +307,12 @@ mod tests {
         // The right half of the image exactly: its left edge runs through
         // no centre, but a 2-pixel quad whose edge passes within the
         // margin of centres covers only the inner ones.
-        let p = vec![[0.0, -1.0, -1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [0.0, 1.0, -1.0]];
+        let p = vec![
+            [0.0, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [0.0, 1.0, -1.0],
+        ];
         d.draw_mesh(&proj(), DVec3::ZERO, &p, &[0, 1, 2, 0, 2, 3]);
         for y in 0..4 {
             assert_eq!(d.get(1, y), 0.0);
@@ -312,7 +320,12 @@ mod tests {
         }
         // Edge through the centres of column 1 (x = 1.5 px = NDC -0.25).
         d.reset(4, 4);
-        let p = vec![[-0.25, -1.0, -1.0], [1.0, -1.0, -1.0], [1.0, 1.0, -1.0], [-0.25, 1.0, -1.0]];
+        let p = vec![
+            [-0.25, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [-0.25, 1.0, -1.0],
+        ];
         d.draw_mesh(&proj(), DVec3::ZERO, &p, &[0, 1, 2, 0, 2, 3]);
         assert!((0..4).all(|y| d.get(1, y) == 0.0 && d.get(2, y) > 0.0));
     }
@@ -322,7 +335,12 @@ mod tests {
         let mut d = SoftDepth::new();
         d.reset(16, 16);
         // A floor from behind the eye to far ahead.
-        let p = vec![[-50.0, -1.0, 10.0], [50.0, -1.0, 10.0], [50.0, -1.0, -100.0], [-50.0, -1.0, -100.0]];
+        let p = vec![
+            [-50.0, -1.0, 10.0],
+            [50.0, -1.0, 10.0],
+            [50.0, -1.0, -100.0],
+            [-50.0, -1.0, -100.0],
+        ];
         d.draw_mesh(&proj(), DVec3::ZERO, &p, &[0, 1, 2, 0, 2, 3]);
         // Bottom half covered, never nearer than the near plane (1).
         assert!(d.get(8, 15) > 0.0 && d.get(8, 15) < 1.0);
@@ -338,8 +356,16 @@ mod tests {
     fn degenerate_and_bad_input_draw_nothing() {
         let mut d = SoftDepth::new();
         d.reset(8, 8);
-        let p = vec![[0.0, 0.0, -1.0], [0.0, 0.0, -1.0], [1.0, 1.0, -1.0], [f32::NAN, 0.0, -1.0]];
-        assert_eq!(d.draw_mesh(&proj(), DVec3::ZERO, &p, &[0, 1, 2, 0, 3, 2, 0, 9, 1]), None);
+        let p = vec![
+            [0.0, 0.0, -1.0],
+            [0.0, 0.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [f32::NAN, 0.0, -1.0],
+        ];
+        assert_eq!(
+            d.draw_mesh(&proj(), DVec3::ZERO, &p, &[0, 1, 2, 0, 3, 2, 0, 9, 1]),
+            None
+        );
         d.reset(0, 0);
         let (p, i) = quad(-4.0, 100.0);
         assert_eq!(d.draw_mesh(&proj(), DVec3::ZERO, &p, &i), None);

@@ -7,7 +7,9 @@ use std::collections::BinaryHeap;
 use gigawalk_scene::Skeleton;
 
 use crate::lod::{distance_to_rel_box, select_lod};
-use crate::{BoxTest, Containment, CullView, Culler, OcclusionTest, PlaneMask, Verdict, ALL_PLANES};
+use crate::{
+    BoxTest, Containment, CullView, Culler, OcclusionTest, PlaneMask, Verdict, ALL_PLANES,
+};
 
 /// Traversal settings; the modes of GigaWalk Table 2 are combinations of
 /// `occlusion` and `hlod` (VFC: neither, tolerance 0).
@@ -240,12 +242,12 @@ impl Traverser {
             culler.begin(view);
         }
         let queue = |heap: &mut BinaryHeap<Entry>,
-                         culler: &mut K,
-                         contexts: &[K::Ctx],
-                         node: u32,
-                         mask: PlaneMask,
-                         test: bool,
-                         ctx: u32| {
+                     culler: &mut K,
+                     contexts: &[K::Ctx],
+                     node: u32,
+                     mask: PlaneMask,
+                     test: bool,
+                     ctx: u32| {
             let (min, max) = view.rel_f64(&skeleton.nodes[node as usize].bounds);
             if K::HEARS_QUEUED && occlusion && test {
                 let b = crate::RelBox::from_f64(min, max);

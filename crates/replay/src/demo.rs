@@ -177,6 +177,7 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
     ReplayOptions {
         modes: Mode::ALL.to_vec(),
         pixel_errors: vec![1.0],
+        cullers: vec![Default::default()],
         runtime: RuntimeOptions {
             width,
             height,

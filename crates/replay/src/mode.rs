@@ -1,6 +1,7 @@
 //! The rendering modes a replay compares: the paper's Table 2 rows.
 
 use gigawalk_cull::TraversalOptions;
+use gigawalk_runtime::CullMethod;
 
 /// One row of the paper's Table 2 (Section 6.3.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -71,20 +72,41 @@ impl std::str::FromStr for Mode {
     }
 }
 
+/// One run of a replay: a mode, its pixel error, and the occlusion
+/// culler (`None` for the modes without occlusion).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Run {
+    pub mode: Mode,
+    pub pixel_error: f64,
+    pub culler: Option<CullMethod>,
+}
+
 /// The runs of a replay: every requested mode, the pixel-error modes once
-/// per pixel error, the full-detail modes once at 0. In the order given,
-/// duplicates removed.
-pub fn runs(modes: &[Mode], pixel_errors: &[f64]) -> Vec<(Mode, f64)> {
-    let mut out: Vec<(Mode, f64)> = Vec::new();
-    for &m in modes {
-        let errs: Vec<f64> = if m.uses_pixel_error() {
+/// per pixel error, the full-detail modes once at 0, the occlusion modes
+/// once per culler. In the order given, duplicates removed.
+pub fn runs(modes: &[Mode], pixel_errors: &[f64], cullers: &[CullMethod]) -> Vec<Run> {
+    let mut out: Vec<Run> = Vec::new();
+    for &mode in modes {
+        let errs: Vec<f64> = if mode.uses_pixel_error() {
             pixel_errors.to_vec()
         } else {
             vec![0.0]
         };
-        for e in errs {
-            if !out.iter().any(|&(m2, e2)| m2 == m && e2 == e) {
-                out.push((m, e));
+        let cs: Vec<Option<CullMethod>> = if mode.traversal(0.0).occlusion {
+            cullers.iter().copied().map(Some).collect()
+        } else {
+            vec![None]
+        };
+        for pixel_error in errs {
+            for &culler in &cs {
+                let r = Run {
+                    mode,
+                    pixel_error,
+                    culler,
+                };
+                if !out.contains(&r) {
+                    out.push(r);
+                }
             }
         }
     }
@@ -97,7 +119,10 @@ mod tests {
 
     #[test]
     fn full_detail_modes_run_once_in_a_sweep() {
-        let r = runs(&Mode::ALL, &[0.0, 1.0, 4.0]);
+        let r: Vec<(Mode, f64)> = runs(&Mode::ALL, &[0.0, 1.0, 4.0], &[CullMethod::Hzb])
+            .into_iter()
+            .map(|r| (r.mode, r.pixel_error))
+            .collect();
         assert_eq!(
             r,
             vec![
@@ -109,6 +134,30 @@ mod tests {
                 (Mode::Och, 0.0),
                 (Mode::Och, 1.0),
                 (Mode::Och, 4.0),
+            ]
+        );
+    }
+
+    #[test]
+    fn occlusion_modes_run_once_per_culler() {
+        let (h, g) = (Some(CullMethod::Hzb), Some(CullMethod::Grid));
+        let r: Vec<(Mode, Option<CullMethod>)> = runs(
+            &Mode::ALL,
+            &[1.0],
+            &[CullMethod::Hzb, CullMethod::Grid, CullMethod::Hzb],
+        )
+        .into_iter()
+        .map(|r| (r.mode, r.culler))
+        .collect();
+        assert_eq!(
+            r,
+            vec![
+                (Mode::Vfc, None),
+                (Mode::Hlod, None),
+                (Mode::Occ, h),
+                (Mode::Occ, g),
+                (Mode::Och, h),
+                (Mode::Och, g),
             ]
         );
     }

@@ -10,15 +10,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use gigawalk_runtime::{
-    CameraError, CameraList, CameraRequest, CameraSource, FrameReport, MemoryBudget, Runtime,
-    RuntimeError, RuntimeOptions, Schedule,
+    CameraError, CameraList, CameraRequest, CameraSource, CullMethod, FrameReport, MemoryBudget,
+    Runtime, RuntimeError, RuntimeOptions, Schedule,
 };
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::{ReadAt, SceneReader};
 use serde::Serialize;
 
 use crate::accuracy::Accuracy;
-use crate::mode::{runs, Mode};
+use crate::mode::{runs, Mode, Run};
 
 /// What to replay, and how.
 #[derive(Clone, Debug)]
@@ -28,6 +28,9 @@ pub struct ReplayOptions {
     /// Pixel-error tolerances for the modes that use one (`hlod`, `och`);
     /// more than one is a sweep.
     pub pixel_errors: Vec<f64>,
+    /// Occlusion cullers: the modes that cull by occlusion (`occ`, `och`)
+    /// run once with each.
+    pub cullers: Vec<CullMethod>,
     /// Every runtime knob; `traversal` is set per mode.
     pub runtime: RuntimeOptions,
     /// Geometry a device may hold; a scene that does not fit is streamed.
@@ -54,6 +57,7 @@ impl Default for ReplayOptions {
         ReplayOptions {
             modes: Mode::ALL.to_vec(),
             pixel_errors: vec![1.0],
+            cullers: vec![CullMethod::Hzb],
             runtime: RuntimeOptions::default(),
             memory_budget: MemoryBudget::All,
             near: None,
@@ -107,6 +111,9 @@ pub struct FrameRecord {
     pub drawn_nodes: u64,
     pub drawn_triangles: u64,
     pub occlusion_used: bool,
+    /// The lazy occlusion grid's work (grid culler only; in frames.csv).
+    #[serde(skip)]
+    pub grid: Option<gigawalk_runtime::GridStats>,
     /// Streaming (zeros when the scene is resident): device bytes the
     /// resident LODs take after the frame, bytes that arrived, loader
     /// requests sent, stand-ins drawn for LODs not resident, and chosen
@@ -127,21 +134,28 @@ pub struct FrameRecord {
 pub struct RunRecord {
     pub mode: Mode,
     pub pixel_error: f64,
+    /// The occlusion culler (`None` for modes without occlusion).
+    pub culler: Option<CullMethod>,
     pub frames: Vec<FrameRecord>,
 }
 
 impl RunRecord {
-    /// "och 1px" style label.
+    /// "och 1px" style label ("och 1px grid" for a culler other than the
+    /// HZB).
     pub fn label(&self) -> String {
-        run_label(self.mode, self.pixel_error)
+        run_label(self.mode, self.pixel_error, self.culler)
     }
 }
 
-pub(crate) fn run_label(mode: Mode, pixel_error: f64) -> String {
-    if mode.uses_pixel_error() {
+pub(crate) fn run_label(mode: Mode, pixel_error: f64, culler: Option<CullMethod>) -> String {
+    let base = if mode.uses_pixel_error() {
         format!("{mode} {pixel_error}px")
     } else {
         mode.name().to_string()
+    };
+    match culler {
+        Some(c) if c != CullMethod::Hzb => format!("{base} {c}"),
+        _ => base,
     }
 }
 
@@ -338,11 +352,17 @@ pub fn replay_on(
         }
     }
 
-    let all_runs = runs(&opts.modes, &opts.pixel_errors).len();
-    for (mode, pixel_error) in runs(&opts.modes, &opts.pixel_errors) {
-        let label = run_label(mode, pixel_error);
+    let all_runs = runs(&opts.modes, &opts.pixel_errors, &opts.cullers).len();
+    for Run {
+        mode,
+        pixel_error,
+        culler,
+    } in runs(&opts.modes, &opts.pixel_errors, &opts.cullers)
+    {
+        let label = run_label(mode, pixel_error, culler);
         let ro = RuntimeOptions {
             traversal: mode.traversal(pixel_error),
+            culler: culler.unwrap_or(opts.runtime.culler),
             ..opts.runtime.clone()
         };
         let mut list = CameraList {
@@ -374,6 +394,7 @@ pub fn replay_on(
                 drawn_nodes: r.stats.drawn_nodes,
                 drawn_triangles: r.stats.drawn_triangles,
                 occlusion_used: r.occlusion_used,
+                grid: r.grid,
                 resident_bytes: r.streaming.resident_bytes,
                 loaded_bytes: r.streaming.loaded_bytes,
                 requests: r.streaming.requests,
@@ -404,6 +425,7 @@ pub fn replay_on(
         out.runs.push(RunRecord {
             mode,
             pixel_error,
+            culler,
             frames,
         });
         if let Err(source) = result {
@@ -456,6 +478,9 @@ fn validate(opts: &ReplayOptions) -> Result<(), ReplayError> {
     }
     if opts.pixel_errors.is_empty() {
         return bad("no pixel errors given".into());
+    }
+    if opts.cullers.is_empty() {
+        return bad("no cullers given".into());
     }
     if let Some(e) = opts
         .pixel_errors

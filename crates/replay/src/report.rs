@@ -76,7 +76,7 @@ impl Replay {
              visited,frustum_culled,occlusion_culled,drawn_nodes,drawn_triangles,occlusion_used,warmup,\
              accuracy_pixels,differing_pixels,wrongly_culled_pixels,bound_violating_pixels,\
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
-             missing_draws\n",
+             missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -85,7 +85,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -118,6 +118,11 @@ impl Replay {
                     f.requests,
                     f.substituted_draws,
                     f.missing_draws,
+                    run.culler.map_or(String::new(), |c| c.to_string()),
+                    opt(f.grid.map(|g| g.raster_ms), 3),
+                    opt(f.grid.map(|g| g.test_ms), 3),
+                    f.grid.map_or(String::new(), |g| g.pixel_reads.to_string()),
+                    f.grid.map_or(String::new(), |g| g.triangles_drawn.to_string()),
                 );
             }
         }
@@ -171,6 +176,11 @@ pub fn markdown(s: &Summary) -> String {
     m += &s.table();
     let _ = writeln!(m, "\n## Stages (medians) and nodes (means)\n");
     m += &s.stage_table();
+    let grid = s.grid_table();
+    if !grid.is_empty() {
+        let _ = writeln!(m, "\n## Lazy occlusion grid\n");
+        m += &grid;
+    }
     if s.memory_budget.is_some() {
         let _ = writeln!(m, "\n## Streaming (out of core)\n");
         m += &s.streaming_table();

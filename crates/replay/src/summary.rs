@@ -38,6 +38,12 @@ pub struct Summary {
     #[serde(default)]
     pub unsettled_reference_frames: usize,
     pub seconds: f64,
+    /// The lazy occlusion grid's cell size and update rule (null without a
+    /// grid run).
+    #[serde(default)]
+    pub grid_cell: Option<u32>,
+    #[serde(default)]
+    pub grid_lazy: Option<bool>,
     pub modes: Vec<ModeSummary>,
 }
 
@@ -47,6 +53,10 @@ pub struct Summary {
 pub struct ModeSummary {
     pub name: String,
     pub pixel_error: f64,
+    /// The occlusion culler ("hzb", "grid"); null for modes without
+    /// occlusion.
+    #[serde(default)]
+    pub culler: Option<String>,
     /// Frames recorded (warm-up included).
     pub frames: usize,
     /// Frame intervals the statistics use.
@@ -68,6 +78,17 @@ pub struct ModeSummary {
     pub median_hzb_ms: f64,
     pub median_stc_ms: f64,
     pub median_rvg_ms: f64,
+    /// The lazy occlusion grid (grid culler only): median ms STC spent
+    /// rasterizing and answering box tests, mean depth pixels read a
+    /// frame, mean triangles rasterized a frame.
+    #[serde(default)]
+    pub median_grid_raster_ms: Option<f64>,
+    #[serde(default)]
+    pub median_grid_test_ms: Option<f64>,
+    #[serde(default)]
+    pub mean_grid_pixel_reads: Option<f64>,
+    #[serde(default)]
+    pub mean_grid_triangles: Option<f64>,
     /// Frames compared with the reference.
     pub accuracy_frames: usize,
     /// Summed over the compared frames (null without accuracy frames).
@@ -104,7 +125,11 @@ impl ModeSummary {
     /// "och 1px" style label.
     pub fn label(&self) -> String {
         match self.name.parse::<Mode>() {
-            Ok(m) => crate::replay::run_label(m, self.pixel_error),
+            Ok(m) => crate::replay::run_label(
+                m,
+                self.pixel_error,
+                self.culler.as_deref().and_then(|c| c.parse().ok()),
+            ),
             Err(_) => self.name.clone(),
         }
     }
@@ -170,9 +195,19 @@ fn summarise(run: &RunRecord) -> ModeSummary {
     }
     let has_acc = accuracy_frames > 0;
     let med = |f: fn(&FrameRecord) -> f64| median(&m.iter().map(|x| f(x)).collect::<Vec<_>>());
+    let grid: Vec<gigawalk_runtime::GridStats> = m.iter().filter_map(|f| f.grid).collect();
+    let grid_fig = |f: fn(&gigawalk_runtime::GridStats) -> f64, med: bool| {
+        let v: Vec<f64> = grid.iter().map(f).collect();
+        (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
+    };
     ModeSummary {
         name: run.mode.name().into(),
         pixel_error: run.pixel_error,
+        culler: run.culler.map(|c| c.to_string()),
+        median_grid_raster_ms: grid_fig(|g| g.raster_ms, true),
+        median_grid_test_ms: grid_fig(|g| g.test_ms, true),
+        mean_grid_pixel_reads: grid_fig(|g| g.pixel_reads as f64, false),
+        mean_grid_triangles: grid_fig(|g| g.triangles_drawn as f64, false),
         frames: run.frames.len(),
         measured_frames: ms.len(),
         mean_fps: 1e3 / mean_ms,
@@ -235,6 +270,10 @@ impl Replay {
             }
         }
         let r = &self.options.runtime;
+        let grid = self
+            .runs
+            .iter()
+            .any(|r| r.culler == Some(gigawalk_runtime::CullMethod::Grid));
         Summary {
             scene: self.scene.clone(),
             path: self.path.clone(),
@@ -256,6 +295,8 @@ impl Replay {
             memory_budget: self.memory_budget,
             unsettled_reference_frames: self.unsettled_reference_frames,
             seconds: self.seconds,
+            grid_cell: grid.then_some(r.grid.cell),
+            grid_lazy: grid.then_some(r.grid.lazy),
             modes,
         }
     }
@@ -272,7 +313,7 @@ impl Summary {
         for m in &self.modes {
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                m.name,
+                self.mode_cell(m),
                 m.pixel_error,
                 num(m.mean_fps, 2),
                 num(m.median_frame_ms, 1),
@@ -306,7 +347,7 @@ impl Summary {
         for m in &self.modes {
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                m.name,
+                self.mode_cell(m),
                 m.pixel_error,
                 num(m.median_or_ms, 2),
                 num(m.median_hzb_ms, 2),
@@ -317,6 +358,58 @@ impl Summary {
                 thousands(m.mean_drawn_nodes),
                 m.median_speedup_vs_vfc
                     .map_or("-".into(), |x| format!("{x:.2}x")),
+            );
+        }
+        s
+    }
+
+    /// A run's mode as the tables show it: with its culler when some run
+    /// used a culler other than the HZB ("och grid", "och hzb").
+    pub fn mode_cell(&self, m: &ModeSummary) -> String {
+        let other = self
+            .modes
+            .iter()
+            .any(|m| m.culler.as_deref().is_some_and(|c| c != "hzb"));
+        match &m.culler {
+            Some(c) if other => format!("{} {c}", m.name),
+            _ => m.name.clone(),
+        }
+    }
+
+    /// The lazy occlusion grid's table of summary.md (empty without a
+    /// grid run).
+    pub fn grid_table(&self) -> String {
+        let runs: Vec<&ModeSummary> = self
+            .modes
+            .iter()
+            .filter(|m| m.median_grid_raster_ms.is_some())
+            .collect();
+        if runs.is_empty() {
+            return String::new();
+        }
+        let mut s = format!(
+            "Cells of {} pixels, {} updates.\n\n\
+             | mode | pixel error | STC ms | rasterize ms | grid tests ms | depth pixels read | triangles rasterized | occlusion-culled |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|\n",
+            self.grid_cell.unwrap_or(0),
+            if self.grid_lazy.unwrap_or(true) {
+                "lazy"
+            } else {
+                "eager"
+            },
+        );
+        let o = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| num(x, d));
+        for m in runs {
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                self.mode_cell(m),
+                m.pixel_error,
+                num(m.median_stc_ms, 2),
+                o(m.median_grid_raster_ms, 2),
+                o(m.median_grid_test_ms, 2),
+                m.mean_grid_pixel_reads.map_or("-".into(), thousands),
+                m.mean_grid_triangles.map_or("-".into(), thousands),
+                thousands(m.mean_occlusion_culled),
             );
         }
         s
@@ -338,7 +431,7 @@ impl Summary {
         for m in &self.modes {
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                m.name,
+                self.mode_cell(m),
                 m.pixel_error,
                 mib(m.peak_resident_bytes),
                 mib(m.loaded_bytes),

@@ -19,17 +19,18 @@ mod options;
 mod pipeline;
 mod stages;
 mod streaming;
+mod triangles;
 
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 pub use gigawalk_cull::{
-    Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
+    Camera, CullReason, DrawItem, GridStats, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{
-    MemoryBudget, OccluderBudget, OptionsError, Prefetching, RuntimeOptions, Schedule, Stage,
-    AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
+    CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, Prefetching,
+    RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
@@ -180,6 +181,8 @@ pub struct FrameReport {
     pub occluder_items: usize,
     pub or_ms: f64,
     pub hzb_ms: f64,
+    /// The lazy occlusion grid's work this frame (grid culler only).
+    pub grid: Option<GridStats>,
     /// All of STC, HZB build included.
     pub stc_ms: f64,
     pub rvg_ms: f64,
@@ -212,26 +215,31 @@ pub struct Runtime<'s> {
     devices: Vec<GpuContext>,
     geometry: Vec<Geometry>,
     host_bytes: u64,
-    /// Streaming: where LODs come from, and the pinned set.
-    source: Option<&'s dyn LodSource>,
+    /// Where LODs come from (streaming's loader, the grid culler's
+    /// triangles).
+    source: &'s dyn LodSource,
+    /// Streaming: the pinned set and who holds what.
     plan: Option<Plan>,
 }
 
 impl<'s> Runtime<'s> {
     /// Opens `devices` (1 or 2) wgpu devices and uploads every LOD to each.
-    pub fn new<R: ReadAt>(scene: &'s SceneReader<R>, devices: usize) -> Result<Self, RuntimeError> {
+    pub fn new<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: usize,
+    ) -> Result<Self, RuntimeError> {
         Self::with_devices(scene, open_devices(devices)?)
     }
 
     /// Like [`Runtime::new`] with devices the caller opened (1 or 2).
-    pub fn with_devices<R: ReadAt>(
+    pub fn with_devices<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
     ) -> Result<Self, RuntimeError> {
         Self::resident_reporting(scene, devices, &mut |_, _| {})
     }
 
-    fn resident_reporting<R: ReadAt>(
+    fn resident_reporting<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
         progress: &mut dyn FnMut(u64, u64),
@@ -249,7 +257,7 @@ impl<'s> Runtime<'s> {
             devices,
             geometry,
             host_bytes: host.bytes(),
-            source: None,
+            source: scene,
             plan: None,
         })
     }
@@ -315,7 +323,7 @@ impl<'s> Runtime<'s> {
             devices,
             geometry,
             host_bytes: 0,
-            source: Some(scene),
+            source: scene,
             plan: Some(plan),
         })
     }

@@ -163,6 +163,74 @@ impl std::str::FromStr for Prefetching {
     }
 }
 
+/// Which occlusion culler STC asks (docs/culling.md has each one's needs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum CullMethod {
+    /// GigaWalk's hierarchical Z-buffer over OR's depth of the visible
+    /// set of frame i - lag.
+    #[default]
+    Hzb,
+    /// Hey et al.'s lazy occlusion grid over a software depth image STC
+    /// draws of the frame it traverses (no OR, no lag).
+    Grid,
+}
+
+impl CullMethod {
+    pub const ALL: [CullMethod; 2] = [CullMethod::Hzb, CullMethod::Grid];
+
+    /// Whether the culler reads OR's occluder depth (OR renders nothing
+    /// for the others).
+    pub fn needs_occluder_depth(self) -> bool {
+        self == CullMethod::Hzb
+    }
+}
+
+impl std::fmt::Display for CullMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CullMethod::Hzb => "hzb",
+            CullMethod::Grid => "grid",
+        })
+    }
+}
+
+impl std::str::FromStr for CullMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        CullMethod::ALL
+            .into_iter()
+            .find(|c| c.to_string() == s)
+            .ok_or_else(|| format!("culler {s:?} is not hzb or grid"))
+    }
+}
+
+/// The lazy occlusion grid's knobs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridOptions {
+    /// Cell size in pixels (the paper: 32).
+    pub cell: u32,
+    /// Refresh cells only when a test needs them (false: as they are
+    /// drawn over, for comparison).
+    pub lazy: bool,
+    /// Triangles STC rasterizes a frame at most, nearest items first
+    /// (u64::MAX: all). What is not rasterized occludes nothing.
+    pub triangle_budget: u64,
+    /// Bytes of triangles STC keeps on the host for rasterizing, least
+    /// recently drawn evicted first.
+    pub cache_bytes: u64,
+}
+
+impl Default for GridOptions {
+    fn default() -> Self {
+        GridOptions {
+            cell: gigawalk_cull::DEFAULT_GRID_CELL,
+            lazy: true,
+            triangle_budget: u64::MAX,
+            cache_bytes: 512 << 20,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {
     pub schedule: Schedule,
@@ -200,6 +268,9 @@ pub struct RuntimeOptions {
     /// loaded 30% more; the ring loaded 85% more for no fewer stand-ins
     /// (docs/PERFORMANCE.md, "Out of core").
     pub prefetch: Prefetching,
+    /// The occlusion culler (with `traversal.occlusion`).
+    pub culler: CullMethod,
+    pub grid: GridOptions,
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
@@ -228,6 +299,8 @@ pub enum OptionsError {
     AsyncNeedsPipelined,
     #[error("chunk must be at least 1")]
     Chunk,
+    #[error("grid cell {0} must be 1..=1024 pixels")]
+    GridCell(u32),
 }
 
 impl Default for RuntimeOptions {
@@ -245,6 +318,8 @@ impl Default for RuntimeOptions {
             chunk: 256,
             async_rvg: false,
             prefetch: Prefetching::Off,
+            culler: CullMethod::Hzb,
+            grid: GridOptions::default(),
             record_culled: false,
             #[cfg(feature = "testing")]
             inject_failure: None,
@@ -284,7 +359,15 @@ impl RuntimeOptions {
         if self.chunk == 0 {
             return Err(OptionsError::Chunk);
         }
+        if !(1..=1024).contains(&self.grid.cell) {
+            return Err(OptionsError::GridCell(self.grid.cell));
+        }
         Ok(())
+    }
+
+    /// Whether OR renders occluder depth at all (the culler reads it).
+    pub fn wants_occluder_depth(&self) -> bool {
+        self.traversal.occlusion && self.culler.needs_occluder_depth()
     }
 
     /// The occluder depth image size.
@@ -328,6 +411,16 @@ mod tests {
         );
         check(&|o| o.devices = 3, OptionsError::Devices(3), "devices 3");
         check(&|o| o.chunk = 0, OptionsError::Chunk, "chunk");
+        check(
+            &|o| o.grid.cell = 0,
+            OptionsError::GridCell(0),
+            "grid cell 0",
+        );
+        check(
+            &|o| o.grid.cell = 4096,
+            OptionsError::GridCell(4096),
+            "grid cell 4096",
+        );
         check(
             &|o| o.hzb_reduction = Reduction::NthFarthest(5),
             OptionsError::NthFarthest(5),
@@ -522,5 +615,26 @@ mod prefetch_tests {
             let e = bad.parse::<Prefetching>().unwrap_err();
             assert!(e.contains("off, band, ring or both"), "{bad:?}: {e}");
         }
+    }
+}
+
+#[cfg(test)]
+mod culler_tests {
+    use super::*;
+
+    #[test]
+    fn cullers_parse_print_and_say_whether_or_renders() {
+        for c in CullMethod::ALL {
+            assert_eq!(c.to_string().parse::<CullMethod>(), Ok(c));
+        }
+        let e = "zbuf".parse::<CullMethod>().unwrap_err();
+        assert!(e.contains("hzb or grid"), "{e}");
+        let mut o = RuntimeOptions::default();
+        assert!(o.wants_occluder_depth());
+        o.culler = CullMethod::Grid;
+        assert!(!o.wants_occluder_depth());
+        o.culler = CullMethod::Hzb;
+        o.traversal.occlusion = false;
+        assert!(!o.wants_occluder_depth());
     }
 }

@@ -94,7 +94,7 @@ fn next_sample(
 
 /// Whether frame `frame` culls against occluders (not in the startup bypass).
 fn wants_occluders(opts: &RuntimeOptions, frame: u64) -> bool {
-    opts.traversal.occlusion && frame >= opts.occluder_lag as u64
+    opts.wants_occluder_depth() && frame >= opts.occluder_lag as u64
 }
 
 /// The result of a frame that holds culling (`hold`): the last culled set,
@@ -124,6 +124,7 @@ fn report(
         occluder_items: end.occluder_items,
         or_ms: end.or_ms,
         hzb_ms: end.stc.hzb_ms,
+        grid: end.stc.grid,
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,
@@ -201,7 +202,7 @@ fn stream_links<'a>(
     a: usize,
     b: usize,
 ) -> StreamLinks<'a> {
-    let (Some(source), Some(plan)) = (rt.source, rt.plan.as_ref()) else {
+    let (source, Some(plan)) = (rt.source, rt.plan.as_ref()) else {
         return StreamLinks::default();
     };
     let mask = (1u8 << a.min(7)) | (1u8 << b.min(7));
@@ -298,7 +299,7 @@ fn sequential_frames<'a>(
     prefetch: Option<Prefetch<'a>>,
 ) -> Result<u64, RuntimeError> {
     let mut or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
-    let mut stc = StcStage::new(rt.skeleton, opts, prefetch);
+    let mut stc = StcStage::new(rt.skeleton, rt.source, opts, prefetch);
     let mut rvg = RvgStage::new(DeviceGeometry::new(rt, 0, rvg_link), opts);
     let mut history: std::collections::VecDeque<VisibleSet> = Default::default();
     let mut last: Option<StcOutput> = None;
@@ -462,7 +463,7 @@ pub(crate) fn run_pipelined(
             (
                 Stage::Stc,
                 Box::new(move || {
-                    let stc = StcStage::new(rt.skeleton, opts, prefetch);
+                    let stc = StcStage::new(rt.skeleton, rt.source, opts, prefetch);
                     stc_thread(stc, rt, opts, or_rx, rvg_tx, feedback_tx)
                 }),
             ),
@@ -720,7 +721,7 @@ pub(crate) fn run_async(
             (
                 Stage::Stc,
                 Box::new(move || {
-                    let stc = StcStage::new(rt.skeleton, opts, prefetch);
+                    let stc = StcStage::new(rt.skeleton, rt.source, opts, prefetch);
                     async_stc_thread(stc, or_rx, sets_tx, feedback_tx)
                 }),
             ),
@@ -763,7 +764,7 @@ fn async_or_thread(
         while sets.len() > opts.occluder_lag as usize {
             sets.pop_front();
         }
-        let occluders = (opts.traversal.occlusion && runs >= opts.occluder_lag as u64)
+        let occluders = (opts.wants_occluder_depth() && runs >= opts.occluder_lag as u64)
             .then(|| sets.front().map(|v| &v[..]).unwrap_or(&[]));
         let o = or.run(sample.frame, &sample.view, occluders)?;
         runs += 1;

@@ -6,14 +6,15 @@ use std::time::Instant;
 
 use gigawalk_cull::{
     reselect_lods, select_occluders, Camera, Containment, CullReason, CullView, DrawItem, Frustum,
-    Hzb, HzbOcclusion, NoOcclusion, OcclusionTest, RelBox, TraversalOptions, TraversalStats,
-    Traverser, ALL_PLANES,
+    GridCuller, GridStats, Hzb, HzbOcclusion, NoOcclusion, OcclusionGrid, OcclusionTest, RelBox,
+    TraversalOptions, TraversalStats, Traverser, ALL_PLANES,
 };
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
 
-use crate::streaming::{Geometry, Link, Plan, Request, StreamStats, Use, PREFETCH_BAND};
-use crate::{OccluderBudget, Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::streaming::{Geometry, Link, LodSource, Plan, Request, StreamStats, Use, PREFETCH_BAND};
+use crate::triangles::TriangleCache;
+use crate::{CullMethod, OccluderBudget, Runtime, RuntimeError, RuntimeOptions, Stage};
 
 /// A stage's device, its geometry there, and (streaming) its end of the
 /// run's loader queues.
@@ -298,12 +299,15 @@ impl OcclusionTest for OutsideOf<'_> {
     }
 }
 
-/// STC: HZB from OR's depth, then traversal (Algorithm 5.2).
+/// STC: HZB from OR's depth, then traversal (Algorithm 5.2); or the lazy
+/// occlusion grid over what it draws itself.
 pub(crate) struct StcStage<'a> {
     pub skeleton: &'a Skeleton,
     pub opts: &'a RuntimeOptions,
     traverser: Traverser,
     hzb: Hzb,
+    grid: OcclusionGrid,
+    triangles: TriangleCache<'a>,
     prefetch: Option<Prefetch<'a>>,
 }
 
@@ -316,12 +320,16 @@ pub(crate) struct StcOutput {
     pub culled: Arc<[(u32, CullReason)]>,
     pub occlusion_used: bool,
     pub hzb_ms: f64,
+    /// The lazy occlusion grid's work (grid culler only).
+    pub grid: Option<GridStats>,
     pub ms: f64,
 }
 
 impl<'a> StcStage<'a> {
+    /// `source` gives the grid culler its triangles.
     pub fn new(
         skeleton: &'a Skeleton,
+        source: &'a dyn LodSource,
         opts: &'a RuntimeOptions,
         prefetch: Option<Prefetch<'a>>,
     ) -> Self {
@@ -330,6 +338,8 @@ impl<'a> StcStage<'a> {
             opts,
             traverser: Traverser::new(),
             hzb: Hzb::new(),
+            grid: OcclusionGrid::new(opts.grid.cell, opts.grid.lazy),
+            triangles: TriangleCache::new(source, opts.grid.cache_bytes),
             prefetch,
         }
     }
@@ -346,7 +356,9 @@ impl<'a> StcStage<'a> {
         let t = Instant::now();
         check_injected(self.opts, Stage::Stc, frame)?;
         let mut hzb_ms = 0.0;
+        let grid = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Grid;
         let occlusion = match depth {
+            _ if grid => true,
             Some(d) if self.opts.traversal.occlusion => {
                 let th = Instant::now();
                 let _s = tracing::info_span!("HZB build", frame).entered();
@@ -383,7 +395,22 @@ impl<'a> StcStage<'a> {
                 culled.push((node, why));
             }
         };
-        let stats = if occlusion {
+        let stats = if grid {
+            let mut culler = GridCuller::new(
+                &mut self.grid,
+                skeleton,
+                &mut self.triangles,
+                self.opts.grid.triangle_budget,
+            );
+            self.traverser.traverse_culled(
+                skeleton,
+                view,
+                &mut culler,
+                &options,
+                &mut sink,
+                &mut on_cull,
+            )
+        } else if occlusion {
             let hzb = HzbOcclusion::new(&self.hzb);
             self.traverser.traverse_recording(
                 self.skeleton,
@@ -412,6 +439,7 @@ impl<'a> StcStage<'a> {
             visible: visible.into(),
             occlusion_used: occlusion,
             hzb_ms,
+            grid: grid.then_some(self.grid.stats),
             ms: ms_since(t),
         })
     }
@@ -551,6 +579,16 @@ mod tests {
         (skeleton, angles)
     }
 
+    struct NoLods;
+    impl LodSource for NoLods {
+        fn read_lod(&self, lod: u32) -> Result<gigawalk_scene::LodMesh, gigawalk_scene::ReadError> {
+            Err(gigawalk_scene::ReadError {
+                file: "none".into(),
+                kind: gigawalk_scene::ReadErrorKind::NoSuchLod { lod, count: 0 },
+            })
+        }
+    }
+
     #[test]
     fn prefetch_asks_for_the_ring_just_outside_the_frustum_and_nothing_else() {
         let (skeleton, angles) = ring();
@@ -565,7 +603,7 @@ mod tests {
             plan: &plan,
             mask: 1,
         };
-        let mut stc = StcStage::new(&skeleton, &opts, Some(prefetch));
+        let mut stc = StcStage::new(&skeleton, &NoLods, &opts, Some(prefetch));
         // Looking along +x, 60 degrees both ways (aspect 1): the wide
         // frustum reaches atan(1.25 tan 30) = 35.8 degrees.
         let camera = Camera::look_at(DVec3::ZERO, DVec3::X, 60f64.to_radians(), 1.0, 0.1);
@@ -592,7 +630,7 @@ mod tests {
         assert!(drawn.iter().all(|&n| off(angles[n as usize - 1]) < 31.0));
         // The prefetch traversal does not disturb the frame's own result.
         let mut again = Vec::new();
-        let mut plain = StcStage::new(&skeleton, &opts, None);
+        let mut plain = StcStage::new(&skeleton, &NoLods, &opts, None);
         plain
             .run(0, &view, None, &mut |i| again.push(i.node))
             .unwrap();

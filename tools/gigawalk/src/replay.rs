@@ -9,7 +9,8 @@ use std::time::Instant;
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
 use gigawalk_runtime::{
-    MemoryBudget, OccluderBudget, Prefetching, Reduction, RuntimeOptions, Schedule,
+    CullMethod, GridOptions, MemoryBudget, OccluderBudget, Prefetching, Reduction, RuntimeOptions,
+    Schedule,
 };
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
@@ -31,6 +32,9 @@ pub struct Args {
     /// Pixel-error tolerance of hlod and och; a list sweeps (e.g. 0,1,2,4,8)
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pixel_error: Vec<f64>,
+    /// Occlusion cullers; occ and och run once with each: hzb = GigaWalk's hierarchical Z-buffer over the occluder pass's depth of frame i-2's visible set, grid = the lazy occlusion grid over a software depth image of the frame's own draws (Hey et al.; no occluder pass)
+    #[arg(long, value_delimiter = ',', default_value = "hzb")]
+    cullers: Vec<CullMethod>,
     /// Replay at most this many poses from the start of the path
     #[arg(long)]
     frames: Option<usize>,
@@ -86,6 +90,15 @@ pub struct RuntimeArgs {
     /// Streaming: what STC asks the loader for before it is needed: band = the next finer LOD of what is drawn near its switching distance, ring = what a frustum a quarter wider would draw, both, or off (on the 50M plant's walk neither drew fewer stand-ins; band drew fewer frames with one)
     #[arg(long, value_name = "off|band|ring|both", default_value = "off")]
     prefetch: Prefetching,
+    /// Lazy occlusion grid: cell size in pixels (1-1024; the paper's 32)
+    #[arg(long, default_value_t = GridOptions::default().cell)]
+    grid_cell: u32,
+    /// Lazy occlusion grid: refresh cells as they are drawn over instead of when a test needs them (same culling, more depth reads; for comparison)
+    #[arg(long)]
+    grid_eager: bool,
+    /// Lazy occlusion grid: triangles STC rasterizes a frame at most, nearest first (all, or a count such as 200k); what is not rasterized occludes nothing
+    #[arg(long, value_name = "all|TRIANGLES", default_value = "all")]
+    grid_budget: OccluderBudget,
 }
 
 impl RuntimeArgs {
@@ -109,6 +122,15 @@ impl RuntimeArgs {
             chunk: self.chunk,
             async_rvg: self.async_rvg,
             prefetch: self.prefetch,
+            grid: GridOptions {
+                cell: self.grid_cell,
+                lazy: !self.grid_eager,
+                triangle_budget: match self.grid_budget {
+                    OccluderBudget::Triangles(t) => t,
+                    _ => u64::MAX,
+                },
+                ..GridOptions::default()
+            },
             ..RuntimeOptions::default()
         }
     }
@@ -124,6 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = ReplayOptions {
         modes: args.modes,
         pixel_errors: args.pixel_error,
+        cullers: args.cullers,
         runtime: args.runtime.options(),
         memory_budget: args.runtime.memory_budget,
         near: args.runtime.near,

@@ -71,6 +71,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
     ReplayOptions {
         modes: Mode::ALL.to_vec(),
         pixel_errors: pixel_errors.to_vec(),
+        cullers: vec![Default::default()],
         runtime: RuntimeOptions {
             width: W,
             height: H,

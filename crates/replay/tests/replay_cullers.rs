@@ -1,0 +1,148 @@
+//! Every occlusion culler on a generated plant, city and forest (lavapipe
+//! or any adapter): at pixel error 0 each one's image is the full-detail
+//! reference's, pixel for pixel (conservative: no wrongly culled pixel),
+//! and the lazy occlusion grid culls exactly as its eager twin with fewer
+//! depth reads.
+
+use gigawalk_gpu::devices_or_skip;
+use gigawalk_procgen::{generate, Kind};
+use gigawalk_replay::{replay_on, Mode, NoProgress, ReplayOptions};
+use gigawalk_runtime::{CullMethod, Runtime, RuntimeOptions, Schedule};
+use gigawalk_scene::SceneReader;
+
+const TRIANGLES: u64 = 30_000;
+const W: u32 = 256;
+const H: u32 = 144;
+
+fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayOptions {
+    ReplayOptions {
+        modes: vec![Mode::Occ, Mode::Och],
+        pixel_errors: vec![0.0],
+        cullers: cullers.to_vec(),
+        runtime: RuntimeOptions {
+            width: W,
+            height: H,
+            schedule,
+            ..Default::default()
+        },
+        memory_budget: Default::default(),
+        near: None,
+        frames: Some(frames),
+        accuracy_every: 3,
+        warmup: 2,
+    }
+}
+
+#[test]
+fn every_culler_draws_the_reference_image_at_pixel_error_0() {
+    let dir = tempfile::tempdir().unwrap();
+    for kind in [Kind::Plant, Kind::City, Kind::Forest] {
+        let g = generate(kind, TRIANGLES, 5, 30);
+        let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "m").unwrap();
+        let file = dir.path().join(format!("{kind:?}.gwk"));
+        gigawalk_preprocess::preprocess(
+            &model,
+            &gigawalk_preprocess::Params::default(),
+            &file,
+            "test",
+            &gigawalk_preprocess::NoProgress,
+        )
+        .unwrap();
+        let scene = SceneReader::open(&file).unwrap();
+        let Some(d) = devices_or_skip(2, "cullers on plant, city and forest") else {
+            return;
+        };
+        let rt = Runtime::with_devices(&scene, d).unwrap();
+        let mut grid_culled = 0;
+        for schedule in [Schedule::Pipelined, Schedule::Sequential] {
+            let opts = options(&CullMethod::ALL, schedule, 24);
+            let r = replay_on(
+                &rt,
+                "m.gwk",
+                &g.path.poses,
+                "m.path",
+                &opts,
+                &mut NoProgress,
+            )
+            .unwrap();
+            let s = r.summary();
+            assert_eq!(
+                s.modes.len(),
+                4,
+                "{kind:?}: occ and och, each with both cullers"
+            );
+            for m in &s.modes {
+                let what = format!("{kind:?} {schedule:?} {} {:?}", m.name, m.culler);
+                assert_eq!(m.accuracy_frames, 8, "{what}");
+                assert_eq!(m.wrongly_culled_pixels, Some(0), "{what}: lost pixels");
+                assert_eq!(m.differing_pixels_fraction, Some(0.0), "{what}: differs");
+                assert_eq!(m.bound_violating_pixels, Some(0), "{what}");
+            }
+            for run in r.runs.iter().filter(|r| r.culler == Some(CullMethod::Grid)) {
+                for f in &run.frames {
+                    let g = f.grid.expect("grid runs report the grid's work");
+                    assert!(f.occlusion_used, "the grid culls from frame 0");
+                    assert!(g.tests > 0 && g.triangles_drawn > 0, "{g:?}");
+                    grid_culled += f.occlusion_culled;
+                }
+            }
+        }
+        assert!(
+            grid_culled > 0,
+            "{kind:?}: the grid culled nothing, the test means little"
+        );
+    }
+}
+
+#[test]
+fn the_lazy_grid_culls_as_the_eager_one_with_fewer_depth_reads() {
+    let Some(d) = devices_or_skip(1, "lazy vs eager grid") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let g = generate(Kind::City, TRIANGLES, 2, 20);
+    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "c").unwrap();
+    let file = dir.path().join("city.gwk");
+    gigawalk_preprocess::preprocess(
+        &model,
+        &gigawalk_preprocess::Params::default(),
+        &file,
+        "test",
+        &gigawalk_preprocess::NoProgress,
+    )
+    .unwrap();
+    let scene = SceneReader::open(&file).unwrap();
+    let rt = Runtime::with_devices(&scene, d).unwrap();
+    let mut runs = Vec::new();
+    for lazy in [true, false] {
+        let mut opts = options(&[CullMethod::Grid], Schedule::Sequential, 20);
+        opts.modes = vec![Mode::Occ];
+        opts.accuracy_every = 0;
+        opts.runtime.grid.lazy = lazy;
+        opts.runtime.grid.cell = 8;
+        let r = replay_on(
+            &rt,
+            "c.gwk",
+            &g.path.poses,
+            "c.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .unwrap();
+        runs.push(r.runs.into_iter().next().unwrap());
+    }
+    let (lazy, eager) = (&runs[0], &runs[1]);
+    let reads = |r: &gigawalk_replay::RunRecord| -> u64 {
+        r.frames.iter().map(|f| f.grid.unwrap().pixel_reads).sum()
+    };
+    for (a, b) in lazy.frames.iter().zip(&eager.frames) {
+        assert_eq!(a.occlusion_culled, b.occlusion_culled, "frame {}", a.frame);
+        assert_eq!(a.drawn_triangles, b.drawn_triangles, "frame {}", a.frame);
+    }
+    assert!(
+        reads(lazy) < reads(eager),
+        "lazy {} vs eager {} depth reads",
+        reads(lazy),
+        reads(eager)
+    );
+}

@@ -225,7 +225,7 @@ impl SoftDepth {
             }
             let x0 = (xl - 0.5).ceil().max(bx0);
             let x1 = (xr - 0.5).floor().min(bx1);
-            if !(x0 <= x1) {
+            if x0.is_nan() || x1.is_nan() || x0 > x1 {
                 continue;
             }
             let (x0, x1) = (x0 as u32, x1 as u32);

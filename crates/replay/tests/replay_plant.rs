@@ -364,6 +364,8 @@ fn every_runtime_knob_replays_with_accuracy() {
             let opts = ReplayOptions {
                 modes: vec![Mode::Occ, Mode::Och],
                 pixel_errors: vec![1.0],
+                // Every knob with every culler.
+                cullers: gigawalk_runtime::CullMethod::ALL.to_vec(),
                 runtime: runtime.clone(),
                 memory_budget: Default::default(),
                 near: None,

@@ -244,6 +244,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             devices: args.devices,
             occluder_budget: args.occluder_budget,
             traversal: running.traversal(),
+            culler: running.culler,
             async_rvg: running.async_rvg,
             // Always: freezing must find the culled set of the frame it
             // freezes, and a list of node ids per frame is cheap.
@@ -478,6 +479,7 @@ impl LoopState {
                 Action::Quit => app.close = true,
                 Action::ToggleWalk => self.controller.toggle_walk(),
                 Action::ToggleOcclusion => self.settings.occlusion ^= true,
+                Action::CycleCuller => self.settings.cycle_culler(),
                 Action::ToggleHlod => self.settings.hlod ^= true,
                 Action::PixelErrorUp => self.settings.step_pixel_error(true),
                 Action::PixelErrorDown => self.settings.step_pixel_error(false),

@@ -96,7 +96,10 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
                 ""
             }
         ),
-        match (s.occlusion, v.occluder_budget) {
+        match (
+            s.occlusion && s.culler.needs_occluder_depth(),
+            v.occluder_budget,
+        ) {
             (true, Some(t)) => format!("mode: {}, occluders <= {} tris", s.mode(), group(t)),
             _ => format!("mode: {}", s.mode()),
         },
@@ -223,7 +226,7 @@ mod tests {
             "1,500,000 tris",
             "stream: 300/1024 MB resident, 12 loads asked, 5 stand-ins",
             "42 occlusion",
-            "occlusion + HLOD",
+            "occlusion (hzb) + HLOD",
             "FROZEN",
             "REC",
             "startup bypass",

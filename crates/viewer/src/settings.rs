@@ -3,6 +3,7 @@
 //! pipeline restarted: the runtime fixes its options per run.
 
 use gigawalk_cull::TraversalOptions;
+use gigawalk_runtime::CullMethod;
 
 /// Pixel-error steps for +/-: 0 is full detail; then doubling from half a
 /// pixel (the paper's Table 2 uses 1 to 20 pixels; 64 is far past visible).
@@ -11,6 +12,8 @@ pub const PIXEL_ERROR_STEPS: &[f64] = &[0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub occlusion: bool,
+    /// Which occlusion culler (C cycles them).
+    pub culler: CullMethod,
     pub hlod: bool,
     pub pixel_error: f64,
     /// RVG draws the newest culled set without waiting for the camera's own
@@ -29,6 +32,7 @@ impl Default for Settings {
         let t = TraversalOptions::default();
         Settings {
             occlusion: t.occlusion,
+            culler: CullMethod::default(),
             hlod: t.hlod,
             pixel_error: t.pixel_tolerance,
             async_rvg: false,
@@ -71,7 +75,16 @@ impl Settings {
 
     /// Whether going from `self` to `next` needs a new pipeline run.
     pub fn needs_restart(&self, next: &Settings) -> bool {
-        self.traversal() != next.traversal() || self.async_rvg != next.async_rvg
+        self.traversal() != next.traversal()
+            || self.async_rvg != next.async_rvg
+            || self.culler != next.culler
+    }
+
+    /// The next culler of [`CullMethod::ALL`], wrapping around.
+    pub fn cycle_culler(&mut self) {
+        let all = CullMethod::ALL;
+        let i = all.iter().position(|&c| c == self.culler).unwrap_or(0);
+        self.culler = all[(i + 1) % all.len()];
     }
 
     /// The mode as the HUD names it (Table 2's modes).
@@ -84,9 +97,9 @@ impl Settings {
         format!(
             "{}{}, {}",
             if self.occlusion {
-                "occlusion"
+                format!("occlusion ({})", self.culler)
             } else {
-                "frustum only"
+                "frustum only".to_string()
             },
             if self.hlod { " + HLOD" } else { "" },
             detail
@@ -155,9 +168,26 @@ mod tests {
     }
 
     #[test]
+    fn c_cycles_every_culler_and_restarts_the_pipeline() {
+        let mut s = Settings::default();
+        let first = s.clone();
+        let mut seen = vec![s.culler];
+        for _ in 1..CullMethod::ALL.len() {
+            s.cycle_culler();
+            assert!(first.needs_restart(&s));
+            seen.push(s.culler);
+        }
+        assert_eq!(seen, CullMethod::ALL.to_vec());
+        s.cycle_culler();
+        assert_eq!(s, first);
+        s.culler = CullMethod::Grid;
+        assert_eq!(s.mode(), "occlusion (grid) + HLOD, 1 px");
+    }
+
+    #[test]
     fn mode_names_the_table_2_mode() {
         let s = Settings::default();
-        assert_eq!(s.mode(), "occlusion + HLOD, 1 px");
+        assert_eq!(s.mode(), "occlusion (hzb) + HLOD, 1 px");
         let s = Settings {
             occlusion: false,
             hlod: false,

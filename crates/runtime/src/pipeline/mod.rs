@@ -1,0 +1,431 @@
+//! The schedules: three threads joined by queues (`pipelined`), the same
+//! with asynchronous RVG (`asynchronous`), or one thread (`sequential`).
+//! What they share is here: the frame messages, the occluder-lag and
+//! frozen-culling bookkeeping, the streaming links and the threads' join.
+
+mod asynchronous;
+mod pipelined;
+mod sequential;
+
+pub(crate) use asynchronous::run_async;
+pub(crate) use pipelined::run_pipelined;
+pub(crate) use sequential::run_sequential;
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::time::Instant;
+
+use crossbeam_channel::{bounded, Receiver, Sender};
+use gigawalk_cull::{CullView, DrawItem, Viewport};
+use gigawalk_gpu::{DepthImage, DrawStyle};
+
+use crate::stages::{Prefetch, RvgStage, StcOutput};
+use crate::streaming::{
+    self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
+};
+use crate::{
+    CameraError, CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage,
+};
+
+/// A frame's visible set as OR gets it back for a later frame's occluders:
+/// shared with the frame's report, never copied.
+pub(super) type VisibleSet = Arc<[DrawItem]>;
+
+/// Messages STC may queue for RVG: enough that STC never waits on RVG
+/// within a frame.
+pub(super) const RVG_QUEUE: usize = 64;
+
+/// Frames between OR taking a camera and RVG finishing it: one per stage,
+/// as in the paper's Figure 6. More would raise throughput only by queueing,
+/// and every queued frame adds a frame of latency.
+pub(super) const MAX_IN_FLIGHT: usize = 3;
+
+/// One camera as OR took it.
+#[derive(Clone)]
+pub(super) struct Sample {
+    pub(super) frame: u64,
+    pub(super) view: CullView,
+    pub(super) read_back: bool,
+    pub(super) hold: bool,
+    pub(super) style: DrawStyle,
+    pub(super) sampled_at: Instant,
+}
+
+/// OR -> STC: one frame's camera and occluder depth.
+pub(super) struct OrToStc {
+    pub(super) sample: Sample,
+    pub(super) depth: Option<DepthImage>,
+    pub(super) occluder_items: usize,
+    pub(super) or_ms: f64,
+}
+
+/// STC -> RVG: a frame is `Begin`, any number of `Items`, then the
+/// sentinel `End` carrying the frame number, camera and statistics.
+pub(super) enum StcToRvg {
+    Begin(u64, Box<CullView>, DrawStyle),
+    Items(Vec<u32>),
+    End(Box<FrameEnd>),
+}
+
+/// What the sentinel carries.
+pub(super) struct FrameEnd {
+    pub(super) sample: Sample,
+    pub(super) occluder_items: usize,
+    pub(super) or_ms: f64,
+    pub(super) stc: StcOutput,
+    pub(super) reused: bool,
+}
+
+/// The view of camera request `frame`, or `None` at the end of the source.
+pub(super) fn next_sample(
+    source: &mut dyn CameraSource,
+    frame: u64,
+    opts: &RuntimeOptions,
+) -> Result<Option<Sample>, RuntimeError> {
+    let Some(req) = source.next_camera(frame)? else {
+        return Ok(None);
+    };
+    let viewport = Viewport::new(opts.width, opts.height);
+    let camera = gigawalk_cull::Camera {
+        aspect: viewport.aspect(),
+        ..req.camera
+    };
+    if !camera.is_valid() {
+        return Err(CameraError::Invalid { frame, camera }.into());
+    }
+    Ok(Some(Sample {
+        frame,
+        view: CullView::new(camera, viewport),
+        read_back: req.read_back,
+        hold: req.hold_culling,
+        style: req.style,
+        sampled_at: Instant::now(),
+    }))
+}
+
+pub(super) fn report(
+    end: FrameEnd,
+    image: Option<gigawalk_gpu::FrameImage>,
+    rvg_ms: f64,
+    streaming: StreamStats,
+) -> FrameReport {
+    FrameReport {
+        frame: end.sample.frame,
+        camera: end.sample.view.camera,
+        sampled_at: end.sample.sampled_at,
+        finished_at: Instant::now(),
+        occlusion_used: end.stc.occlusion_used,
+        occluder_items: end.occluder_items,
+        or_ms: end.or_ms,
+        hzb_ms: end.stc.hzb_ms,
+        grid: end.stc.grid,
+        stc_ms: end.stc.ms,
+        rvg_ms,
+        stats: end.stc.stats,
+        streaming,
+        visible: end.stc.visible,
+        culled: end.stc.culled,
+        reused_visible_set: end.reused,
+        image,
+    }
+}
+
+/// Finishes RVG's frame: presents, then reads back if asked.
+pub(super) fn finish_frame(
+    rvg: &mut RvgStage,
+    presenter: &mut dyn Presenter,
+    end: FrameEnd,
+) -> Result<FrameReport, RuntimeError> {
+    let read_back = end.sample.read_back;
+    let (_, rvg_ms) = rvg.finish(false)?;
+    let mut r = report(end, None, rvg_ms, rvg.stream_stats());
+    presenter
+        .present(rvg.device.ctx, &rvg.pass, &r)
+        .map_err(|source| RuntimeError::Gpu {
+            stage: Stage::Rvg,
+            source,
+        })?;
+    if read_back {
+        r.image = rvg.read_back()?;
+    }
+    r.rvg_ms = (Instant::now() - r.finished_at).as_secs_f64() * 1e3 + rvg_ms;
+    r.finished_at = Instant::now();
+    Ok(r)
+}
+
+/// One run's streaming queues: the loader's ends of them.
+pub(super) struct LoaderQueues<'a> {
+    source: &'a dyn LodSource,
+    requests: Receiver<Request>,
+    prefetches: Receiver<Request>,
+    devices: Vec<Sender<streaming::Loaded>>,
+    plan: &'a streaming::Plan,
+    mask: u8,
+}
+
+impl LoaderQueues<'_> {
+    pub(super) fn body(self) -> Result<(), RuntimeError> {
+        streaming::loader(
+            self.source,
+            self.requests,
+            self.prefetches,
+            self.devices,
+            self.plan,
+            self.mask,
+        )
+    }
+}
+
+/// One run's streaming ends: the loader's, OR's, RVG's and STC's
+/// (prefetch, when on); all `None` when the scene is resident.
+#[derive(Default)]
+pub(super) struct StreamLinks<'a> {
+    pub(super) loader: Option<LoaderQueues<'a>>,
+    pub(super) or: Option<Link>,
+    pub(super) rvg: Option<Link>,
+    pub(super) stc: Option<Prefetch<'a>>,
+}
+
+/// When the runtime streams: the loader's queues, and OR's, RVG's and
+/// STC's links (OR on device `a`, RVG on `b`; one inbox per device, both
+/// stages' when they share one). Made per run, so the loader ends when
+/// the stages drop their links.
+pub(super) fn stream_links<'a>(
+    rt: &'a Runtime<'_>,
+    opts: &RuntimeOptions,
+    a: usize,
+    b: usize,
+) -> StreamLinks<'a> {
+    let (source, Some(plan)) = (rt.source, rt.plan.as_ref()) else {
+        return StreamLinks::default();
+    };
+    let mask = (1u8 << a.min(7)) | (1u8 << b.min(7));
+    plan.start_run();
+    let (requests_tx, requests) = bounded(REQUEST_QUEUE);
+    let (a_tx, a_rx) = bounded(INBOX);
+    let mut devices = vec![a_tx];
+    let or_link = Link {
+        requests: None,
+        inbox: a_rx.clone(),
+    };
+    let rvg_inbox = if a == b {
+        a_rx
+    } else {
+        let (b_tx, b_rx) = bounded(INBOX);
+        devices.push(b_tx);
+        b_rx
+    };
+    let (prefetch_tx, prefetches) = bounded(PREFETCH_QUEUE);
+    let stc = opts.prefetch.any().then(|| Prefetch {
+        requests: prefetch_tx,
+        plan,
+        mask,
+    });
+    let rvg_link = Link {
+        requests: Some(requests_tx),
+        inbox: rvg_inbox,
+    };
+    StreamLinks {
+        loader: Some(LoaderQueues {
+            source,
+            requests,
+            prefetches,
+            devices,
+            plan,
+            mask,
+        }),
+        or: Some(or_link),
+        rvg: Some(rvg_link),
+        stc,
+    }
+}
+
+pub(super) fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// One stage's thread body.
+pub(super) type StageBody<'scope> = Box<dyn FnOnce() -> Result<(), RuntimeError> + Send + 'scope>;
+
+/// Runs the stage bodies (OR, STC, RVG, and the loader when streaming) on
+/// their own threads, feeds reports to
+/// `on_frame` on this thread, and returns the first stage error. A thread
+/// the system cannot start is an error too: its body is dropped unrun,
+/// which closes its queues, so the stages already started stop as they
+/// would after a stage error.
+pub(super) fn run_threads<'scope, 'env>(
+    s: &'scope std::thread::Scope<'scope, 'env>,
+    stages: Vec<(Stage, StageBody<'scope>)>,
+    reports: Receiver<FrameReport>,
+    on_frame: &mut dyn FnMut(FrameReport) -> bool,
+) -> Result<u64, RuntimeError> {
+    let mut handles = Vec::with_capacity(stages.len());
+    let mut first_error = None;
+    for (stage, body) in stages {
+        if first_error.is_some() {
+            continue; // dropping the body closes its queues
+        }
+        match std::thread::Builder::new()
+            .name(format!("gigawalk-{stage}"))
+            .spawn_scoped(s, body)
+        {
+            Ok(h) => handles.push((stage, h)),
+            Err(source) => first_error = Some(RuntimeError::Spawn { stage, source }),
+        }
+    }
+    let mut frames = 0;
+    let mut stopped = false;
+    if first_error.is_none() {
+        for report in reports.iter() {
+            frames += 1;
+            if !on_frame(report) {
+                break;
+            }
+        }
+    }
+    // Closing the report queue stops RVG, whose queues closing stop the rest.
+    drop(reports);
+    for (stage, handle) in handles {
+        let result = handle.join().unwrap_or_else(|p| {
+            Err(RuntimeError::Panic {
+                stage,
+                message: panic_message(p),
+            })
+        });
+        // A stage that merely saw its queue close returns Ok, so the error
+        // kept is the root cause; one that saw the loader stop defers to
+        // the loader's error.
+        match result {
+            Err(RuntimeError::LoaderStopped) => {
+                stopped = true;
+            }
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+            Ok(()) => {}
+        }
+    }
+    if stopped && first_error.is_none() {
+        first_error = Some(RuntimeError::LoaderStopped);
+    }
+    match first_error {
+        Some(e) => Err(e),
+        None => Ok(frames),
+    }
+}
+
+pub(super) fn rvg_device(rt: &Runtime, opts: &RuntimeOptions) -> usize {
+    if opts.devices >= 2 && rt.devices.len() >= 2 {
+        1
+    } else {
+        0
+    }
+}
+
+/// Frame i's occluders: the visible set of frame i - lag (paper Section
+/// 5.1.1). Every schedule keeps them here, by frame number: the first
+/// `lag` frames, and in the asynchronous schedule any frame with no
+/// finished set that old, have none (the startup bypass).
+pub(super) struct Occluders {
+    /// (frame, visible set), oldest first.
+    sets: VecDeque<(u64, VisibleSet)>,
+    lag: u64,
+    wanted: bool,
+}
+
+impl Occluders {
+    pub(super) fn new(opts: &RuntimeOptions) -> Self {
+        Occluders {
+            sets: VecDeque::new(),
+            lag: opts.occluder_lag as u64,
+            wanted: opts.wants_occluder_depth(),
+        }
+    }
+
+    /// Frame `frame`'s visible set, once culled.
+    pub(super) fn push(&mut self, frame: u64, set: VisibleSet) {
+        self.sets.push_back((frame, set));
+        // Bounded whatever the caller asks for.
+        while self.sets.len() > 64 {
+            self.sets.pop_front();
+        }
+    }
+
+    /// The occluders of frame `frame`: the newest set of a frame at least
+    /// `lag` older; `None` when OR is not wanted or there is none yet.
+    pub(super) fn for_frame(&mut self, frame: u64) -> Option<&[DrawItem]> {
+        let cutoff = frame.checked_sub(self.lag).filter(|_| self.wanted)?;
+        while self.sets.len() >= 2 && self.sets[1].0 <= cutoff {
+            self.sets.pop_front();
+        }
+        self.sets
+            .front()
+            .filter(|(f, _)| *f <= cutoff)
+            .map(|(_, s)| &s[..])
+    }
+}
+
+/// Frozen culling: a frame that holds culling gets the last culled set,
+/// unchanged. Before any frame was culled there is nothing to hold, so the
+/// frame culls normally.
+#[derive(Default)]
+pub(super) struct Frozen {
+    last: Option<StcOutput>,
+}
+
+impl Frozen {
+    /// The held result for a frame that holds (`hold`), else `None`.
+    pub(super) fn held(&self, hold: bool) -> Option<StcOutput> {
+        let last = self.last.as_ref().filter(|_| hold)?;
+        Some(StcOutput {
+            ms: 0.0,
+            hzb_ms: 0.0,
+            ..last.clone()
+        })
+    }
+
+    pub(super) fn record(&mut self, s: &StcOutput) {
+        self.last = Some(s.clone());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(n: u32) -> VisibleSet {
+        vec![DrawItem { node: n, lod: 0 }].into()
+    }
+
+    #[test]
+    fn occluders_are_frame_i_minus_lag_and_none_in_the_startup_bypass() {
+        let opts = RuntimeOptions::default();
+        let mut o = Occluders::new(&opts);
+        assert!(o.for_frame(0).is_none() && o.for_frame(1).is_none());
+        for f in 0..10u64 {
+            if f >= 2 {
+                assert_eq!(o.for_frame(f).unwrap()[0].node as u64, f - 2, "frame {f}");
+            }
+            o.push(f, set(f as u32));
+        }
+        // Frames skipped (asynchronous): the newest set at least lag older.
+        let mut o = Occluders::new(&opts);
+        o.push(3, set(3));
+        o.push(7, set(7));
+        assert!(o.for_frame(4).is_none());
+        assert_eq!(o.for_frame(8).unwrap()[0].node, 3);
+        assert_eq!(o.for_frame(9).unwrap()[0].node, 7);
+        assert_eq!(o.for_frame(20).unwrap()[0].node, 7);
+        // A culler that reads no occluder depth gets none.
+        let grid = RuntimeOptions {
+            culler: crate::CullMethod::Grid,
+            ..Default::default()
+        };
+        let mut o = Occluders::new(&grid);
+        o.push(0, set(0));
+        assert!(o.for_frame(5).is_none());
+    }
+}

@@ -37,6 +37,7 @@ pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINN
 
 use gigawalk_gpu::HostGeometry;
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
+use stages::Target;
 use streaming::{DeviceStream, Geometry, Plan};
 
 /// Why the runtime could not start, or why a run stopped early.
@@ -427,24 +428,8 @@ impl<'s> Runtime<'s> {
         presenter: &mut dyn Presenter,
     ) -> Result<u64, RuntimeError> {
         opts.validate()?;
-        let opts = &RuntimeOptions {
-            occluder_budget: match self.occluder_budget(opts.occluder_budget) {
-                Some(t) => OccluderBudget::Triangles(t),
-                None => OccluderBudget::All,
-            },
-            ..opts.clone()
-        };
-        match (opts.schedule, opts.async_rvg) {
-            (Schedule::Sequential, _) => {
-                pipeline::run_sequential(self, opts, source, on_frame, presenter)
-            }
-            (Schedule::Pipelined, false) => {
-                pipeline::run_pipelined(self, opts, source, on_frame, presenter)
-            }
-            (Schedule::Pipelined, true) => {
-                pipeline::run_async(self, opts, source, on_frame, presenter)
-            }
-        }
+        let budget = self.occluder_budget(opts.occluder_budget);
+        schedule(Target::gpu(self), opts, budget, source, on_frame, presenter)
     }
 
     /// The occluder budget `budget` means on these devices, in triangles
@@ -458,6 +443,62 @@ impl<'s> Runtime<'s> {
     pub fn device(&self, i: usize) -> &GpuContext {
         &self.devices[i.min(self.devices.len().saturating_sub(1))]
     }
+}
+
+/// Runs `opts`'s schedule on `target` with the occluder budget resolved.
+fn schedule(
+    target: Target,
+    opts: &RuntimeOptions,
+    occluder_budget: Option<u64>,
+    source: &mut dyn CameraSource,
+    on_frame: &mut dyn FnMut(FrameReport) -> bool,
+    presenter: &mut dyn Presenter,
+) -> Result<u64, RuntimeError> {
+    let opts = &RuntimeOptions {
+        occluder_budget: match occluder_budget {
+            Some(t) => OccluderBudget::Triangles(t),
+            None => OccluderBudget::All,
+        },
+        ..opts.clone()
+    };
+    match (opts.schedule, opts.async_rvg) {
+        (Schedule::Sequential, _) => {
+            pipeline::run_sequential(target, opts, source, on_frame, presenter)
+        }
+        (Schedule::Pipelined, false) => {
+            pipeline::run_pipelined(target, opts, source, on_frame, presenter)
+        }
+        (Schedule::Pipelined, true) => {
+            pipeline::run_async(target, opts, source, on_frame, presenter)
+        }
+    }
+}
+
+/// Runs `opts`'s schedule (threads, queues, occluder lag, frozen culling,
+/// asynchronous RVG: the same code as [`Runtime::run`]) with OR and RVG
+/// drawing on the CPU: gigawalk-cull's conservative software depth
+/// rasterizer, LODs read from `source` on first use, colour all zeros, no
+/// streaming, `devices` ignored, `auto` occluder budget as on a CPU
+/// rasterizer. For testing the schedules without an adapter (feature
+/// `testing`).
+#[cfg(feature = "testing")]
+pub fn run_on_cpu(
+    skeleton: &Skeleton,
+    source: &dyn LodSource,
+    opts: &RuntimeOptions,
+    cameras: &mut dyn CameraSource,
+    on_frame: &mut dyn FnMut(FrameReport) -> bool,
+) -> Result<u64, RuntimeError> {
+    opts.validate()?;
+    let budget = opts.occluder_budget.resolve(true);
+    schedule(
+        Target::cpu(skeleton, source),
+        opts,
+        budget,
+        cameras,
+        on_frame,
+        &mut NoPresenter,
+    )
 }
 
 /// The pipeline uses one or two devices.

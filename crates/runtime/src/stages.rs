@@ -7,14 +7,14 @@ use std::time::Instant;
 use gigawalk_cull::{
     reselect_lods, select_occluders, Camera, Containment, CullReason, CullView, DrawItem, Frustum,
     GridCuller, GridStats, Hzb, HzbOcclusion, NoOcclusion, OcclusionGrid, OcclusionTest, RelBox,
-    TraversalOptions, TraversalStats, Traverser, ALL_PLANES,
+    SoftDepth, TraversalOptions, TraversalStats, Traverser, TriangleSource, ALL_PLANES,
 };
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
 
 use crate::streaming::{Geometry, Link, LodSource, Plan, Request, StreamStats, Use, PREFETCH_BAND};
 use crate::triangles::TriangleCache;
-use crate::{CullMethod, OccluderBudget, Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::{CullMethod, OccluderBudget, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
 
 /// A stage's device, its geometry there, and (streaming) its end of the
 /// run's loader queues.
@@ -106,12 +106,160 @@ pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(),
     Ok(())
 }
 
+/// What the stages draw on: the runtime's wgpu devices, or (the
+/// `testing` feature's `run_on_cpu`) the CPU's software depth
+/// rasterizer, so the schedules can be tested without an adapter.
+#[derive(Clone, Copy)]
+pub(crate) struct Target<'a> {
+    pub skeleton: &'a Skeleton,
+    pub source: &'a dyn LodSource,
+    pub plan: Option<&'a Plan>,
+    gpu: Option<&'a Runtime<'a>>,
+}
+
+impl<'a> Target<'a> {
+    pub fn gpu(rt: &'a Runtime<'a>) -> Self {
+        Target {
+            skeleton: rt.skeleton,
+            source: rt.source,
+            plan: rt.plan.as_ref(),
+            gpu: Some(rt),
+        }
+    }
+
+    /// Depth only, no colour, no streaming (see [`CpuRaster`]).
+    #[cfg_attr(not(feature = "testing"), allow(dead_code))]
+    pub fn cpu(skeleton: &'a Skeleton, source: &'a dyn LodSource) -> Self {
+        Target {
+            skeleton,
+            source,
+            plan: None,
+            gpu: None,
+        }
+    }
+
+    /// The device RVG draws on: the second when there are two and the
+    /// options ask for two.
+    pub fn rvg_device(&self, opts: &RuntimeOptions) -> usize {
+        match self.gpu {
+            Some(rt) if opts.devices >= 2 && rt.devices.len() >= 2 => 1,
+            _ => 0,
+        }
+    }
+
+    /// OR on device 0.
+    pub fn or_stage(&self, opts: &'a RuntimeOptions, link: Option<Link>) -> OrStage<'a> {
+        let (w, h) = opts.occluder_size();
+        let render = match self.gpu {
+            Some(rt) => {
+                let device = DeviceGeometry::new(rt, 0, link);
+                OrRender::Gpu {
+                    pass: Box::new(DepthPass::new(device.ctx, w, h)),
+                    device,
+                }
+            }
+            None => OrRender::Cpu(Box::new(CpuRaster::new(self.source, w, h))),
+        };
+        OrStage {
+            skeleton: self.skeleton,
+            opts,
+            render,
+        }
+    }
+
+    /// RVG on `device`.
+    pub fn rvg_stage(
+        &self,
+        opts: &'a RuntimeOptions,
+        device: usize,
+        link: Option<Link>,
+    ) -> RvgStage<'a> {
+        let render = match self.gpu {
+            Some(rt) => {
+                let device = DeviceGeometry::new(rt, device, link);
+                RvgRender::Gpu {
+                    pass: Box::new(VisiblePass::new(device.ctx, opts.width, opts.height)),
+                    device,
+                }
+            }
+            None => RvgRender::Cpu(Box::new(CpuRaster::new(
+                self.source,
+                opts.width,
+                opts.height,
+            ))),
+        };
+        RvgStage {
+            render,
+            opts,
+            started: None,
+            frame: 0,
+        }
+    }
+}
+
+/// The CPU's stand-in for a device: LODs drawn into a software depth
+/// image (gigawalk-cull's conservative rasterizer) from triangles read
+/// on first use. Depth only; colour reads back as zeros.
+pub(crate) struct CpuRaster<'a> {
+    triangles: TriangleCache<'a>,
+    soft: SoftDepth,
+    view_proj: glam::DMat4,
+    eye: glam::DVec3,
+    width: u32,
+    height: u32,
+}
+
+impl<'a> CpuRaster<'a> {
+    fn new(source: &'a dyn LodSource, width: u32, height: u32) -> Self {
+        CpuRaster {
+            triangles: TriangleCache::new(source, u64::MAX),
+            soft: SoftDepth::new(),
+            view_proj: glam::DMat4::IDENTITY,
+            eye: glam::DVec3::ZERO,
+            width,
+            height,
+        }
+    }
+
+    fn begin(&mut self, view: &CullView) {
+        self.soft.reset(self.width, self.height);
+        self.view_proj = view.camera.view_projection_rel_f64();
+        self.eye = view.camera.position;
+    }
+
+    fn draw(&mut self, lods: &[u32]) {
+        for &l in lods {
+            if let Some(t) = self.triangles.lod_triangles(l) {
+                self.soft
+                    .draw_mesh(&self.view_proj, t.origin - self.eye, t.positions, t.indices);
+            }
+        }
+    }
+
+    fn depth(&self) -> DepthImage {
+        DepthImage {
+            width: self.width,
+            height: self.height,
+            depth: self.soft.depth().to_vec(),
+        }
+    }
+}
+
+/// OR's drawing: a depth pass on a device, or the CPU.
+enum OrRender<'a> {
+    Gpu {
+        device: DeviceGeometry<'a>,
+        pass: Box<DepthPass>,
+    },
+    Cpu(Box<CpuRaster<'a>>),
+}
+
 /// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
 /// camera i (Section 5.2), at the occluder resolution.
 pub(crate) struct OrStage<'a> {
-    pub device: DeviceGeometry<'a>,
-    pub opts: &'a RuntimeOptions,
-    pub pass: DepthPass,
+    skeleton: &'a Skeleton,
+    opts: &'a RuntimeOptions,
+    render: OrRender<'a>,
 }
 
 pub(crate) struct OrOutput {
@@ -121,15 +269,6 @@ pub(crate) struct OrOutput {
 }
 
 impl<'a> OrStage<'a> {
-    pub fn new(device: DeviceGeometry<'a>, opts: &'a RuntimeOptions) -> Self {
-        let (w, h) = opts.occluder_size();
-        OrStage {
-            pass: DepthPass::new(device.ctx, w, h),
-            device,
-            opts,
-        }
-    }
-
     /// `occluders` is `None` during the startup bypass or with occlusion off.
     pub fn run(
         &mut self,
@@ -150,7 +289,7 @@ impl<'a> OrStage<'a> {
         // The same LOD choice STC makes for this camera (conservative mode).
         let mut items = Vec::with_capacity(occluders.len());
         reselect_lods(
-            self.device.skeleton,
+            self.skeleton,
             view,
             &self.opts.traversal,
             occluders,
@@ -158,7 +297,7 @@ impl<'a> OrStage<'a> {
         );
         // `run_presenting` resolved `Auto` for these devices.
         if let OccluderBudget::Triangles(budget) = self.opts.occluder_budget {
-            select_occluders(self.device.skeleton, view, &mut items, budget);
+            select_occluders(self.skeleton, view, &mut items, budget);
         }
         if items.is_empty() {
             // No occluder (a budget of 0, or nothing in view): an all-far
@@ -169,18 +308,27 @@ impl<'a> OrStage<'a> {
                 ms: ms_since(t),
             });
         }
-        let lods = lod_ids(self.device.skeleton, &items);
-        let (pass, ctx) = (&mut self.pass, self.device.ctx);
-        // Streaming: resident occluders only (culling stays conservative).
-        let depth = self
-            .device
-            .with(frame, &lods, Use::Occluders, |residency, lods| {
-                pass.render(ctx, residency, &gpu_view(view), lods)
-            })?
-            .map_err(|source| RuntimeError::Gpu {
-                stage: Stage::Or,
-                source,
-            })?;
+        let lods = lod_ids(self.skeleton, &items);
+        let depth = match &mut self.render {
+            OrRender::Gpu { device, pass } => {
+                let ctx = device.ctx;
+                // Streaming: resident occluders only (culling stays
+                // conservative).
+                device
+                    .with(frame, &lods, Use::Occluders, |residency, lods| {
+                        pass.render(ctx, residency, &gpu_view(view), lods)
+                    })?
+                    .map_err(|source| RuntimeError::Gpu {
+                        stage: Stage::Or,
+                        source,
+                    })?
+            }
+            OrRender::Cpu(c) => {
+                c.begin(view);
+                c.draw(&lods);
+                c.depth()
+            }
+        };
         Ok(OrOutput {
             depth: Some(depth),
             occluder_items: items.len(),
@@ -445,26 +593,31 @@ impl<'a> StcStage<'a> {
     }
 }
 
+/// RVG's drawing: a visible pass on a device, or the CPU.
+enum RvgRender<'a> {
+    Gpu {
+        device: DeviceGeometry<'a>,
+        pass: Box<VisiblePass>,
+    },
+    Cpu(Box<CpuRaster<'a>>),
+}
+
 /// RVG: draws a frame's items as they arrive.
 pub(crate) struct RvgStage<'a> {
-    pub device: DeviceGeometry<'a>,
-    pub opts: &'a RuntimeOptions,
-    pub pass: VisiblePass,
+    render: RvgRender<'a>,
+    opts: &'a RuntimeOptions,
     started: Option<Instant>,
     frame: u64,
 }
 
-impl<'a> RvgStage<'a> {
-    pub fn new(device: DeviceGeometry<'a>, opts: &'a RuntimeOptions) -> Self {
-        RvgStage {
-            pass: VisiblePass::new(device.ctx, opts.width, opts.height),
-            device,
-            opts,
-            started: None,
-            frame: 0,
-        }
+fn rvg_error(source: gigawalk_gpu::GpuError) -> RuntimeError {
+    RuntimeError::Gpu {
+        stage: Stage::Rvg,
+        source,
     }
+}
 
+impl<'a> RvgStage<'a> {
     pub fn begin(
         &mut self,
         frame: u64,
@@ -474,7 +627,10 @@ impl<'a> RvgStage<'a> {
         check_injected(self.opts, Stage::Rvg, frame)?;
         self.started = Some(Instant::now());
         self.frame = frame;
-        self.pass.begin(self.device.ctx, &gpu_view(view), style);
+        match &mut self.render {
+            RvgRender::Gpu { device, pass } => pass.begin(device.ctx, &gpu_view(view), style),
+            RvgRender::Cpu(c) => c.begin(view),
+        }
         Ok(())
     }
 
@@ -482,39 +638,61 @@ impl<'a> RvgStage<'a> {
     /// stand-ins for the rest).
     pub fn draw(&mut self, lods: &[u32]) -> Result<(), RuntimeError> {
         let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
-        let (pass, ctx) = (&mut self.pass, self.device.ctx);
-        self.device
-            .with(self.frame, lods, Use::Visible, |residency, lods| {
-                pass.draw(ctx, residency, lods)
-            })
+        match &mut self.render {
+            RvgRender::Gpu { device, pass } => {
+                let ctx = device.ctx;
+                device.with(self.frame, lods, Use::Visible, |residency, lods| {
+                    pass.draw(ctx, residency, lods)
+                })
+            }
+            RvgRender::Cpu(c) => {
+                c.draw(lods);
+                Ok(())
+            }
+        }
     }
 
     /// The frame's streaming figures (call once, as the frame ends).
     pub fn stream_stats(&self) -> StreamStats {
-        self.device.take_stats()
+        match &self.render {
+            RvgRender::Gpu { device, .. } => device.take_stats(),
+            RvgRender::Cpu(_) => StreamStats::default(),
+        }
+    }
+
+    /// Shows the finished frame (a device only).
+    pub fn present(
+        &mut self,
+        presenter: &mut dyn Presenter,
+        report: &crate::FrameReport,
+    ) -> Result<(), RuntimeError> {
+        match &self.render {
+            RvgRender::Gpu { device, pass } => presenter
+                .present(device.ctx, pass, report)
+                .map_err(rvg_error),
+            RvgRender::Cpu(_) => Ok(()),
+        }
     }
 
     /// Reads back the finished frame's colour and depth.
     pub fn read_back(&mut self) -> Result<Option<FrameImage>, RuntimeError> {
-        self.pass
-            .read_back(self.device.ctx)
-            .map(Some)
-            .map_err(|source| RuntimeError::Gpu {
-                stage: Stage::Rvg,
-                source,
-            })
+        match &mut self.render {
+            RvgRender::Gpu { device, pass } => {
+                pass.read_back(device.ctx).map(Some).map_err(rvg_error)
+            }
+            RvgRender::Cpu(c) => Ok(Some(FrameImage {
+                colour: vec![0; c.width as usize * c.height as usize * 4],
+                depth: c.depth(),
+            })),
+        }
     }
 
-    /// Waits for the frame; returns its image if asked and the stage's ms.
-    pub fn finish(&mut self, read_back: bool) -> Result<(Option<FrameImage>, f64), RuntimeError> {
-        let image = self
-            .pass
-            .finish(self.device.ctx, read_back)
-            .map_err(|source| RuntimeError::Gpu {
-                stage: Stage::Rvg,
-                source,
-            })?;
-        Ok((image, self.started.take().map_or(0.0, ms_since)))
+    /// Waits for the frame; returns the stage's ms.
+    pub fn finish(&mut self) -> Result<f64, RuntimeError> {
+        if let RvgRender::Gpu { device, pass } = &mut self.render {
+            pass.finish(device.ctx, false).map_err(rvg_error)?;
+        }
+        Ok(self.started.take().map_or(0.0, ms_since))
     }
 }
 

@@ -7,7 +7,7 @@ use std::sync::{Condvar, Mutex};
 use crossbeam_channel::{unbounded, TryRecvError};
 
 use super::*;
-use crate::stages::{lod_ids, DeviceGeometry, OrStage, StcStage};
+use crate::stages::{lod_ids, OrStage, StcStage, Target};
 use crate::{CameraSource, Presenter};
 
 /// The newest camera, handed from RVG (which owns the camera source in
@@ -64,7 +64,7 @@ impl Drop for CloseOnDrop<'_> {
 /// newest finished visible set with it at once; OR and STC work on the
 /// newest camera whenever they are free.
 pub(crate) fn run_async(
-    rt: &Runtime,
+    t: Target,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
@@ -78,7 +78,7 @@ pub(crate) fn run_async(
     let (sets_tx, sets_rx) = bounded::<Box<FrameEnd>>(2);
     let (feedback_tx, feedback_rx) = unbounded::<(u64, VisibleSet)>();
     let (report_tx, report_rx) = bounded::<FrameReport>(1);
-    let b = rvg_device(rt, opts);
+    let b = t.rvg_device(opts);
     let latest = &latest;
     // Owned by RVG's body, so the slot closes when RVG ends for any reason,
     // or when its body is dropped without running.
@@ -88,20 +88,20 @@ pub(crate) fn run_async(
         or: or_link,
         rvg: rvg_link,
         stc: prefetch,
-    } = stream_links(rt, opts, 0, b);
+    } = stream_links(t, opts, 0, b);
     std::thread::scope(|s| {
         let mut stages: Vec<(Stage, StageBody)> = vec![
             (
                 Stage::Or,
                 Box::new(move || {
-                    let or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
+                    let or = t.or_stage(opts, or_link);
                     async_or_thread(or, opts, latest, or_tx, feedback_rx)
                 }),
             ),
             (
                 Stage::Stc,
                 Box::new(move || {
-                    let stc = StcStage::new(rt.skeleton, rt.source, opts, prefetch);
+                    let stc = StcStage::new(t.skeleton, t.source, opts, prefetch);
                     async_stc_thread(stc, or_rx, sets_tx, feedback_tx)
                 }),
             ),
@@ -109,8 +109,8 @@ pub(crate) fn run_async(
                 Stage::Rvg,
                 Box::new(move || {
                     let _close = close;
-                    let rvg = RvgStage::new(DeviceGeometry::new(rt, b, rvg_link), opts);
-                    async_rvg_thread(rvg, rt, opts, source, latest, sets_rx, report_tx, presenter)
+                    let rvg = t.rvg_stage(opts, b, rvg_link);
+                    async_rvg_thread(rvg, t, opts, source, latest, sets_rx, report_tx, presenter)
                 }),
             ),
         ];
@@ -188,7 +188,7 @@ fn async_stc_thread(
 #[allow(clippy::too_many_arguments)]
 fn async_rvg_thread(
     mut rvg: RvgStage,
-    rt: &Runtime,
+    t: Target,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     latest: &LatestSlot,
@@ -221,7 +221,7 @@ fn async_rvg_thread(
         let set = newest.as_ref().expect("a visible set");
         let reused = set.sample.frame != frame;
         rvg.begin(frame, &sample.view, sample.style)?;
-        for chunk in lod_ids(rt.skeleton, &set.stc.visible).chunks(opts.chunk) {
+        for chunk in lod_ids(t.skeleton, &set.stc.visible).chunks(opts.chunk) {
             rvg.draw(chunk)?;
         }
         let end = FrameEnd {

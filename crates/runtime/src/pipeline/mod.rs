@@ -19,12 +19,12 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
-use crate::stages::{Prefetch, RvgStage, StcOutput};
+use crate::stages::{Prefetch, RvgStage, StcOutput, Target};
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
 };
 use crate::{
-    CameraError, CameraSource, FrameReport, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage,
+    CameraError, CameraSource, FrameReport, Presenter, RuntimeError, RuntimeOptions, Stage,
 };
 
 /// A frame's visible set as OR gets it back for a later frame's occluders:
@@ -137,14 +137,9 @@ pub(super) fn finish_frame(
     end: FrameEnd,
 ) -> Result<FrameReport, RuntimeError> {
     let read_back = end.sample.read_back;
-    let (_, rvg_ms) = rvg.finish(false)?;
+    let rvg_ms = rvg.finish()?;
     let mut r = report(end, None, rvg_ms, rvg.stream_stats());
-    presenter
-        .present(rvg.device.ctx, &rvg.pass, &r)
-        .map_err(|source| RuntimeError::Gpu {
-            stage: Stage::Rvg,
-            source,
-        })?;
+    rvg.present(presenter, &r)?;
     if read_back {
         r.image = rvg.read_back()?;
     }
@@ -191,12 +186,12 @@ pub(super) struct StreamLinks<'a> {
 /// stages' when they share one). Made per run, so the loader ends when
 /// the stages drop their links.
 pub(super) fn stream_links<'a>(
-    rt: &'a Runtime<'_>,
+    t: Target<'a>,
     opts: &RuntimeOptions,
     a: usize,
     b: usize,
 ) -> StreamLinks<'a> {
-    let (source, Some(plan)) = (rt.source, rt.plan.as_ref()) else {
+    let (source, Some(plan)) = (t.source, t.plan) else {
         return StreamLinks::default();
     };
     let mask = (1u8 << a.min(7)) | (1u8 << b.min(7));
@@ -314,14 +309,6 @@ pub(super) fn run_threads<'scope, 'env>(
     match first_error {
         Some(e) => Err(e),
         None => Ok(frames),
-    }
-}
-
-pub(super) fn rvg_device(rt: &Runtime, opts: &RuntimeOptions) -> usize {
-    if opts.devices >= 2 && rt.devices.len() >= 2 {
-        1
-    } else {
-        0
     }
 }
 

@@ -5,11 +5,11 @@
 use crossbeam_channel::unbounded;
 
 use super::*;
-use crate::stages::{lod_ids, DeviceGeometry, OrStage, StcStage};
+use crate::stages::{lod_ids, OrStage, StcStage, Target};
 use crate::{CameraSource, Presenter};
 
 pub(crate) fn run_pipelined(
-    rt: &Runtime,
+    t: Target,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
@@ -25,33 +25,33 @@ pub(crate) fn run_pipelined(
     for _ in 0..MAX_IN_FLIGHT {
         token_tx.send(()).expect("room for every token");
     }
-    let b = rvg_device(rt, opts);
+    let b = t.rvg_device(opts);
     let StreamLinks {
         loader,
         or: or_link,
         rvg: rvg_link,
         stc: prefetch,
-    } = stream_links(rt, opts, 0, b);
+    } = stream_links(t, opts, 0, b);
     std::thread::scope(|s| {
         let mut stages: Vec<(Stage, StageBody)> = vec![
             (
                 Stage::Or,
                 Box::new(move || {
-                    let or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
+                    let or = t.or_stage(opts, or_link);
                     or_thread(or, opts, source, or_tx, feedback_rx, token_rx)
                 }),
             ),
             (
                 Stage::Stc,
                 Box::new(move || {
-                    let stc = StcStage::new(rt.skeleton, rt.source, opts, prefetch);
-                    stc_thread(stc, rt, opts, or_rx, rvg_tx, feedback_tx)
+                    let stc = StcStage::new(t.skeleton, t.source, opts, prefetch);
+                    stc_thread(stc, t, opts, or_rx, rvg_tx, feedback_tx)
                 }),
             ),
             (
                 Stage::Rvg,
                 Box::new(move || {
-                    let rvg = RvgStage::new(DeviceGeometry::new(rt, b, rvg_link), opts);
+                    let rvg = t.rvg_stage(opts, b, rvg_link);
                     rvg_thread(rvg, rvg_rx, report_tx, token_tx, presenter)
                 }),
             ),
@@ -116,7 +116,7 @@ fn or_thread(
 
 fn stc_thread(
     mut stc: StcStage,
-    rt: &Runtime,
+    t: Target,
     opts: &RuntimeOptions,
     input: Receiver<OrToStc>,
     out: Sender<StcToRvg>,
@@ -137,7 +137,7 @@ fn stc_thread(
         }
         let (s, reused) = match frozen.held(m.sample.hold) {
             Some(s) => {
-                for chunk in lod_ids(rt.skeleton, &s.visible).chunks(opts.chunk) {
+                for chunk in lod_ids(t.skeleton, &s.visible).chunks(opts.chunk) {
                     if out.send(StcToRvg::Items(chunk.to_vec())).is_err() {
                         return Ok(());
                     }
@@ -148,7 +148,7 @@ fn stc_thread(
                 let mut chunk = Vec::with_capacity(opts.chunk);
                 let mut closed = false;
                 let s = stc.run(frame, &m.sample.view, m.depth.as_ref(), &mut |item| {
-                    chunk.push(rt.skeleton.nodes[item.node as usize].first_lod + item.lod);
+                    chunk.push(t.skeleton.nodes[item.node as usize].first_lod + item.lod);
                     if chunk.len() == opts.chunk && !closed {
                         let full = std::mem::replace(&mut chunk, Vec::with_capacity(opts.chunk));
                         closed = out.send(StcToRvg::Items(full)).is_err();

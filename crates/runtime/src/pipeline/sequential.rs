@@ -2,12 +2,12 @@
 //! after another (the baseline of the pipeline).
 
 use super::*;
-use crate::stages::{lod_ids, DeviceGeometry, OrStage, StcStage};
+use crate::stages::{lod_ids, StcStage, Target};
 use crate::streaming::Link;
 use crate::{CameraSource, Presenter};
 
 pub(crate) fn run_sequential(
-    rt: &Runtime,
+    t: Target,
     opts: &RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
@@ -18,9 +18,9 @@ pub(crate) fn run_sequential(
         or: or_link,
         rvg: rvg_link,
         stc: prefetch,
-    } = stream_links(rt, opts, 0, 0);
+    } = stream_links(t, opts, 0, 0);
     let Some(loader) = loader else {
-        return sequential_frames(rt, opts, source, on_frame, presenter, None, None, None);
+        return sequential_frames(t, opts, source, on_frame, presenter, None, None, None);
     };
     std::thread::scope(|s| {
         let handle = std::thread::Builder::new()
@@ -32,7 +32,7 @@ pub(crate) fn run_sequential(
             })?;
         // The links drop when the frames end, which ends the loader.
         let frames = sequential_frames(
-            rt, opts, source, on_frame, presenter, or_link, rvg_link, prefetch,
+            t, opts, source, on_frame, presenter, or_link, rvg_link, prefetch,
         );
         let loaded = handle.join().unwrap_or_else(|p| {
             Err(RuntimeError::Panic {
@@ -49,7 +49,7 @@ pub(crate) fn run_sequential(
 
 #[allow(clippy::too_many_arguments)]
 fn sequential_frames<'a>(
-    rt: &'a Runtime,
+    t: Target<'a>,
     opts: &'a RuntimeOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
@@ -58,9 +58,9 @@ fn sequential_frames<'a>(
     rvg_link: Option<Link>,
     prefetch: Option<Prefetch<'a>>,
 ) -> Result<u64, RuntimeError> {
-    let mut or = OrStage::new(DeviceGeometry::new(rt, 0, or_link), opts);
-    let mut stc = StcStage::new(rt.skeleton, rt.source, opts, prefetch);
-    let mut rvg = RvgStage::new(DeviceGeometry::new(rt, 0, rvg_link), opts);
+    let mut or = t.or_stage(opts, or_link);
+    let mut stc = StcStage::new(t.skeleton, t.source, opts, prefetch);
+    let mut rvg = t.rvg_stage(opts, 0, rvg_link);
     let mut occluders = Occluders::new(opts);
     let mut frozen = Frozen::default();
     let mut frame = 0u64;
@@ -76,7 +76,7 @@ fn sequential_frames<'a>(
         };
         rvg.begin(frame, &view, sample.style)?;
         // The same chunks as the pipeline, drawn after traversal.
-        for chunk in lod_ids(rt.skeleton, &stc_out.visible).chunks(opts.chunk) {
+        for chunk in lod_ids(t.skeleton, &stc_out.visible).chunks(opts.chunk) {
             rvg.draw(chunk)?;
         }
         occluders.push(frame, stc_out.visible.clone());

@@ -1,0 +1,186 @@
+//! The schedules (sequential, pipelined, pipelined with asynchronous RVG)
+//! run on the CPU: OR and RVG draw with gigawalk-cull's conservative
+//! software depth rasterizer instead of a device (`run_on_cpu`), so the
+//! occluder lag, frozen culling, culler choice and error handling are
+//! tested without an adapter, with the same schedule code.
+
+use std::time::{Duration, Instant};
+
+use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
+use gigawalk_import::import_glb_bytes;
+use gigawalk_preprocess::{preprocess, NoProgress, Params};
+use gigawalk_procgen::{generate, Kind};
+use gigawalk_runtime::{
+    run_on_cpu, CameraList, CameraRequest, CullMethod, FrameReport, RuntimeError, RuntimeOptions,
+    Schedule, Stage,
+};
+use gigawalk_scene::path::Pose;
+use gigawalk_scene::SceneReader;
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+fn city(dir: &std::path::Path) -> (SceneReader, Vec<Pose>) {
+    let g = generate(Kind::City, 40_000, 3, 24);
+    let model = import_glb_bytes(&g.glb_bytes(), "city").unwrap();
+    let file = dir.join("city.gwk");
+    preprocess(&model, &Params::default(), &file, "city", &NoProgress).unwrap();
+    (SceneReader::open(&file).unwrap(), g.path.poses)
+}
+
+fn cameras(scene: &SceneReader, poses: &[Pose]) -> CameraList {
+    let near = default_near(&scene.skeleton().bounds);
+    CameraList {
+        cameras: poses
+            .iter()
+            .map(|p| {
+                let c =
+                    Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), near);
+                CameraRequest::new(c, true)
+            })
+            .collect(),
+    }
+}
+
+fn options(schedule: Schedule, occlusion: bool, culler: CullMethod) -> RuntimeOptions {
+    RuntimeOptions {
+        schedule,
+        width: W,
+        height: H,
+        culler,
+        traversal: TraversalOptions {
+            occlusion,
+            hlod: false,
+            pixel_tolerance: 0.0,
+        },
+        ..Default::default()
+    }
+}
+
+fn run(
+    scene: &SceneReader,
+    opts: &RuntimeOptions,
+    list: &mut CameraList,
+) -> Result<Vec<FrameReport>, RuntimeError> {
+    let mut frames = Vec::new();
+    run_on_cpu(scene.skeleton(), scene, opts, list, &mut |r| {
+        frames.push(r);
+        true
+    })?;
+    Ok(frames)
+}
+
+fn depth(r: &FrameReport) -> &[f32] {
+    &r.image.as_ref().expect("read back").depth.depth
+}
+
+#[test]
+fn every_schedule_and_culler_on_the_cpu_loses_no_pixel_and_pipelined_culls_as_sequential() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, poses) = city(dir.path());
+    let reference = run(
+        &scene,
+        &options(Schedule::Sequential, false, CullMethod::Hzb),
+        &mut cameras(&scene, &poses),
+    )
+    .unwrap();
+    assert_eq!(reference.len(), poses.len());
+    for culler in CullMethod::ALL {
+        let seq = run(
+            &scene,
+            &options(Schedule::Sequential, true, culler),
+            &mut cameras(&scene, &poses),
+        )
+        .unwrap();
+        let pip = run(
+            &scene,
+            &options(Schedule::Pipelined, true, culler),
+            &mut cameras(&scene, &poses),
+        )
+        .unwrap();
+        let mut culled = 0;
+        for ((s, p), r) in seq.iter().zip(&pip).zip(&reference) {
+            // Same occluders (frame i - lag's), same culling.
+            assert_eq!(s.visible, p.visible, "{culler} frame {}", s.frame);
+            assert_eq!(s.occlusion_used, p.occlusion_used);
+            // Conservative: the full-detail image, depth for depth.
+            assert_eq!(
+                depth(s),
+                depth(r),
+                "{culler} frame {}: lost a pixel",
+                s.frame
+            );
+            assert_eq!(depth(p), depth(r), "{culler} frame {}", p.frame);
+            culled += s.stats.occlusion_culled;
+            // The startup bypass is the HZB's; the grid culls from frame 0.
+            let bypass = culler == CullMethod::Hzb && s.frame < 2;
+            assert_eq!(s.occlusion_used, !bypass, "{culler} frame {}", s.frame);
+            assert_eq!(s.grid.is_some(), culler == CullMethod::Grid);
+            if culler == CullMethod::Grid {
+                assert_eq!(s.occluder_items, 0, "OR draws nothing for the grid");
+            }
+        }
+        assert!(culled > 0, "{culler} culled nothing on the city walk");
+        // Asynchronous RVG: every camera drawn, each with a finished set.
+        let mut o = options(Schedule::Pipelined, true, culler);
+        o.async_rvg = true;
+        let asy = run(&scene, &o, &mut cameras(&scene, &poses)).unwrap();
+        assert_eq!(asy.len(), poses.len());
+        assert!(asy.iter().all(|r| r.image.is_some()));
+    }
+}
+
+#[test]
+fn occluder_lag_and_frozen_culling_on_the_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, poses) = city(dir.path());
+    for schedule in [Schedule::Sequential, Schedule::Pipelined] {
+        let mut o = options(schedule, true, CullMethod::Hzb);
+        o.occluder_lag = 1;
+        let f = run(&scene, &o, &mut cameras(&scene, &poses)).unwrap();
+        assert!(
+            !f[0].occlusion_used && f[1].occlusion_used,
+            "{schedule:?} lag 1"
+        );
+        // Frozen: frames 10.. hold frame 9's set while the camera moves on.
+        let mut list = cameras(&scene, &poses);
+        for c in &mut list.cameras[10..] {
+            c.hold_culling = true;
+        }
+        let f = run(
+            &scene,
+            &options(schedule, true, CullMethod::Grid),
+            &mut list,
+        )
+        .unwrap();
+        for r in &f[10..] {
+            assert!(r.reused_visible_set, "{schedule:?} frame {}", r.frame);
+            assert_eq!(r.visible, f[9].visible, "{schedule:?} frame {}", r.frame);
+        }
+        assert!(!f[9].reused_visible_set);
+    }
+}
+
+#[test]
+fn a_failing_stage_ends_every_cpu_schedule_with_its_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, poses) = city(dir.path());
+    for (schedule, async_rvg) in [
+        (Schedule::Sequential, false),
+        (Schedule::Pipelined, false),
+        (Schedule::Pipelined, true),
+    ] {
+        for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
+            let mut o = options(schedule, true, CullMethod::Hzb);
+            o.async_rvg = async_rvg;
+            o.inject_failure = Some((stage, 5));
+            let t = Instant::now();
+            let e = run(&scene, &o, &mut cameras(&scene, &poses)).unwrap_err();
+            assert!(
+                matches!(e, RuntimeError::Injected { stage: s, .. } if s == stage),
+                "{schedule:?} async {async_rvg} {stage}: {e}"
+            );
+            assert!(t.elapsed() < Duration::from_secs(5), "{schedule:?} {stage}");
+        }
+    }
+}

@@ -381,6 +381,109 @@ mod tests {
         }
     }
 
+    /// One wall of two triangles, 100 wide at z = -10, for any LOD.
+    struct Wall;
+    impl TriangleSource for Wall {
+        fn lod_triangles(&mut self, _: u32) -> Option<LodTriangles<'_>> {
+            const P: [[f32; 3]; 4] = [
+                [-100.0, -100.0, -10.0],
+                [100.0, -100.0, -10.0],
+                [100.0, 100.0, -10.0],
+                [-100.0, 100.0, -10.0],
+            ];
+            Some(LodTriangles {
+                origin: DVec3::ZERO,
+                positions: &P,
+                indices: &[0, 1, 2, 0, 2, 3],
+            })
+        }
+    }
+
+    #[test]
+    fn the_grid_culler_hides_boxes_behind_what_was_drawn_and_nothing_else() {
+        use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, NO_NODE};
+        let bounds = Aabb {
+            min: DVec3::new(-100.0, -100.0, -10.0),
+            max: DVec3::new(100.0, 100.0, -10.0),
+        };
+        let skeleton = Skeleton {
+            origin: DVec3::ZERO,
+            bounds,
+            nodes: vec![Node {
+                bounds,
+                parent: NO_NODE,
+                first_child: 0,
+                child_count: 0,
+                first_lod: 0,
+                lod_count: 1,
+            }],
+            lods: vec![LodInfo {
+                error: 0.0,
+                triangles: 2,
+                vertices: 4,
+                origin: DVec3::ZERO,
+                index_format: IndexFormat::U16,
+                uniform_colour: None,
+                offset: 0,
+                len: 0,
+                checksum: 0,
+            }],
+            provenance: Default::default(),
+        };
+        let view = CullView::new(
+            crate::Camera::look_at(DVec3::ZERO, DVec3::NEG_Z, 90f64.to_radians(), 1.5, 0.5),
+            crate::Viewport::new(33, 22),
+        );
+        let mut grid = OcclusionGrid::new(8, true);
+        let mut wall = Wall;
+        let mut c = GridCuller::new(&mut grid, &skeleton, &mut wall, u64::MAX);
+        c.begin(&view);
+        let test = |c: &mut GridCuller, min: [f64; 3], max: [f64; 3]| {
+            let b = RelBox::from_f64(DVec3::from(min), DVec3::from(max));
+            c.test(&view, 0, &b, &()).0
+        };
+        // Nothing drawn yet: everything in view is visible.
+        assert_eq!(
+            test(&mut c, [-1.0, -1.0, -30.0], [1.0, 1.0, -20.0]),
+            Verdict::Visible
+        );
+        c.drawn(&view, DrawItem { node: 0, lod: 0 });
+        assert_eq!(c.grid.stats.items_drawn, 1);
+        // Behind the wall: hidden; in front, touching it, crossing the
+        // near plane, or around the eye: visible; beside the image: hidden.
+        assert_eq!(
+            test(&mut c, [-1.0, -1.0, -30.0], [1.0, 1.0, -20.0]),
+            Verdict::Occluded
+        );
+        assert_eq!(
+            test(&mut c, [-1.0, -1.0, -8.0], [1.0, 1.0, -5.0]),
+            Verdict::Visible
+        );
+        assert_eq!(
+            test(&mut c, [-1.0, -1.0, -20.0], [1.0, 1.0, -10.0]),
+            Verdict::Visible
+        );
+        assert_eq!(
+            test(&mut c, [-1.0, -1.0, -30.0], [1.0, 1.0, -0.1]),
+            Verdict::Visible
+        );
+        assert_eq!(test(&mut c, [-1.0; 3], [1.0; 3]), Verdict::Visible);
+        assert_eq!(
+            test(&mut c, [50.0, -1.0, -3.0], [60.0, 1.0, -2.0]),
+            Verdict::Occluded
+        );
+        // A budget of 0 rasterizes nothing, so nothing is hidden.
+        let mut grid = OcclusionGrid::new(8, true);
+        let mut c = GridCuller::new(&mut grid, &skeleton, &mut wall, 0);
+        c.begin(&view);
+        c.drawn(&view, DrawItem { node: 0, lod: 0 });
+        assert_eq!(c.grid.stats.items_skipped, 1);
+        assert_eq!(
+            test(&mut c, [-1.0, -1.0, -30.0], [1.0, 1.0, -20.0]),
+            Verdict::Visible
+        );
+    }
+
     #[test]
     fn lazy_updates_read_fewer_pixels_than_eager_ones() {
         let (mut lazy, mut eager) = (OcclusionGrid::new(8, true), OcclusionGrid::new(8, false));

@@ -46,6 +46,9 @@ pub struct Args {
     /// Start without occlusion culling
     #[arg(long)]
     no_occlusion: bool,
+    /// Starting occlusion culler (C cycles them): hzb = GigaWalk's hierarchical Z-buffer, grid = the lazy occlusion grid (Hey et al.)
+    #[arg(long, default_value = "hzb")]
+    culler: gigawalk_runtime::CullMethod,
     /// Start without HLODs
     #[arg(long)]
     no_hlod: bool,
@@ -111,6 +114,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         memory_budget: a.memory_budget,
         settings: Settings {
             occlusion: !a.no_occlusion,
+            culler: a.culler,
             hlod: !a.no_hlod,
             pixel_error: a.pixel_error,
             async_rvg: a.async_rvg,

@@ -284,6 +284,12 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
     let sstats = gigawalk_viewer::image_stats(&streamed);
     assert!(sstats.distinct_colours > 100, "{sstats:?}");
     assert!(sstats.non_background > 0.2, "{sstats:?}");
+
+    // The lazy occlusion grid as the starting culler draws the scene too.
+    let grid = shot(&dir.path().join("grid.png"), &["--culler", "grid"]);
+    let gstats = gigawalk_viewer::image_stats(&grid);
+    assert!(gstats.distinct_colours > 100, "{gstats:?}");
+    assert!(gstats.non_background > 0.2, "{gstats:?}");
 }
 
 #[test]
@@ -295,6 +301,9 @@ fn bad_memory_budget_is_a_clear_error() {
         assert!(err.contains("memory budget"), "{bad}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
+    let (ok, _, err) = gigawalk(&["view", "x.gwk", "--culler", "zbuffer"], None);
+    assert!(!ok);
+    assert!(err.contains("hzb or grid"), "{err}");
 }
 
 /// A running `gigawalk view`, killed if the test fails before it quits.

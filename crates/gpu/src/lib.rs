@@ -16,6 +16,7 @@ mod context;
 mod overlay;
 mod passes;
 mod present;
+mod queries;
 mod residency;
 pub mod shader_types;
 
@@ -26,6 +27,7 @@ pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLA
 pub use passes::{
     DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
 };
+pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use residency::{
     DecodedLod, GeometryPool, HostGeometry, LodRange, Residency, ResidentGeometry, INDEX_BYTES,

@@ -49,20 +49,20 @@ pub enum DrawStyle {
 }
 
 /// Reversed-Z: clear to 0 (infinitely far), keep the greater depth.
-const DEPTH_COMPARE: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+pub(crate) const DEPTH_COMPARE: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
 
 /// Uniforms, per-draw instance data and the draw loop shared by both passes.
-struct Drawer {
+pub(crate) struct Drawer {
     uniforms: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
-    layout: wgpu::PipelineLayout,
+    pub(crate) bind_group: wgpu::BindGroup,
+    pub(crate) layout: wgpu::PipelineLayout,
     instances: wgpu::Buffer,
     /// Instances already used this frame (chunks append).
     used: u64,
 }
 
 impl Drawer {
-    fn new(ctx: &GpuContext, label: &str) -> Drawer {
+    pub(crate) fn new(ctx: &GpuContext, label: &str) -> Drawer {
         let d = &ctx.device;
         let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(label),
@@ -106,7 +106,7 @@ impl Drawer {
     }
 
     /// `unlit`: draw the object colour without lighting (wireframe).
-    fn begin(&mut self, ctx: &GpuContext, view: &View, unlit: bool) {
+    pub(crate) fn begin(&mut self, ctx: &GpuContext, view: &View, unlit: bool) {
         let u = FrameUniforms {
             view_proj: view.view_proj.to_cols_array_2d(),
             light_dir: view
@@ -122,7 +122,7 @@ impl Drawer {
     }
 
     /// Writes this chunk's instance data; returns the draws with their instance index.
-    fn prepare(
+    pub(crate) fn prepare(
         &mut self,
         ctx: &GpuContext,
         view: &View,
@@ -157,7 +157,7 @@ impl Drawer {
             .collect()
     }
 
-    fn record(
+    pub(crate) fn record(
         &self,
         pass: &mut wgpu::RenderPass,
         residency: &dyn Residency,
@@ -191,7 +191,7 @@ fn instance_buffer(ctx: &GpuContext, count: u64) -> wgpu::Buffer {
     })
 }
 
-fn target(
+pub(crate) fn target(
     ctx: &GpuContext,
     label: &str,
     w: u32,
@@ -216,7 +216,7 @@ fn target(
     })
 }
 
-fn pipeline(
+pub(crate) fn pipeline(
     ctx: &GpuContext,
     drawer: &Drawer,
     label: &str,
@@ -340,7 +340,7 @@ impl DepthPass {
     }
 }
 
-fn depth_attachment(
+pub(crate) fn depth_attachment(
     view: &wgpu::TextureView,
     clear: bool,
 ) -> wgpu::RenderPassDepthStencilAttachment<'_> {
@@ -545,7 +545,7 @@ impl Residency for NoGeometry {
     }
 }
 
-fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
+pub(crate) fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
     GpuError::Device {
         device: ctx.name.clone(),
         message: e.to_string(),

@@ -208,3 +208,47 @@ fn wireframe_draws_edges_in_the_unlit_object_colour() {
     let with_depth = wire_depth.iter().filter(|&&d| d > 0.0).count();
     assert_eq!(with_depth, n_wire, "depth written off the lines");
 }
+
+#[test]
+fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
+    let Some(ctx) = devices_or_skip(1, "occlusion queries").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    // lavapipe counts samples.
+    assert_eq!(
+        gigawalk_gpu::query_counts(&ctx).unwrap(),
+        gigawalk_gpu::QueryCounts::Exact
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    let shift = DVec3::new(1e6, -2e5, 3e6);
+    write_scene(&path, shift);
+    let scene = SceneReader::open(&path).unwrap();
+    let geometry = HostGeometry::load(&scene, 1 << 20)
+        .unwrap()
+        .upload(&ctx)
+        .unwrap();
+    let (w, h) = (64, 48);
+    let v = view(shift, w, h);
+    let mut q = gigawalk_gpu::QueryPass::new(&ctx, w, h);
+    let b = |min: [f32; 3], max: [f32; 3]| {
+        gigawalk_gpu::QueryBox::new(Vec3::from(min), Vec3::from(max))
+    };
+    // Boxes relative to the eye: behind the red box (z -6..-5, x, y
+    // -1..1), in front of it, and beside it.
+    let behind = b([-0.5, -0.5, -9.0], [0.5, 0.5, -8.0]);
+    let front = b([-0.5, -0.5, -4.0], [0.5, 0.5, -3.0]);
+    let beside = b([-6.0, -0.5, -9.0], [-5.0, 0.5, -8.0]);
+    q.begin(&ctx, &v);
+    // Nothing drawn yet: every box in view passes samples.
+    let before = q.query(&ctx, Some(&geometry), &[behind, front, beside]).unwrap();
+    assert!(before.iter().all(|&n| n > 0), "{before:?}");
+    q.draw(&[0]);
+    let after = q.query(&ctx, Some(&geometry), &[behind, front, beside]).unwrap();
+    assert_eq!(after[0], 0, "a box wholly behind the red box passed samples");
+    assert_eq!(after[1], before[1], "a box in front passes its whole area");
+    assert_eq!(after[2], before[2], "a box beside it is not hidden");
+    // A new frame clears the depth.
+    q.begin(&ctx, &v);
+    assert!(q.query(&ctx, Some(&geometry), &[behind]).unwrap()[0] > 0);
+}

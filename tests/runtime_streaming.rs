@@ -111,6 +111,22 @@ fn a_scene_that_fits_the_budget_is_loaded_whole_and_draws_the_same() {
 }
 
 #[test]
+fn occlusion_queries_refuse_a_streamed_scene_with_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, poses) = plant(dir.path(), 3);
+    let scene = SceneReader::open(&file).unwrap();
+    let Some(d) = devices(2) else { return };
+    let rt = Runtime::streaming(&scene, d, scene_bytes(&scene) / 4).unwrap();
+    let mut o = options(Schedule::Pipelined, 2, 1.0);
+    o.culler = gigawalk_runtime::CullMethod::Oq;
+    let e = run(&rt, &o, &scene, &poses, &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string().contains("oq culler") && e.to_string().contains("memory-budget"),
+        "{e}"
+    );
+}
+
+#[test]
 fn a_budget_below_the_minimum_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let (file, _) = plant(dir.path(), 2);

@@ -27,8 +27,8 @@ pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLA
 pub use passes::{
     DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
 };
-pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
+pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};
 pub use residency::{
     DecodedLod, GeometryPool, HostGeometry, LodRange, Residency, ResidentGeometry, INDEX_BYTES,
     VERTEX_BYTES,

@@ -55,7 +55,10 @@ pub struct QueryPass {
     view: Option<View>,
 }
 
-fn query_buffers(ctx: &GpuContext, n: u32) -> (wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer) {
+fn query_buffers(
+    ctx: &GpuContext,
+    n: u32,
+) -> (wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer) {
     let d = &ctx.device;
     let queries = d.create_query_set(&wgpu::QuerySetDescriptor {
         label: Some("occlusion queries"),
@@ -103,7 +106,9 @@ impl QueryPass {
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("query box"),
-                source: wgpu::ShaderSource::Wgsl(shader_types::shader_source(QUERY_BOX_WGSL).into()),
+                source: wgpu::ShaderSource::Wgsl(
+                    shader_types::shader_source(QUERY_BOX_WGSL).into(),
+                ),
             });
         let box_pipeline = ctx
             .device
@@ -142,7 +147,13 @@ impl QueryPass {
             drawer,
             depth_pipeline,
             box_pipeline,
-            depth: target(ctx, "query depth", width.max(1), height.max(1), DEPTH_FORMAT),
+            depth: target(
+                ctx,
+                "query depth",
+                width.max(1),
+                height.max(1),
+                DEPTH_FORMAT,
+            ),
             queries,
             capacity,
             resolve,

@@ -241,11 +241,18 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
     let beside = b([-6.0, -0.5, -9.0], [-5.0, 0.5, -8.0]);
     q.begin(&ctx, &v);
     // Nothing drawn yet: every box in view passes samples.
-    let before = q.query(&ctx, Some(&geometry), &[behind, front, beside]).unwrap();
+    let before = q
+        .query(&ctx, Some(&geometry), &[behind, front, beside])
+        .unwrap();
     assert!(before.iter().all(|&n| n > 0), "{before:?}");
     q.draw(&[0]);
-    let after = q.query(&ctx, Some(&geometry), &[behind, front, beside]).unwrap();
-    assert_eq!(after[0], 0, "a box wholly behind the red box passed samples");
+    let after = q
+        .query(&ctx, Some(&geometry), &[behind, front, beside])
+        .unwrap();
+    assert_eq!(
+        after[0], 0,
+        "a box wholly behind the red box passed samples"
+    );
     assert_eq!(after[1], before[1], "a box in front passes its whole area");
     assert_eq!(after[2], before[2], "a box beside it is not hidden");
     // A new frame clears the depth.

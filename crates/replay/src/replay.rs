@@ -114,6 +114,9 @@ pub struct FrameRecord {
     /// The lazy occlusion grid's work (grid culler only; in frames.csv).
     #[serde(skip)]
     pub grid: Option<gigawalk_runtime::GridStats>,
+    /// The occlusion queries' work (oq culler only; in frames.csv).
+    #[serde(skip)]
+    pub oq: Option<gigawalk_runtime::OqStats>,
     /// Streaming (zeros when the scene is resident): device bytes the
     /// resident LODs take after the frame, bytes that arrived, loader
     /// requests sent, stand-ins drawn for LODs not resident, and chosen
@@ -395,6 +398,7 @@ pub fn replay_on(
                 drawn_triangles: r.stats.drawn_triangles,
                 occlusion_used: r.occlusion_used,
                 grid: r.grid,
+                oq: r.oq,
                 resident_bytes: r.streaming.resident_bytes,
                 loaded_bytes: r.streaming.loaded_bytes,
                 requests: r.streaming.requests,

@@ -76,7 +76,8 @@ impl Replay {
              visited,frustum_culled,occlusion_culled,drawn_nodes,drawn_triangles,occlusion_used,warmup,\
              accuracy_pixels,differing_pixels,wrongly_culled_pixels,bound_violating_pixels,\
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
-             missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles\n",
+             missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
+             oq_queries,oq_round_trips,oq_ms,oq_untested\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -85,7 +86,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -123,6 +124,10 @@ impl Replay {
                     opt(f.grid.map(|g| g.test_ms), 3),
                     f.grid.map_or(String::new(), |g| g.pixel_reads.to_string()),
                     f.grid.map_or(String::new(), |g| g.triangles_drawn.to_string()),
+                    f.oq.map_or(String::new(), |q| q.queries.to_string()),
+                    f.oq.map_or(String::new(), |q| q.round_trips.to_string()),
+                    opt(f.oq.map(|q| q.ms), 3),
+                    f.oq.map_or(String::new(), |q| (q.over_budget + q.coherent).to_string()),
                 );
             }
         }
@@ -180,6 +185,11 @@ pub fn markdown(s: &Summary) -> String {
     if !grid.is_empty() {
         let _ = writeln!(m, "\n## Lazy occlusion grid\n");
         m += &grid;
+    }
+    let oq = s.oq_table();
+    if !oq.is_empty() {
+        let _ = writeln!(m, "\n## Occlusion queries\n");
+        m += &oq;
     }
     if s.memory_budget.is_some() {
         let _ = writeln!(m, "\n## Streaming (out of core)\n");

@@ -44,6 +44,17 @@ pub struct Summary {
     pub grid_cell: Option<u32>,
     #[serde(default)]
     pub grid_lazy: Option<bool>,
+    /// The occlusion-query culler's settings (null without an oq run).
+    #[serde(default)]
+    pub oq_batch: Option<u32>,
+    #[serde(default)]
+    pub oq_coherent: Option<bool>,
+    #[serde(default)]
+    pub oq_adaptive: Option<u64>,
+    #[serde(default)]
+    pub oq_budget: Option<f64>,
+    #[serde(default)]
+    pub oq_test_leaves: Option<bool>,
     pub modes: Vec<ModeSummary>,
 }
 
@@ -89,6 +100,17 @@ pub struct ModeSummary {
     pub mean_grid_pixel_reads: Option<f64>,
     #[serde(default)]
     pub mean_grid_triangles: Option<f64>,
+    /// The occlusion queries (oq culler only): mean boxes queried and
+    /// round trips a frame, median ms in round trips, mean nodes passed
+    /// untested (over the time budget, or coherent).
+    #[serde(default)]
+    pub mean_oq_queries: Option<f64>,
+    #[serde(default)]
+    pub mean_oq_round_trips: Option<f64>,
+    #[serde(default)]
+    pub median_oq_ms: Option<f64>,
+    #[serde(default)]
+    pub mean_oq_untested: Option<f64>,
     /// Frames compared with the reference.
     pub accuracy_frames: usize,
     /// Summed over the compared frames (null without accuracy frames).
@@ -200,6 +222,11 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         let v: Vec<f64> = grid.iter().map(f).collect();
         (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
     };
+    let oq: Vec<gigawalk_runtime::OqStats> = m.iter().filter_map(|f| f.oq).collect();
+    let oq_fig = |f: fn(&gigawalk_runtime::OqStats) -> f64, med: bool| {
+        let v: Vec<f64> = oq.iter().map(f).collect();
+        (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
+    };
     ModeSummary {
         name: run.mode.name().into(),
         pixel_error: run.pixel_error,
@@ -208,6 +235,10 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         median_grid_test_ms: grid_fig(|g| g.test_ms, true),
         mean_grid_pixel_reads: grid_fig(|g| g.pixel_reads as f64, false),
         mean_grid_triangles: grid_fig(|g| g.triangles_drawn as f64, false),
+        mean_oq_queries: oq_fig(|q| q.queries as f64, false),
+        mean_oq_round_trips: oq_fig(|q| q.round_trips as f64, false),
+        median_oq_ms: oq_fig(|q| q.ms, true),
+        mean_oq_untested: oq_fig(|q| (q.over_budget + q.coherent) as f64, false),
         frames: run.frames.len(),
         measured_frames: ms.len(),
         mean_fps: 1e3 / mean_ms,
@@ -274,6 +305,10 @@ impl Replay {
             .runs
             .iter()
             .any(|r| r.culler == Some(gigawalk_runtime::CullMethod::Grid));
+        let oq = self
+            .runs
+            .iter()
+            .any(|r| r.culler == Some(gigawalk_runtime::CullMethod::Oq));
         Summary {
             scene: self.scene.clone(),
             path: self.path.clone(),
@@ -297,6 +332,11 @@ impl Replay {
             seconds: self.seconds,
             grid_cell: grid.then_some(r.grid.cell),
             grid_lazy: grid.then_some(r.grid.lazy),
+            oq_batch: oq.then_some(r.oq.batch),
+            oq_coherent: oq.then_some(r.oq.coherent),
+            oq_adaptive: oq.then_some(r.oq.adaptive),
+            oq_budget: r.oq.budget.filter(|_| oq),
+            oq_test_leaves: oq.then_some(r.oq.test_leaves),
             modes,
         }
     }
@@ -410,6 +450,52 @@ impl Summary {
                 m.mean_grid_pixel_reads.map_or("-".into(), thousands),
                 m.mean_grid_triangles.map_or("-".into(), thousands),
                 thousands(m.mean_occlusion_culled),
+            );
+        }
+        s
+    }
+
+    /// The occlusion queries' table of summary.md (empty without an oq
+    /// run).
+    pub fn oq_table(&self) -> String {
+        let runs: Vec<&ModeSummary> = self
+            .modes
+            .iter()
+            .filter(|m| m.mean_oq_queries.is_some())
+            .collect();
+        if runs.is_empty() {
+            return String::new();
+        }
+        let budget = match self.oq_budget {
+            Some(b) => format!("{b} of the last frame"),
+            None => "none".into(),
+        };
+        let mut s = format!(
+            "Batches of {} boxes a round trip, coherent {}, adaptive threshold {} samples, time budget {budget}, leaves {}.\n\n\
+             | mode | pixel error | STC ms | queries | round trips | ms in round trips | passed untested | occlusion-culled | triangles |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            self.oq_batch.unwrap_or(0),
+            if self.oq_coherent.unwrap_or(false) { "on" } else { "off" },
+            self.oq_adaptive.unwrap_or(0),
+            if self.oq_test_leaves.unwrap_or(true) {
+                "tested"
+            } else {
+                "drawn untested (the paper)"
+            },
+        );
+        let o = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| num(x, d));
+        for m in runs {
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                self.mode_cell(m),
+                m.pixel_error,
+                num(m.median_stc_ms, 2),
+                m.mean_oq_queries.map_or("-".into(), thousands),
+                o(m.mean_oq_round_trips, 1),
+                o(m.median_oq_ms, 2),
+                m.mean_oq_untested.map_or("-".into(), thousands),
+                thousands(m.mean_occlusion_culled),
+                thousands(m.mean_triangles),
             );
         }
         s

@@ -68,7 +68,7 @@ fn every_culler_draws_the_reference_image_at_pixel_error_0() {
             let s = r.summary();
             assert_eq!(
                 s.modes.len(),
-                4,
+                2 * CullMethod::ALL.len(),
                 "{kind:?}: occ and och, each with both cullers"
             );
             for m in &s.modes {
@@ -77,6 +77,13 @@ fn every_culler_draws_the_reference_image_at_pixel_error_0() {
                 assert_eq!(m.wrongly_culled_pixels, Some(0), "{what}: lost pixels");
                 assert_eq!(m.differing_pixels_fraction, Some(0.0), "{what}: differs");
                 assert_eq!(m.bound_violating_pixels, Some(0), "{what}");
+            }
+            for run in r.runs.iter().filter(|r| r.culler == Some(CullMethod::Oq)) {
+                for f in &run.frames {
+                    let q = f.oq.expect("oq runs report the queries");
+                    assert!(f.occlusion_used, "queries cull from frame 0");
+                    assert!(q.round_trips > 0 && q.queries >= q.round_trips, "{q:?}");
+                }
             }
             for run in r.runs.iter().filter(|r| r.culler == Some(CullMethod::Grid)) {
                 for f in &run.frames {
@@ -144,5 +151,88 @@ fn the_lazy_grid_culls_as_the_eager_one_with_fewer_depth_reads() {
         "lazy {} vs eager {} depth reads",
         reads(lazy),
         reads(eager)
+    );
+}
+
+#[test]
+fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = generate(Kind::City, TRIANGLES, 4, 20);
+    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "c").unwrap();
+    let file = dir.path().join("city.gwk");
+    gigawalk_preprocess::preprocess(
+        &model,
+        &gigawalk_preprocess::Params::default(),
+        &file,
+        "test",
+        &gigawalk_preprocess::NoProgress,
+    )
+    .unwrap();
+    let scene = SceneReader::open(&file).unwrap();
+    let Some(d) = devices_or_skip(2, "occlusion-query variants") else {
+        return;
+    };
+    let rt = Runtime::with_devices(&scene, d).unwrap();
+    let replay = |f: &dyn Fn(&mut RuntimeOptions)| {
+        let mut opts = options(&[CullMethod::Oq], Schedule::Pipelined, 20);
+        opts.modes = vec![Mode::Occ];
+        f(&mut opts.runtime);
+        let r = replay_on(
+            &rt,
+            "c.gwk",
+            &g.path.poses,
+            "c.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .unwrap();
+        let s = r.summary();
+        (r.runs.into_iter().next().unwrap(), s.modes[0].clone())
+    };
+    // The paper (a round trip per test, leaves untested), batched, and
+    // coherent: all conservative.
+    let (paper, ps) = replay(&|o| {
+        o.oq.batch = 1;
+        o.oq.test_leaves = false;
+    });
+    let (batched, bs) = replay(&|o| o.oq.batch = 64);
+    let (coherent, cs) = replay(&|o| o.oq.coherent = true);
+    for (name, m) in [("paper", &ps), ("batched", &bs), ("coherent", &cs)] {
+        assert_eq!(m.wrongly_culled_pixels, Some(0), "{name}");
+        assert_eq!(m.differing_pixels_fraction, Some(0.0), "{name}");
+    }
+    let trips = |r: &gigawalk_replay::RunRecord| -> u64 {
+        r.frames.iter().map(|f| f.oq.unwrap().round_trips).sum()
+    };
+    let queries = |r: &gigawalk_replay::RunRecord| -> u64 {
+        r.frames.iter().map(|f| f.oq.unwrap().queries).sum()
+    };
+    // One query per round trip as written; batches need fewer trips.
+    assert_eq!(trips(&paper), queries(&paper));
+    assert!(
+        trips(&batched) < trips(&paper),
+        "{} vs {}",
+        trips(&batched),
+        trips(&paper)
+    );
+    // Coherent: visible nodes of the last frame are not waited for.
+    let passed: u64 = coherent.frames.iter().map(|f| f.oq.unwrap().coherent).sum();
+    assert!(passed > 0);
+    // A budget of 0: frustum culling only, and every frame finishes.
+    let (zero, _) = replay(&|o| o.oq.budget = Some(0.0));
+    assert_eq!(zero.frames.len(), 20);
+    assert!(zero.frames.iter().all(|f| f.occlusion_culled == 0));
+    assert!(zero.frames.iter().all(|f| f.oq.unwrap().queries == 0));
+    // Adaptive culling culls more than conservative queries (approximate:
+    // what it costs is in the accuracy figures).
+    let (adaptive, _) = replay(&|o| o.oq.adaptive = 400);
+    let tris = |r: &gigawalk_replay::RunRecord| -> u64 {
+        r.frames.iter().map(|f| f.drawn_triangles).sum()
+    };
+    assert!(
+        tris(&adaptive) < tris(&batched),
+        "{} vs {}",
+        tris(&adaptive),
+        tris(&batched)
     );
 }

@@ -17,6 +17,7 @@
 
 mod options;
 mod pipeline;
+mod queries;
 mod stages;
 mod streaming;
 mod triangles;
@@ -29,10 +30,11 @@ pub use gigawalk_cull::{
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{
-    CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, Prefetching,
+    CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, OqOptions, Prefetching,
     RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
+pub use queries::OqStats;
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
 use gigawalk_gpu::HostGeometry;
@@ -71,6 +73,8 @@ pub enum RuntimeError {
     #[error("camera source: {0}")]
     Camera(#[from] CameraError),
     /// The loader could not read a LOD the walk needed (streaming).
+    #[error("the {culler} culler cannot run here: {why}")]
+    CullerUnavailable { culler: CullMethod, why: String },
     #[error("loader: {source}")]
     Load {
         source: Box<gigawalk_scene::ReadError>,
@@ -184,6 +188,8 @@ pub struct FrameReport {
     pub hzb_ms: f64,
     /// The lazy occlusion grid's work this frame (grid culler only).
     pub grid: Option<GridStats>,
+    /// The occlusion queries' work this frame (oq culler only).
+    pub oq: Option<OqStats>,
     /// All of STC, HZB build included.
     pub stc_ms: f64,
     pub rvg_ms: f64,

@@ -173,10 +173,13 @@ pub enum CullMethod {
     /// Hey et al.'s lazy occlusion grid over a software depth image STC
     /// draws of the frame it traverses (no OR, no lag).
     Grid,
+    /// Bartz et al.'s hardware occlusion queries: node boxes drawn against
+    /// the depth of what the frame drew so far, on RVG's device.
+    Oq,
 }
 
 impl CullMethod {
-    pub const ALL: [CullMethod; 2] = [CullMethod::Hzb, CullMethod::Grid];
+    pub const ALL: [CullMethod; 3] = [CullMethod::Hzb, CullMethod::Grid, CullMethod::Oq];
 
     /// Whether the culler reads OR's occluder depth (OR renders nothing
     /// for the others).
@@ -190,6 +193,7 @@ impl std::fmt::Display for CullMethod {
         f.write_str(match self {
             CullMethod::Hzb => "hzb",
             CullMethod::Grid => "grid",
+            CullMethod::Oq => "oq",
         })
     }
 }
@@ -200,7 +204,7 @@ impl std::str::FromStr for CullMethod {
         CullMethod::ALL
             .into_iter()
             .find(|c| c.to_string() == s)
-            .ok_or_else(|| format!("culler {s:?} is not hzb or grid"))
+            .ok_or_else(|| format!("culler {s:?} is not hzb, grid or oq"))
     }
 }
 
@@ -227,6 +231,40 @@ impl Default for GridOptions {
             lazy: true,
             triangle_budget: u64::MAX,
             cache_bytes: 512 << 20,
+        }
+    }
+}
+
+/// The occlusion-query culler's knobs (Bartz et al.; docs/culling.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OqOptions {
+    /// Boxes queried per round trip: the popped node and the nearest
+    /// queued ones (1 = the paper: a round trip per test).
+    pub batch: u32,
+    /// Coherent (after CHC): nodes visible last frame are drawn without
+    /// waiting and queried for the next frame.
+    pub coherent: bool,
+    /// Adaptive culling (the paper's Eq. 1): a box passing fewer samples
+    /// than this is culled (approximate; 0 = off). Needs a device whose
+    /// queries count samples.
+    pub adaptive: u64,
+    /// Cost-adaptive culling (Eq. 2): after this fraction of the previous
+    /// frame's time (measured from one traversal's start to the next),
+    /// nodes get frustum culling only. `None`: no budget; `Some(0)`:
+    /// frustum culling only; the paper: 1/3.
+    pub budget: Option<f64>,
+    /// Test leaves too (the paper draws leaves without a query).
+    pub test_leaves: bool,
+}
+
+impl Default for OqOptions {
+    fn default() -> Self {
+        OqOptions {
+            batch: 32,
+            coherent: false,
+            adaptive: 0,
+            budget: None,
+            test_leaves: true,
         }
     }
 }
@@ -271,6 +309,7 @@ pub struct RuntimeOptions {
     /// The occlusion culler (with `traversal.occlusion`).
     pub culler: CullMethod,
     pub grid: GridOptions,
+    pub oq: OqOptions,
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
@@ -301,6 +340,10 @@ pub enum OptionsError {
     Chunk,
     #[error("grid cell {0} must be 1..=1024 pixels")]
     GridCell(u32),
+    #[error("occlusion-query batch {0} must be 1..=65536")]
+    OqBatch(u32),
+    #[error("occlusion-query budget {0} must be a fraction in [0, 10]")]
+    OqBudget(f64),
 }
 
 impl Default for RuntimeOptions {
@@ -320,6 +363,7 @@ impl Default for RuntimeOptions {
             prefetch: Prefetching::Off,
             culler: CullMethod::Hzb,
             grid: GridOptions::default(),
+            oq: OqOptions::default(),
             record_culled: false,
             #[cfg(feature = "testing")]
             inject_failure: None,
@@ -361,6 +405,16 @@ impl RuntimeOptions {
         }
         if !(1..=1024).contains(&self.grid.cell) {
             return Err(OptionsError::GridCell(self.grid.cell));
+        }
+        if !(1..=65536).contains(&self.oq.batch) {
+            return Err(OptionsError::OqBatch(self.oq.batch));
+        }
+        if let Some(b) = self
+            .oq
+            .budget
+            .filter(|b| !(b.is_finite() && (0.0..=10.0).contains(b)))
+        {
+            return Err(OptionsError::OqBudget(b));
         }
         Ok(())
     }
@@ -411,6 +465,12 @@ mod tests {
         );
         check(&|o| o.devices = 3, OptionsError::Devices(3), "devices 3");
         check(&|o| o.chunk = 0, OptionsError::Chunk, "chunk");
+        check(&|o| o.oq.batch = 0, OptionsError::OqBatch(0), "batch 0");
+        check(
+            &|o| o.oq.budget = Some(-1.0),
+            OptionsError::OqBudget(-1.0),
+            "budget -1",
+        );
         check(
             &|o| o.grid.cell = 0,
             OptionsError::GridCell(0),
@@ -628,7 +688,7 @@ mod culler_tests {
             assert_eq!(c.to_string().parse::<CullMethod>(), Ok(c));
         }
         let e = "zbuf".parse::<CullMethod>().unwrap_err();
-        assert!(e.contains("hzb or grid"), "{e}");
+        assert!(e.contains("hzb, grid or oq"), "{e}");
         let mut o = RuntimeOptions::default();
         assert!(o.wants_occluder_depth());
         o.culler = CullMethod::Grid;

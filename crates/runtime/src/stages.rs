@@ -12,6 +12,7 @@ use gigawalk_cull::{
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
 
+use crate::queries::{OqCuller, OqState, OqStats};
 use crate::streaming::{Geometry, Link, LodSource, Plan, Request, StreamStats, Use, PREFETCH_BAND};
 use crate::triangles::TriangleCache;
 use crate::{CullMethod, OccluderBudget, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
@@ -63,6 +64,10 @@ impl<'a> DeviceGeometry<'a> {
     pub fn take_stats(&self) -> StreamStats {
         self.geometry.take_stats()
     }
+}
+
+fn setup_error(source: gigawalk_gpu::GpuError) -> RuntimeError {
+    RuntimeError::Setup { source }
 }
 
 pub(crate) fn ms_since(t: Instant) -> f64 {
@@ -145,6 +150,43 @@ impl<'a> Target<'a> {
             Some(rt) if opts.devices >= 2 && rt.devices.len() >= 2 => 1,
             _ => 0,
         }
+    }
+
+    /// STC, with the occlusion-query culler's device state when the
+    /// options ask for it (on RVG's device, whose whole geometry must be
+    /// resident).
+    pub fn stc_stage(
+        &self,
+        opts: &'a RuntimeOptions,
+        prefetch: Option<Prefetch<'a>>,
+    ) -> Result<StcStage<'a>, RuntimeError> {
+        let mut stc = StcStage::new(self.skeleton, self.source, opts, prefetch);
+        if opts.culler == CullMethod::Oq && opts.traversal.occlusion {
+            let unavailable = |why: &str| RuntimeError::CullerUnavailable {
+                culler: CullMethod::Oq,
+                why: why.to_string(),
+            };
+            let Some(rt) = self.gpu else {
+                return Err(unavailable("it needs a device (none on the CPU)"));
+            };
+            let b = self.rvg_device(opts);
+            let Geometry::Resident(geometry) = &rt.geometry[b] else {
+                return Err(unavailable(
+                    "it draws on RVG's device, which must hold the whole scene (no --memory-budget)",
+                ));
+            };
+            let ctx = &rt.devices[b];
+            if opts.oq.adaptive > 0
+                && gigawalk_gpu::query_counts(ctx).map_err(setup_error)?
+                    != gigawalk_gpu::QueryCounts::Exact
+            {
+                return Err(unavailable(
+                    "adaptive culling needs sample counts, and this device's occlusion queries only say zero or not",
+                ));
+            }
+            stc.oq = Some(OqState::new(ctx, geometry, opts.width, opts.height));
+        }
+        Ok(stc)
     }
 
     /// OR on device 0.
@@ -456,6 +498,8 @@ pub(crate) struct StcStage<'a> {
     hzb: Hzb,
     grid: OcclusionGrid,
     triangles: TriangleCache<'a>,
+    /// The occlusion-query culler's device state.
+    oq: Option<OqState<'a>>,
     prefetch: Option<Prefetch<'a>>,
 }
 
@@ -470,6 +514,8 @@ pub(crate) struct StcOutput {
     pub hzb_ms: f64,
     /// The lazy occlusion grid's work (grid culler only).
     pub grid: Option<GridStats>,
+    /// The occlusion queries' work (oq culler only).
+    pub oq: Option<OqStats>,
     pub ms: f64,
 }
 
@@ -488,6 +534,7 @@ impl<'a> StcStage<'a> {
             hzb: Hzb::new(),
             grid: OcclusionGrid::new(opts.grid.cell, opts.grid.lazy),
             triangles: TriangleCache::new(source, opts.grid.cache_bytes),
+            oq: None,
             prefetch,
         }
     }
@@ -505,8 +552,9 @@ impl<'a> StcStage<'a> {
         check_injected(self.opts, Stage::Stc, frame)?;
         let mut hzb_ms = 0.0;
         let grid = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Grid;
+        let oq = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Oq;
         let occlusion = match depth {
-            _ if grid => true,
+            _ if grid || oq => true,
             Some(d) if self.opts.traversal.occlusion => {
                 let th = Instant::now();
                 let _s = tracing::info_span!("HZB build", frame).entered();
@@ -543,7 +591,28 @@ impl<'a> StcStage<'a> {
                 culled.push((node, why));
             }
         };
-        let stats = if grid {
+        let mut oq_stats = None;
+        let stats = if oq {
+            let state = self.oq.as_mut().ok_or(RuntimeError::CullerUnavailable {
+                culler: CullMethod::Oq,
+                why: "its device state was not set up".into(),
+            })?;
+            let mut culler = OqCuller::new(state, skeleton, self.opts.oq);
+            let stats = self.traverser.traverse_culled(
+                skeleton,
+                view,
+                &mut culler,
+                &options,
+                &mut sink,
+                &mut on_cull,
+            );
+            let (s, error) = culler.end();
+            if let Some(e) = error {
+                return Err(e);
+            }
+            oq_stats = Some(s);
+            stats
+        } else if grid {
             let mut culler = GridCuller::new(
                 &mut self.grid,
                 skeleton,
@@ -588,6 +657,7 @@ impl<'a> StcStage<'a> {
             occlusion_used: occlusion,
             hzb_ms,
             grid: grid.then_some(self.grid.stats),
+            oq: oq_stats,
             ms: ms_since(t),
         })
     }

@@ -21,8 +21,8 @@ use gigawalk_gpu::{
     WindowError, WindowSurface,
 };
 use gigawalk_runtime::{
-    CameraError, CameraRequest, CameraSource, CullReason, DrawStyle, FrameReport, OccluderBudget,
-    Presenter, Runtime, RuntimeError, RuntimeOptions,
+    CameraError, CameraRequest, CameraSource, CullMethod, CullReason, DrawStyle, FrameReport,
+    OccluderBudget, Presenter, Runtime, RuntimeError, RuntimeOptions,
 };
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
 use gigawalk_scene::{SceneReader, Skeleton};
@@ -102,6 +102,9 @@ pub enum ViewError {
 /// new size (each restart costs a thread start and 2 bypass frames; the
 /// blit scales the old size meanwhile).
 const RESIZE_SETTLE: Duration = Duration::from_millis(200);
+/// Shown when occlusion queries are asked for on a streamed scene.
+const OQ_STREAMED: &str =
+    "occlusion queries need the whole scene on the device (no --memory-budget): culler left as it was";
 /// Shown when wireframe is asked for on a device without line mode.
 const WIREFRAME_UNSUPPORTED: &str =
     "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
@@ -190,6 +193,11 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     }
     let runtime = Runtime::with_budget(&scene, devices, args.memory_budget, &mut load_lines())?;
     tracing::info!("viewing {} on {device_names}", args.scene.display());
+    if settings.culler == CullMethod::Oq && runtime.is_streaming() {
+        settings.culler = CullMethod::Hzb;
+        start_message = Some((OQ_STREAMED.to_string(), Instant::now()));
+        eprintln!("{OQ_STREAMED}");
+    }
 
     let scripted = args.frames.map(|n| Script {
         frames: n.max(1),
@@ -225,6 +233,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         controller,
         settings,
         wireframe_supported,
+        streaming: runtime.is_streaming(),
         recorder: PathRecorder::default(),
         record_start: Instant::now(),
         last_update: Instant::now(),
@@ -451,6 +460,8 @@ struct LoopState {
     settings: Settings,
     /// Every device has line mode (wireframe).
     wireframe_supported: bool,
+    /// Geometry streamed under a memory budget (no occlusion queries).
+    streaming: bool,
     recorder: PathRecorder,
     record_start: Instant,
     last_update: Instant,
@@ -479,7 +490,13 @@ impl LoopState {
                 Action::Quit => app.close = true,
                 Action::ToggleWalk => self.controller.toggle_walk(),
                 Action::ToggleOcclusion => self.settings.occlusion ^= true,
-                Action::CycleCuller => self.settings.cycle_culler(),
+                Action::CycleCuller => {
+                    self.settings.cycle_culler();
+                    if self.settings.culler == CullMethod::Oq && self.streaming {
+                        self.settings.cycle_culler();
+                        self.message = Some((OQ_STREAMED.into(), now));
+                    }
+                }
                 Action::ToggleHlod => self.settings.hlod ^= true,
                 Action::PixelErrorUp => self.settings.step_pixel_error(true),
                 Action::PixelErrorDown => self.settings.step_pixel_error(false),

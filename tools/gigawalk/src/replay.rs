@@ -9,8 +9,8 @@ use std::time::Instant;
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
 use gigawalk_runtime::{
-    CullMethod, GridOptions, MemoryBudget, OccluderBudget, Prefetching, Reduction, RuntimeOptions,
-    Schedule,
+    CullMethod, GridOptions, MemoryBudget, OccluderBudget, OqOptions, Prefetching, Reduction,
+    RuntimeOptions, Schedule,
 };
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
@@ -32,7 +32,7 @@ pub struct Args {
     /// Pixel-error tolerance of hlod and och; a list sweeps (e.g. 0,1,2,4,8)
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pixel_error: Vec<f64>,
-    /// Occlusion cullers; occ and och run once with each: hzb = GigaWalk's hierarchical Z-buffer over the occluder pass's depth of frame i-2's visible set, grid = the lazy occlusion grid over a software depth image of the frame's own draws (Hey et al.; no occluder pass)
+    /// Occlusion cullers; occ and och run once with each: hzb = GigaWalk's hierarchical Z-buffer over the occluder pass's depth of frame i-2's visible set, grid = the lazy occlusion grid over a software depth image of the frame's own draws (Hey et al.; no occluder pass), oq = hardware occlusion queries of node boxes against the frame's own draws on RVG's device (Bartz et al.; the whole scene resident)
     #[arg(long, value_delimiter = ',', default_value = "hzb")]
     cullers: Vec<CullMethod>,
     /// Replay at most this many poses from the start of the path
@@ -99,6 +99,21 @@ pub struct RuntimeArgs {
     /// Lazy occlusion grid: triangles STC rasterizes a frame at most, nearest first (all, or a count such as 200k); what is not rasterized occludes nothing
     #[arg(long, value_name = "all|TRIANGLES", default_value = "all")]
     grid_budget: OccluderBudget,
+    /// Occlusion queries: boxes per round trip to the device, the node being tested and the nearest queued ones (1 = the paper: one round trip per test)
+    #[arg(long, default_value_t = OqOptions::default().batch)]
+    oq_batch: u32,
+    /// Occlusion queries, coherent (after CHC): nodes visible last frame are drawn without waiting and queried for the next frame
+    #[arg(long)]
+    oq_coherent: bool,
+    /// Occlusion queries, adaptive (the paper's Eq. 1; approximate): cull boxes passing fewer than N samples (0 = off; needs a device that counts samples)
+    #[arg(long, default_value_t = 0)]
+    oq_adaptive: u64,
+    /// Occlusion queries, cost-adaptive (Eq. 2): stop querying after this fraction of the previous frame's time (the paper: 0.33; 0 = frustum culling only; absent = no budget)
+    #[arg(long)]
+    oq_budget: Option<f64>,
+    /// Occlusion queries: draw leaves without testing them, as the paper does
+    #[arg(long)]
+    oq_untested_leaves: bool,
 }
 
 impl RuntimeArgs {
@@ -130,6 +145,13 @@ impl RuntimeArgs {
                     _ => u64::MAX,
                 },
                 ..GridOptions::default()
+            },
+            oq: OqOptions {
+                batch: self.oq_batch,
+                coherent: self.oq_coherent,
+                adaptive: self.oq_adaptive,
+                budget: self.oq_budget,
+                test_leaves: !self.oq_untested_leaves,
             },
             ..RuntimeOptions::default()
         }

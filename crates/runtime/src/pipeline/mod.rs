@@ -119,6 +119,7 @@ pub(super) fn report(
         or_ms: end.or_ms,
         hzb_ms: end.stc.hzb_ms,
         grid: end.stc.grid,
+        oq: end.stc.oq,
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,

@@ -2,7 +2,7 @@
 //! after another (the baseline of the pipeline).
 
 use super::*;
-use crate::stages::{lod_ids, StcStage, Target};
+use crate::stages::{lod_ids, Target};
 use crate::streaming::Link;
 use crate::{CameraSource, Presenter};
 
@@ -59,7 +59,7 @@ fn sequential_frames<'a>(
     prefetch: Option<Prefetch<'a>>,
 ) -> Result<u64, RuntimeError> {
     let mut or = t.or_stage(opts, or_link);
-    let mut stc = StcStage::new(t.skeleton, t.source, opts, prefetch);
+    let mut stc = t.stc_stage(opts, prefetch)?;
     let mut rvg = t.rvg_stage(opts, 0, rvg_link);
     let mut occluders = Occluders::new(opts);
     let mut frozen = Frozen::default();

@@ -1,0 +1,249 @@
+//! The occlusion-query culler (Bartz, Meissner and Huettner): traversal
+//! nearest first; every emitted item is drawn into a depth image on RVG's
+//! device; a node is tested by drawing its box inside an occlusion query
+//! against that depth and culled when no sample (or, adaptive, fewer than
+//! N) passes. Queries go in batches: the popped node with the nearest
+//! queued ones, one round trip per batch. Coherent: nodes visible last
+//! frame are not waited for; their queries run with the next batch and
+//! decide the next frame. A time budget (cost-adaptive) stops querying
+//! for the rest of the frame.
+
+use std::collections::HashSet;
+use std::time::Instant;
+
+use gigawalk_cull::{
+    BoxProjection, Containment, CullView, Culler, DrawItem, RelBox, Verdict, ALL_PLANES,
+};
+use gigawalk_gpu::{GpuContext, QueryBox, QueryPass, Residency};
+use gigawalk_scene::Skeleton;
+
+use crate::stages::gpu_view;
+use crate::{OqOptions, RuntimeError, Stage};
+
+/// What the occlusion queries did in a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OqStats {
+    /// Boxes queried, and round trips (waits for the device).
+    pub queries: u64,
+    pub round_trips: u64,
+    /// Nodes passed as visible without a test: over the time budget, or
+    /// (coherent) visible last frame.
+    pub over_budget: u64,
+    pub coherent: u64,
+    /// Milliseconds in round trips (drawing, querying, waiting).
+    pub ms: f64,
+}
+
+/// What lives from frame to frame: the device's pass, last frame's
+/// visible nodes (coherent), the previous frame's time (budget).
+pub(crate) struct OqState<'a> {
+    pub ctx: &'a GpuContext,
+    pub residency: &'a dyn Residency,
+    pass: QueryPass,
+    visible_last: HashSet<u32>,
+    visible_now: HashSet<u32>,
+    last_start: Option<Instant>,
+    last_frame_ms: Option<f64>,
+}
+
+impl<'a> OqState<'a> {
+    pub fn new(ctx: &'a GpuContext, residency: &'a dyn Residency, w: u32, h: u32) -> Self {
+        OqState {
+            ctx,
+            residency,
+            pass: QueryPass::new(ctx, w, h),
+            visible_last: HashSet::new(),
+            visible_now: HashSet::new(),
+            last_start: None,
+            last_frame_ms: None,
+        }
+    }
+}
+
+/// The culler for one frame.
+pub(crate) struct OqCuller<'s, 'a> {
+    state: &'s mut OqState<'a>,
+    skeleton: &'a Skeleton,
+    opts: OqOptions,
+    /// Queued nodes in the frustum not yet queried: (distance, node, box).
+    queued: Vec<(f32, u32, QueryBox)>,
+    /// Nodes already tested this frame (their queued entries are stale).
+    tested: HashSet<u32>,
+    /// Coherent: nodes passed without waiting, to query with the next batch.
+    deferred: Vec<(u32, QueryBox)>,
+    /// Samples per node queried this frame.
+    results: std::collections::HashMap<u32, u64>,
+    deadline: Option<Instant>,
+    pub stats: OqStats,
+    pub error: Option<RuntimeError>,
+}
+
+/// A query box for a node: its camera-relative box grown by a hair so a
+/// face lying exactly on drawn geometry still passes the depth test
+/// (GreaterEqual) whatever the rasterizer's rounding.
+fn query_box(b: &RelBox) -> QueryBox {
+    let pad =
+        (b.max - b.min).max_element() * 1e-4 + b.min.abs().max(b.max.abs()).max_element() * 1e-6;
+    QueryBox::new(b.min - pad, b.max + pad)
+}
+
+impl<'s, 'a> OqCuller<'s, 'a> {
+    pub fn new(state: &'s mut OqState<'a>, skeleton: &'a Skeleton, opts: OqOptions) -> Self {
+        OqCuller {
+            state,
+            skeleton,
+            opts,
+            queued: Vec::new(),
+            tested: HashSet::new(),
+            deferred: Vec::new(),
+            results: Default::default(),
+            deadline: None,
+            stats: OqStats::default(),
+            error: None,
+        }
+    }
+
+    /// One round trip for `batch`; results stored. On a device error the
+    /// boxes count as visible and the error is kept for the frame.
+    fn round_trip(&mut self, batch: Vec<(u32, QueryBox)>) {
+        let t = Instant::now();
+        let boxes: Vec<QueryBox> = batch.iter().map(|b| b.1).collect();
+        let samples =
+            match self
+                .state
+                .pass
+                .query(self.state.ctx, Some(self.state.residency), &boxes)
+            {
+                Ok(s) => s,
+                Err(source) => {
+                    self.error.get_or_insert(RuntimeError::Gpu {
+                        stage: Stage::Stc,
+                        source,
+                    });
+                    vec![u64::MAX; boxes.len()]
+                }
+            };
+        self.stats.queries += boxes.len() as u64;
+        self.stats.round_trips += 1;
+        for ((node, _), n) in batch.into_iter().zip(samples) {
+            self.results.insert(node, n);
+        }
+        self.stats.ms += t.elapsed().as_secs_f64() * 1e3;
+    }
+
+    fn passes(&self, samples: u64) -> bool {
+        samples > 0 && samples >= self.opts.adaptive
+    }
+
+    /// After traversal: the coherent queries still waiting decide the next
+    /// frame; the frame's time sets the next budget.
+    pub fn end(mut self) -> (OqStats, Option<RuntimeError>) {
+        if !self.deferred.is_empty() {
+            let batch = std::mem::take(&mut self.deferred);
+            self.round_trip(batch);
+        }
+        if self.opts.coherent {
+            let results = &self.results;
+            let adaptive = self.opts.adaptive;
+            let now: HashSet<u32> = self
+                .state
+                .visible_now
+                .iter()
+                .copied()
+                .filter(|n| results.get(n).is_none_or(|&s| s > 0 && s >= adaptive))
+                .collect();
+            self.state.visible_last = now;
+        }
+        (self.stats, self.error)
+    }
+}
+
+impl Culler for OqCuller<'_, '_> {
+    type Ctx = ();
+    const HEARS_QUEUED: bool = true;
+
+    fn begin(&mut self, view: &CullView) {
+        let now = Instant::now();
+        if let Some(s) = self.state.last_start.replace(now) {
+            self.state.last_frame_ms = Some((now - s).as_secs_f64() * 1e3);
+        }
+        // No budget before a frame time is known, except a zero one.
+        self.deadline = match (self.opts.budget, self.state.last_frame_ms) {
+            (Some(0.0), _) => Some(now),
+            (Some(b), Some(ms)) => Some(now + std::time::Duration::from_secs_f64(ms * b / 1e3)),
+            _ => None,
+        };
+        self.state.visible_now.clear();
+        self.state.pass.begin(self.state.ctx, &gpu_view(view));
+    }
+
+    fn queued(&mut self, view: &CullView, node: u32, b: &RelBox, _: &()) {
+        if self.opts.batch <= 1 {
+            return;
+        }
+        let (min, max) = (b.min.as_dvec3(), b.max.as_dvec3());
+        if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
+            return;
+        }
+        let d = gigawalk_cull::lod::distance_to_rel_box(min, max) as f32;
+        self.queued.push((d, node, query_box(b)));
+    }
+
+    fn test(&mut self, view: &CullView, node: u32, b: &RelBox, _: &()) -> (Verdict, ()) {
+        self.tested.insert(node);
+        let leaf = self
+            .skeleton
+            .nodes
+            .get(node as usize)
+            .is_none_or(|n| n.is_leaf());
+        // Leaves untested (the paper), boxes at the near plane or around
+        // the eye, and everything past the budget: visible.
+        let untested = (leaf && !self.opts.test_leaves)
+            || matches!(view.project_box(b), BoxProjection::CrossesNear);
+        if untested {
+            self.state.visible_now.insert(node);
+            return (Verdict::Visible, ());
+        }
+        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            self.stats.over_budget += 1;
+            self.state.visible_now.insert(node);
+            return (Verdict::Visible, ());
+        }
+        if self.opts.coherent && self.state.visible_last.contains(&node) {
+            self.stats.coherent += 1;
+            self.deferred.push((node, query_box(b)));
+            self.state.visible_now.insert(node);
+            return (Verdict::Visible, ());
+        }
+        if !self.results.contains_key(&node) {
+            let mut batch = vec![(node, query_box(b))];
+            // The nearest queued nodes not yet tested: the next to pop.
+            let (tested, results) = (&self.tested, &self.results);
+            self.queued
+                .retain(|(_, n, _)| !tested.contains(n) && !results.contains_key(n));
+            let room = (self.opts.batch as usize - 1).min(self.queued.len());
+            if room > 0 {
+                if room < self.queued.len() {
+                    self.queued
+                        .select_nth_unstable_by(room, |a, b| a.0.total_cmp(&b.0));
+                }
+                batch.extend(self.queued.drain(..room).map(|(_, n, b)| (n, b)));
+            }
+            batch.append(&mut self.deferred);
+            self.round_trip(batch);
+        }
+        let samples = self.results.get(&node).copied().unwrap_or(u64::MAX);
+        if self.passes(samples) {
+            self.state.visible_now.insert(node);
+            (Verdict::Visible, ())
+        } else {
+            (Verdict::Occluded, ())
+        }
+    }
+
+    fn drawn(&mut self, _: &CullView, item: DrawItem) {
+        if let Some(n) = self.skeleton.nodes.get(item.node as usize) {
+            self.state.pass.draw(&[n.first_lod + item.lod]);
+        }
+    }
+}

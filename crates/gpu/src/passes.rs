@@ -545,6 +545,22 @@ impl Residency for NoGeometry {
     }
 }
 
+/// Maps `slice` for reading and waits until it is (after the submissions
+/// that fill it).
+pub(crate) fn map_and_wait(ctx: &GpuContext, slice: wgpu::BufferSlice) -> Result<(), GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| device_error(ctx, e))?;
+    ctx.check()?;
+    rx.recv()
+        .map_err(|e| device_error(ctx, e))?
+        .map_err(|e| device_error(ctx, e))
+}
+
 pub(crate) fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
     GpuError::Device {
         device: ctx.name.clone(),
@@ -627,17 +643,7 @@ impl ReadBack {
             },
         );
         ctx.queue.submit([enc.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        buf.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        ctx.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| device_error(ctx, e))?;
-        ctx.check()?;
-        rx.recv()
-            .map_err(|e| device_error(ctx, e))?
-            .map_err(|e| device_error(ctx, e))?;
+        map_and_wait(ctx, buf.slice(..))?;
         let data = buf.get_mapped_range(..).map_err(|e| device_error(ctx, e))?;
         let mut out = Vec::with_capacity(row as usize * h as usize / std::mem::size_of::<T>());
         for y in 0..h as usize {

@@ -5,7 +5,8 @@
 use glam::Vec3;
 
 use crate::passes::{
-    depth_attachment, device_error, pipeline, target, Drawer, DEPTH_COMPARE, DEPTH_FORMAT,
+    depth_attachment, device_error, map_and_wait, pipeline, target, Drawer, DEPTH_COMPARE,
+    DEPTH_FORMAT,
 };
 use crate::shader_types;
 use crate::{GpuContext, GpuError, Residency, View};
@@ -236,20 +237,8 @@ impl QueryPass {
         enc.resolve_query_set(&self.queries, 0..n, &self.resolve, 0);
         enc.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, n as u64 * 8);
         ctx.queue.submit([enc.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
         let bytes = n as u64 * 8;
-        self.read
-            .slice(..bytes)
-            .map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx.send(r);
-            });
-        ctx.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| device_error(ctx, e))?;
-        ctx.check()?;
-        rx.recv()
-            .map_err(|e| device_error(ctx, e))?
-            .map_err(|e| device_error(ctx, e))?;
+        map_and_wait(ctx, self.read.slice(..bytes))?;
         let out = {
             let data = self
                 .read

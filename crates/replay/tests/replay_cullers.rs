@@ -5,7 +5,7 @@
 //! depth reads.
 
 use gigawalk_gpu::devices_or_skip;
-use gigawalk_procgen::{generate, Kind};
+use gigawalk_procgen::{generate, Generated, Kind};
 use gigawalk_replay::{replay_on, Mode, NoProgress, ReplayOptions};
 use gigawalk_runtime::{CullMethod, Runtime, RuntimeOptions, Schedule};
 use gigawalk_scene::SceneReader;
@@ -13,6 +13,22 @@ use gigawalk_scene::SceneReader;
 const TRIANGLES: u64 = 30_000;
 const W: u32 = 256;
 const H: u32 = 144;
+
+/// A generated scene of `kind`, preprocessed into `dir`, and its walk.
+fn scene(dir: &std::path::Path, kind: Kind, seed: u64, poses: usize) -> (SceneReader, Generated) {
+    let g = generate(kind, TRIANGLES, seed, poses);
+    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "m").unwrap();
+    let file = dir.join(format!("{kind:?}.gwk"));
+    gigawalk_preprocess::preprocess(
+        &model,
+        &gigawalk_preprocess::Params::default(),
+        &file,
+        "test",
+        &gigawalk_preprocess::NoProgress,
+    )
+    .unwrap();
+    (SceneReader::open(&file).unwrap(), g)
+}
 
 fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayOptions {
     ReplayOptions {
@@ -37,18 +53,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
 fn every_culler_draws_the_reference_image_at_pixel_error_0() {
     let dir = tempfile::tempdir().unwrap();
     for kind in [Kind::Plant, Kind::City, Kind::Forest] {
-        let g = generate(kind, TRIANGLES, 5, 30);
-        let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "m").unwrap();
-        let file = dir.path().join(format!("{kind:?}.gwk"));
-        gigawalk_preprocess::preprocess(
-            &model,
-            &gigawalk_preprocess::Params::default(),
-            &file,
-            "test",
-            &gigawalk_preprocess::NoProgress,
-        )
-        .unwrap();
-        let scene = SceneReader::open(&file).unwrap();
+        let (scene, g) = scene(dir.path(), kind, 5, 30);
         let Some(d) = devices_or_skip(2, "cullers on plant, city and forest") else {
             return;
         };
@@ -107,18 +112,7 @@ fn the_lazy_grid_culls_as_the_eager_one_with_fewer_depth_reads() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let g = generate(Kind::City, TRIANGLES, 2, 20);
-    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "c").unwrap();
-    let file = dir.path().join("city.gwk");
-    gigawalk_preprocess::preprocess(
-        &model,
-        &gigawalk_preprocess::Params::default(),
-        &file,
-        "test",
-        &gigawalk_preprocess::NoProgress,
-    )
-    .unwrap();
-    let scene = SceneReader::open(&file).unwrap();
+    let (scene, g) = scene(dir.path(), Kind::City, 2, 20);
     let rt = Runtime::with_devices(&scene, d).unwrap();
     let mut runs = Vec::new();
     for lazy in [true, false] {
@@ -157,18 +151,7 @@ fn the_lazy_grid_culls_as_the_eager_one_with_fewer_depth_reads() {
 #[test]
 fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
     let dir = tempfile::tempdir().unwrap();
-    let g = generate(Kind::City, TRIANGLES, 4, 20);
-    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "c").unwrap();
-    let file = dir.path().join("city.gwk");
-    gigawalk_preprocess::preprocess(
-        &model,
-        &gigawalk_preprocess::Params::default(),
-        &file,
-        "test",
-        &gigawalk_preprocess::NoProgress,
-    )
-    .unwrap();
-    let scene = SceneReader::open(&file).unwrap();
+    let (scene, g) = scene(dir.path(), Kind::City, 4, 20);
     let Some(d) = devices_or_skip(2, "occlusion-query variants") else {
         return;
     };

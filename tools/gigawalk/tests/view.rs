@@ -303,7 +303,10 @@ fn bad_memory_budget_is_a_clear_error() {
     }
     let (ok, _, err) = gigawalk(&["view", "x.gwk", "--culler", "zbuffer"], None);
     assert!(!ok);
-    assert!(err.contains("hzb or grid"), "{err}");
+    assert!(
+        err.contains("culler \"zbuffer\" is not hzb, grid or oq"),
+        "{err}"
+    );
 }
 
 /// A running `gigawalk view`, killed if the test fails before it quits.

@@ -23,6 +23,7 @@ pub mod cluster;
 pub mod hausdorff;
 pub mod hierarchy;
 pub mod hlod;
+pub mod occluders;
 pub mod params;
 pub mod partition;
 pub mod parts;

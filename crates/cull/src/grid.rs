@@ -170,6 +170,16 @@ impl OcclusionGrid {
     /// `nearest` (by [`crate::DEPTH_SLACK`]): the box is hidden.
     pub fn hides(&mut self, r: PixelRect, nearest: f32) -> bool {
         self.stats.tests += 1;
+        // Clipped to the image (an empty image hides nothing).
+        let (w, h) = (self.depth.width(), self.depth.height());
+        if w == 0 || h == 0 || r.x0 > r.x1 || r.y0 > r.y1 || r.x0 >= w || r.y0 >= h {
+            return w > 0 && h > 0 && (r.x0 >= w || r.y0 >= h);
+        }
+        let r = PixelRect {
+            x1: r.x1.min(w - 1),
+            y1: r.y1.min(h - 1),
+            ..r
+        };
         let c = self.cell;
         for cy in r.y0 / c..=r.y1 / c {
             for cx in r.x0 / c..=r.x1 / c {

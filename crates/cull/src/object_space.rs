@@ -51,7 +51,17 @@ impl ConvexOccluder {
     /// `None` unless there are at least 3 vertices spanning an area, all on
     /// one plane, making a convex polygon (either winding).
     pub fn new(vertices: &[DVec3]) -> Option<Self> {
-        if vertices.len() < 3 || vertices.iter().any(|v| !v.is_finite()) {
+        if vertices.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        // Repeated vertices would make zero-length edges, whose planes
+        // nothing satisfies.
+        let mut vertices: Vec<DVec3> = vertices.to_vec();
+        vertices.dedup();
+        while vertices.len() > 1 && vertices.first() == vertices.last() {
+            vertices.pop();
+        }
+        if vertices.len() < 3 {
             return None;
         }
         let origin = vertices.iter().copied().sum::<DVec3>() / vertices.len() as f64;

@@ -16,7 +16,7 @@
 //! triangle's depth slope and a relative [`DEPTH_REL_SLACK`] (the GPU's
 //! f32 vertex transform and interpolation).
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3, DVec4, Vec3};
 
 /// How far inside a triangle (in pixels) a pixel centre must lie to be
 /// covered.
@@ -93,6 +93,11 @@ impl SoftDepth {
     /// `rel_origin` (its origin minus the eye, in f64), seen through the
     /// camera-relative `view_proj`. Returns the rectangle of pixels it
     /// wrote, if any. Indices out of range are skipped.
+    ///
+    /// The vertices are placed as the GPU places them: the offset rounded
+    /// to f32 and added to each f32 position in f32 (the shaders'
+    /// `position + offset`), so a mesh far from the eye lands where the
+    /// GPU draws it, not where exact arithmetic would.
     pub fn draw_mesh(
         &mut self,
         view_proj: &DMat4,
@@ -100,13 +105,13 @@ impl SoftDepth {
         positions: &[[f32; 3]],
         indices: &[u32],
     ) -> Option<PixelRect> {
-        let m = *view_proj * DMat4::from_translation(rel_origin);
+        let offset = rel_origin.as_vec3();
         let mut clip = std::mem::take(&mut self.clip);
         clip.clear();
         clip.extend(
             positions
                 .iter()
-                .map(|p| m * DVec4::new(p[0] as f64, p[1] as f64, p[2] as f64, 1.0)),
+                .map(|p| *view_proj * (Vec3::from(*p) + offset).as_dvec3().extend(1.0)),
         );
         let mut rect = None;
         for t in indices.chunks_exact(3) {
@@ -215,10 +220,15 @@ impl SoftDepth {
             let (mut xl, mut xr) = (bx0 + 0.5, bx1 + 0.5);
             for &(ea, eb, ec) in &edges {
                 let r = -(eb * py + ec);
-                if ea > 0.0 {
-                    xl = xl.max(r / ea);
+                let x = r / ea;
+                if x.is_nan() && ea != 0.0 {
+                    // Cannot happen for a finite, non-degenerate triangle;
+                    // drawing nothing is the safe answer.
+                    xl = f64::INFINITY;
+                } else if ea > 0.0 {
+                    xl = xl.max(x);
                 } else if ea < 0.0 {
-                    xr = xr.min(r / ea);
+                    xr = xr.min(x);
                 } else if r > 0.0 {
                     xl = f64::INFINITY;
                 }

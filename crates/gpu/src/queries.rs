@@ -182,8 +182,27 @@ impl QueryPass {
 
     /// One round trip: the pending draws, then a query per box; waits and
     /// returns the samples each box passed (the count where the driver
-    /// counts; WebGPU only promises zero or not).
+    /// counts; WebGPU only promises zero or not). More boxes than a query
+    /// set holds ([`wgpu::QUERY_SET_MAX_QUERIES`]) take one round trip per
+    /// set's worth.
     pub fn query(
+        &mut self,
+        ctx: &GpuContext,
+        residency: Option<&dyn Residency>,
+        boxes: &[QueryBox],
+    ) -> Result<Vec<u64>, GpuError> {
+        let max = wgpu::QUERY_SET_MAX_QUERIES as usize;
+        if boxes.len() <= max {
+            return self.query_set(ctx, residency, boxes);
+        }
+        let mut out = Vec::with_capacity(boxes.len());
+        for chunk in boxes.chunks(max) {
+            out.extend(self.query_set(ctx, residency, chunk)?);
+        }
+        Ok(out)
+    }
+
+    fn query_set(
         &mut self,
         ctx: &GpuContext,
         residency: Option<&dyn Residency>,
@@ -194,7 +213,7 @@ impl QueryPass {
         };
         let n = boxes.len() as u32;
         if n > self.capacity {
-            self.capacity = n.next_power_of_two();
+            self.capacity = n.next_power_of_two().min(wgpu::QUERY_SET_MAX_QUERIES);
             (self.queries, self.resolve, self.read, self.boxes) = query_buffers(ctx, self.capacity);
         }
         let pending = std::mem::take(&mut self.pending);

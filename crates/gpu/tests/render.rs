@@ -255,6 +255,10 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
     );
     assert_eq!(after[1], before[1], "a box in front passes its whole area");
     assert_eq!(after[2], before[2], "a box beside it is not hidden");
+    // More boxes than a query set holds: split into round trips.
+    let many = q.query(&ctx, Some(&geometry), &vec![behind; 5000]).unwrap();
+    assert_eq!(many.len(), 5000);
+    assert!(many.iter().all(|&n| n == 0));
     // A new frame clears the depth.
     q.begin(&ctx, &v);
     assert!(q.query(&ctx, Some(&geometry), &[behind]).unwrap()[0] > 0);

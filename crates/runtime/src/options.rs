@@ -340,7 +340,7 @@ pub enum OptionsError {
     Chunk,
     #[error("grid cell {0} must be 1..=1024 pixels")]
     GridCell(u32),
-    #[error("occlusion-query batch {0} must be 1..=65536")]
+    #[error("occlusion-query batch {0} must be 1..=4096 (a query set's size)")]
     OqBatch(u32),
     #[error("occlusion-query budget {0} must be a fraction in [0, 10]")]
     OqBudget(f64),
@@ -406,7 +406,7 @@ impl RuntimeOptions {
         if !(1..=1024).contains(&self.grid.cell) {
             return Err(OptionsError::GridCell(self.grid.cell));
         }
-        if !(1..=65536).contains(&self.oq.batch) {
+        if !(1..=4096).contains(&self.oq.batch) {
             return Err(OptionsError::OqBatch(self.oq.batch));
         }
         if let Some(b) = self

@@ -78,13 +78,21 @@ pub(crate) struct OqCuller<'s, 'a> {
     pub error: Option<RuntimeError>,
 }
 
-/// A query box for a node: its camera-relative box grown by a hair so a
-/// face lying exactly on drawn geometry still passes the depth test
-/// (GreaterEqual) whatever the rasterizer's rounding.
-fn query_box(b: &RelBox) -> QueryBox {
+/// The box a node is queried with: its camera-relative box grown by a
+/// hair so a face lying exactly on drawn geometry still passes the depth
+/// test (GreaterEqual) whatever the rasterizer's rounding. The near-plane
+/// check must use this box, not the node's: a grown box can reach the eye.
+fn padded(b: &RelBox) -> RelBox {
     let pad =
         (b.max - b.min).max_element() * 1e-4 + b.min.abs().max(b.max.abs()).max_element() * 1e-6;
-    QueryBox::new(b.min - pad, b.max + pad)
+    RelBox {
+        min: b.min - pad,
+        max: b.max + pad,
+    }
+}
+
+fn query_box(b: &RelBox) -> QueryBox {
+    QueryBox::new(b.min, b.max)
 }
 
 impl<'s, 'a> OqCuller<'s, 'a> {
@@ -129,6 +137,13 @@ impl<'s, 'a> OqCuller<'s, 'a> {
             self.results.insert(node, n);
         }
         self.stats.ms += t.elapsed().as_secs_f64() * 1e3;
+    }
+
+    fn is_leaf(&self, node: u32) -> bool {
+        self.skeleton
+            .nodes
+            .get(node as usize)
+            .is_none_or(|n| n.is_leaf())
     }
 
     fn passes(&self, samples: u64) -> bool {
@@ -185,21 +200,26 @@ impl Culler for OqCuller<'_, '_> {
         if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
             return;
         }
+        // What `test` passes without a query is not worth one.
+        let p = padded(b);
+        if !self.opts.test_leaves && self.is_leaf(node)
+            || matches!(view.project_box(&p), BoxProjection::CrossesNear)
+        {
+            return;
+        }
         let d = gigawalk_cull::lod::distance_to_rel_box(min, max) as f32;
-        self.queued.push((d, node, query_box(b)));
+        self.queued.push((d, node, query_box(&p)));
     }
 
     fn test(&mut self, view: &CullView, node: u32, b: &RelBox, _: &()) -> (Verdict, ()) {
         self.tested.insert(node);
-        let leaf = self
-            .skeleton
-            .nodes
-            .get(node as usize)
-            .is_none_or(|n| n.is_leaf());
+        let p = padded(b);
         // Leaves untested (the paper), boxes at the near plane or around
-        // the eye, and everything past the budget: visible.
-        let untested = (leaf && !self.opts.test_leaves)
-            || matches!(view.project_box(b), BoxProjection::CrossesNear);
+        // the eye (as queried: grown), everything past the budget or after
+        // a device error: visible.
+        let untested = (!self.opts.test_leaves && self.is_leaf(node))
+            || matches!(view.project_box(&p), BoxProjection::CrossesNear)
+            || self.error.is_some();
         if untested {
             self.state.visible_now.insert(node);
             return (Verdict::Visible, ());
@@ -211,12 +231,12 @@ impl Culler for OqCuller<'_, '_> {
         }
         if self.opts.coherent && self.state.visible_last.contains(&node) {
             self.stats.coherent += 1;
-            self.deferred.push((node, query_box(b)));
+            self.deferred.push((node, query_box(&p)));
             self.state.visible_now.insert(node);
             return (Verdict::Visible, ());
         }
         if !self.results.contains_key(&node) {
-            let mut batch = vec![(node, query_box(b))];
+            let mut batch = vec![(node, query_box(&p))];
             // The nearest queued nodes not yet tested: the next to pop.
             let (tested, results) = (&self.tested, &self.results);
             self.queued

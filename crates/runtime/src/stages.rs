@@ -153,11 +153,12 @@ impl<'a> Target<'a> {
     }
 
     /// STC, with the occlusion-query culler's device state when the
-    /// options ask for it (on RVG's device, whose whole geometry must be
-    /// resident).
+    /// options ask for it (on RVG's device `rvg_device`, whose whole
+    /// geometry must be resident).
     pub fn stc_stage(
         &self,
         opts: &'a RuntimeOptions,
+        rvg_device: usize,
         prefetch: Option<Prefetch<'a>>,
     ) -> Result<StcStage<'a>, RuntimeError> {
         let mut stc = StcStage::new(self.skeleton, self.source, opts, prefetch);
@@ -169,7 +170,7 @@ impl<'a> Target<'a> {
             let Some(rt) = self.gpu else {
                 return Err(unavailable("it needs a device (none on the CPU)"));
             };
-            let b = self.rvg_device(opts);
+            let b = rvg_device;
             let Geometry::Resident(geometry) = &rt.geometry[b] else {
                 return Err(unavailable(
                     "it draws on RVG's device, which must hold the whole scene (no --memory-budget)",

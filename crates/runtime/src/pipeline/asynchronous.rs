@@ -101,7 +101,7 @@ pub(crate) fn run_async(
             (
                 Stage::Stc,
                 Box::new(move || {
-                    let stc = t.stc_stage(opts, prefetch)?;
+                    let stc = t.stc_stage(opts, b, prefetch)?;
                     async_stc_thread(stc, or_rx, sets_tx, feedback_tx)
                 }),
             ),

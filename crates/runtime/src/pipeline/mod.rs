@@ -368,9 +368,12 @@ impl Frozen {
     /// The held result for a frame that holds (`hold`), else `None`.
     pub(super) fn held(&self, hold: bool) -> Option<StcOutput> {
         let last = self.last.as_ref().filter(|_| hold)?;
+        // A held frame did no culling work of its own.
         Some(StcOutput {
             ms: 0.0,
             hzb_ms: 0.0,
+            grid: None,
+            oq: None,
             ..last.clone()
         })
     }

@@ -44,7 +44,7 @@ pub(crate) fn run_pipelined(
             (
                 Stage::Stc,
                 Box::new(move || {
-                    let stc = t.stc_stage(opts, prefetch)?;
+                    let stc = t.stc_stage(opts, b, prefetch)?;
                     stc_thread(stc, t, opts, or_rx, rvg_tx, feedback_tx)
                 }),
             ),

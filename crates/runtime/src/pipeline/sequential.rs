@@ -59,7 +59,7 @@ fn sequential_frames<'a>(
     prefetch: Option<Prefetch<'a>>,
 ) -> Result<u64, RuntimeError> {
     let mut or = t.or_stage(opts, or_link);
-    let mut stc = t.stc_stage(opts, prefetch)?;
+    let mut stc = t.stc_stage(opts, 0, prefetch)?;
     let mut rvg = t.rvg_stage(opts, 0, rvg_link);
     let mut occluders = Occluders::new(opts);
     let mut frozen = Frozen::default();

@@ -31,6 +31,7 @@
 //! (HZB building uses rayon's pool inside the call).
 
 mod camera;
+mod ct;
 mod culler;
 mod frustum;
 mod grid;
@@ -43,6 +44,7 @@ mod traverse;
 mod view;
 
 pub use camera::{default_near, Camera, Viewport, NEAR_FRACTION_OF_SCENE};
+pub use ct::{CtCuller, CtStats, PlaneCache, MAX_FRAME_OCCLUDERS};
 pub use culler::{BoxTest, Culler, Verdict};
 pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
 pub use grid::{

@@ -93,7 +93,7 @@ fn every_schedule_and_culler_on_the_cpu_loses_no_pixel_and_pipelined_culls_as_se
     )
     .unwrap_err();
     assert!(matches!(e, RuntimeError::CullerUnavailable { .. }), "{e}");
-    for culler in [CullMethod::Hzb, CullMethod::Grid] {
+    for culler in [CullMethod::Hzb, CullMethod::Grid, CullMethod::Ct] {
         let seq = run(
             &scene,
             &options(Schedule::Sequential, true, culler),
@@ -124,7 +124,8 @@ fn every_schedule_and_culler_on_the_cpu_loses_no_pixel_and_pipelined_culls_as_se
             let bypass = culler == CullMethod::Hzb && s.frame < 2;
             assert_eq!(s.occlusion_used, !bypass, "{culler} frame {}", s.frame);
             assert_eq!(s.grid.is_some(), culler == CullMethod::Grid);
-            if culler == CullMethod::Grid {
+            assert_eq!(s.ct.is_some(), culler == CullMethod::Ct);
+            if culler != CullMethod::Hzb {
                 assert_eq!(s.occluder_items, 0, "OR draws nothing for the grid");
             }
         }

@@ -39,7 +39,7 @@ pub mod verify;
 /// scenes (`gigawalk demo`'s) compare it, and provenance records it.
 /// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1;
 /// 3: vanished pieces of inner nodes covered.
-pub const REVISION: u32 = 3;
+pub const REVISION: u32 = 4;
 
 use std::path::Path;
 use std::time::Instant;
@@ -171,6 +171,12 @@ pub fn preprocess(
         ),
         parameters,
     };
+    let occluders = occluders::scene_occluders(model);
+    built.stats.occluders = occluders.len();
+    writer.add_optional_section(
+        gigawalk_scene::occluders::TAG_OCCLUDERS,
+        gigawalk_scene::occluders::encode_occluders(&occluders),
+    );
     let summary = writer
         .finish(built.nodes, provenance)
         .map_err(|e| PreprocessError::Write(e.into()))?;

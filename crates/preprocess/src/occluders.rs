@@ -10,12 +10,49 @@
 //! 1e-6) and at least `min_area`. Its polygon is that hull. A non-convex
 //! patch (an L-shaped wall) is skipped: the test needs convex occluders.
 //!
-//! The first piece of the `ct` culler (issue 16): nothing stores or uses
-//! these yet.
+//! Preprocess keeps the [`MAX_OCCLUDERS`] largest faces of the model of at
+//! least [`MIN_OCCLUDER_SIZE`] squared (of the model's diagonal) in the
+//! scene file's OCCL section, for the `ct` culler.
 
 use std::collections::HashMap;
 
 use glam::DVec3;
+
+/// Most occluders a scene keeps (the largest).
+pub const MAX_OCCLUDERS: usize = 4096;
+/// Smallest occluder side kept, as a fraction of the model's diagonal
+/// (its area must reach this squared).
+pub const MIN_OCCLUDER_SIZE: f64 = 0.005;
+
+/// The scene's occluders: every object's convex faces of at least
+/// `(MIN_OCCLUDER_SIZE x diagonal)^2`, the [`MAX_OCCLUDERS`] largest.
+pub fn scene_occluders(
+    model: &gigawalk_import::Model,
+) -> Vec<gigawalk_scene::occluders::OccluderRecord> {
+    let (lo, hi) = model.objects.iter().flat_map(|o| &o.positions).fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let diag = (hi - lo).length();
+    if !diag.is_finite() {
+        return Vec::new();
+    }
+    let min_area = (MIN_OCCLUDER_SIZE * diag).powi(2);
+    let mut all: Vec<OccluderPolygon> = model
+        .objects
+        .iter()
+        .flat_map(|o| convex_faces(&o.positions, &o.indices, min_area))
+        .filter(|o| o.vertices.len() <= gigawalk_scene::occluders::MAX_OCCLUDER_VERTICES)
+        .collect();
+    all.sort_by(|a, b| b.area.total_cmp(&a.area));
+    all.truncate(MAX_OCCLUDERS);
+    all.into_iter()
+        .map(|o| gigawalk_scene::occluders::OccluderRecord {
+            vertices: o.vertices,
+            area: o.area,
+        })
+        .collect()
+}
 
 /// A convex planar polygon, vertices in order around its normal.
 #[derive(Clone, Debug, PartialEq)]

@@ -43,6 +43,9 @@ pub struct Stats {
     pub input_file_bytes: u64,
     /// Size of the scene file written; 0 when nothing was written.
     pub output_bytes: u64,
+    /// Convex occluders stored for object-space culling (OCCL section).
+    #[serde(default)]
+    pub occluders: usize,
     /// `output_bytes / raw_input_bytes`.
     pub output_ratio: f64,
     /// `output_bytes / triangles`.

@@ -117,6 +117,9 @@ pub struct FrameRecord {
     /// The occlusion queries' work (oq culler only; in frames.csv).
     #[serde(skip)]
     pub oq: Option<gigawalk_runtime::OqStats>,
+    /// The object-space culler's work (ct culler only).
+    #[serde(skip)]
+    pub ct: Option<gigawalk_cull::CtStats>,
     /// Streaming (zeros when the scene is resident): device bytes the
     /// resident LODs take after the frame, bytes that arrived, loader
     /// requests sent, stand-ins drawn for LODs not resident, and chosen
@@ -399,6 +402,7 @@ pub fn replay_on(
                 occlusion_used: r.occlusion_used,
                 grid: r.grid,
                 oq: r.oq,
+                ct: r.ct,
                 resident_bytes: r.streaming.resident_bytes,
                 loaded_bytes: r.streaming.loaded_bytes,
                 requests: r.streaming.requests,

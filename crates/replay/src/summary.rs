@@ -111,6 +111,15 @@ pub struct ModeSummary {
     pub median_oq_ms: Option<f64>,
     #[serde(default)]
     pub mean_oq_untested: Option<f64>,
+    /// The object-space culler (ct only): mean nodes tested and (node,
+    /// occluder) classifications a frame, and the share of tangent planes
+    /// found in the cache.
+    #[serde(default)]
+    pub mean_ct_nodes_tested: Option<f64>,
+    #[serde(default)]
+    pub mean_ct_pair_tests: Option<f64>,
+    #[serde(default)]
+    pub ct_cache_hit_fraction: Option<f64>,
     /// Frames compared with the reference.
     pub accuracy_frames: usize,
     /// Summed over the compared frames (null without accuracy frames).
@@ -223,6 +232,7 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
     };
     let oq: Vec<gigawalk_runtime::OqStats> = m.iter().filter_map(|f| f.oq).collect();
+    let ct: Vec<gigawalk_cull::CtStats> = m.iter().filter_map(|f| f.ct).collect();
     let oq_fig = |f: fn(&gigawalk_runtime::OqStats) -> f64, med: bool| {
         let v: Vec<f64> = oq.iter().map(f).collect();
         (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
@@ -239,6 +249,14 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         mean_oq_round_trips: oq_fig(|q| q.round_trips as f64, false),
         median_oq_ms: oq_fig(|q| q.ms, true),
         mean_oq_untested: oq_fig(|q| (q.over_budget + q.coherent) as f64, false),
+        mean_ct_nodes_tested: (!ct.is_empty())
+            .then(|| mean(ct.iter().map(|c| c.nodes_tested as f64))),
+        mean_ct_pair_tests: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.pair_tests as f64))),
+        ct_cache_hit_fraction: (!ct.is_empty()).then(|| {
+            let hits: u64 = ct.iter().map(|c| c.cache_hits).sum();
+            let all: u64 = ct.iter().map(|c| c.cache_hits + c.cache_misses).sum();
+            hits as f64 / all.max(1) as f64
+        }),
         frames: run.frames.len(),
         measured_frames: ms.len(),
         mean_fps: 1e3 / mean_ms,

@@ -190,6 +190,8 @@ pub struct FrameReport {
     pub grid: Option<GridStats>,
     /// The occlusion queries' work this frame (oq culler only).
     pub oq: Option<OqStats>,
+    /// The object-space culler's work this frame (ct culler only).
+    pub ct: Option<gigawalk_cull::CtStats>,
     /// All of STC, HZB build included.
     pub stc_ms: f64,
     pub rvg_ms: f64,
@@ -364,6 +366,12 @@ impl<'s> Runtime<'s> {
             None => Self::resident_reporting(scene, devices, progress),
             Some(bytes) => Self::streaming_reporting(scene, devices, bytes, progress),
         }
+    }
+
+    /// Whether the scene stores occluders for the `ct` culler (a scene
+    /// that cannot be read says no; the run would say why).
+    pub fn has_occluders(&self) -> bool {
+        matches!(self.source.occluders(), Ok(Some(_)))
     }
 
     /// Whether geometry is streamed under a memory budget.

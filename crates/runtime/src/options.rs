@@ -176,10 +176,18 @@ pub enum CullMethod {
     /// Bartz et al.'s hardware occlusion queries: node boxes drawn against
     /// the depth of what the frame drew so far, on RVG's device.
     Oq,
+    /// Coorg and Teller's object-space culling by the scene's large convex
+    /// occluders (no rendering at all).
+    Ct,
 }
 
 impl CullMethod {
-    pub const ALL: [CullMethod; 3] = [CullMethod::Hzb, CullMethod::Grid, CullMethod::Oq];
+    pub const ALL: [CullMethod; 4] = [
+        CullMethod::Hzb,
+        CullMethod::Grid,
+        CullMethod::Oq,
+        CullMethod::Ct,
+    ];
 
     /// Whether the culler reads OR's occluder depth (OR renders nothing
     /// for the others).
@@ -194,6 +202,7 @@ impl std::fmt::Display for CullMethod {
             CullMethod::Hzb => "hzb",
             CullMethod::Grid => "grid",
             CullMethod::Oq => "oq",
+            CullMethod::Ct => "ct",
         })
     }
 }
@@ -204,7 +213,7 @@ impl std::str::FromStr for CullMethod {
         CullMethod::ALL
             .into_iter()
             .find(|c| c.to_string() == s)
-            .ok_or_else(|| format!("culler {s:?} is not hzb, grid or oq"))
+            .ok_or_else(|| format!("culler {s:?} is not hzb, grid, oq or ct"))
     }
 }
 
@@ -688,7 +697,7 @@ mod culler_tests {
             assert_eq!(c.to_string().parse::<CullMethod>(), Ok(c));
         }
         let e = "zbuf".parse::<CullMethod>().unwrap_err();
-        assert!(e.contains("hzb, grid or oq"), "{e}");
+        assert!(e.contains("hzb, grid, oq or ct"), "{e}");
         let mut o = RuntimeOptions::default();
         assert!(o.wants_occluder_depth());
         o.culler = CullMethod::Grid;

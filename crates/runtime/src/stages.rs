@@ -5,9 +5,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use gigawalk_cull::{
-    reselect_lods, select_occluders, Camera, Containment, CullReason, CullView, DrawItem, Frustum,
-    GridCuller, GridStats, Hzb, HzbOcclusion, NoOcclusion, OcclusionGrid, OcclusionTest, RelBox,
-    SoftDepth, TraversalOptions, TraversalStats, Traverser, TriangleSource, ALL_PLANES,
+    reselect_lods, select_occluders, Camera, Containment, ConvexOccluder, CtCuller, CtStats,
+    CullReason, CullView, DrawItem, Frustum, GridCuller, GridStats, Hzb, HzbOcclusion, NoOcclusion,
+    OcclusionGrid, OcclusionTest, PlaneCache, RelBox, SoftDepth, TraversalOptions, TraversalStats,
+    Traverser, TriangleSource, ALL_PLANES,
 };
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
@@ -186,6 +187,19 @@ impl<'a> Target<'a> {
                 ));
             }
             stc.oq = Some(OqState::new(ctx, geometry, opts.width, opts.height));
+        }
+        if opts.culler == CullMethod::Ct && opts.traversal.occlusion {
+            let records = self
+                .source
+                .occluders()
+                .map_err(|source| RuntimeError::Load {
+                    source: Box::new(source),
+                })?
+                .ok_or_else(|| RuntimeError::CullerUnavailable {
+                    culler: CullMethod::Ct,
+                    why: "the scene file has no occluders (written before they were stored): preprocess it again".into(),
+                })?;
+            stc.ct = Some(CtState::new(&records));
         }
         Ok(stc)
     }
@@ -380,6 +394,33 @@ impl<'a> OrStage<'a> {
     }
 }
 
+/// Occluders the object-space culler uses a frame (the paper's k).
+const CT_FRAME_OCCLUDERS: usize = 32;
+/// Tangent-plane pairs cached across frames.
+const CT_CACHE_PAIRS: usize = 1 << 20;
+
+/// The object-space culler's occluders and cache, kept across frames.
+pub(crate) struct CtState {
+    occluders: Vec<ConvexOccluder>,
+    areas: Vec<f64>,
+    cache: PlaneCache,
+}
+
+impl CtState {
+    /// Occluders that are not convex planar polygons are left out.
+    fn new(records: &[gigawalk_scene::occluders::OccluderRecord]) -> Self {
+        let (occluders, areas) = records
+            .iter()
+            .filter_map(|r| ConvexOccluder::new(&r.vertices).map(|o| (o, r.area)))
+            .unzip();
+        CtState {
+            occluders,
+            areas,
+            cache: PlaneCache::new(CT_CACHE_PAIRS),
+        }
+    }
+}
+
 /// STC's end of the loader's request queue (streaming with prefetch).
 pub(crate) struct Prefetch<'a> {
     pub requests: crossbeam_channel::Sender<Request>,
@@ -501,6 +542,8 @@ pub(crate) struct StcStage<'a> {
     triangles: TriangleCache<'a>,
     /// The occlusion-query culler's device state.
     oq: Option<OqState<'a>>,
+    /// The object-space culler's occluders and tangent-plane cache.
+    ct: Option<CtState>,
     prefetch: Option<Prefetch<'a>>,
 }
 
@@ -517,6 +560,8 @@ pub(crate) struct StcOutput {
     pub grid: Option<GridStats>,
     /// The occlusion queries' work (oq culler only).
     pub oq: Option<OqStats>,
+    /// The object-space culler's work (ct culler only).
+    pub ct: Option<CtStats>,
     pub ms: f64,
 }
 
@@ -536,6 +581,7 @@ impl<'a> StcStage<'a> {
             grid: OcclusionGrid::new(opts.grid.cell, opts.grid.lazy),
             triangles: TriangleCache::new(source, opts.grid.cache_bytes),
             oq: None,
+            ct: None,
             prefetch,
         }
     }
@@ -554,8 +600,9 @@ impl<'a> StcStage<'a> {
         let mut hzb_ms = 0.0;
         let grid = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Grid;
         let oq = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Oq;
+        let ct = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Ct;
         let occlusion = match depth {
-            _ if grid || oq => true,
+            _ if grid || oq || ct => true,
             Some(d) if self.opts.traversal.occlusion => {
                 let th = Instant::now();
                 let _s = tracing::info_span!("HZB build", frame).entered();
@@ -593,7 +640,30 @@ impl<'a> StcStage<'a> {
             }
         };
         let mut oq_stats = None;
-        let stats = if oq {
+        let mut ct_stats = None;
+        let stats = if ct {
+            let state = self.ct.as_mut().ok_or(RuntimeError::CullerUnavailable {
+                culler: CullMethod::Ct,
+                why: "its occluders were not loaded".into(),
+            })?;
+            let mut culler = CtCuller::new(
+                skeleton,
+                &state.occluders,
+                &state.areas,
+                CT_FRAME_OCCLUDERS,
+                &mut state.cache,
+            );
+            let stats = self.traverser.traverse_culled(
+                skeleton,
+                view,
+                &mut culler,
+                &options,
+                &mut sink,
+                &mut on_cull,
+            );
+            ct_stats = Some(culler.stats);
+            stats
+        } else if oq {
             let state = self.oq.as_mut().ok_or(RuntimeError::CullerUnavailable {
                 culler: CullMethod::Oq,
                 why: "its device state was not set up".into(),
@@ -659,6 +729,7 @@ impl<'a> StcStage<'a> {
             hzb_ms,
             grid: grid.then_some(self.grid.stats),
             oq: oq_stats,
+            ct: ct_stats,
             ms: ms_since(t),
         })
     }

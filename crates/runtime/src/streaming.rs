@@ -29,11 +29,22 @@ use crate::RuntimeError;
 /// Where LODs are read from while a walk runs: a scene file.
 pub trait LodSource: Sync {
     fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError>;
+    /// The scene's stored occluders (`None`: the file has none).
+    fn occluders(
+        &self,
+    ) -> Result<Option<Vec<gigawalk_scene::occluders::OccluderRecord>>, ReadError> {
+        Ok(None)
+    }
 }
 
 impl<R: ReadAt + Sync> LodSource for SceneReader<R> {
     fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
         SceneReader::read_lod(self, lod)
+    }
+    fn occluders(
+        &self,
+    ) -> Result<Option<Vec<gigawalk_scene::occluders::OccluderRecord>>, ReadError> {
+        SceneReader::occluders(self)
     }
 }
 

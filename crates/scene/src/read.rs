@@ -98,6 +98,8 @@ pub struct SceneReader<R = File> {
     lod_owner: Vec<u32>,
     sections: Vec<SectionInfo>,
     geometry: TocEntry,
+    /// Optional sections (known to this reader or not), read on demand.
+    optional: Vec<TocEntry>,
     file_len: u64,
     version: (u16, u16),
 }
@@ -142,6 +144,32 @@ impl<R: ReadAt> SceneReader<R> {
 
     /// Reads, checks (checksum, index range, geometry inside its node's
     /// box) and decodes one LOD's geometry.
+    /// The file's path (or in-memory description), as errors name it.
+    pub fn file_name(&self) -> &str {
+        &self.file
+    }
+
+    /// The bytes of optional section `tag`, CRC checked; `None` when the
+    /// file has no such section.
+    pub fn optional_section(&self, tag: [u8; 4]) -> Result<Option<Vec<u8>>, ReadError> {
+        let err = |kind| ReadError {
+            file: self.file.clone(),
+            kind,
+        };
+        let Some(e) = self.optional.iter().find(|e| e.tag == tag) else {
+            return Ok(None);
+        };
+        let bytes = read_bytes(&self.src, e.offset, e.len).map_err(err)?;
+        if crc32fast::hash(&bytes) != e.crc {
+            return Err(err(ReadErrorKind::Checksum {
+                section: format::section_name(tag),
+                offset: e.offset,
+                end: e.offset + e.len,
+            }));
+        }
+        Ok(Some(bytes))
+    }
+
     pub fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
         self.read_lod_kind(lod).map_err(|kind| ReadError {
             file: self.file.clone(),
@@ -506,6 +534,11 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
             })
             .collect(),
         geometry,
+        optional: toc
+            .iter()
+            .filter(|e| e.flags & format::SECTION_OPTIONAL != 0)
+            .cloned()
+            .collect(),
         file_len: actual,
         version: (h.major, h.minor),
     })

@@ -34,9 +34,17 @@ pub struct SceneWriter {
     lods: Vec<LodInfo>,
     /// World bounds of each LOD's geometry exactly as stored.
     lod_bounds: Vec<Aabb>,
+    /// Optional sections to write after the v1 ones.
+    optional: Vec<([u8; 4], Vec<u8>)>,
 }
 
 impl SceneWriter {
+    /// Adds an optional section (a reader that does not know `tag` skips
+    /// it), written by [`SceneWriter::finish`] after the v1 sections.
+    pub fn add_optional_section(&mut self, tag: [u8; 4], bytes: Vec<u8>) {
+        self.optional.push((tag, bytes));
+    }
+
     /// Creates a temporary file beside `path`; nothing at `path` changes
     /// until [`SceneWriter::finish`] succeeds. Dropping the writer before
     /// that removes the temporary file.
@@ -56,6 +64,7 @@ impl SceneWriter {
             geometry_crc: crc32fast::Hasher::new(),
             lods: Vec::new(),
             lod_bounds: Vec::new(),
+            optional: Vec::new(),
         })
     }
 
@@ -122,6 +131,7 @@ impl SceneWriter {
             crc: self.geometry_crc.clone().finalize(),
         }];
         let mut sections: Vec<([u8; 4], Vec<u8>)> = Vec::new();
+        let optional = std::mem::take(&mut self.optional);
         let mut p = Put::default();
         format::encode_scene(
             &mut p,
@@ -146,11 +156,15 @@ impl SceneWriter {
         let meta = serde_json::to_vec_pretty(&skeleton.provenance).expect("provenance serialises");
         sections.push((format::TAG_META, meta));
 
-        for (tag, bytes) in &sections {
+        let flagged = sections
+            .iter()
+            .map(|s| (s, 0))
+            .chain(optional.iter().map(|s| (s, format::SECTION_OPTIONAL)));
+        for ((tag, bytes), flags) in flagged {
             self.pad_to_alignment()?;
             toc.push(TocEntry {
                 tag: *tag,
-                flags: 0,
+                flags,
                 offset: self.pos,
                 len: bytes.len() as u64,
                 crc: crc32fast::hash(bytes),

@@ -117,6 +117,35 @@ fn far_from_origin_keeps_precision() {
     };
     w.finish(vec![node], Provenance::default()).unwrap();
     let r = SceneReader::open(&path).unwrap();
+    // Written without occluders: none.
+    assert_eq!(r.occluders().unwrap(), None);
+    // The same with an OCCL section: read back as written, and a flipped
+    // byte in it is a checksum error naming the section.
+    let occ = vec![gigawalk_scene::occluders::OccluderRecord {
+        vertices: world[..3].to_vec(),
+        area: 0.5,
+    }];
+    let path2 = dir.path().join("far-occl.gwk");
+    let mut w = SceneWriter::create(&path2).unwrap();
+    w.add_lod(&mesh, 0.0).unwrap();
+    w.add_optional_section(
+        gigawalk_scene::occluders::TAG_OCCLUDERS,
+        gigawalk_scene::occluders::encode_occluders(&occ),
+    );
+    w.finish(vec![node], Provenance::default()).unwrap();
+    let r2 = SceneReader::open(&path2).unwrap();
+    assert_eq!(r2.occluders().unwrap(), Some(occ));
+    let section = r2
+        .sections()
+        .iter()
+        .find(|s| s.name == "OCCL")
+        .unwrap()
+        .clone();
+    let mut bytes = std::fs::read(&path2).unwrap();
+    bytes[section.offset as usize + 9] ^= 1;
+    std::fs::write(&path2, &bytes).unwrap();
+    let e = SceneReader::open(&path2).unwrap().occluders().unwrap_err();
+    assert!(e.to_string().contains("OCCL"), "{e}");
     let back = r.read_lod(0).unwrap();
     for (p, q) in world.iter().zip(&back.positions) {
         let d = (back.origin + glam::Vec3::from(*q).as_dvec3() - *p)

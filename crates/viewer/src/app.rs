@@ -105,6 +105,10 @@ const RESIZE_SETTLE: Duration = Duration::from_millis(200);
 /// Shown when occlusion queries are asked for on a streamed scene.
 const OQ_STREAMED: &str =
     "occlusion queries need the whole scene on the device (no --memory-budget): culler left as it was";
+/// Shown when the object-space culler is asked for on a scene without
+/// occluders.
+const NO_OCCLUDERS: &str =
+    "the scene file stores no occluders (preprocess it again for the ct culler): culler left as it was";
 /// Shown when wireframe is asked for on a device without line mode.
 const WIREFRAME_UNSUPPORTED: &str =
     "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
@@ -198,6 +202,11 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((OQ_STREAMED.to_string(), Instant::now()));
         eprintln!("{OQ_STREAMED}");
     }
+    if settings.culler == CullMethod::Ct && !runtime.has_occluders() {
+        settings.culler = CullMethod::Hzb;
+        start_message = Some((NO_OCCLUDERS.to_string(), Instant::now()));
+        eprintln!("{NO_OCCLUDERS}");
+    }
 
     let scripted = args.frames.map(|n| Script {
         frames: n.max(1),
@@ -234,6 +243,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         settings,
         wireframe_supported,
         streaming: runtime.is_streaming(),
+        occluders: runtime.has_occluders(),
         recorder: PathRecorder::default(),
         record_start: Instant::now(),
         last_update: Instant::now(),
@@ -462,6 +472,8 @@ struct LoopState {
     wireframe_supported: bool,
     /// Geometry streamed under a memory budget (no occlusion queries).
     streaming: bool,
+    /// The scene stores occluders (the ct culler).
+    occluders: bool,
     recorder: PathRecorder,
     record_start: Instant,
     last_update: Instant,
@@ -495,6 +507,10 @@ impl LoopState {
                     if self.settings.culler == CullMethod::Oq && self.streaming {
                         self.settings.cycle_culler();
                         self.message = Some((OQ_STREAMED.into(), now));
+                    }
+                    if self.settings.culler == CullMethod::Ct && !self.occluders {
+                        self.settings.cycle_culler();
+                        self.message = Some((NO_OCCLUDERS.into(), now));
                     }
                 }
                 Action::ToggleHlod => self.settings.hlod ^= true,

@@ -63,7 +63,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding { keys: &[KeyCode::ShiftLeft, KeyCode::ShiftRight], label: "Shift", what: "hold: 5x faster", does: Move(Movement::Fast) },
     Binding { keys: &[KeyCode::KeyG], label: "G", what: "walk mode (eye height, level) on/off", does: Act(Action::ToggleWalk) },
     Binding { keys: &[KeyCode::KeyO], label: "O", what: "occlusion culling on/off", does: Act(Action::ToggleOcclusion) },
-    Binding { keys: &[KeyCode::KeyC], label: "C", what: "next occlusion culler: hzb (GigaWalk), grid (lazy occlusion grid), oq (occlusion queries)", does: Act(Action::CycleCuller) },
+    Binding { keys: &[KeyCode::KeyC], label: "C", what: "next occlusion culler: hzb (GigaWalk), grid (lazy occlusion grid), oq (occlusion queries), ct (large occluders)", does: Act(Action::CycleCuller) },
     Binding { keys: &[KeyCode::KeyL], label: "L", what: "HLOD on/off", does: Act(Action::ToggleHlod) },
     Binding { keys: &[KeyCode::Equal, KeyCode::NumpadAdd, KeyCode::PageUp], label: "+ / PgUp", what: "pixel error up", does: Act(Action::PixelErrorUp) },
     Binding { keys: &[KeyCode::Minus, KeyCode::NumpadSubtract, KeyCode::PageDown], label: "- / PgDn", what: "pixel error down", does: Act(Action::PixelErrorDown) },

@@ -304,7 +304,7 @@ fn bad_memory_budget_is_a_clear_error() {
     let (ok, _, err) = gigawalk(&["view", "x.gwk", "--culler", "zbuffer"], None);
     assert!(!ok);
     assert!(
-        err.contains("culler \"zbuffer\" is not hzb, grid or oq"),
+        err.contains("culler \"zbuffer\" is not hzb, grid, oq or ct"),
         "{err}"
     );
 }

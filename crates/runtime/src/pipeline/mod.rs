@@ -120,6 +120,7 @@ pub(super) fn report(
         hzb_ms: end.stc.hzb_ms,
         grid: end.stc.grid,
         oq: end.stc.oq,
+        ct: end.stc.ct,
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,
@@ -374,6 +375,7 @@ impl Frozen {
             hzb_ms: 0.0,
             grid: None,
             oq: None,
+            ct: None,
             ..last.clone()
         })
     }

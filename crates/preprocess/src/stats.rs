@@ -132,6 +132,11 @@ impl Stats {
         let _ = writeln!(s, "HLODs (tris)      {}", list(&self.inner_lod_triangles));
         let _ = writeln!(
             s,
+            "occluders         {} convex faces (OCCL)",
+            self.occluders
+        );
+        let _ = writeln!(
+            s,
             "size              {:.1} MiB out / {:.1} MiB raw input = {:.2}x, {:.1} bytes per triangle",
             mib(self.output_bytes),
             mib(self.raw_input_bytes),

@@ -32,7 +32,7 @@ pub struct Args {
     /// Pixel-error tolerance of hlod and och; a list sweeps (e.g. 0,1,2,4,8)
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pixel_error: Vec<f64>,
-    /// Occlusion cullers; occ and och run once with each: hzb = GigaWalk's hierarchical Z-buffer over the occluder pass's depth of frame i-2's visible set, grid = the lazy occlusion grid over a software depth image of the frame's own draws (Hey et al.; no occluder pass), oq = hardware occlusion queries of node boxes against the frame's own draws on RVG's device (Bartz et al.; the whole scene resident)
+    /// Occlusion cullers; occ and och run once with each: hzb = GigaWalk's hierarchical Z-buffer over the occluder pass's depth of frame i-2's visible set, grid = the lazy occlusion grid over a software depth image of the frame's own draws (Hey et al.; no occluder pass), oq = hardware occlusion queries of node boxes against the frame's own draws on RVG's device (Bartz et al.; the whole scene resident), ct = object-space tests against the scene's large convex occluders (Coorg and Teller; scenes preprocessed by revision 4 on)
     #[arg(long, value_delimiter = ',', default_value = "hzb")]
     cullers: Vec<CullMethod>,
     /// Replay at most this many poses from the start of the path

@@ -46,7 +46,7 @@ pub struct Args {
     /// Start without occlusion culling
     #[arg(long)]
     no_occlusion: bool,
-    /// Starting occlusion culler (C cycles them): hzb = GigaWalk's hierarchical Z-buffer, grid = the lazy occlusion grid (Hey et al.), oq = hardware occlusion queries (Bartz et al.; not with --memory-budget)
+    /// Starting occlusion culler (C cycles them): hzb = GigaWalk's hierarchical Z-buffer, grid = the lazy occlusion grid (Hey et al.), oq = hardware occlusion queries (Bartz et al.; not with --memory-budget), ct = large occluders (Coorg and Teller)
     #[arg(long, default_value = "hzb")]
     culler: gigawalk_runtime::CullMethod,
     /// Start without HLODs

@@ -30,8 +30,8 @@ pub use gigawalk_cull::{
 };
 pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
 pub use options::{
-    CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, OqOptions, Prefetching,
-    RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
+    CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, OqOptions,
+    Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
 pub use queries::OqStats;

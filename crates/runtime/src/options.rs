@@ -278,6 +278,26 @@ impl Default for OqOptions {
     }
 }
 
+/// The object-space culler's knobs (Coorg and Teller; docs/culling.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CtOptions {
+    /// Occluders a frame uses, the best by the area-angle metric (the
+    /// paper's k; 1..=64).
+    pub occluders: usize,
+    /// (node, occluder) tangent-plane pairs cached across frames (0: no
+    /// cache).
+    pub cache_pairs: usize,
+}
+
+impl Default for CtOptions {
+    fn default() -> Self {
+        CtOptions {
+            occluders: 32,
+            cache_pairs: 1 << 20,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {
     pub schedule: Schedule,
@@ -319,6 +339,7 @@ pub struct RuntimeOptions {
     pub culler: CullMethod,
     pub grid: GridOptions,
     pub oq: OqOptions,
+    pub ct: CtOptions,
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
@@ -349,6 +370,8 @@ pub enum OptionsError {
     Chunk,
     #[error("grid cell {0} must be 1..=1024 pixels")]
     GridCell(u32),
+    #[error("object-space occluders a frame {0} must be 1..=64")]
+    CtOccluders(usize),
     #[error("occlusion-query batch {0} must be 1..=4096 (a query set's size)")]
     OqBatch(u32),
     #[error("occlusion-query budget {0} must be a fraction in [0, 10]")]
@@ -373,6 +396,7 @@ impl Default for RuntimeOptions {
             culler: CullMethod::Hzb,
             grid: GridOptions::default(),
             oq: OqOptions::default(),
+            ct: CtOptions::default(),
             record_culled: false,
             #[cfg(feature = "testing")]
             inject_failure: None,
@@ -414,6 +438,9 @@ impl RuntimeOptions {
         }
         if !(1..=1024).contains(&self.grid.cell) {
             return Err(OptionsError::GridCell(self.grid.cell));
+        }
+        if !(1..=gigawalk_cull::MAX_FRAME_OCCLUDERS).contains(&self.ct.occluders) {
+            return Err(OptionsError::CtOccluders(self.ct.occluders));
         }
         if !(1..=4096).contains(&self.oq.batch) {
             return Err(OptionsError::OqBatch(self.oq.batch));
@@ -475,6 +502,11 @@ mod tests {
         check(&|o| o.devices = 3, OptionsError::Devices(3), "devices 3");
         check(&|o| o.chunk = 0, OptionsError::Chunk, "chunk");
         check(&|o| o.oq.batch = 0, OptionsError::OqBatch(0), "batch 0");
+        check(
+            &|o| o.ct.occluders = 65,
+            OptionsError::CtOccluders(65),
+            "a frame 65",
+        );
         check(
             &|o| o.oq.budget = Some(-1.0),
             OptionsError::OqBudget(-1.0),

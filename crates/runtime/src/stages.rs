@@ -199,7 +199,7 @@ impl<'a> Target<'a> {
                     culler: CullMethod::Ct,
                     why: "the scene file has no occluders (written before they were stored): preprocess it again".into(),
                 })?;
-            stc.ct = Some(CtState::new(&records));
+            stc.ct = Some(CtState::new(&records, opts.ct.cache_pairs));
         }
         Ok(stc)
     }
@@ -394,11 +394,6 @@ impl<'a> OrStage<'a> {
     }
 }
 
-/// Occluders the object-space culler uses a frame (the paper's k).
-const CT_FRAME_OCCLUDERS: usize = 32;
-/// Tangent-plane pairs cached across frames.
-const CT_CACHE_PAIRS: usize = 1 << 20;
-
 /// The object-space culler's occluders and cache, kept across frames.
 pub(crate) struct CtState {
     occluders: Vec<ConvexOccluder>,
@@ -408,7 +403,7 @@ pub(crate) struct CtState {
 
 impl CtState {
     /// Occluders that are not convex planar polygons are left out.
-    fn new(records: &[gigawalk_scene::occluders::OccluderRecord]) -> Self {
+    fn new(records: &[gigawalk_scene::occluders::OccluderRecord], cache_pairs: usize) -> Self {
         let (occluders, areas) = records
             .iter()
             .filter_map(|r| ConvexOccluder::new(&r.vertices).map(|o| (o, r.area)))
@@ -416,7 +411,7 @@ impl CtState {
         CtState {
             occluders,
             areas,
-            cache: PlaneCache::new(CT_CACHE_PAIRS),
+            cache: PlaneCache::new(cache_pairs),
         }
     }
 }
@@ -650,7 +645,7 @@ impl<'a> StcStage<'a> {
                 skeleton,
                 &state.occluders,
                 &state.areas,
-                CT_FRAME_OCCLUDERS,
+                self.opts.ct.occluders,
                 &mut state.cache,
             );
             let stats = self.traverser.traverse_culled(

@@ -9,8 +9,8 @@ use std::time::Instant;
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
 use gigawalk_runtime::{
-    CullMethod, GridOptions, MemoryBudget, OccluderBudget, OqOptions, Prefetching, Reduction,
-    RuntimeOptions, Schedule,
+    CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OqOptions, Prefetching,
+    Reduction, RuntimeOptions, Schedule,
 };
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
@@ -114,6 +114,12 @@ pub struct RuntimeArgs {
     /// Occlusion queries: draw leaves without testing them, as the paper does
     #[arg(long)]
     oq_untested_leaves: bool,
+    /// Large occluders (ct): occluders a frame, the best by the paper's area-angle metric (1-64; the paper's k)
+    #[arg(long, default_value_t = CtOptions::default().occluders)]
+    ct_occluders: usize,
+    /// Large occluders (ct): (node, occluder) tangent-plane pairs cached across frames (0 = no cache)
+    #[arg(long, default_value_t = CtOptions::default().cache_pairs)]
+    ct_cache: usize,
 }
 
 impl RuntimeArgs {
@@ -145,6 +151,10 @@ impl RuntimeArgs {
                     _ => u64::MAX,
                 },
                 ..GridOptions::default()
+            },
+            ct: CtOptions {
+                occluders: self.ct_occluders,
+                cache_pairs: self.ct_cache,
             },
             oq: OqOptions {
                 batch: self.oq_batch,

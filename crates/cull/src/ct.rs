@@ -196,16 +196,7 @@ mod tests {
     use crate::{Camera, NoOcclusion, TraversalOptions, Traverser, Viewport};
     use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, NO_NODE};
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::test_rng::Lcg;
 
     /// A binary tree over `leaves` (median splits along x, built breadth
     /// first so children are contiguous and after their parent), every

@@ -323,22 +323,7 @@ mod tests {
     }
 
     /// A tiny deterministic generator (no dependency for a unit test).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> u32 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 33) as u32
-        }
-        fn upto(&mut self, n: u32) -> u32 {
-            self.next() % n.max(1)
-        }
-        fn unit(&mut self) -> f64 {
-            self.next() as f64 / (1u64 << 31) as f64
-        }
-    }
+    use crate::test_rng::Lcg;
 
     fn proj() -> DMat4 {
         crate::Camera::look_at(DVec3::ZERO, DVec3::NEG_Z, 90f64.to_radians(), 1.0, 0.5)

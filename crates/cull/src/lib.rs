@@ -40,6 +40,8 @@ pub mod lod;
 mod object_space;
 mod occlusion;
 mod raster;
+#[cfg(test)]
+mod test_rng;
 mod traverse;
 mod view;
 

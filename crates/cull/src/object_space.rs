@@ -271,22 +271,7 @@ mod tests {
         })
     }
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, a: f64, b: f64) -> f64 {
-            a + (b - a) * self.unit()
-        }
-        fn vec(&mut self, r: f64) -> DVec3 {
-            DVec3::new(self.range(-r, r), self.range(-r, r), self.range(-r, r))
-        }
-    }
+    use crate::test_rng::Lcg;
 
     /// A random convex polygon: a regular k-gon, squashed, rotated, moved.
     fn polygon(rng: &mut Lcg, at: DVec3) -> (ConvexOccluder, DVec3) {

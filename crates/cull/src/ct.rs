@@ -16,7 +16,7 @@ use std::collections::HashMap;
 use gigawalk_scene::Skeleton;
 use glam::DVec3;
 
-use crate::object_space::{ConvexOccluder, Occlusion, TangentPlanes};
+use crate::object_space::{pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
 use crate::{CullView, Culler, RelBox, Verdict};
 
 /// Most occluders a frame uses (the bitmask's width).
@@ -30,6 +30,8 @@ pub struct CtStats {
     /// Nodes tested, and (node, occluder) classifications.
     pub nodes_tested: u64,
     pub pair_tests: u64,
+    /// Nodes hidden only by two connected occluders together.
+    pub joint: u64,
     /// Tangent planes found in the cache, and computed.
     pub cache_hits: u64,
     pub cache_misses: u64,
@@ -41,6 +43,40 @@ pub struct CtStats {
 pub struct PlaneCache {
     planes: HashMap<(u32, u32), TangentPlanes>,
     capacity: usize,
+    /// Occluder pairs sharing an edge: (i, j) with i < j -> (edge of i,
+    /// edge of j). Found on first use.
+    shared: Option<HashMap<(u32, u32), (usize, usize)>>,
+}
+
+/// Pairs of occluders sharing an edge (end points equal up to 1e-9 of the
+/// edge's length).
+fn shared_edges(occluders: &[ConvexOccluder]) -> HashMap<(u32, u32), (usize, usize)> {
+    let mut by_end: HashMap<[i64; 6], Vec<(u32, usize)>> = HashMap::new();
+    let key = |a: DVec3, b: DVec3, step: f64| {
+        let (a, b) = if (a.x, a.y, a.z) <= (b.x, b.y, b.z) {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        let q = |v: f64| (v / step).round() as i64;
+        [q(a.x), q(a.y), q(a.z), q(b.x), q(b.y), q(b.z)]
+    };
+    let mut out = HashMap::new();
+    for (i, o) in occluders.iter().enumerate() {
+        let v: Vec<DVec3> = o.vertices().collect();
+        for e in 0..v.len() {
+            let (a, b) = (v[e], v[(e + 1) % v.len()]);
+            let step = ((b - a).length() * 1e-7).max(f64::MIN_POSITIVE);
+            for (j, f) in by_end.entry(key(a, b, step)).or_default().iter() {
+                out.insert((*j, i as u32), (*f, e));
+            }
+            by_end
+                .get_mut(&key(a, b, step))
+                .expect("entry")
+                .push((i as u32, e));
+        }
+    }
+    out
 }
 
 impl PlaneCache {
@@ -49,6 +85,7 @@ impl PlaneCache {
         PlaneCache {
             planes: HashMap::new(),
             capacity,
+            shared: None,
         }
     }
 
@@ -100,6 +137,36 @@ impl<'a> CtCuller<'a> {
     /// The occluders chosen for the last `begin`'s view.
     pub fn chosen(&self) -> &[u32] {
         &self.chosen
+    }
+
+    /// Whether two of the occluders that partly hide `node`, sharing an
+    /// edge, hide it together (connected occluders, Figs. 3-5).
+    fn jointly_hidden(&mut self, node: u32, partial: &[u32]) -> bool {
+        if partial.len() < 2 {
+            return false;
+        }
+        let occluders = self.occluders;
+        let shared = self
+            .cache
+            .shared
+            .get_or_insert_with(|| shared_edges(occluders));
+        let pairs: Vec<(u32, u32, usize, usize)> = partial
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &i)| partial[k + 1..].iter().map(move |&j| (i.min(j), i.max(j))))
+            .filter_map(|(i, j)| shared.get(&(i, j)).map(|&(ei, ej)| (i, j, ei, ej)))
+            .collect();
+        let Some(n) = self.skeleton.nodes.get(node as usize) else {
+            return false;
+        };
+        pairs.into_iter().any(|(i, j, ei, ej)| {
+            let (a, b) = (&occluders[i as usize], &occluders[j as usize]);
+            let (pa, pb) = (
+                TangentPlanes::new(a, &n.bounds),
+                TangentPlanes::new(b, &n.bounds),
+            );
+            pair_fully_occludes((a, &pa, ei), (b, &pb, ej), self.eye)
+        })
     }
 
     fn planes(&mut self, node: u32, occ: u32) -> Option<Occlusion> {
@@ -166,6 +233,7 @@ impl Culler for CtCuller<'_> {
     fn test(&mut self, _: &CullView, node: u32, _: &RelBox, dropped: &u64) -> (Verdict, u64) {
         self.stats.nodes_tested += 1;
         let mut dropped = *dropped;
+        let mut partial = Vec::new();
         for i in 0..self.chosen.len() {
             if dropped & (1 << i) != 0 {
                 continue;
@@ -173,9 +241,13 @@ impl Culler for CtCuller<'_> {
             self.stats.pair_tests += 1;
             match self.planes(node, self.chosen[i]) {
                 Some(Occlusion::Full) => return (Verdict::Occluded, dropped),
-                Some(Occlusion::Partial) => {}
+                Some(Occlusion::Partial) => partial.push(self.chosen[i]),
                 Some(Occlusion::None) | None => dropped |= 1 << i,
             }
+        }
+        if self.jointly_hidden(node, &partial) {
+            self.stats.joint += 1;
+            return (Verdict::Occluded, dropped);
         }
         let all = if self.chosen.len() >= 64 {
             u64::MAX

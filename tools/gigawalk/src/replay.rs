@@ -99,7 +99,7 @@ pub struct RuntimeArgs {
     /// Lazy occlusion grid: triangles STC rasterizes a frame at most, nearest first (all, or a count such as 200k); what is not rasterized occludes nothing
     #[arg(long, value_name = "all|TRIANGLES", default_value = "all")]
     grid_budget: OccluderBudget,
-    /// Occlusion queries: boxes per round trip to the device, the node being tested and the nearest queued ones (1 = the paper: one round trip per test)
+    /// Occlusion queries: boxes per round trip to the device, the node being tested and the nearest queued ones (1-4096; 1 = the paper: one round trip per test)
     #[arg(long, default_value_t = OqOptions::default().batch)]
     oq_batch: u32,
     /// Occlusion queries, coherent (after CHC): nodes visible last frame are drawn without waiting and queried for the next frame

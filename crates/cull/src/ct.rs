@@ -210,8 +210,7 @@ impl Culler for CtCuller<'_> {
             .enumerate()
             .filter(|(_, o)| o.vertices().all(|v| (v - eye).dot(forward) > near))
             .map(|(i, o)| {
-                let centre = o.vertices().sum::<DVec3>() / o.vertices().count() as f64;
-                let d = centre - eye;
+                let d = o.centroid() - eye;
                 let area = self.areas.get(i).copied().unwrap_or(0.0);
                 (
                     area * o.normal().dot(forward).abs() / d.length_squared(),

@@ -98,6 +98,11 @@ impl ConvexOccluder {
         self.normal
     }
 
+    /// The mean of the vertices (what the rest is relative to).
+    pub fn centroid(&self) -> DVec3 {
+        self.origin
+    }
+
     /// World-space vertices.
     pub fn vertices(&self) -> impl Iterator<Item = DVec3> + '_ {
         self.rel.iter().map(|v| *v + self.origin)

@@ -5,10 +5,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use gigawalk_cull::{
-    reselect_lods, select_occluders, Camera, Containment, ConvexOccluder, CtCuller, CtStats,
-    CullReason, CullView, DrawItem, Frustum, GridCuller, GridStats, Hzb, HzbOcclusion, NoOcclusion,
-    OcclusionGrid, OcclusionTest, PlaneCache, RelBox, SoftDepth, TraversalOptions, TraversalStats,
-    Traverser, TriangleSource, ALL_PLANES,
+    reselect_lods, select_occluders, BoxTest, Camera, Containment, ConvexOccluder, CtCuller,
+    CtStats, CullReason, CullView, DrawItem, Frustum, GridCuller, GridStats, Hzb, HzbOcclusion,
+    NoOcclusion, OcclusionGrid, OcclusionTest, PlaneCache, RelBox, SoftDepth, TraversalOptions,
+    TraversalStats, Traverser, TriangleSource, ALL_PLANES,
 };
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
 use gigawalk_scene::Skeleton;
@@ -593,12 +593,12 @@ impl<'a> StcStage<'a> {
         let t = Instant::now();
         check_injected(self.opts, Stage::Stc, frame)?;
         let mut hzb_ms = 0.0;
-        let grid = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Grid;
-        let oq = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Oq;
-        let ct = self.opts.traversal.occlusion && self.opts.culler == CullMethod::Ct;
-        let occlusion = match depth {
-            _ if grid || oq || ct => true,
-            Some(d) if self.opts.traversal.occlusion => {
+        // The culler, when occlusion is on; the HZB needs OR's depth (none
+        // in the startup bypass), the others cull from frame 0.
+        let culler = self.opts.traversal.occlusion.then_some(self.opts.culler);
+        let occlusion = match (culler, depth) {
+            (None, _) | (Some(CullMethod::Hzb), None) => false,
+            (Some(CullMethod::Hzb), Some(d)) => {
                 let th = Instant::now();
                 let _s = tracing::info_span!("HZB build", frame).entered();
                 self.hzb
@@ -607,7 +607,7 @@ impl<'a> StcStage<'a> {
                 hzb_ms = ms_since(th);
                 true
             }
-            _ => false,
+            (Some(_), _) => true,
         };
         let options = TraversalOptions {
             occlusion,
@@ -634,84 +634,59 @@ impl<'a> StcStage<'a> {
                 culled.push((node, why));
             }
         };
-        let mut oq_stats = None;
-        let mut ct_stats = None;
-        let stats = if ct {
-            let state = self.ct.as_mut().ok_or(RuntimeError::CullerUnavailable {
-                culler: CullMethod::Ct,
-                why: "its occluders were not loaded".into(),
-            })?;
-            let mut culler = CtCuller::new(
-                skeleton,
-                &state.occluders,
-                &state.areas,
-                self.opts.ct.occluders,
-                &mut state.cache,
-            );
-            let stats = self.traverser.traverse_culled(
-                skeleton,
-                view,
-                &mut culler,
-                &options,
-                &mut sink,
-                &mut on_cull,
-            );
-            ct_stats = Some(culler.stats);
-            stats
-        } else if oq {
-            let state = self.oq.as_mut().ok_or(RuntimeError::CullerUnavailable {
-                culler: CullMethod::Oq,
-                why: "its device state was not set up".into(),
-            })?;
-            let mut culler = OqCuller::new(state, skeleton, self.opts.oq);
-            let stats = self.traverser.traverse_culled(
-                skeleton,
-                view,
-                &mut culler,
-                &options,
-                &mut sink,
-                &mut on_cull,
-            );
-            let (s, error) = culler.end();
-            if let Some(e) = error {
-                return Err(e);
+        let (mut grid_stats, mut oq_stats, mut ct_stats) = (None, None, None);
+        macro_rules! traverse {
+            ($culler:expr) => {
+                self.traverser.traverse_culled(
+                    skeleton,
+                    view,
+                    $culler,
+                    &options,
+                    &mut sink,
+                    &mut on_cull,
+                )
+            };
+        }
+        let stats = match culler.filter(|_| occlusion) {
+            Some(CullMethod::Ct) => {
+                let state = self.ct.as_mut().ok_or(RuntimeError::CullerUnavailable {
+                    culler: CullMethod::Ct,
+                    why: "its occluders were not loaded".into(),
+                })?;
+                let mut c = CtCuller::new(
+                    skeleton,
+                    &state.occluders,
+                    &state.areas,
+                    self.opts.ct.occluders,
+                    &mut state.cache,
+                );
+                let stats = traverse!(&mut c);
+                ct_stats = Some(c.stats);
+                stats
             }
-            oq_stats = Some(s);
-            stats
-        } else if grid {
-            let mut culler = GridCuller::new(
-                &mut self.grid,
-                skeleton,
-                &mut self.triangles,
-                self.opts.grid.triangle_budget,
-            );
-            self.traverser.traverse_culled(
-                skeleton,
-                view,
-                &mut culler,
-                &options,
-                &mut sink,
-                &mut on_cull,
-            )
-        } else if occlusion {
-            let hzb = HzbOcclusion::new(&self.hzb);
-            self.traverser.traverse_recording(
-                self.skeleton,
-                view,
-                &hzb,
-                &options,
-                &mut sink,
-                &mut on_cull,
-            )
-        } else {
-            self.traverser.traverse_recording(
-                self.skeleton,
-                view,
-                &NoOcclusion,
-                &options,
-                &mut sink,
-                &mut on_cull,
-            )
+            Some(CullMethod::Oq) => {
+                let state = self.oq.as_mut().ok_or(RuntimeError::CullerUnavailable {
+                    culler: CullMethod::Oq,
+                    why: "its device state was not set up".into(),
+                })?;
+                let mut c = OqCuller::new(state, skeleton, self.opts.oq);
+                let stats = traverse!(&mut c);
+                let (s, error) = c.end();
+                if let Some(e) = error {
+                    return Err(e);
+                }
+                oq_stats = Some(s);
+                stats
+            }
+            Some(CullMethod::Grid) => {
+                let budget = self.opts.grid.triangle_budget;
+                let mut c = GridCuller::new(&mut self.grid, skeleton, &mut self.triangles, budget);
+                let stats = traverse!(&mut c);
+                grid_stats = Some(c.grid.stats);
+                stats
+            }
+            Some(CullMethod::Hzb) => traverse!(&mut BoxTest(&HzbOcclusion::new(&self.hzb))),
+            None => traverse!(&mut BoxTest(&NoOcclusion)),
         };
         if let Some(p) = self.prefetch.as_ref().filter(|_| self.opts.prefetch.ring()) {
             p.margin(&mut self.traverser, skeleton, view, &options, frame);
@@ -722,7 +697,7 @@ impl<'a> StcStage<'a> {
             visible: visible.into(),
             occlusion_used: occlusion,
             hzb_ms,
-            grid: grid.then_some(self.grid.stats),
+            grid: grid_stats,
             oq: oq_stats,
             ct: ct_stats,
             ms: ms_since(t),

@@ -202,7 +202,8 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((OQ_STREAMED.to_string(), Instant::now()));
         eprintln!("{OQ_STREAMED}");
     }
-    if settings.culler == CullMethod::Ct && !runtime.has_occluders() {
+    let occluders = runtime.has_occluders();
+    if settings.culler == CullMethod::Ct && !occluders {
         settings.culler = CullMethod::Hzb;
         start_message = Some((NO_OCCLUDERS.to_string(), Instant::now()));
         eprintln!("{NO_OCCLUDERS}");
@@ -243,7 +244,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         settings,
         wireframe_supported,
         streaming: runtime.is_streaming(),
-        occluders: runtime.has_occluders(),
+        occluders,
         recorder: PathRecorder::default(),
         record_start: Instant::now(),
         last_update: Instant::now(),

@@ -90,7 +90,7 @@ pub(crate) fn run_async(
         stc: prefetch,
     } = stream_links(t, opts, 0, b);
     std::thread::scope(|s| {
-        let mut stages: Vec<(Stage, StageBody)> = vec![
+        let stages: Vec<(Stage, StageBody)> = vec![
             (
                 Stage::Or,
                 Box::new(move || {
@@ -114,10 +114,7 @@ pub(crate) fn run_async(
                 }),
             ),
         ];
-        if let Some(l) = loader {
-            stages.push((Stage::Loader, Box::new(move || l.body())));
-        }
-        run_threads(s, stages, report_rx, on_frame)
+        run_threads(s, stages, loader, report_rx, on_frame)
     })
 }
 

@@ -255,10 +255,14 @@ pub(super) type StageBody<'scope> = Box<dyn FnOnce() -> Result<(), RuntimeError>
 /// would after a stage error.
 pub(super) fn run_threads<'scope, 'env>(
     s: &'scope std::thread::Scope<'scope, 'env>,
-    stages: Vec<(Stage, StageBody<'scope>)>,
+    mut stages: Vec<(Stage, StageBody<'scope>)>,
+    loader: Option<LoaderQueues<'scope>>,
     reports: Receiver<FrameReport>,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
 ) -> Result<u64, RuntimeError> {
+    if let Some(l) = loader {
+        stages.push((Stage::Loader, Box::new(move || l.body())));
+    }
     let mut handles = Vec::with_capacity(stages.len());
     let mut first_error = None;
     for (stage, body) in stages {

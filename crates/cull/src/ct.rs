@@ -4,33 +4,51 @@
 //! down the traversal as a bitmask. An occluder that hides a node fully
 //! culls it; one that does not even partly hide it is dropped for the
 //! node's subtree; a node with every occluder dropped is visible with its
-//! whole subtree (no more tests below it). Tangent planes depend only on
-//! the (node, occluder) pair, so they are cached across frames.
+//! whole subtree (no more tests below it). Occluders that partly hide a
+//! node and share edges hide it together when they do (connected
+//! occluders, Figs. 3-5, any number). Tangent planes depend only on the
+//! (node, occluder) pair, so they are cached across frames.
 //!
-//! Occluders come from the caller (preprocess's convex faces); the
-//! view-cell tree that would pick them per region is not built yet: each
-//! frame scores every occluder by the paper's area-angle metric.
+//! Candidates come from the scene's view cells (Section 3.1: the eye's
+//! kD-tree cell lists the best occluders for the view direction nearest
+//! the camera's) or, without them, are every occluder; the frame keeps the
+//! best `k` by the area-angle metric from the eye. An occluder reaching
+//! nearer than the near plane is clipped to it first (the image does not
+//! show what lies in front of the near plane, so that part hides nothing);
+//! a clipped occluder's planes are not cached and it is not joined with
+//! others.
 
 use std::collections::HashMap;
 
+use gigawalk_scene::occluder_cells::OccluderCells;
 use gigawalk_scene::Skeleton;
 use glam::DVec3;
 
-use crate::object_space::{pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
+use crate::object_space::{
+    connected_fully_occlude, ConvexOccluder, Occlusion, SharedEdge, TangentPlanes,
+};
 use crate::{CullView, Culler, RelBox, Verdict};
 
 /// Most occluders a frame uses (the bitmask's width).
 pub const MAX_FRAME_OCCLUDERS: usize = 64;
 
+/// An occluder is clipped this far beyond the near plane (relative to the
+/// near distance), so rounding never keeps a sliver the image lacks.
+const NEAR_MARGIN: f64 = 1e-3;
+
 /// What the culler did in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CtStats {
-    /// Occluders chosen for the frame.
+    /// Occluders scored for the frame (the view cell's list, or all), and
+    /// chosen.
+    pub candidates: u64,
     pub occluders: u64,
+    /// Chosen occluders that reached nearer than the near plane, clipped.
+    pub clipped: u64,
     /// Nodes tested, and (node, occluder) classifications.
     pub nodes_tested: u64,
     pub pair_tests: u64,
-    /// Nodes hidden only by two connected occluders together.
+    /// Nodes hidden only by connected occluders together.
     pub joint: u64,
     /// Tangent planes found in the cache, and computed.
     pub cache_hits: u64,
@@ -98,6 +116,14 @@ impl PlaneCache {
     }
 }
 
+/// An occluder the frame uses: a stored one, or one clipped to the near
+/// plane.
+#[derive(Clone, Debug)]
+enum Chosen {
+    Stored(u32),
+    Clipped(ConvexOccluder),
+}
+
 /// The culler for one frame. Its context is the set of chosen occluders
 /// *dropped* for a subtree (bit i: the frame's i-th occluder), so the
 /// root starts with none dropped.
@@ -105,20 +131,24 @@ pub struct CtCuller<'a> {
     skeleton: &'a Skeleton,
     occluders: &'a [ConvexOccluder],
     areas: &'a [f64],
+    /// View cells whose lists index `occluders`.
+    cells: Option<&'a OccluderCells>,
     /// Occluders a frame may use (at most [`MAX_FRAME_OCCLUDERS`]).
     k: usize,
-    chosen: Vec<u32>,
+    chosen: Vec<Chosen>,
     cache: &'a mut PlaneCache,
     eye: DVec3,
     pub stats: CtStats,
 }
 
 impl<'a> CtCuller<'a> {
-    /// `areas[i]` is occluder i's area (the metric's weight).
+    /// `areas[i]` is occluder i's area (the metric's weight); `cells`, when
+    /// given, list candidates by index into `occluders`.
     pub fn new(
         skeleton: &'a Skeleton,
         occluders: &'a [ConvexOccluder],
         areas: &'a [f64],
+        cells: Option<&'a OccluderCells>,
         k: usize,
         cache: &'a mut PlaneCache,
     ) -> Self {
@@ -126,6 +156,7 @@ impl<'a> CtCuller<'a> {
             skeleton,
             occluders,
             areas,
+            cells,
             k: k.min(MAX_FRAME_OCCLUDERS),
             chosen: Vec::new(),
             cache,
@@ -134,43 +165,77 @@ impl<'a> CtCuller<'a> {
         }
     }
 
-    /// The occluders chosen for the last `begin`'s view.
-    pub fn chosen(&self) -> &[u32] {
-        &self.chosen
+    /// The occluders chosen for the last `begin`'s view, as used (clipped
+    /// to the near plane where they reach nearer).
+    pub fn chosen(&self) -> Vec<ConvexOccluder> {
+        self.chosen
+            .iter()
+            .map(|c| match c {
+                Chosen::Stored(i) => self.occluders[*i as usize].clone(),
+                Chosen::Clipped(o) => o.clone(),
+            })
+            .collect()
     }
 
-    /// Whether two of the occluders that partly hide `node`, sharing an
-    /// edge, hide it together (connected occluders, Figs. 3-5).
-    fn jointly_hidden(&mut self, node: u32, partial: &[u32]) -> bool {
+    /// Whether occluders that partly hide `node` (indices into the frame's
+    /// chosen ones), joined across shared edges, hide it together.
+    fn jointly_hidden(&mut self, node: u32, partial: &[usize]) -> bool {
         if partial.len() < 2 {
             return false;
         }
         let occluders = self.occluders;
+        let stored: Vec<u32> = partial
+            .iter()
+            .filter_map(|&c| match self.chosen[c] {
+                Chosen::Stored(i) => Some(i),
+                Chosen::Clipped(_) => None,
+            })
+            .collect();
         let shared = self
             .cache
             .shared
             .get_or_insert_with(|| shared_edges(occluders));
-        let pairs: Vec<(u32, u32, usize, usize)> = partial
-            .iter()
-            .enumerate()
-            .flat_map(|(k, &i)| partial[k + 1..].iter().map(move |&j| (i.min(j), i.max(j))))
-            .filter_map(|(i, j)| shared.get(&(i, j)).map(|&(ei, ej)| (i, j, ei, ej)))
-            .collect();
+        let mut edges: Vec<SharedEdge> = Vec::new();
+        for (a, &i) in stored.iter().enumerate() {
+            for (b, &j) in stored.iter().enumerate().skip(a + 1) {
+                let (lo, hi, flip) = if i < j { (i, j, false) } else { (j, i, true) };
+                if let Some(&(el, eh)) = shared.get(&(lo, hi)) {
+                    let (ea, eb) = if flip { (eh, el) } else { (el, eh) };
+                    edges.push((a, ea, b, eb));
+                }
+            }
+        }
+        if edges.is_empty() {
+            return false;
+        }
         let Some(n) = self.skeleton.nodes.get(node as usize) else {
             return false;
         };
-        pairs.into_iter().any(|(i, j, ei, ej)| {
-            let (a, b) = (&occluders[i as usize], &occluders[j as usize]);
-            let (pa, pb) = (
-                TangentPlanes::new(a, &n.bounds),
-                TangentPlanes::new(b, &n.bounds),
-            );
-            pair_fully_occludes((a, &pa, ei), (b, &pb, ej), self.eye)
-        })
+        let planes: Vec<TangentPlanes> = stored
+            .iter()
+            .map(|&i| match self.cache.planes.get(&(node, i)) {
+                Some(p) => p.clone(),
+                None => TangentPlanes::new(&occluders[i as usize], &n.bounds),
+            })
+            .collect();
+        let members: Vec<(&ConvexOccluder, &TangentPlanes)> = stored
+            .iter()
+            .map(|&i| &occluders[i as usize])
+            .zip(&planes)
+            .collect();
+        connected_fully_occlude(&members, &edges, self.eye)
     }
 
-    fn planes(&mut self, node: u32, occ: u32) -> Option<Occlusion> {
+    /// How the frame's `c`-th occluder hides `node`.
+    fn classify(&mut self, node: u32, c: usize) -> Option<Occlusion> {
         let n = self.skeleton.nodes.get(node as usize)?;
+        let occ = match &self.chosen[c] {
+            Chosen::Clipped(o) => {
+                self.stats.cache_misses += 1;
+                return Some(TangentPlanes::new(o, &n.bounds).classify(self.eye));
+            }
+            Chosen::Stored(i) => *i,
+        };
         let o = self.occluders.get(occ as usize)?;
         if self.cache.capacity == 0 {
             self.stats.cache_misses += 1;
@@ -194,39 +259,67 @@ impl<'a> CtCuller<'a> {
 impl Culler for CtCuller<'_> {
     type Ctx = u64;
 
-    /// Chooses the frame's occluders: the `k` best by the paper's metric
-    /// A |N . V| / |D|^2 (area, normal against the view direction, distance
-    /// to the eye; walls occlude from both sides), leaving out any with a
-    /// vertex nearer than the near plane (the image does not show what is
-    /// in front of it, so it could not hide what is behind).
+    /// Chooses the frame's occluders: of the candidates (the eye's view
+    /// cell's list for the nearest direction, or every occluder), the `k`
+    /// best by the paper's metric A |N . V| / |D|^2 (area, normal against
+    /// the view direction, distance to the eye; walls occlude from both
+    /// sides), each clipped to the near plane first.
     fn begin(&mut self, view: &CullView) {
         let eye = view.camera.position;
         let forward = view.camera.forward();
-        let near = view.camera.near;
+        let clip_at = view.camera.near * (1.0 + NEAR_MARGIN);
         self.eye = eye;
-        let mut scored: Vec<(f64, u32)> = self
-            .occluders
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| o.vertices().all(|v| (v - eye).dot(forward) > near))
-            .map(|(i, o)| {
-                let d = o.centroid() - eye;
-                let area = self.areas.get(i).copied().unwrap_or(0.0);
+        let all: Vec<u32>;
+        let candidates: &[u32] = match self.cells {
+            Some(c) => c.lookup(eye, forward),
+            None => {
+                all = (0..self.occluders.len() as u32).collect();
+                &all
+            }
+        };
+        self.stats.candidates = candidates.len() as u64;
+        let mut scored: Vec<(f64, u32, Option<ConvexOccluder>)> = Vec::new();
+        for &i in candidates {
+            let Some(o) = self.occluders.get(i as usize) else {
+                continue;
+            };
+            let depth = |v: DVec3| (v - eye).dot(forward);
+            let (area, centroid, clipped) = if o.vertices().all(|v| depth(v) > clip_at) {
                 (
-                    area * o.normal().dot(forward).abs() / d.length_squared(),
-                    i as u32,
+                    self.areas.get(i as usize).copied().unwrap_or(0.0),
+                    o.centroid(),
+                    None,
                 )
-            })
-            .filter(|(s, _)| s.is_finite() && *s > 0.0)
-            .collect();
+            } else if o.vertices().all(|v| depth(v) <= clip_at) {
+                continue;
+            } else {
+                let Some(c) = o.clipped(eye + forward * clip_at, forward) else {
+                    continue;
+                };
+                (c.area(), c.centroid(), Some(c))
+            };
+            let d = centroid - eye;
+            let s = area * o.normal().dot(forward).abs() / d.length_squared();
+            if s.is_finite() && s > 0.0 {
+                scored.push((s, i, clipped));
+            }
+        }
         let k = self.k.min(scored.len());
         if k < scored.len() {
             scored.select_nth_unstable_by(k, |a, b| b.0.total_cmp(&a.0));
         }
         scored.truncate(k);
         scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        self.chosen = scored.into_iter().map(|(_, i)| i).collect();
+        self.chosen = scored
+            .into_iter()
+            .map(|(_, i, c)| c.map_or(Chosen::Stored(i), Chosen::Clipped))
+            .collect();
         self.stats.occluders = self.chosen.len() as u64;
+        self.stats.clipped = self
+            .chosen
+            .iter()
+            .filter(|c| matches!(c, Chosen::Clipped(_)))
+            .count() as u64;
     }
 
     fn test(&mut self, _: &CullView, node: u32, _: &RelBox, dropped: &u64) -> (Verdict, u64) {
@@ -238,9 +331,9 @@ impl Culler for CtCuller<'_> {
                 continue;
             }
             self.stats.pair_tests += 1;
-            match self.planes(node, self.chosen[i]) {
+            match self.classify(node, i) {
                 Some(Occlusion::Full) => return (Verdict::Occluded, dropped),
-                Some(Occlusion::Partial) => partial.push(self.chosen[i]),
+                Some(Occlusion::Partial) => partial.push(i),
                 Some(Occlusion::None) | None => dropped |= 1 << i,
             }
         }
@@ -393,7 +486,7 @@ mod tests {
             };
             // Hierarchical, with the cache carried across frames and without.
             let mut drawn = Vec::new();
-            let mut ct = CtCuller::new(&sk, &occ, &areas, 32, &mut cache);
+            let mut ct = CtCuller::new(&sk, &occ, &areas, None, 32, &mut cache);
             Traverser::new().traverse_culled(
                 &sk,
                 &view,
@@ -402,10 +495,10 @@ mod tests {
                 &mut |i: crate::DrawItem| drawn.push(i.node),
                 &mut |_, _| {},
             );
-            let chosen = ct.chosen().to_vec();
+            let chosen = ct.chosen();
             let mut nocache = PlaneCache::new(0);
             let mut drawn2 = Vec::new();
-            let mut ct2 = CtCuller::new(&sk, &occ, &areas, 32, &mut nocache);
+            let mut ct2 = CtCuller::new(&sk, &occ, &areas, None, 32, &mut nocache);
             Traverser::new().traverse_culled(
                 &sk,
                 &view,
@@ -418,10 +511,9 @@ mod tests {
             // Flat: every frustum-visible leaf against every chosen occluder.
             let mut flat = Vec::new();
             leaves(&mut |n| {
-                let hidden = chosen.iter().any(|&o| {
-                    occlusion(&occ[o as usize], &sk.nodes[n as usize].bounds, eye)
-                        == Occlusion::Full
-                });
+                let hidden = chosen
+                    .iter()
+                    .any(|o| occlusion(o, &sk.nodes[n as usize].bounds, eye) == Occlusion::Full);
                 if !hidden {
                     flat.push(n);
                 }
@@ -441,6 +533,131 @@ mod tests {
     }
 
     use crate::object_space::occlusion;
+
+    fn culled(
+        sk: &Skeleton,
+        occ: &[ConvexOccluder],
+        areas: &[f64],
+        cells: Option<&OccluderCells>,
+        view: &CullView,
+    ) -> (Vec<u32>, CtStats) {
+        let opts = TraversalOptions {
+            occlusion: true,
+            hlod: false,
+            pixel_tolerance: 0.0,
+        };
+        let mut cache = PlaneCache::new(1 << 16);
+        let mut ct = CtCuller::new(sk, occ, areas, cells, 32, &mut cache);
+        let mut drawn = Vec::new();
+        Traverser::new().traverse_culled(
+            sk,
+            view,
+            &mut ct,
+            &opts,
+            &mut |i: crate::DrawItem| drawn.push(i.node),
+            &mut |_, _| {},
+        );
+        drawn.sort();
+        (drawn, ct.stats)
+    }
+
+    #[test]
+    fn an_occluder_through_the_near_plane_hides_only_with_what_the_image_shows() {
+        // The eye at the origin looks down -z with the near plane at 1; a
+        // wall tilted so that it runs from depth 0.5 (left) to depth 3
+        // (right). A box behind its far part is hidden; a box behind the
+        // part nearer than the near plane shows (that part is not drawn),
+        // though the whole polygon would hide it.
+        let wall = ConvexOccluder::new(&[
+            DVec3::new(-2.0, -2.0, -0.5),
+            DVec3::new(2.0, -2.0, -3.0),
+            DVec3::new(2.0, 2.0, -3.0),
+            DVec3::new(-2.0, 2.0, -0.5),
+        ])
+        .unwrap();
+        let far = Aabb::new(DVec3::new(1.0, -0.3, -9.0), DVec3::new(1.6, 0.3, -8.5));
+        let near = Aabb::new(DVec3::new(-2.6, -0.1, -1.3), DVec3::new(-2.4, 0.1, -1.2));
+        let view = CullView::new(
+            Camera::look_at(DVec3::ZERO, DVec3::NEG_Z, 140f64.to_radians(), 1.0, 1.0),
+            Viewport::new(200, 200),
+        );
+        assert_eq!(occlusion(&wall, &near, DVec3::ZERO), Occlusion::Full);
+        assert_eq!(occlusion(&wall, &far, DVec3::ZERO), Occlusion::Full);
+        let sk = tree(&[far, near]);
+        let (drawn, stats) = culled(&sk, &[wall], &[20.0], None, &view);
+        assert_eq!(stats.clipped, 1);
+        let leaf = |b: &Aabb| sk.nodes.iter().position(|n| n.bounds == *b).unwrap() as u32;
+        assert_eq!(
+            drawn,
+            vec![leaf(&near)],
+            "the far box is hidden, the near one shows"
+        );
+    }
+
+    #[test]
+    fn view_cells_listing_every_occluder_cull_as_every_occluder() {
+        use gigawalk_scene::occluder_cells::CellNode;
+        let mut rng = Lcg(9);
+        let (sk, occ, areas) = street(&mut rng, DVec3::ZERO);
+        // Two cells split across z, both listing everything for all
+        // eight diagonal directions, and one cell listing nothing.
+        let dirs: Vec<DVec3> = (0..8)
+            .map(|i| {
+                let s = |b: usize| if i & b == 0 { -1.0 } else { 1.0 };
+                DVec3::new(s(1), s(2), s(4)).normalize()
+            })
+            .collect();
+        let every: Vec<u32> = (0..occ.len() as u32).collect();
+        let cells = OccluderCells {
+            nodes: vec![
+                CellNode::Split {
+                    axis: 2,
+                    at: -100.0,
+                    first: 1,
+                },
+                CellNode::Leaf(0),
+                CellNode::Leaf(1),
+            ],
+            directions: dirs,
+            k: occ.len() as u32,
+            lists: (0..16)
+                .map(|i| if i < 8 { Vec::new() } else { every.clone() })
+                .collect(),
+        };
+        let mut culled_any = false;
+        for step in 0..6 {
+            let eye = DVec3::new(0.5, 1.7, -12.0 * step as f64);
+            let view = CullView::new(
+                Camera::look_at(
+                    eye,
+                    eye + DVec3::new(0.1, 0.0, -1.0),
+                    70f64.to_radians(),
+                    1.6,
+                    0.1,
+                ),
+                Viewport::new(160, 100),
+            );
+            let (with, s) = culled(&sk, &occ, &areas, Some(&cells), &view);
+            let (without, _) = culled(&sk, &occ, &areas, None, &view);
+            assert_eq!(with, without, "step {step}");
+            assert_eq!(s.candidates, occ.len() as u64);
+            culled_any |= s.nodes_tested > 0 && with.len() < sk.nodes.len() / 2;
+            // An eye in the empty cell has no occluders.
+            let away = CullView::new(
+                Camera::look_at(
+                    DVec3::new(0.0, 1.7, -150.0),
+                    DVec3::new(0.0, 1.7, -160.0),
+                    1.2,
+                    1.6,
+                    0.1,
+                ),
+                Viewport::new(160, 100),
+            );
+            let (_, s) = culled(&sk, &occ, &areas, Some(&cells), &away);
+            assert_eq!((s.candidates, s.occluders), (0, 0));
+        }
+        assert!(culled_any);
+    }
 
     #[test]
     fn hierarchical_culling_equals_flat_culling_of_every_leaf_with_or_without_the_cache() {

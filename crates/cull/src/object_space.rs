@@ -20,8 +20,8 @@
 //! to the occluder's centroid in f64, so a scene 10^7 units from the
 //! origin tests like one at the origin.
 //!
-//! This is the geometric core of the `ct` culler; the occluders, their
-//! view-cell tree and the culler itself are not built yet.
+//! This is the geometric core of the `ct` culler (crate::ct), with
+//! connected occluders ([`connected_fully_occlude`]).
 
 use gigawalk_scene::Aabb;
 use glam::DVec3;
@@ -106,6 +106,41 @@ impl ConvexOccluder {
     /// World-space vertices.
     pub fn vertices(&self) -> impl Iterator<Item = DVec3> + '_ {
         self.rel.iter().map(|v| *v + self.origin)
+    }
+
+    /// The polygon's area.
+    pub fn area(&self) -> f64 {
+        let mut n = DVec3::ZERO;
+        for (a, b) in self.edges() {
+            n += a.cross(b);
+        }
+        0.5 * n.length()
+    }
+
+    /// The part on the side of the plane through `point` that `normal`
+    /// points to (points on the plane kept); `None` when too little is
+    /// left to be an occluder.
+    pub fn clipped(&self, point: DVec3, normal: DVec3) -> Option<ConvexOccluder> {
+        let side = |v: DVec3| (v - point).dot(normal);
+        let mut out = Vec::with_capacity(self.rel.len() + 1);
+        for (a, b) in self.edges() {
+            let (a, b) = (a + self.origin, b + self.origin);
+            let (sa, sb) = (side(a), side(b));
+            if sa >= 0.0 {
+                out.push(a);
+            }
+            if (sa >= 0.0) != (sb >= 0.0) {
+                // Where the edge crosses the plane, pulled onto the kept
+                // side if rounding left it just outside.
+                let mut x = a + (b - a) * (sa / (sa - sb));
+                let sx = side(x);
+                if sx < 0.0 {
+                    x -= normal * (sx / normal.length_squared());
+                }
+                out.push(x);
+            }
+        }
+        ConvexOccluder::new(&out)
     }
 
     fn edges(&self) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
@@ -249,27 +284,110 @@ impl TangentPlanes {
     }
 }
 
-/// Connected occluders (Coorg and Teller, Figs. 3-5): two occluders that
-/// share an edge may hide together a box that neither hides alone. They
-/// do when the box lies beyond both planes with the eye in front of both,
-/// the shared edge is not a silhouette edge from the eye (the eye's plane
-/// through it has the two occluders on opposite sides; Fig. 4 shows why a
-/// silhouette edge cannot be ignored), and the eye is inside every
-/// supporting plane of both except the two through the shared edge.
-/// `edges` are the shared edge's index in each occluder (edge i runs from
-/// vertex i to vertex i + 1); `false` when they are not the same segment.
-pub fn pair_fully_occludes(
-    (a, pa, ea): (&ConvexOccluder, &TangentPlanes, usize),
-    (b, pb, eb): (&ConvexOccluder, &TangentPlanes, usize),
+/// An edge two occluders of a set share: (occluder, its edge, occluder,
+/// its edge), occluders by their index in the set, edge i running from
+/// vertex i to vertex i + 1.
+pub type SharedEdge = (usize, usize, usize, usize);
+
+/// Connected occluders (Coorg and Teller, Figs. 3-5): occluders that share
+/// edges may hide together a box that none hides alone. Two occluders are
+/// joined across a shared edge when the box lies beyond both planes with
+/// the eye in front of both and the edge is not a silhouette edge from the
+/// eye (the eye's plane through it has the two occluders on opposite
+/// sides; Fig. 4 shows why a silhouette edge cannot be ignored). A joined
+/// group of two or more hides the box when one of them partly hides it and
+/// the eye is inside every supporting plane of every member except those
+/// through the group's joining edges.
+///
+/// Why that is conservative, for any number of occluders: seen from the
+/// eye, the group is a surface that does not fold at its joining edges,
+/// so the outline of its image is made of the other edges only. The box's
+/// image lies on the inner side of each of those edges' lines (their
+/// supporting planes), so it crosses no part of the outline; it is
+/// connected and meets the group's image (one member partly hides it), so
+/// it lies inside it. Every ray to the box therefore meets some member,
+/// and meets it before the box (the box is beyond every member's plane).
+/// An outline that is not convex from the eye (Fig. 5b) or a group with a
+/// hole fails the test; disconnected occluders (Fig. 5c) are never joined.
+/// `shared` names the edges shared in `members`; a pair that is not the
+/// same segment (up to rounding) is ignored.
+pub fn connected_fully_occlude(
+    members: &[(&ConvexOccluder, &TangentPlanes)],
+    shared: &[SharedEdge],
     eye: DVec3,
 ) -> bool {
+    let n = members.len();
+    if n < 2 {
+        return false;
+    }
+    let front: Vec<bool> = members
+        .iter()
+        .map(|(o, t)| t.front.is_some_and(|f| f.satisfied(eye - o.origin)))
+        .collect();
+    let mut group: Vec<usize> = (0..n).collect();
+    fn root(group: &mut [usize], mut i: usize) -> usize {
+        while group[i] != i {
+            group[i] = group[group[i]];
+            i = group[i];
+        }
+        i
+    }
+    let mut joining: Vec<(usize, usize)> = Vec::new();
+    for &(i, ei, j, ej) in shared {
+        if i >= n || j >= n || i == j || !front[i] || !front[j] {
+            continue;
+        }
+        let (a, b) = (members[i].0, members[j].0);
+        if ei >= a.rel.len() || ej >= b.rel.len() || !joined(a, ei, b, ej, eye) {
+            continue;
+        }
+        joining.extend([(i, ei), (j, ej)]);
+        let (ri, rj) = (root(&mut group, i), root(&mut group, j));
+        group[ri] = rj;
+    }
+    if joining.is_empty() {
+        return false;
+    }
+    let roots: Vec<usize> = (0..n).map(|i| root(&mut group, i)).collect();
+    let mut seen = vec![false; n];
+    for &r in &roots {
+        if std::mem::replace(&mut seen[r], true) {
+            continue;
+        }
+        let group: Vec<usize> = (0..n).filter(|&i| roots[i] == r).collect();
+        if group.len() < 2 {
+            continue;
+        }
+        let all = |planes: &[Option<Plane>], e: DVec3, skip: &dyn Fn(usize) -> bool| {
+            planes
+                .iter()
+                .enumerate()
+                .all(|(k, p)| skip(k) || p.is_some_and(|p| p.satisfied(e)))
+        };
+        let partly = group.iter().any(|&m| {
+            let (o, t) = members[m];
+            all(&t.separating, eye - o.origin, &|_| false)
+        });
+        let inside = group.iter().all(|&m| {
+            let (o, t) = members[m];
+            all(&t.supporting, eye - o.origin, &|k| {
+                joining.contains(&(m, k))
+            })
+        });
+        if partly && inside {
+            return true;
+        }
+    }
+    false
+}
+
+/// Whether edge `ea` of `a` and edge `eb` of `b` are the same segment and
+/// not a silhouette edge from `eye`.
+fn joined(a: &ConvexOccluder, ea: usize, b: &ConvexOccluder, eb: usize, eye: DVec3) -> bool {
     let edge = |o: &ConvexOccluder, i: usize| {
         let n = o.rel.len();
         (o.rel[i % n] + o.origin, o.rel[(i + 1) % n] + o.origin)
     };
-    if ea >= a.rel.len() || eb >= b.rel.len() {
-        return false;
-    }
     let ((p0, p1), (q0, q1)) = (edge(a, ea), edge(b, eb));
     // The same segment, up to the rounding of each occluder's vertices
     // about its own centroid.
@@ -278,28 +396,22 @@ pub fn pair_fully_occludes(
     if !((same(p0, q0) && same(p1, q1)) || (same(p0, q1) && same(p1, q0))) {
         return false;
     }
-    for (o, t) in [(a, pa), (b, pb)] {
-        match t.front {
-            Some(f) if f.satisfied(eye - o.origin) => {}
-            _ => return false,
-        }
-    }
     // Not a silhouette edge: the plane through the eye and the edge has
     // the two occluders' centroids strictly on opposite sides.
     let m = (p1 - p0).cross(eye - p0);
     let (sa, sb) = (m.dot(a.origin - p0), m.dot(b.origin - p0));
     let tol = 1e-12 * m.length() * ((a.origin - p0).length() + (b.origin - p0).length());
-    if !(sa * sb < 0.0 && sa.abs() > tol && sb.abs() > tol) {
-        return false;
-    }
-    let inside = |o: &ConvexOccluder, t: &TangentPlanes, skip: usize| {
-        let e = eye - o.origin;
-        t.supporting
-            .iter()
-            .enumerate()
-            .all(|(i, p)| i == skip || p.is_some_and(|p| p.satisfied(e)))
-    };
-    inside(a, pa, ea) && inside(b, pb, eb)
+    sa * sb < 0.0 && sa.abs() > tol && sb.abs() > tol
+}
+
+/// [`connected_fully_occlude`] for two occluders sharing one edge (`ea`
+/// of `a`, `eb` of `b`); `false` when they are not the same segment.
+pub fn pair_fully_occludes(
+    (a, pa, ea): (&ConvexOccluder, &TangentPlanes, usize),
+    (b, pb, eb): (&ConvexOccluder, &TangentPlanes, usize),
+    eye: DVec3,
+) -> bool {
+    connected_fully_occlude(&[(a, pa), (b, pb)], &[(0, ea, 1, eb)], eye)
 }
 
 /// [`TangentPlanes::new`] then [`TangentPlanes::classify`].
@@ -583,6 +695,152 @@ mod tests {
             full > 50,
             "only {full} jointly hidden cases: the test proves little"
         );
+    }
+
+    /// A strip of `widths.len()` panels of height `h` along y, each bent
+    /// from the one before by `bends[i]` radians about their shared edge;
+    /// panel i's edge 1 is shared with panel i + 1's edge 3.
+    fn strip(h: f64, widths: &[f64], bends: &[f64]) -> (Vec<ConvexOccluder>, Vec<SharedEdge>) {
+        let mut at = DVec3::ZERO;
+        let mut angle: f64 = 0.0;
+        let mut out = Vec::new();
+        for (&w, &bend) in widths.iter().zip(bends) {
+            angle += bend;
+            let next = at + DVec3::new(angle.cos(), 0.0, angle.sin()) * w;
+            let up = DVec3::Y * h;
+            out.push(ConvexOccluder::new(&[at, next, next + up, at + up]).unwrap());
+            at = next;
+        }
+        let shared = (0..out.len().saturating_sub(1))
+            .map(|i| (i, 1, i + 1, 3))
+            .collect();
+        (out, shared)
+    }
+
+    #[test]
+    fn chains_of_connected_occluders_never_hide_a_visible_point_and_hide_what_no_pair_does() {
+        let mut rng = Lcg(31);
+        let (mut full, mut only_chain) = (0, 0);
+        for _ in 0..3000 {
+            let n = 3 + (rng.unit() * 3.0) as usize;
+            let h = rng.range(1.0, 3.0);
+            let widths: Vec<f64> = (0..n).map(|_| rng.range(0.3, 1.5)).collect();
+            let bends: Vec<f64> = (0..n)
+                .map(|i| if i == 0 { 0.0 } else { rng.range(-0.6, 0.6) })
+                .collect();
+            let (panels, shared) = strip(h, &widths, &bends);
+            let span = widths.iter().sum::<f64>();
+            let c = DVec3::new(
+                rng.range(0.0, span * 0.8),
+                rng.range(0.0, h),
+                -rng.range(1.0, 5.0),
+            );
+            let e = DVec3::new(
+                rng.range(0.05, 0.8),
+                rng.range(0.05, 0.6),
+                rng.range(0.05, 0.6),
+            );
+            let bx = Aabb::new(c - e, c + e);
+            let eye = DVec3::new(
+                rng.range(-2.0, span + 2.0),
+                rng.range(-1.0, h + 1.0),
+                rng.range(2.0, 10.0),
+            );
+            let planes: Vec<TangentPlanes> =
+                panels.iter().map(|p| TangentPlanes::new(p, &bx)).collect();
+            let members: Vec<(&ConvexOccluder, &TangentPlanes)> =
+                panels.iter().zip(&planes).collect();
+            if !connected_fully_occlude(&members, &shared, eye) {
+                continue;
+            }
+            full += 1;
+            for p in surface(&bx) {
+                assert!(
+                    panels.iter().any(|o| hidden(o, eye, p, 1e-9)),
+                    "{p} shows; eye {eye}, widths {widths:?}, bends {bends:?}"
+                );
+            }
+            let by_one = planes.iter().any(|t| t.classify(eye) == Occlusion::Full);
+            let by_pair = shared.iter().any(|&(i, ei, j, ej)| {
+                pair_fully_occludes(
+                    (&panels[i], &planes[i], ei),
+                    (&panels[j], &planes[j], ej),
+                    eye,
+                )
+            });
+            if !by_one && !by_pair {
+                only_chain += 1;
+            }
+        }
+        assert!(
+            full > 100 && only_chain > 20,
+            "{full} hidden, {only_chain} only by a chain: the test proves little"
+        );
+    }
+
+    #[test]
+    fn a_ring_with_a_hole_does_not_hide_what_shows_through_the_hole() {
+        // The eight unit squares of a 3 x 3 wall in z = 0 around its empty
+        // centre, each sharing whole edges with its neighbours; a box
+        // behind the hole, a little larger than it, is partly hidden by
+        // the ring but shows through the hole.
+        let cells: Vec<(i32, i32)> = (0..3)
+            .flat_map(|x| (0..3).map(move |y| (x, y)))
+            .filter(|&c| c != (1, 1))
+            .collect();
+        let panels: Vec<ConvexOccluder> = cells
+            .iter()
+            .map(|&(x, y)| {
+                let (x, y) = (x as f64, y as f64);
+                quad([
+                    [x, y, 0.0],
+                    [x + 1.0, y, 0.0],
+                    [x + 1.0, y + 1.0, 0.0],
+                    [x, y + 1.0, 0.0],
+                ])
+            })
+            .collect();
+        // Edge 1 (right) of (x, y) is edge 3 (left) of (x + 1, y); edge 2
+        // (top) of (x, y) is edge 0 (bottom) of (x, y + 1).
+        let at = |c: (i32, i32)| cells.iter().position(|&d| d == c);
+        let mut shared: Vec<SharedEdge> = Vec::new();
+        for (i, &(x, y)) in cells.iter().enumerate() {
+            if let Some(j) = at((x + 1, y)) {
+                shared.push((i, 1, j, 3));
+            }
+            if let Some(j) = at((x, y + 1)) {
+                shared.push((i, 2, j, 0));
+            }
+        }
+        assert_eq!(shared.len(), 8);
+        let bx = Aabb::new(DVec3::new(0.7, 0.7, -1.2), DVec3::new(2.3, 2.3, -1.0));
+        let eye = DVec3::new(1.5, 1.5, 4.0);
+        let planes: Vec<TangentPlanes> =
+            panels.iter().map(|p| TangentPlanes::new(p, &bx)).collect();
+        let members: Vec<_> = panels.iter().zip(&planes).collect();
+        assert!(planes.iter().any(|t| t.classify(eye) == Occlusion::Partial));
+        assert!(!connected_fully_occlude(&members, &shared, eye));
+        // The same wall with its centre: the box is hidden.
+        let mut whole = panels.clone();
+        whole.push(quad([
+            [1.0, 1.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [2.0, 2.0, 0.0],
+            [1.0, 2.0, 0.0],
+        ]));
+        let centre = whole.len() - 1;
+        for (i, &(x, y)) in cells.iter().enumerate() {
+            match (x, y) {
+                (0, 1) => shared.push((i, 1, centre, 3)),
+                (2, 1) => shared.push((centre, 1, i, 3)),
+                (1, 0) => shared.push((i, 2, centre, 0)),
+                (1, 2) => shared.push((centre, 2, i, 0)),
+                _ => {}
+            }
+        }
+        let planes: Vec<TangentPlanes> = whole.iter().map(|p| TangentPlanes::new(p, &bx)).collect();
+        let members: Vec<_> = whole.iter().zip(&planes).collect();
+        assert!(connected_fully_occlude(&members, &shared, eye));
     }
 
     #[test]

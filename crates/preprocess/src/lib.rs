@@ -38,8 +38,9 @@ pub mod verify;
 /// file (a new simplification or error measurement): caches of built
 /// scenes (`gigawalk demo`'s) compare it, and provenance records it.
 /// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1;
-/// 3: vanished pieces of inner nodes covered.
-pub const REVISION: u32 = 4;
+/// 3: vanished pieces of inner nodes covered; 4: occluders (OCCL); 5:
+/// their view cells (OCVC).
+pub const REVISION: u32 = 5;
 
 use std::path::Path;
 use std::time::Instant;
@@ -173,9 +174,24 @@ pub fn preprocess(
     };
     let occluders = occluders::scene_occluders(model);
     built.stats.occluders = occluders.len();
+    let bounds = occluders::model_bounds(model).unwrap_or((glam::DVec3::ZERO, glam::DVec3::ZERO));
+    let cells = occluders::occluder_cells(
+        &occluders,
+        bounds,
+        &occluders::CellParams {
+            height: params.cell_height,
+            k: params.cell_occluders,
+            directions: params.cell_directions,
+        },
+    );
+    built.stats.occluder_cells = cells.leaves();
     writer.add_optional_section(
         gigawalk_scene::occluders::TAG_OCCLUDERS,
         gigawalk_scene::occluders::encode_occluders(&occluders),
+    );
+    writer.add_optional_section(
+        gigawalk_scene::occluder_cells::TAG_OCCLUDER_CELLS,
+        gigawalk_scene::occluder_cells::encode_occluder_cells(&cells),
     );
     let summary = writer
         .finish(built.nodes, provenance)

@@ -24,19 +24,25 @@ pub const MAX_OCCLUDERS: usize = 4096;
 /// (its area must reach this squared).
 pub const MIN_OCCLUDER_SIZE: f64 = 0.005;
 
+/// The box of every position of the model (`None` when it has none or a
+/// non-finite one).
+pub fn model_bounds(model: &gigawalk_import::Model) -> Option<(DVec3, DVec3)> {
+    let (lo, hi) = model.objects.iter().flat_map(|o| &o.positions).fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    (hi - lo).length().is_finite().then_some((lo, hi))
+}
+
 /// The scene's occluders: every object's convex faces of at least
 /// `(MIN_OCCLUDER_SIZE x diagonal)^2`, the [`MAX_OCCLUDERS`] largest.
 pub fn scene_occluders(
     model: &gigawalk_import::Model,
 ) -> Vec<gigawalk_scene::occluders::OccluderRecord> {
-    let (lo, hi) = model.objects.iter().flat_map(|o| &o.positions).fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    let diag = (hi - lo).length();
-    if !diag.is_finite() {
+    let Some((lo, hi)) = model_bounds(model) else {
         return Vec::new();
-    }
+    };
+    let diag = (hi - lo).length();
     let min_area = (MIN_OCCLUDER_SIZE * diag).powi(2);
     let mut all: Vec<OccluderPolygon> = model
         .objects
@@ -52,6 +58,220 @@ pub fn scene_occluders(
             area: o.area,
         })
         .collect()
+}
+
+/// The view directions of a cell tree: 6 (the axes), 8 (the octants'
+/// diagonals, the paper's count), 14 (both) or 26 (and the 12 edge
+/// directions of a cube); `None` for another count.
+pub fn cell_directions(n: u32) -> Option<Vec<DVec3>> {
+    let all: Vec<DVec3> = (-1..=1)
+        .flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| [x, y, z])))
+        .filter(|v| *v != [0, 0, 0])
+        .map(|[x, y, z]| DVec3::new(x as f64, y as f64, z as f64))
+        .collect();
+    let nonzero = |v: &DVec3| v.to_array().iter().filter(|c| **c != 0.0).count();
+    let pick = |counts: &[usize]| -> Vec<DVec3> {
+        all.iter()
+            .filter(|v| counts.contains(&nonzero(v)))
+            .map(|v| v.normalize())
+            .collect()
+    };
+    match n {
+        6 => Some(pick(&[1])),
+        8 => Some(pick(&[3])),
+        14 => Some(pick(&[1, 3])),
+        26 => Some(pick(&[1, 2, 3])),
+        _ => None,
+    }
+}
+
+/// How the view cells are built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellParams {
+    /// Levels of splits (the paper: 8, about 250 cells).
+    pub height: u32,
+    /// Occluders listed per cell and direction (the paper: 32).
+    pub k: u32,
+    /// View directions ([`cell_directions`]; the paper: 8).
+    pub directions: u32,
+}
+
+/// Coorg and Teller's view cells (Section 3.1): a kD-tree over the space
+/// the eye moves in, split at the median of the occluders' centroids
+/// across the cell's longest side (the paper alternates axes; a city or a
+/// plant is flat, so alternating would spend a third of the levels on
+/// height) until `height` levels or fewer than two centroids. Each leaf
+/// lists, per direction, the `k` occluders with the largest area-angle
+/// metric A |N . V| / |D|^2 (D from the eye to the occluder's centroid;
+/// walls occlude from both sides) that an eye in the cell looking along a
+/// view V the direction stands for may see: the best A / |D|^2 over eyes
+/// sampled in the cell (a 3 x 3 x 3 grid over the cell within the scene
+/// box grown by half its size on every side; |D| at least the occluder's
+/// own size sqrt A) times the best |N . V| over the views nearer to the
+/// direction than to any other (of 256 spread over the sphere) in which
+/// the occluder reaches in front of the cell.
+pub fn occluder_cells(
+    occluders: &[gigawalk_scene::occluders::OccluderRecord],
+    bounds: (DVec3, DVec3),
+    p: &CellParams,
+) -> gigawalk_scene::occluder_cells::OccluderCells {
+    use gigawalk_scene::occluder_cells::{CellNode, OccluderCells};
+    let directions =
+        cell_directions(p.directions).unwrap_or_else(|| cell_directions(8).expect("8 directions"));
+    let grow = (bounds.1 - bounds.0) * 0.5;
+    let space = (bounds.0 - grow, bounds.1 + grow);
+    struct Occ {
+        centroid: DVec3,
+        normal: DVec3,
+        area: f64,
+        radius: f64,
+    }
+    let occ: Vec<Occ> = occluders
+        .iter()
+        .map(|o| {
+            let n = o.vertices.len().max(1) as f64;
+            let centroid = o.vertices.iter().copied().sum::<DVec3>() / n;
+            let mut normal = DVec3::ZERO;
+            for (i, a) in o.vertices.iter().enumerate() {
+                let b = o.vertices[(i + 1) % o.vertices.len()];
+                normal += (*a - centroid).cross(b - centroid);
+            }
+            let radius = o
+                .vertices
+                .iter()
+                .map(|v| (*v - centroid).length())
+                .fold(0.0, f64::max);
+            Occ {
+                centroid,
+                normal: normal.normalize_or_zero(),
+                area: o.area,
+                radius,
+            }
+        })
+        .collect();
+    // The tree: a node's two children are consecutive and after it.
+    let mut nodes: Vec<CellNode> = vec![CellNode::Leaf(0)];
+    let mut regions: Vec<(DVec3, DVec3)> = Vec::new();
+    let mut work = vec![(0usize, space, (0..occ.len()).collect::<Vec<usize>>(), 0u32)];
+    let mut leaf_of_node: Vec<(usize, (DVec3, DVec3))> = Vec::new();
+    while let Some((at, region, members, depth)) = work.pop() {
+        let extent = region.1 - region.0;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        if depth >= p.height || members.len() < 2 {
+            leaf_of_node.push((at, region));
+            continue;
+        }
+        let mut keys: Vec<f64> = members.iter().map(|&i| occ[i].centroid[axis]).collect();
+        let mid = keys.len() / 2;
+        keys.select_nth_unstable_by(mid, f64::total_cmp);
+        let mut split = keys[mid];
+        if !(split > region.0[axis] && split < region.1[axis]) {
+            split = 0.5 * (region.0[axis] + region.1[axis]);
+        }
+        let first = nodes.len();
+        nodes[at] = CellNode::Split {
+            axis: axis as u8,
+            at: split,
+            first: first as u32,
+        };
+        nodes.extend([CellNode::Leaf(0), CellNode::Leaf(0)]);
+        let (below, above): (Vec<usize>, Vec<usize>) = members
+            .iter()
+            .partition(|&&i| occ[i].centroid[axis] < split);
+        let (mut lo_hi, mut hi_lo) = (region.1, region.0);
+        lo_hi[axis] = split;
+        hi_lo[axis] = split;
+        work.push((first + 1, (hi_lo, region.1), above, depth + 1));
+        work.push((first, (region.0, lo_hi), below, depth + 1));
+    }
+    // Leaves numbered in node order (what the file format asks).
+    leaf_of_node.sort_by_key(|(at, _)| *at);
+    for (leaf, (at, region)) in leaf_of_node.iter().enumerate() {
+        nodes[*at] = CellNode::Leaf(leaf as u32);
+        regions.push(*region);
+    }
+    // The view directions each stored direction stands for: those of 256
+    // spread over the sphere that are nearer to it than to any other.
+    let views: Vec<Vec<DVec3>> = {
+        let mut v: Vec<Vec<DVec3>> = directions.iter().map(|d| vec![*d]).collect();
+        let n = 256;
+        for i in 0..n {
+            let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - y * y).sqrt();
+            let a = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+            let s = DVec3::new(r * a.cos(), y, r * a.sin());
+            let near = (0..directions.len())
+                .max_by(|&x, &y| directions[x].dot(s).total_cmp(&directions[y].dot(s)))
+                .expect("directions");
+            v[near].push(s);
+        }
+        v
+    };
+    use rayon::prelude::*;
+    let lists: Vec<Vec<u32>> = regions
+        .par_iter()
+        .flat_map_iter(|&(lo, hi)| {
+            let eyes: Vec<DVec3> = (0..27)
+                .map(|i| {
+                    let t = DVec3::new((i % 3) as f64, ((i / 3) % 3) as f64, (i / 9) as f64) * 0.5;
+                    lo + (hi - lo) * t
+                })
+                .collect();
+            // Per occluder: its mean nearness over the cell's eyes (A /
+            // |D|^2, |D| at least sqrt A): what it is worth from a viewpoint
+            // anywhere in the cell.
+            let near: Vec<f64> = occ
+                .iter()
+                .map(|o| {
+                    eyes.iter()
+                        .map(|e| o.area / (o.centroid - *e).length_squared().max(o.area))
+                        .sum::<f64>()
+                        / eyes.len() as f64
+                })
+                .collect();
+            let occ = &occ;
+            views.iter().map(move |vs| {
+                let mut scored: Vec<(f64, u32)> = occ
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, o)| {
+                        // Facing: the best |N . v| over the views this
+                        // direction stands for in which the occluder
+                        // reaches in front of some eye of the cell.
+                        let facing = vs
+                            .iter()
+                            .filter(|v| {
+                                let nearest = DVec3::new(
+                                    if v.x > 0.0 { lo.x } else { hi.x },
+                                    if v.y > 0.0 { lo.y } else { hi.y },
+                                    if v.z > 0.0 { lo.z } else { hi.z },
+                                );
+                                (o.centroid - nearest).dot(**v) > -o.radius
+                            })
+                            .map(|v| o.normal.dot(*v).abs())
+                            .fold(0.0, f64::max);
+                        let s = facing * near[i];
+                        (s.is_finite() && s > 0.0).then_some((s, i as u32))
+                    })
+                    .collect();
+                scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+                scored.truncate(p.k as usize);
+                scored.into_iter().map(|(_, i)| i).collect::<Vec<u32>>()
+            })
+        })
+        .collect();
+    OccluderCells {
+        nodes,
+        directions,
+        k: p.k,
+        lists,
+    }
 }
 
 /// A convex planar polygon, vertices in order around its normal.
@@ -307,5 +527,110 @@ mod tests {
         assert!(convex_faces(&[], &[], 0.0).is_empty());
         assert!(convex_faces(&[DVec3::NAN; 3], &[0, 1, 2], 0.0).is_empty());
         assert!(convex_faces(&p, &[0, 1, 9], 0.0).is_empty());
+    }
+
+    /// Walls of a street grid: `n` x `n` blocks, each a box's four sides
+    /// as occluders.
+    fn city_walls(n: usize) -> Vec<gigawalk_scene::occluders::OccluderRecord> {
+        let mut out = Vec::new();
+        for bx in 0..n {
+            for bz in 0..n {
+                let (x, z) = (bx as f64 * 30.0, bz as f64 * 30.0);
+                let (p, idx) = boxed(DVec3::new(x, 0.0, z), DVec3::new(20.0, 15.0, 20.0));
+                for f in convex_faces(&p, &idx, 1.0) {
+                    if f.normal.y.abs() < 0.5 {
+                        out.push(gigawalk_scene::occluders::OccluderRecord {
+                            vertices: f.vertices,
+                            area: f.area,
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn view_cells_split_the_occluders_evenly_and_list_the_best_wall_for_the_eye() {
+        use gigawalk_scene::occluder_cells::{
+            decode_occluder_cells, encode_occluder_cells, CellNode,
+        };
+        let walls = city_walls(8);
+        assert_eq!(walls.len(), 8 * 8 * 4);
+        let bounds = (DVec3::ZERO, DVec3::new(230.0, 15.0, 230.0));
+        let p = CellParams {
+            height: 5,
+            k: 16,
+            directions: 8,
+        };
+        let cells = occluder_cells(&walls, bounds, &p);
+        assert_eq!(cells.leaves(), 32);
+        assert_eq!(cells.directions.len(), 8);
+        // What is written reads back, checked.
+        let bytes = encode_occluder_cells(&cells);
+        assert_eq!(decode_occluder_cells(&bytes, walls.len()).unwrap(), cells);
+        // Splits never cut across height (the street grid is flat), and
+        // each cell holds 8 walls' centroids.
+        let mut count = vec![0; cells.leaves()];
+        for w in &walls {
+            let c = w.vertices.iter().copied().sum::<DVec3>() / w.vertices.len() as f64;
+            count[cells.leaf(c) as usize] += 1;
+        }
+        assert!(count.iter().all(|&c| c == 8), "{count:?}");
+        assert!(cells
+            .nodes
+            .iter()
+            .all(|n| !matches!(n, CellNode::Split { axis: 1, .. })));
+        let paper = occluder_cells(
+            &walls,
+            bounds,
+            &CellParams {
+                height: 8,
+                k: 32,
+                directions: 8,
+            },
+        );
+        let mut ratios = Vec::new();
+        for i in 0..400 {
+            let eye = DVec3::new(
+                -20.0 + (i % 20) as f64 * 13.7,
+                1.7,
+                -20.0 + (i / 20) as f64 * 13.3,
+            );
+            for view in [DVec3::X, DVec3::NEG_Z, DVec3::new(0.6, -0.2, 0.77)] {
+                let list = paper.lookup(eye, view);
+                let metric = |w: &gigawalk_scene::occluders::OccluderRecord| {
+                    let c = w.vertices.iter().copied().sum::<DVec3>() / w.vertices.len() as f64;
+                    let n = (w.vertices[1] - w.vertices[0])
+                        .cross(w.vertices[2] - w.vertices[0])
+                        .normalize();
+                    let d = c - eye;
+                    if d.dot(view) <= 0.0 {
+                        return 0.0;
+                    }
+                    w.area * n.dot(view).abs() / d.length_squared().max(w.area)
+                };
+                let best = walls.iter().map(metric).fold(0.0, f64::max);
+                let listed = list
+                    .iter()
+                    .map(|&i| metric(&walls[i as usize]))
+                    .fold(0.0, f64::max);
+                if best > 0.0 {
+                    ratios.push(listed / best);
+                }
+            }
+        }
+        ratios.sort_by(f64::total_cmp);
+        // With the paper's settings (height 8, k = 32) the eye's list
+        // holds the best wall by the metric for every eye on a grid over
+        // the city and beyond it, and every view tried.
+        assert!(ratios.len() > 1000);
+        assert!(ratios.iter().all(|&r| r == 1.0), "{:?}", &ratios[..10]);
+        // One level: a single cell; no occluders: a single empty cell.
+        let one = occluder_cells(&walls, bounds, &CellParams { height: 0, ..p });
+        assert_eq!((one.leaves(), one.nodes.len()), (1, 1));
+        let none = occluder_cells(&[], bounds, &p);
+        assert_eq!(none.leaves(), 1);
+        assert!(none.lists.iter().all(|l| l.is_empty()));
     }
 }

@@ -82,6 +82,14 @@ pub struct Params {
     /// of the node's box diagonal (a kept surface still gets at least this
     /// much error; 1e-3 is a pixel once the node spans 1000 pixels).
     pub bound_floor: f64,
+    /// Object-space culling's view cells (Coorg and Teller, Section 3.1):
+    /// levels of the kD-tree over the eye's space (8: about 250 cells).
+    pub cell_height: u32,
+    /// ...occluders listed per cell and view direction (the paper: 32).
+    pub cell_occluders: u32,
+    /// ...view directions: 6 (axes), 8 (octant diagonals, the paper), 14
+    /// or 26.
+    pub cell_directions: u32,
 }
 
 impl Default for Params {
@@ -102,6 +110,9 @@ impl Default for Params {
             node_budget: 2048,
             bound_spacing: 0.25,
             bound_floor: 1e-3,
+            cell_height: 8,
+            cell_occluders: 32,
+            cell_directions: 8,
         }
     }
 }
@@ -186,6 +197,27 @@ impl Params {
                 why: "must be above 0 and at most 0.1",
             });
         }
+        if self.cell_height > 16 {
+            return Err(ParamError {
+                name: "cell-height",
+                value: self.cell_height as f64,
+                why: "must be at most 16 (65,536 cells)",
+            });
+        }
+        if !(1..=1024).contains(&self.cell_occluders) {
+            return Err(ParamError {
+                name: "cell-occluders",
+                value: self.cell_occluders as f64,
+                why: "must be 1 to 1024",
+            });
+        }
+        if crate::occluders::cell_directions(self.cell_directions).is_none() {
+            return Err(ParamError {
+                name: "cell-directions",
+                value: self.cell_directions as f64,
+                why: "must be 6, 8, 14 or 26",
+            });
+        }
         if self.lod_floor == 0 {
             return Err(ParamError {
                 name: "lod-floor",
@@ -243,6 +275,9 @@ impl Params {
             "node_budget": self.node_budget,
             "bound_spacing": self.bound_spacing,
             "bound_floor_fraction_of_node_diagonal": self.bound_floor,
+            "cell_height": self.cell_height,
+            "cell_occluders": self.cell_occluders,
+            "cell_directions": self.cell_directions,
         });
         match v {
             Value::Object(m) => m,
@@ -326,6 +361,31 @@ mod tests {
             ..Params::default()
         };
         assert_eq!(p.validate().unwrap_err().name, "v");
+        for (p, name) in [
+            (
+                Params {
+                    cell_directions: 7,
+                    ..Params::default()
+                },
+                "cell-directions",
+            ),
+            (
+                Params {
+                    cell_occluders: 0,
+                    ..Params::default()
+                },
+                "cell-occluders",
+            ),
+            (
+                Params {
+                    cell_height: 17,
+                    ..Params::default()
+                },
+                "cell-height",
+            ),
+        ] {
+            assert_eq!(p.validate().unwrap_err().name, name);
+        }
     }
 
     #[test]

@@ -46,6 +46,9 @@ pub struct Stats {
     /// Convex occluders stored for object-space culling (OCCL section).
     #[serde(default)]
     pub occluders: usize,
+    /// View cells listing them (OCVC section).
+    #[serde(default)]
+    pub occluder_cells: usize,
     /// `output_bytes / raw_input_bytes`.
     pub output_ratio: f64,
     /// `output_bytes / triangles`.
@@ -132,8 +135,8 @@ impl Stats {
         let _ = writeln!(s, "HLODs (tris)      {}", list(&self.inner_lod_triangles));
         let _ = writeln!(
             s,
-            "occluders         {} convex faces (OCCL)",
-            self.occluders
+            "occluders         {} convex faces (OCCL), listed in {} view cells (OCVC)",
+            self.occluders, self.occluder_cells
         );
         let _ = writeln!(
             s,

@@ -120,6 +120,12 @@ pub struct ModeSummary {
     pub mean_ct_pair_tests: Option<f64>,
     #[serde(default)]
     pub ct_cache_hit_fraction: Option<f64>,
+    /// ...mean candidates scored a frame (the view cell's list, or every
+    /// occluder), and mean chosen occluders clipped to the near plane.
+    #[serde(default)]
+    pub mean_ct_candidates: Option<f64>,
+    #[serde(default)]
+    pub mean_ct_clipped: Option<f64>,
     /// Frames compared with the reference.
     pub accuracy_frames: usize,
     /// Summed over the compared frames (null without accuracy frames).
@@ -257,6 +263,8 @@ fn summarise(run: &RunRecord) -> ModeSummary {
             let all: u64 = ct.iter().map(|c| c.cache_hits + c.cache_misses).sum();
             hits as f64 / all.max(1) as f64
         }),
+        mean_ct_candidates: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.candidates as f64))),
+        mean_ct_clipped: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.clipped as f64))),
         frames: run.frames.len(),
         measured_frames: ms.len(),
         mean_fps: 1e3 / mean_ms,

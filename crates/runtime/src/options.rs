@@ -287,6 +287,9 @@ pub struct CtOptions {
     /// (node, occluder) tangent-plane pairs cached across frames (0: no
     /// cache).
     pub cache_pairs: usize,
+    /// Candidates from the scene's view cells when it has them (Section
+    /// 3.1); `false`: every occluder is scored each frame.
+    pub cells: bool,
 }
 
 impl Default for CtOptions {
@@ -294,6 +297,7 @@ impl Default for CtOptions {
         CtOptions {
             occluders: 32,
             cache_pairs: 1 << 20,
+            cells: true,
         }
     }
 }

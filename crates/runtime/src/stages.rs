@@ -11,6 +11,7 @@ use gigawalk_cull::{
     TraversalStats, Traverser, TriangleSource, ALL_PLANES,
 };
 use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
+use gigawalk_scene::occluder_cells::OccluderCells;
 use gigawalk_scene::Skeleton;
 
 use crate::queries::{OqCuller, OqState, OqStats};
@@ -199,7 +200,16 @@ impl<'a> Target<'a> {
                     culler: CullMethod::Ct,
                     why: "the scene file has no occluders (written before they were stored): preprocess it again".into(),
                 })?;
-            stc.ct = Some(CtState::new(&records, opts.ct.cache_pairs));
+            let cells = if opts.ct.cells {
+                self.source
+                    .occluder_cells(records.len())
+                    .map_err(|source| RuntimeError::Load {
+                        source: Box::new(source),
+                    })?
+            } else {
+                None
+            };
+            stc.ct = Some(CtState::new(&records, cells, opts.ct.cache_pairs));
         }
         Ok(stc)
     }
@@ -398,19 +408,38 @@ impl<'a> OrStage<'a> {
 pub(crate) struct CtState {
     occluders: Vec<ConvexOccluder>,
     areas: Vec<f64>,
+    /// Lists indexing `occluders` (not the records).
+    cells: Option<OccluderCells>,
     cache: PlaneCache,
 }
 
 impl CtState {
-    /// Occluders that are not convex planar polygons are left out.
-    fn new(records: &[gigawalk_scene::occluders::OccluderRecord], cache_pairs: usize) -> Self {
-        let (occluders, areas) = records
-            .iter()
-            .filter_map(|r| ConvexOccluder::new(&r.vertices).map(|o| (o, r.area)))
-            .unzip();
+    /// Occluders that are not convex planar polygons are left out (and
+    /// from the cells' lists).
+    fn new(
+        records: &[gigawalk_scene::occluders::OccluderRecord],
+        cells: Option<OccluderCells>,
+        cache_pairs: usize,
+    ) -> Self {
+        let mut index = vec![None; records.len()];
+        let (mut occluders, mut areas) = (Vec::new(), Vec::new());
+        for (i, r) in records.iter().enumerate() {
+            if let Some(o) = ConvexOccluder::new(&r.vertices) {
+                index[i] = Some(occluders.len() as u32);
+                occluders.push(o);
+                areas.push(r.area);
+            }
+        }
+        let cells = cells.map(|mut c| {
+            for l in &mut c.lists {
+                *l = l.iter().filter_map(|&i| index[i as usize]).collect();
+            }
+            c
+        });
         CtState {
             occluders,
             areas,
+            cells,
             cache: PlaneCache::new(cache_pairs),
         }
     }
@@ -657,6 +686,7 @@ impl<'a> StcStage<'a> {
                     skeleton,
                     &state.occluders,
                     &state.areas,
+                    state.cells.as_ref(),
                     self.opts.ct.occluders,
                     &mut state.cache,
                 );

@@ -35,6 +35,15 @@ pub trait LodSource: Sync {
     ) -> Result<Option<Vec<gigawalk_scene::occluders::OccluderRecord>>, ReadError> {
         Ok(None)
     }
+    /// The occluders' view cells (`None`: the file has none), checked
+    /// against a scene of `occluders` occluders.
+    fn occluder_cells(
+        &self,
+        occluders: usize,
+    ) -> Result<Option<gigawalk_scene::occluder_cells::OccluderCells>, ReadError> {
+        let _ = occluders;
+        Ok(None)
+    }
 }
 
 impl<R: ReadAt + Sync> LodSource for SceneReader<R> {
@@ -45,6 +54,12 @@ impl<R: ReadAt + Sync> LodSource for SceneReader<R> {
         &self,
     ) -> Result<Option<Vec<gigawalk_scene::occluders::OccluderRecord>>, ReadError> {
         SceneReader::occluders(self)
+    }
+    fn occluder_cells(
+        &self,
+        occluders: usize,
+    ) -> Result<Option<gigawalk_scene::occluder_cells::OccluderCells>, ReadError> {
+        SceneReader::occluder_cells(self, occluders)
     }
 }
 

@@ -18,6 +18,7 @@ mod atomic;
 mod error;
 mod format;
 mod mesh;
+pub mod occluder_cells;
 pub mod occluders;
 pub mod path;
 mod read;

@@ -65,6 +65,15 @@ pub struct Args {
     /// LOD errors: the finest sample cover, as a fraction of the node's box diagonal
     #[arg(long, default_value_t = 1e-3)]
     bound_floor: f64,
+    /// Object-space culling (ct): levels of the view-cell kD-tree over the eye's space (Coorg and Teller 3.1: 8, about 250 cells); 0: one cell
+    #[arg(long, default_value_t = 8)]
+    cell_height: u32,
+    /// Object-space culling (ct): occluders listed per view cell and direction, best first by the area-angle metric (paper: 32)
+    #[arg(long, default_value_t = 32)]
+    cell_occluders: u32,
+    /// Object-space culling (ct): view directions per cell: 6 (axes), 8 (octant diagonals, the paper), 14 or 26
+    #[arg(long, default_value_t = 8)]
+    cell_directions: u32,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -84,6 +93,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         node_budget: args.node_budget,
         bound_spacing: args.bound_spacing,
         bound_floor: args.bound_floor,
+        cell_height: args.cell_height,
+        cell_occluders: args.cell_occluders,
+        cell_directions: args.cell_directions,
     };
     // Bad flags fail before the (possibly long) import.
     params.validate().context("bad parameter")?;

@@ -120,6 +120,9 @@ pub struct RuntimeArgs {
     /// Large occluders (ct): (node, occluder) tangent-plane pairs cached across frames (0 = no cache)
     #[arg(long, default_value_t = CtOptions::default().cache_pairs)]
     ct_cache: usize,
+    /// Large occluders (ct): score every stored occluder each frame instead of the eye's view cell's list (the scene's OCVC section)
+    #[arg(long)]
+    ct_all_occluders: bool,
 }
 
 impl RuntimeArgs {
@@ -155,6 +158,7 @@ impl RuntimeArgs {
             ct: CtOptions {
                 occluders: self.ct_occluders,
                 cache_pairs: self.ct_cache,
+                cells: !self.ct_all_occluders,
             },
             oq: OqOptions {
                 batch: self.oq_batch,

@@ -135,6 +135,8 @@ pub struct CtCuller<'a> {
     cells: Option<&'a OccluderCells>,
     /// Occluders a frame may use (at most [`MAX_FRAME_OCCLUDERS`]).
     k: usize,
+    /// Clip occluders at the near plane (else leave them out).
+    clip: bool,
     chosen: Vec<Chosen>,
     cache: &'a mut PlaneCache,
     eye: DVec3,
@@ -158,11 +160,19 @@ impl<'a> CtCuller<'a> {
             areas,
             cells,
             k: k.min(MAX_FRAME_OCCLUDERS),
+            clip: true,
             chosen: Vec::new(),
             cache,
             eye: DVec3::ZERO,
             stats: CtStats::default(),
         }
+    }
+
+    /// Leaves out occluders reaching nearer than the near plane instead
+    /// of clipping them.
+    pub fn without_clipping(mut self) -> Self {
+        self.clip = false;
+        self
     }
 
     /// The occluders chosen for the last `begin`'s view, as used (clipped
@@ -290,7 +300,7 @@ impl Culler for CtCuller<'_> {
                     o.centroid(),
                     None,
                 )
-            } else if o.vertices().all(|v| depth(v) <= clip_at) {
+            } else if !self.clip || o.vertices().all(|v| depth(v) <= clip_at) {
                 continue;
             } else {
                 let Some(c) = o.clipped(eye + forward * clip_at, forward) else {

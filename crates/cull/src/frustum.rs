@@ -58,6 +58,29 @@ impl Frustum {
         Frustum { normals, offsets }
     }
 
+    /// The frustum of a camera-relative view-projection matrix in the
+    /// runtime's convention (reversed Z, infinite far: clip z <= w in
+    /// front of the near plane, -w <= x, y <= w inside), for off-axis
+    /// frustums such as a tile's (Gribb and Hartmann's plane extraction).
+    pub fn from_view_projection(m: &glam::DMat4) -> Self {
+        let (x, y, z, w) = (m.row(0), m.row(1), m.row(2), m.row(3));
+        let planes = [w - z, w + x, w - x, w + y, w - y];
+        let mut normals = [DVec3::ZERO; 5];
+        let mut offsets = [0.0; 5];
+        for (i, p) in planes.iter().enumerate() {
+            let n = p.truncate();
+            let len = n.length();
+            let len = if len > 0.0 && len.is_finite() {
+                len
+            } else {
+                1.0
+            };
+            normals[i] = n / len;
+            offsets[i] = p.w / len;
+        }
+        Frustum { normals, offsets }
+    }
+
     /// Tests the camera-relative box `[min, max]` against the planes in
     /// `mask`. Returns the containment and the planes the box's descendants
     /// still have to be tested against (those it crosses).

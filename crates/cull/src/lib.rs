@@ -42,6 +42,7 @@ mod occlusion;
 mod raster;
 #[cfg(test)]
 mod test_rng;
+pub mod tiles;
 mod traverse;
 mod view;
 

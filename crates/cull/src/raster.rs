@@ -57,6 +57,8 @@ pub struct SoftDepth {
     depth: Vec<f32>,
     /// Clip-space vertices of the mesh being drawn (kept between calls).
     clip: Vec<DVec4>,
+    /// Only pixels in `[x, y, w, h]` are written (a tile), when set.
+    scissor: Option<[u32; 4]>,
 }
 
 impl SoftDepth {
@@ -70,6 +72,13 @@ impl SoftDepth {
         self.height = height;
         self.depth.clear();
         self.depth.resize(width as usize * height as usize, 0.0);
+        self.scissor = None;
+    }
+
+    /// Later draws write only pixels in `[x, y, w, h]` (`None`: anywhere),
+    /// as a GPU scissor rectangle does.
+    pub fn set_scissor(&mut self, rect: Option<[u32; 4]>) {
+        self.scissor = rect;
     }
 
     pub fn width(&self) -> u32 {
@@ -205,10 +214,12 @@ impl SoftDepth {
         let hi = a.max(b).max(c);
         let (wf, hf) = (self.width as f64, self.height as f64);
         // Pixel centres x + 0.5 within [lo.x, hi.x], inside the image.
-        let y0 = (lo.y - 0.5).ceil().max(0.0);
-        let y1 = (hi.y - 0.5).floor().min(hf - 1.0);
-        let bx0 = (lo.x - 0.5).ceil().max(0.0);
-        let bx1 = (hi.x - 0.5).floor().min(wf - 1.0);
+        let [sx, sy, sw, sh] = self.scissor.unwrap_or([0, 0, self.width, self.height]);
+        let (sx, sy) = (sx as f64, sy as f64);
+        let y0 = (lo.y - 0.5).ceil().max(sy);
+        let y1 = (hi.y - 0.5).floor().min(hf - 1.0).min(sy + sh as f64 - 1.0);
+        let bx0 = (lo.x - 0.5).ceil().max(sx);
+        let bx1 = (hi.x - 0.5).floor().min(wf - 1.0).min(sx + sw as f64 - 1.0);
         if !(y0 <= y1 && bx0 <= bx1) {
             return None;
         }

@@ -376,6 +376,8 @@ pub struct VisiblePass {
     /// Whether the current frame's targets have been cleared yet.
     cleared: bool,
     view: Option<View>,
+    /// Where later draws of the frame may write (a tile), `[x, y, w, h]`.
+    scissor: Option<[u32; 4]>,
 }
 
 /// Background colour (linear): a dark blue-grey, so black geometry shows.
@@ -417,6 +419,7 @@ impl VisiblePass {
             width,
             height,
             cleared: false,
+            scissor: None,
             view: None,
         }
     }
@@ -456,6 +459,14 @@ impl VisiblePass {
             .begin(ctx, view, self.style == DrawStyle::Wireframe);
         self.cleared = false;
         self.view = Some(*view);
+        self.scissor = None;
+    }
+
+    /// Later draws of this frame write only pixels in `[x, y, w, h]` (a
+    /// tile of a tiled display; clamped to the targets), or anywhere. The
+    /// first draw still clears the whole targets.
+    pub fn set_scissor(&mut self, rect: Option<[u32; 4]>) {
+        self.scissor = rect;
     }
 
     /// Draws one chunk of the frame's visible LODs and submits it, so the
@@ -490,6 +501,11 @@ impl VisiblePass {
                 _ => &self.pipeline,
             };
             pass.set_pipeline(pipeline);
+            if let Some([x, y, w, h]) = self.scissor {
+                let (tw, th) = (self.width, self.height);
+                let (x, y) = (x.min(tw), y.min(th));
+                pass.set_scissor_rect(x, y, w.min(tw - x), h.min(th - y));
+            }
             self.drawer.record(&mut pass, residency, &draws);
         }
         self.cleared = true;

@@ -60,10 +60,22 @@ pub fn scene_occluders(
         .collect()
 }
 
-/// The view directions of a cell tree: 6 (the axes), 8 (the octants'
-/// diagonals, the paper's count), 14 (both) or 26 (and the 12 edge
-/// directions of a cube); `None` for another count.
+/// The view directions of a cell tree: 4, 8 (the paper's count) or 16
+/// spread evenly around the model's up axis (+Y, as glTF defines it), for
+/// walkthroughs that look about horizontally; or 6 (the axes), 14 (and the
+/// octants' diagonals) or 26 (and the cube's 12 edge directions) over the
+/// whole sphere. `None` for another count.
 pub fn cell_directions(n: u32) -> Option<Vec<DVec3>> {
+    if matches!(n, 4 | 8 | 16) {
+        return Some(
+            (0..n)
+                .map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / n as f64;
+                    DVec3::new(a.cos(), 0.0, a.sin())
+                })
+                .collect(),
+        );
+    }
     let all: Vec<DVec3> = (-1..=1)
         .flat_map(|x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| [x, y, z])))
         .filter(|v| *v != [0, 0, 0])
@@ -78,7 +90,6 @@ pub fn cell_directions(n: u32) -> Option<Vec<DVec3>> {
     };
     match n {
         6 => Some(pick(&[1])),
-        8 => Some(pick(&[3])),
         14 => Some(pick(&[1, 3])),
         26 => Some(pick(&[1, 2, 3])),
         _ => None,
@@ -92,7 +103,8 @@ pub struct CellParams {
     pub height: u32,
     /// Occluders listed per cell and direction (the paper: 32).
     pub k: u32,
-    /// View directions ([`cell_directions`]; the paper: 8).
+    /// View directions ([`cell_directions`]; the paper: 8, here around
+    /// the up axis).
     pub directions: u32,
 }
 
@@ -101,15 +113,14 @@ pub struct CellParams {
 /// across the cell's longest side (the paper alternates axes; a city or a
 /// plant is flat, so alternating would spend a third of the levels on
 /// height) until `height` levels or fewer than two centroids. Each leaf
-/// lists, per direction, the `k` occluders with the largest area-angle
+/// lists, per direction V, the `k` occluders with the largest area-angle
 /// metric A |N . V| / |D|^2 (D from the eye to the occluder's centroid;
-/// walls occlude from both sides) that an eye in the cell looking along a
-/// view V the direction stands for may see: the best A / |D|^2 over eyes
+/// walls occlude from both sides): the mean of A / |D|^2 over eyes
 /// sampled in the cell (a 3 x 3 x 3 grid over the cell within the scene
 /// box grown by half its size on every side; |D| at least the occluder's
-/// own size sqrt A) times the best |N . V| over the views nearer to the
-/// direction than to any other (of 256 spread over the sphere) in which
-/// the occluder reaches in front of the cell.
+/// own size sqrt A) times |N . V|, counting only occluders that reach in
+/// front of the cell for some view nearer to V than to any other stored
+/// direction (of 256 spread over the sphere).
 pub fn occluder_cells(
     occluders: &[gigawalk_scene::occluders::OccluderRecord],
     bounds: (DVec3, DVec3),
@@ -236,26 +247,23 @@ pub fn occluder_cells(
                 })
                 .collect();
             let occ = &occ;
-            views.iter().map(move |vs| {
+            views.iter().zip(&directions).map(move |(vs, d)| {
                 let mut scored: Vec<(f64, u32)> = occ
                     .iter()
                     .enumerate()
                     .filter_map(|(i, o)| {
-                        // Facing: the best |N . v| over the views this
-                        // direction stands for in which the occluder
-                        // reaches in front of some eye of the cell.
-                        let facing = vs
-                            .iter()
-                            .filter(|v| {
-                                let nearest = DVec3::new(
-                                    if v.x > 0.0 { lo.x } else { hi.x },
-                                    if v.y > 0.0 { lo.y } else { hi.y },
-                                    if v.z > 0.0 { lo.z } else { hi.z },
-                                );
-                                (o.centroid - nearest).dot(**v) > -o.radius
-                            })
-                            .map(|v| o.normal.dot(*v).abs())
-                            .fold(0.0, f64::max);
+                        // The paper's V is the direction itself; the
+                        // occluder counts when it reaches in front of the
+                        // cell for some view the direction stands for.
+                        let ahead = vs.iter().any(|v| {
+                            let nearest = DVec3::new(
+                                if v.x > 0.0 { lo.x } else { hi.x },
+                                if v.y > 0.0 { lo.y } else { hi.y },
+                                if v.z > 0.0 { lo.z } else { hi.z },
+                            );
+                            (o.centroid - nearest).dot(*v) > -o.radius
+                        });
+                        let facing = if ahead { o.normal.dot(*d).abs() } else { 0.0 };
                         let s = facing * near[i];
                         (s.is_finite() && s > 0.0).then_some((s, i as u32))
                     })

@@ -87,8 +87,8 @@ pub struct Params {
     pub cell_height: u32,
     /// ...occluders listed per cell and view direction (the paper: 32).
     pub cell_occluders: u32,
-    /// ...view directions: 6 (axes), 8 (octant diagonals, the paper), 14
-    /// or 26.
+    /// ...view directions: 4, 8 (the paper's count) or 16 around the up
+    /// axis (+Y), or 6, 14 or 26 over the sphere.
     pub cell_directions: u32,
 }
 
@@ -215,7 +215,7 @@ impl Params {
             return Err(ParamError {
                 name: "cell-directions",
                 value: self.cell_directions as f64,
-                why: "must be 6, 8, 14 or 26",
+                why: "must be 4, 8 or 16 (around +Y) or 6, 14 or 26 (the sphere)",
             });
         }
         if self.lod_floor == 0 {

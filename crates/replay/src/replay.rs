@@ -90,6 +90,19 @@ pub enum ReplayError {
     },
 }
 
+/// One frame's tiled-display figures: milliseconds sending the items to
+/// the tiles by the adaptive and the naive method (both run every frame),
+/// box tests of the method drawn, and triangles of the busiest tile and
+/// of the mean tile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TileFigures {
+    pub ms_adaptive: f64,
+    pub ms_naive: f64,
+    pub tests: u64,
+    pub max_triangles: u64,
+    pub mean_triangles: f64,
+}
+
 /// One frame of one run.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRecord {
@@ -120,6 +133,9 @@ pub struct FrameRecord {
     /// The object-space culler's work (ct culler only).
     #[serde(skip)]
     pub ct: Option<gigawalk_cull::CtStats>,
+    /// A tiled display's figures (`--tiles` only; in frames.csv).
+    #[serde(skip)]
+    pub tiles: Option<TileFigures>,
     /// Streaming (zeros when the scene is resident): device bytes the
     /// resident LODs take after the frame, bytes that arrived, loader
     /// requests sent, stand-ins drawn for LODs not resident, and chosen
@@ -314,6 +330,8 @@ pub fn replay_on(
             // Sequential runs synchronously whatever the runs use.
             async_rvg: false,
             traversal: Mode::Vfc.traversal(0.0),
+            // One view: the runs' stitched tiles are compared with it.
+            tiles: None,
             ..opts.runtime.clone()
         };
         progress.start("reference", list.cameras.len() as u64);
@@ -403,6 +421,13 @@ pub fn replay_on(
                 grid: r.grid,
                 oq: r.oq,
                 ct: r.ct,
+                tiles: r.tiles.as_ref().map(|t| TileFigures {
+                    ms_adaptive: t.ms_adaptive,
+                    ms_naive: t.ms_naive,
+                    tests: t.tests,
+                    max_triangles: t.max_triangles,
+                    mean_triangles: t.mean_triangles,
+                }),
                 resident_bytes: r.streaming.resident_bytes,
                 loaded_bytes: r.streaming.loaded_bytes,
                 requests: r.streaming.requests,

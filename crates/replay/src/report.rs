@@ -77,7 +77,8 @@ impl Replay {
              accuracy_pixels,differing_pixels,wrongly_culled_pixels,bound_violating_pixels,\
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
              missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
-             oq_queries,oq_round_trips,oq_ms,oq_untested\n",
+             oq_queries,oq_round_trips,oq_ms,oq_untested,tile_ms_adaptive,tile_ms_naive,tile_tests,\
+             max_tile_triangles,mean_tile_triangles\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -86,7 +87,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -128,6 +129,11 @@ impl Replay {
                     f.oq.map_or(String::new(), |q| q.round_trips.to_string()),
                     opt(f.oq.map(|q| q.ms), 3),
                     f.oq.map_or(String::new(), |q| (q.over_budget + q.coherent).to_string()),
+                    opt(f.tiles.map(|t| t.ms_adaptive), 4),
+                    opt(f.tiles.map(|t| t.ms_naive), 4),
+                    f.tiles.map_or(String::new(), |t| t.tests.to_string()),
+                    f.tiles.map_or(String::new(), |t| t.max_triangles.to_string()),
+                    opt(f.tiles.map(|t| t.mean_triangles), 1),
                 );
             }
         }
@@ -190,6 +196,11 @@ pub fn markdown(s: &Summary) -> String {
     if !oq.is_empty() {
         let _ = writeln!(m, "\n## Occlusion queries\n");
         m += &oq;
+    }
+    let tiles = s.tile_table();
+    if !tiles.is_empty() {
+        let _ = writeln!(m, "\n## Tiled display\n");
+        m += &tiles;
     }
     if s.memory_budget.is_some() {
         let _ = writeln!(m, "\n## Streaming (out of core)\n");

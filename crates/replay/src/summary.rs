@@ -126,6 +126,23 @@ pub struct ModeSummary {
     pub mean_ct_candidates: Option<f64>,
     #[serde(default)]
     pub mean_ct_clipped: Option<f64>,
+    /// A tiled display (`--tiles`): the grid ("4x4") and how items were
+    /// sent to tiles; the median milliseconds of the adaptive and the
+    /// naive method on the same frames (both run every frame); triangles
+    /// of the busiest tile and of the mean tile, means over frames. Null
+    /// without tiles.
+    #[serde(default)]
+    pub tiles: Option<String>,
+    #[serde(default)]
+    pub tile_culling: Option<String>,
+    #[serde(default)]
+    pub cull_ms_adaptive: Option<f64>,
+    #[serde(default)]
+    pub cull_ms_naive: Option<f64>,
+    #[serde(default)]
+    pub max_tile_triangles: Option<f64>,
+    #[serde(default)]
+    pub mean_tile_triangles: Option<f64>,
     /// Frames compared with the reference.
     pub accuracy_frames: usize,
     /// Summed over the compared frames (null without accuracy frames).
@@ -220,7 +237,10 @@ pub fn measured(frames: &[FrameRecord]) -> Vec<&FrameRecord> {
     }
 }
 
-fn summarise(run: &RunRecord) -> ModeSummary {
+fn summarise(
+    run: &RunRecord,
+    tile_opts: Option<(gigawalk_runtime::TileGrid, gigawalk_runtime::TileMethod)>,
+) -> ModeSummary {
     let m = measured(&run.frames);
     let ms: Vec<f64> = m.iter().filter_map(|f| f.frame_ms).collect();
     let mean_ms = mean(ms.iter().copied());
@@ -239,6 +259,11 @@ fn summarise(run: &RunRecord) -> ModeSummary {
     };
     let oq: Vec<gigawalk_runtime::OqStats> = m.iter().filter_map(|f| f.oq).collect();
     let ct: Vec<gigawalk_cull::CtStats> = m.iter().filter_map(|f| f.ct).collect();
+    let tl: Vec<crate::replay::TileFigures> = m.iter().filter_map(|f| f.tiles).collect();
+    let tile_fig = |f: fn(&crate::replay::TileFigures) -> f64, med: bool| {
+        let v: Vec<f64> = tl.iter().map(f).collect();
+        (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
+    };
     let oq_fig = |f: fn(&gigawalk_runtime::OqStats) -> f64, med: bool| {
         let v: Vec<f64> = oq.iter().map(f).collect();
         (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
@@ -265,6 +290,12 @@ fn summarise(run: &RunRecord) -> ModeSummary {
         }),
         mean_ct_candidates: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.candidates as f64))),
         mean_ct_clipped: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.clipped as f64))),
+        tiles: tile_opts.map(|(g, _)| g.to_string()),
+        tile_culling: tile_opts.map(|(_, m)| m.name().to_string()),
+        cull_ms_adaptive: tile_fig(|t| t.ms_adaptive, true),
+        cull_ms_naive: tile_fig(|t| t.ms_naive, true),
+        max_tile_triangles: tile_fig(|t| t.max_triangles as f64, false),
+        mean_tile_triangles: tile_fig(|t| t.mean_triangles, false),
         frames: run.frames.len(),
         measured_frames: ms.len(),
         mean_fps: 1e3 / mean_ms,
@@ -315,7 +346,10 @@ fn finite(x: f64) -> Option<f64> {
 impl Replay {
     /// The report's figures.
     pub fn summary(&self) -> Summary {
-        let mut modes: Vec<ModeSummary> = self.runs.iter().map(summarise).collect();
+        let rt = &self.options.runtime;
+        let tile_opts = rt.tiles.map(|g| (g, rt.tile_culling));
+        let mut modes: Vec<ModeSummary> =
+            self.runs.iter().map(|r| summarise(r, tile_opts)).collect();
         let vfc = modes
             .iter()
             .find(|m| m.name == Mode::Vfc.name())
@@ -483,6 +517,35 @@ impl Summary {
 
     /// The occlusion queries' table of summary.md (empty without an oq
     /// run).
+    /// The tiled-display table (empty without tiles).
+    pub fn tile_table(&self) -> String {
+        let runs: Vec<&ModeSummary> = self.modes.iter().filter(|m| m.tiles.is_some()).collect();
+        if runs.is_empty() {
+            return String::new();
+        }
+        let mut s = String::from(
+            "Items are sent to tiles after culling; both methods run every frame on the same items (median ms); the lists drawn are the named method's.\n\n\
+             | mode | pixel error | tiles | drawn by | adaptive ms | naive ms | busiest tile triangles | mean tile triangles | triangles |\n\
+             |---|---:|---|---|---:|---:|---:|---:|---:|\n",
+        );
+        let o = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| num(x, d));
+        for m in runs {
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                self.mode_cell(m),
+                m.pixel_error,
+                m.tiles.as_deref().unwrap_or("-"),
+                m.tile_culling.as_deref().unwrap_or("-"),
+                o(m.cull_ms_adaptive, 3),
+                o(m.cull_ms_naive, 3),
+                m.max_tile_triangles.map_or("-".into(), thousands),
+                m.mean_tile_triangles.map_or("-".into(), thousands),
+                thousands(m.mean_triangles),
+            );
+        }
+        s
+    }
+
     pub fn oq_table(&self) -> String {
         let runs: Vec<&ModeSummary> = self
             .modes

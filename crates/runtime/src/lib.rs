@@ -25,6 +25,7 @@ mod triangles;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+pub use gigawalk_cull::tiles::{TileGrid, TileMethod};
 pub use gigawalk_cull::{
     Camera, CullReason, DrawItem, GridStats, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
@@ -35,6 +36,7 @@ pub use options::{
 };
 
 pub use queries::OqStats;
+pub use stages::TileFrame;
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
 use gigawalk_gpu::HostGeometry;
@@ -192,6 +194,8 @@ pub struct FrameReport {
     pub oq: Option<OqStats>,
     /// The object-space culler's work this frame (ct culler only).
     pub ct: Option<gigawalk_cull::CtStats>,
+    /// The tiles' lists and what making them cost (tiled display only).
+    pub tiles: Option<Arc<TileFrame>>,
     /// All of STC, HZB build included.
     pub stc_ms: f64,
     pub rvg_ms: f64,

@@ -1,5 +1,6 @@
 //! Runtime options: every speed/accuracy knob of the pipeline.
 
+use gigawalk_cull::tiles::{TileGrid, TileMethod};
 use gigawalk_cull::{Reduction, TraversalOptions};
 
 /// How the three stages run.
@@ -290,6 +291,9 @@ pub struct CtOptions {
     /// Candidates from the scene's view cells when it has them (Section
     /// 3.1); `false`: every occluder is scored each frame.
     pub cells: bool,
+    /// Occluders reaching nearer than the near plane are clipped to it
+    /// (`false`: left out, which culls less and costs less).
+    pub clip: bool,
 }
 
 impl Default for CtOptions {
@@ -298,6 +302,7 @@ impl Default for CtOptions {
             occluders: 32,
             cache_pairs: 1 << 20,
             cells: true,
+            clip: true,
         }
     }
 }
@@ -344,6 +349,13 @@ pub struct RuntimeOptions {
     pub grid: GridOptions,
     pub oq: OqOptions,
     pub ct: CtOptions,
+    /// A tiled display (Nirnimesh, Harish and Narayanan): the viewport
+    /// split into `cols x rows` tiles, each drawn from its own list under
+    /// its own scissor rectangle; `None`: one view.
+    pub tiles: Option<TileGrid>,
+    /// How STC sends drawn items to the tiles (both naive and adaptive are
+    /// timed every frame; this one is drawn).
+    pub tile_culling: TileMethod,
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
@@ -364,6 +376,12 @@ pub enum OptionsError {
     OccluderScale(f64),
     #[error("devices {0} must be 1 or 2")]
     Devices(usize),
+    #[error("tiles {tiles}: each tile needs at least one pixel of the {width}x{height} viewport")]
+    Tiles {
+        tiles: TileGrid,
+        width: u32,
+        height: u32,
+    },
     #[error("pixel error {0} must be a finite number >= 0")]
     PixelError(f64),
     #[error("n-th farthest HZB needs n in 1..=4, got {0}")]
@@ -401,6 +419,8 @@ impl Default for RuntimeOptions {
             grid: GridOptions::default(),
             oq: OqOptions::default(),
             ct: CtOptions::default(),
+            tiles: None,
+            tile_culling: TileMethod::Adaptive,
             record_culled: false,
             #[cfg(feature = "testing")]
             inject_failure: None,
@@ -439,6 +459,15 @@ impl RuntimeOptions {
         }
         if self.chunk == 0 {
             return Err(OptionsError::Chunk);
+        }
+        if let Some(t) = self.tiles {
+            if t.cols == 0 || t.rows == 0 || t.cols > self.width || t.rows > self.height {
+                return Err(OptionsError::Tiles {
+                    tiles: t,
+                    width: self.width,
+                    height: self.height,
+                });
+            }
         }
         if !(1..=1024).contains(&self.grid.cell) {
             return Err(OptionsError::GridCell(self.grid.cell));

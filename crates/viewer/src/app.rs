@@ -70,6 +70,11 @@ pub struct ViewArgs {
     pub settings: Settings,
     /// Where recorded paths and key screenshots go.
     pub out_dir: PathBuf,
+    /// A tiled display: the window split into this grid (left out while
+    /// the window is smaller than one pixel a tile).
+    pub tiles: Option<gigawalk_runtime::TileGrid>,
+    /// How items are sent to the tiles.
+    pub tile_culling: gigawalk_runtime::TileMethod,
 }
 
 /// Why the viewer stopped with an error.
@@ -266,6 +271,10 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             traversal: running.traversal(),
             culler: running.culler,
             async_rvg: running.async_rvg,
+            tiles: args
+                .tiles
+                .filter(|t| t.cols <= render.width && t.rows <= render.height),
+            tile_culling: args.tile_culling,
             // Always: freezing must find the culled set of the frame it
             // freezes, and a list of node ids per frame is cheap.
             record_culled: true,
@@ -702,6 +711,14 @@ impl Presenter for ViewerPresenter<'_> {
             occlusion_used: report.occlusion_used,
             stats: report.stats,
             streaming: report.streaming,
+            tiles: report.tiles.as_ref().map(|t| {
+                (
+                    t.grid.to_string(),
+                    t.max_triangles,
+                    t.ms_adaptive,
+                    t.ms_naive,
+                )
+            }),
         };
         let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
         if let Some(script) = &self.script {

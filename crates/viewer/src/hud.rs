@@ -54,6 +54,9 @@ pub struct FrameNumbers {
     pub stats: TraversalStats,
     /// Streaming figures (zeros when the scene is resident).
     pub streaming: gigawalk_runtime::StreamStats,
+    /// Tiled display: the grid, the busiest tile's triangles, and the
+    /// adaptive and naive methods' ms.
+    pub tiles: Option<(String, u64, f64, f64)>,
 }
 
 /// The viewer's state the HUD shows besides the frame's numbers.
@@ -104,6 +107,12 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
             _ => format!("mode: {}", s.mode()),
         },
     ];
+    if let Some((grid, busiest, adaptive, naive)) = &n.tiles {
+        lines.push(format!(
+            "tiles {grid}: busiest {} tris; to tiles {adaptive:.2} ms adaptive, {naive:.2} ms naive",
+            group(*busiest)
+        ));
+    }
     let sm = &n.streaming;
     if sm.pool_bytes > 0 {
         let mb = |b: u64| b as f64 / (1u64 << 20) as f64;

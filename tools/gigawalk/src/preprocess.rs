@@ -71,7 +71,7 @@ pub struct Args {
     /// Object-space culling (ct): occluders listed per view cell and direction, best first by the area-angle metric (paper: 32)
     #[arg(long, default_value_t = 32)]
     cell_occluders: u32,
-    /// Object-space culling (ct): view directions per cell: 6 (axes), 8 (octant diagonals, the paper), 14 or 26
+    /// Object-space culling (ct): view directions per cell: 4, 8 (the paper's count) or 16 around the up axis (+Y, glTF's), or 6, 14 or 26 over the whole sphere
     #[arg(long, default_value_t = 8)]
     cell_directions: u32,
 }

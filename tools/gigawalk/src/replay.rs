@@ -10,7 +10,7 @@ use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
 use gigawalk_runtime::{
     CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OqOptions, Prefetching,
-    Reduction, RuntimeOptions, Schedule,
+    Reduction, RuntimeOptions, Schedule, TileGrid, TileMethod,
 };
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
@@ -90,6 +90,12 @@ pub struct RuntimeArgs {
     /// Streaming: what STC asks the loader for before it is needed: band = the next finer LOD of what is drawn near its switching distance, ring = what a frustum a quarter wider would draw, both, or off (on the 50M plant's walk neither drew fewer stand-ins; band drew fewer frames with one)
     #[arg(long, value_name = "off|band|ring|both", default_value = "off")]
     prefetch: Prefetching,
+    /// Tiled display (Nirnimesh et al.): split the viewport into COLSxROWS tiles (1-64 each; e.g. 4x4), each an off-axis frustum from the same eye drawn from its own list under its own scissor; the stitched image is what accuracy compares with the single-view reference
+    #[arg(long, value_name = "COLSxROWS")]
+    tiles: Option<TileGrid>,
+    /// Tiled display: how culled items are sent to tiles: adaptive (the paper's object and frustum hierarchies together), naive (every item against every tile's frustum), object-hierarchy, frustum-hierarchy or binning (screen rectangles); adaptive and naive are both timed every frame
+    #[arg(long, value_name = "METHOD", default_value = "adaptive")]
+    tile_culling: TileMethod,
     /// Lazy occlusion grid: cell size in pixels (1-1024; the paper's 32)
     #[arg(long, default_value_t = GridOptions::default().cell)]
     grid_cell: u32,
@@ -123,6 +129,9 @@ pub struct RuntimeArgs {
     /// Large occluders (ct): score every stored occluder each frame instead of the eye's view cell's list (the scene's OCVC section)
     #[arg(long)]
     ct_all_occluders: bool,
+    /// Large occluders (ct): leave out occluders that reach nearer than the near plane instead of clipping them to it (culls less; their planes are not cached)
+    #[arg(long)]
+    ct_no_clip: bool,
 }
 
 impl RuntimeArgs {
@@ -146,6 +155,8 @@ impl RuntimeArgs {
             chunk: self.chunk,
             async_rvg: self.async_rvg,
             prefetch: self.prefetch,
+            tiles: self.tiles,
+            tile_culling: self.tile_culling,
             grid: GridOptions {
                 cell: self.grid_cell,
                 lazy: !self.grid_eager,
@@ -159,6 +170,7 @@ impl RuntimeArgs {
                 occluders: self.ct_occluders,
                 cache_pairs: self.ct_cache,
                 cells: !self.ct_all_occluders,
+                clip: !self.ct_no_clip,
             },
             oq: OqOptions {
                 batch: self.oq_batch,

@@ -58,6 +58,12 @@ pub struct Args {
     /// Start with asynchronous rendering
     #[arg(long)]
     async_rvg: bool,
+    /// Tiled display (Nirnimesh et al.): split the window into COLSxROWS tiles (1-64 each), each drawn from its own list under its own scissor; the HUD shows the busiest tile and what sending items to tiles cost
+    #[arg(long, value_name = "COLSxROWS")]
+    tiles: Option<gigawalk_runtime::TileGrid>,
+    /// Tiled display: adaptive, naive, object-hierarchy, frustum-hierarchy or binning
+    #[arg(long, value_name = "METHOD", default_value = "adaptive")]
+    tile_culling: gigawalk_runtime::TileMethod,
     /// Start in wireframe (triangle edges in each object's colour)
     #[arg(long)]
     wireframe: bool,
@@ -124,6 +130,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ..Settings::default()
         },
         out_dir: a.out_dir,
+        tiles: a.tiles,
+        tile_culling: a.tile_culling,
     })
     .with_context(|| format!("viewing {}", scene.display()))
 }

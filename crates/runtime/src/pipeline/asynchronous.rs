@@ -7,7 +7,7 @@ use std::sync::{Condvar, Mutex};
 use crossbeam_channel::{unbounded, TryRecvError};
 
 use super::*;
-use crate::stages::{lod_ids, OrStage, StcStage, Target};
+use crate::stages::{OrStage, StcStage, Target};
 use crate::{CameraSource, Presenter};
 
 /// The newest camera, handed from RVG (which owns the camera source in
@@ -218,9 +218,8 @@ fn async_rvg_thread(
         let set = newest.as_ref().expect("a visible set");
         let reused = set.sample.frame != frame;
         rvg.begin(frame, &sample.view, sample.style)?;
-        for chunk in lod_ids(t.skeleton, &set.stc.visible).chunks(opts.chunk) {
-            rvg.draw(chunk)?;
-        }
+        let retile = reused.then_some((&sample.view, opts));
+        draw_set(&mut rvg, t.skeleton, &set.stc, opts.chunk, retile)?;
         let end = FrameEnd {
             sample,
             occluder_items: set.occluder_items,

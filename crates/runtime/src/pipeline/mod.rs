@@ -19,7 +19,7 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
-use crate::stages::{Prefetch, RvgStage, StcOutput, Target};
+use crate::stages::{lod_ids, Prefetch, RvgStage, StcOutput, Target};
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
 };
@@ -59,12 +59,68 @@ pub(super) struct OrToStc {
     pub(super) or_ms: f64,
 }
 
-/// STC -> RVG: a frame is `Begin`, any number of `Items`, then the
-/// sentinel `End` carrying the frame number, camera and statistics.
+/// STC -> RVG: a frame is `Begin`, any number of `Items` (each drawn under
+/// the last `Scissor`: a tile, or none), then the sentinel `End` carrying
+/// the frame number, camera and statistics.
 pub(super) enum StcToRvg {
     Begin(u64, Box<CullView>, DrawStyle),
+    Scissor(Option<[u32; 4]>),
     Items(Vec<u32>),
     End(Box<FrameEnd>),
+}
+
+/// The chunks RVG draws for a finished visible set, each with the scissor
+/// rectangle it is drawn under: without tiles, the LOD ids in STC's order
+/// (no scissor); with tiles, each tile's list under its rectangle. A set
+/// drawn with another camera than it was culled for (held culling,
+/// asynchronous RVG) is sent to that camera's tiles again (`retile`).
+pub(super) fn draw_plan(
+    skeleton: &gigawalk_scene::Skeleton,
+    s: &StcOutput,
+    chunk: usize,
+    retile: Option<(&CullView, &RuntimeOptions)>,
+) -> Vec<(Option<[u32; 4]>, Vec<u32>)> {
+    let ids = lod_ids(skeleton, &s.visible);
+    let again = match (&s.tiles, retile) {
+        (Some(t), Some((view, opts))) => Some(Arc::new(crate::stages::TileFrame::new(
+            skeleton,
+            view,
+            t.grid,
+            opts.tile_culling,
+            &s.visible,
+        ))),
+        _ => None,
+    };
+    match again.as_ref().or(s.tiles.as_ref()) {
+        None => ids.chunks(chunk).map(|c| (None, c.to_vec())).collect(),
+        Some(t) => t
+            .rects
+            .iter()
+            .zip(&t.lists)
+            .flat_map(|(r, list)| {
+                let lods: Vec<u32> = list.iter().map(|&i| ids[i as usize]).collect();
+                lods.chunks(chunk)
+                    .map(|c| (Some(*r), c.to_vec()))
+                    .collect::<Vec<_>>()
+            })
+            .collect(),
+    }
+}
+
+/// Draws a finished visible set on RVG ([`draw_plan`]).
+pub(super) fn draw_set(
+    rvg: &mut RvgStage,
+    skeleton: &gigawalk_scene::Skeleton,
+    s: &StcOutput,
+    chunk: usize,
+    retile: Option<(&CullView, &RuntimeOptions)>,
+) -> Result<(), RuntimeError> {
+    for (rect, lods) in draw_plan(skeleton, s, chunk, retile) {
+        rvg.scissor(rect);
+        rvg.draw(&lods)?;
+    }
+    rvg.scissor(None);
+    Ok(())
 }
 
 /// What the sentinel carries.
@@ -121,6 +177,7 @@ pub(super) fn report(
         grid: end.stc.grid,
         oq: end.stc.oq,
         ct: end.stc.ct,
+        tiles: end.stc.tiles.clone(),
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,

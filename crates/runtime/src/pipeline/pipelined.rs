@@ -5,7 +5,7 @@
 use crossbeam_channel::unbounded;
 
 use super::*;
-use crate::stages::{lod_ids, OrStage, StcStage, Target};
+use crate::stages::{OrStage, StcOutput, StcStage, Target};
 use crate::{CameraSource, Presenter};
 
 pub(crate) fn run_pipelined(
@@ -132,14 +132,35 @@ fn stc_thread(
         {
             return Ok(());
         }
+        // A finished set (held, or tiles: drawn once STC has sent every
+        // item to its tiles), chunk by chunk under each chunk's scissor.
+        let send_set = |s: &StcOutput, retile| {
+            let mut scissor = None;
+            for (rect, lods) in draw_plan(t.skeleton, s, opts.chunk, retile) {
+                if rect != scissor {
+                    scissor = rect;
+                    out.send(StcToRvg::Scissor(rect)).map_err(|_| ())?;
+                }
+                out.send(StcToRvg::Items(lods)).map_err(|_| ())?;
+            }
+            if scissor.is_some() {
+                out.send(StcToRvg::Scissor(None)).map_err(|_| ())?;
+            }
+            Ok::<(), ()>(())
+        };
         let (s, reused) = match frozen.held(m.sample.hold) {
             Some(s) => {
-                for chunk in lod_ids(t.skeleton, &s.visible).chunks(opts.chunk) {
-                    if out.send(StcToRvg::Items(chunk.to_vec())).is_err() {
-                        return Ok(());
-                    }
+                if send_set(&s, Some((&m.sample.view, opts))).is_err() {
+                    return Ok(());
                 }
                 (s, true)
+            }
+            None if opts.tiles.is_some() => {
+                let s = stc.run(frame, &m.sample.view, m.depth.as_ref(), &mut |_| {})?;
+                if send_set(&s, None).is_err() {
+                    return Ok(());
+                }
+                (s, false)
             }
             None => {
                 let mut chunk = Vec::with_capacity(opts.chunk);
@@ -188,6 +209,7 @@ fn rvg_thread(
                 span = Some(tracing::info_span!("RVG", frame).entered());
                 rvg.begin(frame, &view, style)?;
             }
+            StcToRvg::Scissor(rect) => rvg.scissor(rect),
             StcToRvg::Items(lods) => rvg.draw(&lods)?,
             StcToRvg::End(end) => {
                 let r = finish_frame(&mut rvg, presenter, *end)?;

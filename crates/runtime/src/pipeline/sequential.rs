@@ -2,7 +2,7 @@
 //! after another (the baseline of the pipeline).
 
 use super::*;
-use crate::stages::{lod_ids, Target};
+use crate::stages::Target;
 use crate::streaming::Link;
 use crate::{CameraSource, Presenter};
 
@@ -76,9 +76,8 @@ fn sequential_frames<'a>(
         };
         rvg.begin(frame, &view, sample.style)?;
         // The same chunks as the pipeline, drawn after traversal.
-        for chunk in lod_ids(t.skeleton, &stc_out.visible).chunks(opts.chunk) {
-            rvg.draw(chunk)?;
-        }
+        let retile = reused.then_some((&view, opts));
+        draw_set(&mut rvg, t.skeleton, &stc_out, opts.chunk, retile)?;
         occluders.push(frame, stc_out.visible.clone());
         frozen.record(&stc_out);
         let end = FrameEnd {

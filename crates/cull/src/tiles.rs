@@ -283,14 +283,16 @@ pub struct TileLists {
 }
 
 /// The drawn items' part of the scene's tree: each node that is an item or
-/// has one below it, with those of its children that do.
+/// has one below it. The items are numbered in depth-first order of that
+/// tree, so the items below a node are one range of `order`.
 struct ItemTree {
+    /// Per skeleton node: the range of `order` below it (empty when the
+    /// node is not on the tree).
+    range: Vec<(u32, u32)>,
     /// Per skeleton node: the item index when drawn, else u32::MAX.
     item: Vec<u32>,
-    /// Per skeleton node: whether it is on the tree.
-    on: Vec<bool>,
-    /// The nodes on the tree, in skeleton order (parents first).
-    nodes: Vec<u32>,
+    /// Item indices in depth-first order.
+    order: Vec<u32>,
 }
 
 impl ItemTree {
@@ -298,7 +300,6 @@ impl ItemTree {
         let n = skeleton.nodes.len();
         let mut item = vec![u32::MAX; n];
         let mut on = vec![false; n];
-        let mut nodes = Vec::new();
         for (i, it) in items.iter().enumerate() {
             let Some(slot) = item.get_mut(it.node as usize) else {
                 continue;
@@ -307,29 +308,53 @@ impl ItemTree {
             let mut at = it.node;
             while (at as usize) < n && !on[at as usize] {
                 on[at as usize] = true;
-                nodes.push(at);
                 at = skeleton.nodes[at as usize].parent;
             }
         }
-        nodes.sort_unstable();
-        ItemTree { item, on, nodes }
+        let mut range = vec![(0u32, 0u32); n];
+        let mut order = Vec::with_capacity(items.len());
+        if n > 0 && on[0] {
+            // Depth-first; a node's range closes when its subtree is done.
+            let mut stack = vec![(0u32, false)];
+            while let Some((at, done)) = stack.pop() {
+                if done {
+                    range[at as usize].1 = order.len() as u32;
+                    continue;
+                }
+                range[at as usize].0 = order.len() as u32;
+                if item[at as usize] != u32::MAX {
+                    order.push(item[at as usize]);
+                }
+                stack.push((at, true));
+                let nd = &skeleton.nodes[at as usize];
+                for c in (nd.first_child..nd.first_child + nd.child_count).rev() {
+                    if on.get(c as usize) == Some(&true) {
+                        stack.push((c, false));
+                    }
+                }
+            }
+        }
+        ItemTree { range, item, order }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
+
+    fn on(&self, node: u32) -> bool {
+        let (a, b) = self.range[node as usize];
+        b > a
     }
 
     fn children<'s>(&'s self, skeleton: &'s Skeleton, node: u32) -> impl Iterator<Item = u32> + 's {
         let n = &skeleton.nodes[node as usize];
-        (n.first_child..n.first_child + n.child_count).filter(|&c| self.on[c as usize])
+        (n.first_child..n.first_child + n.child_count).filter(|&c| self.on(c))
     }
 
-    /// Every item at or below `node`, into `out`.
-    fn gather(&self, skeleton: &Skeleton, node: u32, out: &mut Vec<u32>) {
-        let mut stack = vec![node];
-        while let Some(at) = stack.pop() {
-            let i = self.item[at as usize];
-            if i != u32::MAX {
-                out.push(i);
-            }
-            stack.extend(self.children(skeleton, at));
-        }
+    /// Every item at or below `node`.
+    fn below(&self, node: u32) -> &[u32] {
+        let (a, b) = self.range[node as usize];
+        &self.order[a as usize..b as usize]
     }
 }
 
@@ -379,7 +404,7 @@ pub fn assign(
         }
         TileMethod::ObjectHierarchy => {
             let tree = ItemTree::new(skeleton, items);
-            if !tree.nodes.is_empty() {
+            if !tree.is_empty() {
                 for (t, f) in tiles.frustums.iter().enumerate() {
                     let mut stack = vec![(0u32, ALL_PLANES)];
                     while let Some((at, mask)) = stack.pop() {
@@ -388,7 +413,9 @@ pub fn assign(
                         let (c, mask) = f.test(lo, hi, mask);
                         match c {
                             crate::Containment::Outside => {}
-                            crate::Containment::Inside => tree.gather(skeleton, at, &mut lists[t]),
+                            crate::Containment::Inside => {
+                                lists[t].extend_from_slice(tree.below(at))
+                            }
                             crate::Containment::Intersecting => {
                                 let i = tree.item[at as usize];
                                 if i != u32::MAX {
@@ -403,14 +430,14 @@ pub fn assign(
         }
         TileMethod::Adaptive => {
             let tree = ItemTree::new(skeleton, items);
-            if !tree.nodes.is_empty() {
+            if !tree.is_empty() {
                 // (object node, frustum node, whether the node is already
                 // known to cut that frustum node's plane).
                 let mut stack = vec![(0u32, 0u32, false)];
                 while let Some((oh, fh, known_cut)) = stack.pop() {
                     let (plane, first) = match tiles.fh[fh as usize] {
                         FhNode::Tile(t) => {
-                            tree.gather(skeleton, oh, &mut lists[t as usize]);
+                            lists[t as usize].extend_from_slice(tree.below(oh));
                             continue;
                         }
                         FhNode::Split { plane, first } => (plane, first),
@@ -633,7 +660,7 @@ mod tests {
                     .map(|&m| assign(&sk, &view, &tiles, &items, m))
                     .collect();
                 let naive = &got[0].lists;
-                for t in 0..grid.count() {
+                for (t, naive_t) in naive.iter().enumerate() {
                     for (i, it) in items.iter().enumerate() {
                         let b = sk.nodes[it.node as usize].bounds;
                         let i = i as u32;
@@ -660,7 +687,7 @@ mod tests {
                                     | TileMethod::FrustumHierarchy
                                     | TileMethod::Adaptive
                             ) {
-                                let naive_has = naive[t].binary_search(&i).is_ok();
+                                let naive_has = naive_t.binary_search(&i).is_ok();
 
                                 assert!(
                                     !has || naive_has,

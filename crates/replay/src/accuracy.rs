@@ -259,6 +259,38 @@ pub fn bound_violations(reference: &DepthImage, result: &DepthImage, p: f64) -> 
     )
 }
 
+/// Whether pixel `p` differs between two images: any colour channel by
+/// more than 2 of 255, or depth by more than 1e-3 relative.
+fn changed(a: &FrameImage, b: &FrameImage, p: usize) -> bool {
+    let (ca, cb) = (&a.colour[4 * p..4 * p + 3], &b.colour[4 * p..4 * p + 3]);
+    let colour = ca.iter().zip(cb).any(|(x, y)| x.abs_diff(*y) > 2);
+    let (da, db) = (a.depth.depth[p], b.depth.depth[p]);
+    colour || (da - db).abs() > 1e-3 * da.abs().max(db.abs())
+}
+
+/// Popping between two consecutive frames: the share of pixels that change
+/// from the run's frame `a` to its next frame `b` while the full-detail
+/// reference's same two frames (`ref_a`, `ref_b`) do not change there. A
+/// pixel the camera's motion changes changes in both and does not count; a
+/// LOD switch or a culling change between the two frames does. 0 for a run
+/// drawing what the reference draws. `None` when the sizes differ.
+pub fn popping(
+    ref_a: &FrameImage,
+    ref_b: &FrameImage,
+    a: &FrameImage,
+    b: &FrameImage,
+) -> Option<f64> {
+    let n = a.depth.depth.len();
+    let ok = |x: &FrameImage| x.depth.depth.len() == n && x.colour.len() == 4 * n;
+    if n == 0 || ![ref_a, ref_b, a, b].into_iter().all(ok) {
+        return None;
+    }
+    let popped = (0..n)
+        .filter(|&p| changed(a, b, p) && !changed(ref_a, ref_b, p))
+        .count();
+    Some(popped as f64 / n as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

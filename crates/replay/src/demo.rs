@@ -188,5 +188,6 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
         frames: Some(frames),
         accuracy_every: 10,
         warmup: 5,
+        target: None,
     }
 }

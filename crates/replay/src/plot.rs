@@ -149,6 +149,104 @@ pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
     root.present().map_err(err)
 }
 
+/// pixel_error.png (a target frame rate): the pixel-error tolerance each
+/// controlled run chose along the path, with its frame time against the
+/// target on a second panel.
+pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
+    fonts();
+    let root = BitMapBackend::new(file, (1000, 640)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (top, bottom) = root.split_vertically(330);
+    let runs: Vec<_> = replay
+        .runs
+        .iter()
+        .filter(|r| r.frames.iter().any(|f| f.controller_us.is_some()))
+        .collect();
+    let frames = replay.frames.max(2) as f64;
+    let max_p = runs
+        .iter()
+        .flat_map(|r| r.frames.iter().map(|f| f.pixel_error_used))
+        .fold(1.0f64, f64::max);
+    let mut chart = ChartBuilder::on(&top)
+        .caption("Pixel error chosen for the target frame rate", (FAMILY, 20))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..frames - 1.0, 0f64..max_p * 1.1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .y_desc("pixel error")
+        .label_style((FAMILY, 14))
+        .draw()
+        .map_err(err)?;
+    let target = replay.options.target.map_or(f64::NAN, |t| t.ms);
+    let max_ms = runs
+        .iter()
+        .flat_map(|r| r.frames.iter().filter_map(|f| f.frame_ms))
+        .fold(target * 2.0, f64::max);
+    let mut lower = ChartBuilder::on(&bottom)
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..frames - 1.0, 0f64..max_ms.min(target * 4.0))
+        .map_err(err)?;
+    lower
+        .configure_mesh()
+        .x_desc("frame (pose along the path)")
+        .y_desc("frame ms")
+        .label_style((FAMILY, 14))
+        .draw()
+        .map_err(err)?;
+    lower
+        .draw_series(LineSeries::new(
+            [(0.0, target), (frames - 1.0, target)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(err)?
+        .label(format!("target {target:.1} ms"))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+    let mut shade = std::collections::HashMap::new();
+    for r in runs {
+        let s = shade.entry(r.mode).or_insert(0usize);
+        let c = colour(r.mode, *s);
+        *s += 1;
+        let p: Vec<(f64, f64)> = r
+            .frames
+            .iter()
+            .map(|f| (f.frame as f64, f.pixel_error_used))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(p, c.stroke_width(2)))
+            .map_err(err)?
+            .label(r.label())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
+        let ms: Vec<(f64, f64)> = r
+            .frames
+            .iter()
+            .filter_map(|f| f.frame_ms.map(|ms| (f.frame as f64, ms)))
+            .collect();
+        lower
+            .draw_series(LineSeries::new(ms, c.stroke_width(1)))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    lower
+        .configure_series_labels()
+        .label_font((FAMILY, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)
+}
+
 /// tradeoff.png: mean frame rate against the fraction of pixels breaking
 /// the pixel-error bound (or against the pixel error when accuracy was not
 /// measured), one line per mode through its pixel errors. The bound, not

@@ -7,17 +7,18 @@ use std::time::Instant;
 use gigawalk_cull::{default_near, Camera, Viewport};
 use gigawalk_gpu::FrameImage;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
+use gigawalk_runtime::target::FrameRateController;
 use gigawalk_runtime::{
-    CameraError, CameraList, CameraRequest, CameraSource, CullMethod, FrameReport, MemoryBudget,
-    Runtime, RuntimeError, RuntimeOptions, Schedule,
+    CameraError, CameraRequest, CameraSource, CullMethod, FrameReport, MemoryBudget, Runtime,
+    RuntimeError, RuntimeOptions, Schedule,
 };
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::{ReadAt, SceneReader};
 use serde::Serialize;
 
-use crate::accuracy::Accuracy;
+use crate::accuracy::{popping, Accuracy};
 use crate::mode::{runs, Mode, Run};
 
 /// What to replay, and how.
@@ -50,6 +51,19 @@ pub struct ReplayOptions {
     /// `occluder_lag` frames have no occluders), the pipeline filling, and
     /// first-use allocations in the driver.
     pub warmup: usize,
+    /// A target frame rate: the runs of modes with a pixel error (`hlod`,
+    /// `och`) choose each frame's tolerance to hold it, starting from their
+    /// pixel error ([`gigawalk_runtime::target`]); `None`: fixed.
+    pub target: Option<TargetFps>,
+}
+
+/// `--target-fps` / `--target-ms`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TargetFps {
+    /// Frame time aimed for, ms.
+    pub ms: f64,
+    /// Largest tolerance the controller may choose, pixels.
+    pub max_pixel_error: f64,
 }
 
 impl Default for ReplayOptions {
@@ -64,6 +78,7 @@ impl Default for ReplayOptions {
             frames: None,
             accuracy_every: 10,
             warmup: 5,
+            target: None,
         }
     }
 }
@@ -124,6 +139,12 @@ pub struct FrameRecord {
     pub drawn_nodes: u64,
     pub drawn_triangles: u64,
     pub occlusion_used: bool,
+    /// The pixel-error tolerance the frame was culled with (the run's, or
+    /// the target-frame-rate controller's choice).
+    pub pixel_error_used: f64,
+    /// Microseconds the target-frame-rate controller took on this frame.
+    #[serde(skip)]
+    pub controller_us: Option<f64>,
     /// The lazy occlusion grid's work (grid culler only; in frames.csv).
     #[serde(skip)]
     pub grid: Option<gigawalk_runtime::GridStats>,
@@ -147,6 +168,10 @@ pub struct FrameRecord {
     pub missing_draws: u64,
     /// Left out of the statistics (see [`ReplayOptions::warmup`]).
     pub warmup: bool,
+    /// On compared frames: the share of pixels that change from this frame
+    /// to the next where the reference's do not (LOD switches and culling
+    /// changes, not camera motion; [`crate::accuracy::popping`]).
+    pub popping: Option<f64>,
     /// Against the reference, on every K-th frame.
     pub accuracy: Option<Accuracy>,
 }
@@ -293,9 +318,16 @@ pub fn replay_on(
         .map(|(i, p)| {
             let camera =
                 Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near);
-            CameraRequest::new(camera, k > 0 && i % k == 0)
+            CameraRequest::new(camera, compared_or_next(i, k))
         })
         .collect();
+    // The frames the reference renders: each compared frame and the one
+    // after it (for popping), in order; by frame, its place in that list.
+    let ref_frames: Vec<usize> = (0..n).filter(|&i| compared_or_next(i, k)).collect();
+    let mut ref_at = vec![usize::MAX; n];
+    for (j, &i) in ref_frames.iter().enumerate() {
+        ref_at[i] = j;
+    }
     let mut out = Replay {
         scene: scene_name.to_string(),
         path: path_name.to_string(),
@@ -321,7 +353,7 @@ pub fn replay_on(
     if k > 0 {
         let advance = Arc::new(AtomicBool::new(false));
         let mut list = Settle {
-            cameras: cameras.iter().step_by(k).copied().collect(),
+            cameras: ref_frames.iter().map(|&i| cameras[i]).collect(),
             next: 0,
             advance: advance.clone(),
         };
@@ -389,8 +421,17 @@ pub fn replay_on(
             culler: culler.unwrap_or(opts.runtime.culler),
             ..opts.runtime.clone()
         };
-        let mut list = CameraList {
+        // A target frame rate steers the runs that have a pixel error.
+        let ctrl = opts.target.filter(|_| mode.uses_pixel_error()).map(|t| {
+            Arc::new(Mutex::new(FrameRateController::new(
+                t.ms,
+                pixel_error,
+                t.max_pixel_error,
+            )))
+        });
+        let mut list = Controlled {
             cameras: cameras.clone(),
+            ctrl: ctrl.clone(),
         };
         let mut frames: Vec<FrameRecord> = Vec::with_capacity(n);
         // Compared frames' images, by index into `frames`: compared after
@@ -398,15 +439,28 @@ pub fn replay_on(
         // search is the costly part) nor rayon's threads running it share
         // the CPU with the frames being timed.
         let mut compared: Vec<(usize, FrameImage)> = Vec::new();
+        // The frames after compared ones (popping), by frame number.
+        let mut next_images: std::collections::HashMap<usize, FrameImage> = Default::default();
         let mut last_finish: Option<Instant> = None;
         let mut stopped = false;
         progress.start(&label, n as u64);
         let result = rt.run(&ro, &mut list, &mut |r: FrameReport| {
             let i = r.frame as usize;
+            let frame_ms = last_finish.map(|t| (r.finished_at - t).as_secs_f64() * 1e3);
+            let controller_us = match (&ctrl, frame_ms) {
+                (Some(c), Some(ms)) => {
+                    let t = Instant::now();
+                    if let Ok(mut c) = c.lock() {
+                        c.update(ms, r.stats.drawn_triangles, r.pixel_error);
+                    }
+                    Some(t.elapsed().as_secs_f64() * 1e6)
+                }
+                _ => None,
+            };
             frames.push(FrameRecord {
                 frame: r.frame,
                 pose_time_s: poses.get(i).map_or(0.0, |p| p.time),
-                frame_ms: last_finish.map(|t| (r.finished_at - t).as_secs_f64() * 1e3),
+                frame_ms,
                 latency_ms: r.latency_ms(),
                 or_ms: r.or_ms,
                 hzb_ms: r.hzb_ms,
@@ -418,6 +472,8 @@ pub fn replay_on(
                 drawn_nodes: r.stats.drawn_nodes,
                 drawn_triangles: r.stats.drawn_triangles,
                 occlusion_used: r.occlusion_used,
+                pixel_error_used: r.pixel_error,
+                controller_us,
                 grid: r.grid,
                 oq: r.oq,
                 ct: r.ct,
@@ -434,11 +490,14 @@ pub fn replay_on(
                 substituted_draws: r.streaming.substituted,
                 missing_draws: r.streaming.missing,
                 warmup: i < opts.warmup,
+                popping: None,
                 accuracy: None,
             });
             if let Some(img) = r.image {
                 if k > 0 && i.is_multiple_of(k) {
                     compared.push((frames.len() - 1, img));
+                } else if compared_or_next(i, k) {
+                    next_images.insert(i, img);
                 }
             }
             last_finish = Some(r.finished_at);
@@ -446,13 +505,25 @@ pub fn replay_on(
             stopped = !progress.keep_going();
             !stopped
         });
-        let tolerance = ro.traversal.pixel_tolerance;
+        // Each frame's bound is the tolerance it was culled with.
+        let reference_of = |i: usize| {
+            ref_at
+                .get(i)
+                .and_then(|&j| reference.get(j))
+                .and_then(|x| x.as_ref())
+        };
         for (at, img) in compared {
             let i = frames[at].frame as usize;
-            frames[at].accuracy = reference
-                .get(i / k)
-                .and_then(|x| x.as_ref())
-                .and_then(|reference| Accuracy::compare(reference, &img, tolerance));
+            frames[at].accuracy = reference_of(i)
+                .and_then(|r| Accuracy::compare(r, &img, frames[at].pixel_error_used));
+            frames[at].popping = match (
+                reference_of(i),
+                reference_of(i + 1),
+                next_images.get(&(i + 1)),
+            ) {
+                (Some(ra), Some(rb), Some(b)) => popping(ra, rb, &img, b),
+                _ => None,
+            };
         }
         progress.finish(&label);
         out.runs.push(RunRecord {
@@ -479,9 +550,35 @@ pub fn replay_on(
     // the last frame.
     out.complete = out.runs.len() == all_runs
         && out.runs.iter().all(|r| r.frames.len() == n)
-        && (k == 0 || out.reference_frames == n.div_ceil(k));
+        && out.reference_frames == ref_frames.len();
     out.seconds = start.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// Frame `i` is compared with the reference (every `k`-th) or follows a
+/// compared one (popping needs the pair).
+fn compared_or_next(i: usize, k: usize) -> bool {
+    k > 0 && (i.is_multiple_of(k) || i % k == 1)
+}
+
+/// A run's cameras, each with the target-frame-rate controller's
+/// tolerance when there is one.
+struct Controlled {
+    cameras: Vec<CameraRequest>,
+    ctrl: Option<Arc<Mutex<FrameRateController>>>,
+}
+
+impl CameraSource for Controlled {
+    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
+        let pixel_error = self
+            .ctrl
+            .as_ref()
+            .and_then(|c| c.lock().ok().map(|c| c.tolerance()));
+        Ok(self
+            .cameras
+            .get(frame as usize)
+            .map(|c| CameraRequest { pixel_error, ..*c }))
+    }
 }
 
 /// The reference's cameras, each handed out again until the frame report

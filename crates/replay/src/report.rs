@@ -58,6 +58,14 @@ impl Replay {
             message,
         })?;
         w.files.push(fps);
+        if self.options.target.is_some() {
+            let p = dir.join("pixel_error.png");
+            crate::plot::pixel_error(self, &p).map_err(|message| ReportError::Plot {
+                file: p.clone(),
+                message,
+            })?;
+            w.files.push(p);
+        }
         if crate::plot::is_sweep(&summary) {
             let t = dir.join("tradeoff.png");
             crate::plot::tradeoff(&summary, &t).map_err(|message| ReportError::Plot {
@@ -78,7 +86,7 @@ impl Replay {
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
              missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
              oq_queries,oq_round_trips,oq_ms,oq_untested,tile_ms_adaptive,tile_ms_naive,tile_tests,\
-             max_tile_triangles,mean_tile_triangles\n",
+             max_tile_triangles,mean_tile_triangles,pixel_error_used,popping\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -87,7 +95,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -134,6 +142,8 @@ impl Replay {
                     f.tiles.map_or(String::new(), |t| t.tests.to_string()),
                     f.tiles.map_or(String::new(), |t| t.max_triangles.to_string()),
                     opt(f.tiles.map(|t| t.mean_triangles), 1),
+                    f.pixel_error_used,
+                    opt(f.popping, 6),
                 );
             }
         }
@@ -196,6 +206,45 @@ pub fn markdown(s: &Summary) -> String {
     if !oq.is_empty() {
         let _ = writeln!(m, "\n## Occlusion queries\n");
         m += &oq;
+    }
+    let popping: Vec<String> = s
+        .modes
+        .iter()
+        .filter_map(|m| {
+            m.popping
+                .map(|p| format!("{} {:.3}%", s.mode_cell(m), 100.0 * p))
+        })
+        .collect();
+    if !popping.is_empty() {
+        let _ = writeln!(
+            m,
+            "\nPopping (share of pixels a frame that change to the next where the full-detail reference's do not: LOD switches and culling changes, not camera motion; compared frames and the ones after them): {}.",
+            popping.join(", ")
+        );
+    }
+    let targets: Vec<String> = s
+        .modes
+        .iter()
+        .filter_map(|m| {
+            Some(format!(
+                "{}: target {:.1} fps, median {:.2} ms (target {:.2}), p95 {:.2} ms, pixel error chosen mean {:.2} / median {:.2}, controller {:.1} us a frame",
+                s.mode_cell(m),
+                m.target_fps?,
+                m.median_frame_ms,
+                1e3 / m.target_fps?,
+                m.p95_frame_ms,
+                m.mean_pixel_error_used?,
+                m.median_pixel_error_used?,
+                m.mean_controller_us?,
+            ))
+        })
+        .collect();
+    if !targets.is_empty() {
+        let _ = writeln!(m, "\n## Target frame rate\n");
+        for t in targets {
+            let _ = writeln!(m, "- {t}");
+        }
+        let _ = writeln!(m, "\n![pixel error chosen along the path](pixel_error.png)");
     }
     let tiles = s.tile_table();
     if !tiles.is_empty() {

@@ -133,6 +133,24 @@ pub struct ModeSummary {
     /// without tiles.
     #[serde(default)]
     pub tiles: Option<String>,
+    /// A target frame rate (`--target-fps`; runs with a pixel error only):
+    /// the fps aimed for, the tolerance the controller chose (mean and
+    /// median over measured frames) and its own cost a frame (mean
+    /// microseconds). Null for runs without one.
+    #[serde(default)]
+    pub target_fps: Option<f64>,
+    /// Popping: the mean share of pixels that change from a compared
+    /// frame to the next where the full-detail reference's do not (LOD
+    /// switches and culling changes, not camera motion); null without
+    /// compared pairs.
+    #[serde(default)]
+    pub popping: Option<f64>,
+    #[serde(default)]
+    pub mean_pixel_error_used: Option<f64>,
+    #[serde(default)]
+    pub median_pixel_error_used: Option<f64>,
+    #[serde(default)]
+    pub mean_controller_us: Option<f64>,
     #[serde(default)]
     pub tile_culling: Option<String>,
     #[serde(default)]
@@ -240,6 +258,7 @@ pub fn measured(frames: &[FrameRecord]) -> Vec<&FrameRecord> {
 fn summarise(
     run: &RunRecord,
     tile_opts: Option<(gigawalk_runtime::TileGrid, gigawalk_runtime::TileMethod)>,
+    target_ms: Option<f64>,
 ) -> ModeSummary {
     let m = measured(&run.frames);
     let ms: Vec<f64> = m.iter().filter_map(|f| f.frame_ms).collect();
@@ -260,6 +279,7 @@ fn summarise(
     let oq: Vec<gigawalk_runtime::OqStats> = m.iter().filter_map(|f| f.oq).collect();
     let ct: Vec<gigawalk_cull::CtStats> = m.iter().filter_map(|f| f.ct).collect();
     let tl: Vec<crate::replay::TileFigures> = m.iter().filter_map(|f| f.tiles).collect();
+    let us: Vec<f64> = m.iter().filter_map(|f| f.controller_us).collect();
     let tile_fig = |f: fn(&crate::replay::TileFigures) -> f64, med: bool| {
         let v: Vec<f64> = tl.iter().map(f).collect();
         (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
@@ -291,6 +311,15 @@ fn summarise(
         mean_ct_candidates: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.candidates as f64))),
         mean_ct_clipped: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.clipped as f64))),
         tiles: tile_opts.map(|(g, _)| g.to_string()),
+        target_fps: target_ms.filter(|_| !us.is_empty()).map(|ms| 1e3 / ms),
+        popping: {
+            let p: Vec<f64> = run.frames.iter().filter_map(|f| f.popping).collect();
+            (!p.is_empty()).then(|| mean(p.into_iter()))
+        },
+        mean_pixel_error_used: (!us.is_empty()).then(|| mean(m.iter().map(|f| f.pixel_error_used))),
+        median_pixel_error_used: (!us.is_empty())
+            .then(|| median(&m.iter().map(|f| f.pixel_error_used).collect::<Vec<_>>())),
+        mean_controller_us: (!us.is_empty()).then(|| mean(us.iter().copied())),
         tile_culling: tile_opts.map(|(_, m)| m.name().to_string()),
         cull_ms_adaptive: tile_fig(|t| t.ms_adaptive, true),
         cull_ms_naive: tile_fig(|t| t.ms_naive, true),
@@ -348,8 +377,11 @@ impl Replay {
     pub fn summary(&self) -> Summary {
         let rt = &self.options.runtime;
         let tile_opts = rt.tiles.map(|g| (g, rt.tile_culling));
-        let mut modes: Vec<ModeSummary> =
-            self.runs.iter().map(|r| summarise(r, tile_opts)).collect();
+        let mut modes: Vec<ModeSummary> = self
+            .runs
+            .iter()
+            .map(|r| summarise(r, tile_opts, self.options.target.map(|t| t.ms)))
+            .collect();
         let vfc = modes
             .iter()
             .find(|m| m.name == Mode::Vfc.name())

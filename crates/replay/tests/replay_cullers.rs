@@ -46,6 +46,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
         frames: Some(frames),
         accuracy_every: 3,
         warmup: 2,
+        target: None,
     }
 }
 
@@ -218,4 +219,64 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
         tris(&adaptive),
         tris(&batched)
     );
+}
+
+#[test]
+fn a_tiled_replay_matches_the_single_view_reference_and_reports_its_tiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, g) = scene(dir.path(), Kind::City, 7, 12);
+    let Some(d) = devices_or_skip(2, "tiled replay") else {
+        return;
+    };
+    let rt = Runtime::with_devices(&scene, d).unwrap();
+    for (grid, method) in [
+        ("4x4", gigawalk_runtime::TileMethod::Adaptive),
+        ("3x2", gigawalk_runtime::TileMethod::Binning),
+    ] {
+        let mut opts = options(&[CullMethod::Hzb, CullMethod::Ct], Schedule::Pipelined, 12);
+        opts.runtime.tiles = Some(grid.parse().unwrap());
+        opts.runtime.tile_culling = method;
+        let r = replay_on(
+            &rt,
+            "m.gwk",
+            &g.path.poses,
+            "m.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .unwrap();
+        let s = r.summary();
+        for m in &s.modes {
+            let what = format!("{grid} {} {:?}", m.name, m.culler);
+            assert_eq!(m.tiles.as_deref(), Some(grid), "{what}");
+            assert_eq!(m.tile_culling.as_deref(), Some(method.name()), "{what}");
+            assert!(
+                m.cull_ms_adaptive.is_some() && m.cull_ms_naive.is_some(),
+                "{what}"
+            );
+            let (max, mean) = (
+                m.max_tile_triangles.unwrap(),
+                m.mean_tile_triangles.unwrap(),
+            );
+            assert!(max >= mean && mean > 0.0, "{what}: {max} {mean}");
+            // The stitched tiles are the single view's image.
+            assert_eq!(m.wrongly_culled_pixels, Some(0), "{what}");
+            assert_eq!(m.differing_pixels_fraction, Some(0.0), "{what}");
+            if m.culler.as_deref() == Some("ct") {
+                // The scene's view cells list the candidates.
+                assert!(m.mean_ct_candidates.unwrap() <= 32.0, "{what}");
+            }
+        }
+        let csv = r.csv();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let col = header
+            .iter()
+            .position(|h| *h == "max_tile_triangles")
+            .unwrap();
+        for line in csv.lines().skip(1) {
+            let v: Vec<&str> = line.split(',').collect();
+            assert!(v[col].parse::<u64>().is_ok(), "{line}");
+        }
+        assert!(gigawalk_replay::markdown(&s).contains("## Tiled display"));
+    }
 }

@@ -82,6 +82,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
         frames: Some(frames),
         accuracy_every: every,
         warmup: 3,
+        target: None,
     }
 }
 
@@ -372,6 +373,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 frames: Some(12),
                 accuracy_every: 4,
                 warmup: 2,
+                target: None,
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             assert_eq!(r.reference_frames, 3, "{runtime:?}");
@@ -445,4 +447,67 @@ fn a_streamed_replay_reports_its_memory_and_stand_ins_against_a_settled_referenc
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert!(json["memory_budget"].as_u64().is_some());
     assert!(json["modes"][0]["substituted_draws"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn a_target_frame_rate_steers_the_tolerance_and_the_report_says_what_it_chose() {
+    on_plant(2, "target frame rate", 30, |rt, path, _| {
+        // An unreachable target (0.1 ms a frame): the controller raises the
+        // tolerance to its maximum; modes without a pixel error ignore it.
+        let opts = ReplayOptions {
+            modes: vec![Mode::Vfc, Mode::Och],
+            target: Some(gigawalk_replay::TargetFps {
+                ms: 0.1,
+                max_pixel_error: 6.0,
+            }),
+            ..options(&[1.0], 30, 5)
+        };
+        let r = replay_plant(rt, path, &opts).unwrap();
+        let och = r.runs.iter().find(|r| r.mode == Mode::Och).unwrap();
+        let used: Vec<f64> = och.frames.iter().map(|f| f.pixel_error_used).collect();
+        assert_eq!(used[0], 1.0, "starts at --pixel-error");
+        assert!(used.iter().all(|&p| (0.125..=6.0).contains(&p)), "{used:?}");
+        assert_eq!(*used.last().unwrap(), 6.0, "{used:?}");
+        let vfc = r.runs.iter().find(|r| r.mode == Mode::Vfc).unwrap();
+        assert!(vfc.frames.iter().all(|f| f.pixel_error_used == 0.0));
+        let s = r.summary();
+        let m = s.modes.iter().find(|m| m.name == "och").unwrap();
+        assert_eq!(m.target_fps, Some(10_000.0));
+        assert!(m.mean_pixel_error_used.unwrap() > 3.0);
+        assert!(m.mean_controller_us.is_some());
+        // Each compared frame's bound is its own tolerance.
+        assert!(och.frames.iter().any(|f| f.accuracy.is_some()));
+        let v = s.modes.iter().find(|m| m.name == "vfc").unwrap();
+        assert_eq!(v.target_fps, None);
+        let csv = r.csv();
+        assert!(csv
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",pixel_error_used,popping"));
+    });
+}
+
+#[test]
+fn popping_is_zero_for_what_draws_the_reference_and_above_zero_for_lod_switches() {
+    on_plant(2, "popping", 40, |rt, path, dir| {
+        let opts = ReplayOptions {
+            modes: vec![Mode::Vfc, Mode::Occ, Mode::Och],
+            ..options(&[4.0], 40, 2)
+        };
+        let r = replay_plant(rt, path, &opts).unwrap();
+        let s = r.summary();
+        let by = |name: &str| s.modes.iter().find(|m| m.name == name).unwrap();
+        // Full detail, frustum or conservative culling: the reference's
+        // image every frame, so nothing pops.
+        assert_eq!(by("vfc").popping, Some(0.0));
+        assert_eq!(by("occ").popping, Some(0.0));
+        // Coarse LODs switching as the camera walks: some pixels pop.
+        let och = by("och").popping.unwrap();
+        assert!(och > 0.0 && och < 0.5, "och popping {och}");
+        let w = r.write_report(&dir.join("popping")).unwrap();
+        assert!(w.files.iter().all(|f| !f.ends_with("pixel_error.png")));
+        let md = std::fs::read_to_string(dir.join("popping/summary.md")).unwrap();
+        assert!(md.contains("Popping"), "{md}");
+    });
 }

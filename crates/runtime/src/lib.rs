@@ -20,6 +20,7 @@ mod pipeline;
 mod queries;
 mod stages;
 mod streaming;
+pub mod target;
 mod triangles;
 
 use std::sync::{Arc, Mutex};
@@ -98,6 +99,8 @@ pub const MIN_MEMORY_BUDGET: u64 = 1 << 16;
 pub enum CameraError {
     #[error("frame {frame}: camera {camera:?} is not valid (non-finite position, bad orientation or field of view)")]
     Invalid { frame: u64, camera: Camera },
+    #[error("frame {frame}: pixel error {value} must be a finite number >= 0")]
+    PixelError { frame: u64, value: f64 },
     /// The source itself failed (e.g. the viewer's window thread is gone).
     #[error("frame {frame}: {source}")]
     Source {
@@ -119,6 +122,10 @@ pub struct CameraRequest {
     /// How RVG draws this frame (the viewer's wireframe toggle). Culling
     /// does not depend on it.
     pub style: DrawStyle,
+    /// This frame's pixel-error tolerance, overriding
+    /// `RuntimeOptions::traversal` (a target-frame-rate controller sets it
+    /// per frame); `None`: the options'. Must be finite and >= 0.
+    pub pixel_error: Option<f64>,
 }
 
 impl CameraRequest {
@@ -128,6 +135,7 @@ impl CameraRequest {
             read_back,
             hold_culling: false,
             style: DrawStyle::Shaded,
+            pixel_error: None,
         }
     }
 }
@@ -196,6 +204,9 @@ pub struct FrameReport {
     pub ct: Option<gigawalk_cull::CtStats>,
     /// The tiles' lists and what making them cost (tiled display only).
     pub tiles: Option<Arc<TileFrame>>,
+    /// The pixel-error tolerance the frame was culled with (the options',
+    /// or the request's).
+    pub pixel_error: f64,
     /// All of STC, HZB build included.
     pub stc_ms: f64,
     pub rvg_ms: f64,

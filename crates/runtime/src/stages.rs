@@ -338,10 +338,12 @@ pub(crate) struct OrOutput {
 
 impl<'a> OrStage<'a> {
     /// `occluders` is `None` during the startup bypass or with occlusion off.
+    /// `tolerance` overrides the options' pixel error for this frame.
     pub fn run(
         &mut self,
         frame: u64,
         view: &CullView,
+        tolerance: Option<f64>,
         occluders: Option<&[DrawItem]>,
     ) -> Result<OrOutput, RuntimeError> {
         let _span = tracing::info_span!("OR", frame).entered();
@@ -356,13 +358,13 @@ impl<'a> OrStage<'a> {
         };
         // The same LOD choice STC makes for this camera (conservative mode).
         let mut items = Vec::with_capacity(occluders.len());
-        reselect_lods(
-            self.skeleton,
-            view,
-            &self.opts.traversal,
-            occluders,
-            &mut |i| items.push(i),
-        );
+        let traversal = TraversalOptions {
+            pixel_tolerance: tolerance.unwrap_or(self.opts.traversal.pixel_tolerance),
+            ..self.opts.traversal
+        };
+        reselect_lods(self.skeleton, view, &traversal, occluders, &mut |i| {
+            items.push(i)
+        });
         // `run_presenting` resolved `Auto` for these devices.
         if let OccluderBudget::Triangles(budget) = self.opts.occluder_budget {
             select_occluders(self.skeleton, view, &mut items, budget);
@@ -589,6 +591,8 @@ pub(crate) struct StcOutput {
     pub ct: Option<CtStats>,
     /// The tiles' draw lists (a tiled display only).
     pub tiles: Option<Arc<TileFrame>>,
+    /// The pixel-error tolerance traversal used.
+    pub tolerance: f64,
     pub ms: f64,
 }
 
@@ -685,11 +689,13 @@ impl<'a> StcStage<'a> {
         }
     }
 
-    /// Traverses, handing every item to `emit` as it is found.
+    /// Traverses, handing every item to `emit` as it is found; `tolerance`
+    /// overrides the options' pixel error for this frame.
     pub fn run(
         &mut self,
         frame: u64,
         view: &CullView,
+        tolerance: Option<f64>,
         depth: Option<&DepthImage>,
         emit: &mut dyn FnMut(DrawItem),
     ) -> Result<StcOutput, RuntimeError> {
@@ -715,6 +721,7 @@ impl<'a> StcStage<'a> {
         };
         let options = TraversalOptions {
             occlusion,
+            pixel_tolerance: tolerance.unwrap_or(self.opts.traversal.pixel_tolerance),
             ..self.opts.traversal
         };
         let mut visible = Vec::new();
@@ -811,6 +818,7 @@ impl<'a> StcStage<'a> {
         });
         Ok(StcOutput {
             tiles,
+            tolerance: options.pixel_tolerance,
             stats,
             culled: culled.into(),
             visible: visible.into(),
@@ -1027,7 +1035,7 @@ mod tests {
         let camera = Camera::look_at(DVec3::ZERO, DVec3::X, 60f64.to_radians(), 1.0, 0.1);
         let view = CullView::new(camera, Viewport::new(64, 64));
         let mut drawn = Vec::new();
-        stc.run(0, &view, None, &mut |i| drawn.push(i.node))
+        stc.run(0, &view, None, None, &mut |i| drawn.push(i.node))
             .unwrap();
         let asked: std::collections::BTreeSet<u32> = rx.try_iter().map(|r| r.lod).collect();
         // A unit box at radius 40 spans +-0.72 degrees around its angle.
@@ -1050,7 +1058,7 @@ mod tests {
         let mut again = Vec::new();
         let mut plain = StcStage::new(&skeleton, &NoLods, &opts, None);
         plain
-            .run(0, &view, None, &mut |i| again.push(i.node))
+            .run(0, &view, None, None, &mut |i| again.push(i.node))
             .unwrap();
         assert_eq!(drawn, again);
     }

@@ -657,6 +657,7 @@ impl CameraSource for LiveSource {
                 read_back: false,
                 hold_culling: false,
                 style,
+                pixel_error: None,
             }));
         }
         if minimised {
@@ -667,6 +668,7 @@ impl CameraSource for LiveSource {
             read_back: false,
             hold_culling: frozen,
             style,
+            pixel_error: None,
         }))
     }
 }

@@ -44,6 +44,15 @@ pub struct Args {
     /// Frames at the start of every run left out of the statistics
     #[arg(long, default_value_t = 5)]
     warmup: usize,
+    /// Target frame rate: hlod and och choose each frame's pixel error (from --pixel-error up to --pixel-error-max) to hold it; the report gives the tolerance per frame (frames.csv pixel_error_used) and the accuracy it bought
+    #[arg(long, conflicts_with = "target_ms")]
+    target_fps: Option<f64>,
+    /// Target frame time in ms (instead of --target-fps)
+    #[arg(long)]
+    target_ms: Option<f64>,
+    /// Largest pixel error the target-frame-rate controller may choose
+    #[arg(long, default_value_t = 16.0)]
+    pixel_error_max: f64,
     #[command(flatten)]
     runtime: RuntimeArgs,
 }
@@ -191,6 +200,20 @@ fn parse_mode(s: &str) -> Result<Mode, String> {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let path = CameraPath::read(&args.path).context("cannot read the camera path")?;
     let scene = SceneReader::open(&args.scene).context("cannot open the scene")?;
+    let target_ms = match (args.target_fps, args.target_ms) {
+        (Some(f), _) if f.is_finite() && f > 0.0 => Some(1e3 / f),
+        (None, Some(ms)) if ms.is_finite() && ms > 0.0 => Some(ms),
+        (None, None) => None,
+        (f, ms) => anyhow::bail!(
+            "--target-fps {f:?} / --target-ms {ms:?}: a target must be a finite number above 0"
+        ),
+    };
+    if !(args.pixel_error_max.is_finite() && args.pixel_error_max > 0.0) {
+        anyhow::bail!(
+            "--pixel-error-max {}: must be a finite number above 0",
+            args.pixel_error_max
+        );
+    }
     let opts = ReplayOptions {
         modes: args.modes,
         pixel_errors: args.pixel_error,
@@ -201,6 +224,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         frames: args.frames,
         accuracy_every: args.accuracy_every,
         warmup: args.warmup,
+        target: target_ms.map(|ms| gigawalk_replay::TargetFps {
+            ms,
+            max_pixel_error: args.pixel_error_max,
+        }),
     };
     let replay = run_replay(
         &scene,

@@ -139,6 +139,7 @@ fn async_or_thread(
         let o = or.run(
             sample.frame,
             &sample.view,
+            sample.tolerance,
             occluders.for_frame(sample.frame),
         )?;
         let msg = OrToStc {
@@ -164,6 +165,7 @@ fn async_stc_thread(
         let s = stc.run(
             m.sample.frame,
             &m.sample.view,
+            m.sample.tolerance,
             m.depth.as_ref(),
             &mut |_| {},
         )?;

@@ -49,6 +49,8 @@ pub(super) struct Sample {
     pub(super) hold: bool,
     pub(super) style: DrawStyle,
     pub(super) sampled_at: Instant,
+    /// The request's pixel error for this frame (`None`: the options').
+    pub(super) tolerance: Option<f64>,
 }
 
 /// OR -> STC: one frame's camera and occluder depth.
@@ -149,6 +151,9 @@ pub(super) fn next_sample(
     if !camera.is_valid() {
         return Err(CameraError::Invalid { frame, camera }.into());
     }
+    if let Some(value) = req.pixel_error.filter(|p| !(p.is_finite() && *p >= 0.0)) {
+        return Err(CameraError::PixelError { frame, value }.into());
+    }
     Ok(Some(Sample {
         frame,
         view: CullView::new(camera, viewport),
@@ -156,6 +161,7 @@ pub(super) fn next_sample(
         hold: req.hold_culling,
         style: req.style,
         sampled_at: Instant::now(),
+        tolerance: req.pixel_error,
     }))
 }
 
@@ -178,6 +184,7 @@ pub(super) fn report(
         oq: end.stc.oq,
         ct: end.stc.ct,
         tiles: end.stc.tiles.clone(),
+        pixel_error: end.stc.tolerance,
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,

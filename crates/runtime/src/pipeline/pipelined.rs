@@ -95,7 +95,12 @@ fn or_thread(
                 or_ms: 0.0,
             }
         } else {
-            let o = or.run(frame, &sample.view, occluders.for_frame(frame))?;
+            let o = or.run(
+                frame,
+                &sample.view,
+                sample.tolerance,
+                occluders.for_frame(frame),
+            )?;
             OrToStc {
                 sample,
                 depth: o.depth,
@@ -156,7 +161,8 @@ fn stc_thread(
                 (s, true)
             }
             None if opts.tiles.is_some() => {
-                let s = stc.run(frame, &m.sample.view, m.depth.as_ref(), &mut |_| {})?;
+                let (view, tol) = (&m.sample.view, m.sample.tolerance);
+                let s = stc.run(frame, view, tol, m.depth.as_ref(), &mut |_| {})?;
                 if send_set(&s, None).is_err() {
                     return Ok(());
                 }
@@ -165,7 +171,8 @@ fn stc_thread(
             None => {
                 let mut chunk = Vec::with_capacity(opts.chunk);
                 let mut closed = false;
-                let s = stc.run(frame, &m.sample.view, m.depth.as_ref(), &mut |item| {
+                let (view, tol) = (&m.sample.view, m.sample.tolerance);
+                let s = stc.run(frame, view, tol, m.depth.as_ref(), &mut |item| {
                     chunk.push(t.skeleton.nodes[item.node as usize].first_lod + item.lod);
                     if chunk.len() == opts.chunk && !closed {
                         let full = std::mem::replace(&mut chunk, Vec::with_capacity(opts.chunk));

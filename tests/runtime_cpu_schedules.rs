@@ -193,3 +193,52 @@ fn a_failing_stage_ends_every_cpu_schedule_with_its_error() {
         }
     }
 }
+
+#[test]
+fn speculative_rvg_draws_the_last_set_while_stc_is_late_and_the_real_frames_stay_exact() {
+    let dir = tempfile::tempdir().unwrap();
+    let (scene, poses) = city(dir.path());
+    let mut base = options(Schedule::Pipelined, true, CullMethod::Hzb);
+    base.stc_delay_ms = 40.0;
+    let plain = run(&scene, &base, &mut cameras(&scene, &poses)).unwrap();
+    let spec_opts = RuntimeOptions {
+        speculative_rvg: true,
+        ..base.clone()
+    };
+    let spec = run(&scene, &spec_opts, &mut cameras(&scene, &poses)).unwrap();
+    let (extra, real): (Vec<&FrameReport>, Vec<&FrameReport>) =
+        spec.iter().partition(|r| r.speculative);
+    assert_eq!(real.len(), poses.len());
+    assert!(
+        !extra.is_empty(),
+        "STC sleeps 40 ms a frame: RVG should speculate"
+    );
+    // A speculative frame comes before the real frame of its camera, at
+    // most one per frame, drawn from an older set without a read-back.
+    for (i, r) in spec.iter().enumerate() {
+        if r.speculative {
+            let next = &spec[i + 1];
+            assert!(!next.speculative && next.frame == r.frame, "{i}");
+            assert!(r.reused_visible_set && r.image.is_none());
+        }
+    }
+    // The real frames are those of the run without speculation.
+    for (p, s) in plain.iter().zip(&real) {
+        assert_eq!(p.frame, s.frame);
+        assert_eq!(p.visible, s.visible);
+        assert_eq!(depth(p), depth(s), "frame {}", p.frame);
+    }
+    // RVG waited for the slow STC without speculation.
+    let waited: f64 = plain.iter().skip(2).map(|r| r.rvg_wait_ms).sum();
+    assert!(
+        waited > 20.0 * (plain.len() - 2) as f64,
+        "RVG waited {waited} ms in all"
+    );
+    // Refused where it has no meaning.
+    let bad = RuntimeOptions {
+        speculative_rvg: true,
+        schedule: Schedule::Sequential,
+        ..base
+    };
+    assert!(bad.validate().is_err());
+}

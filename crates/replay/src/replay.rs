@@ -145,6 +145,10 @@ pub struct FrameRecord {
     /// Microseconds the target-frame-rate controller took on this frame.
     #[serde(skip)]
     pub controller_us: Option<f64>,
+    /// Speculative frames RVG drew just before this one (STC was late).
+    pub speculative_before: u32,
+    /// Milliseconds RVG waited for STC before this frame (pipelined).
+    pub rvg_wait_ms: f64,
     /// The lazy occlusion grid's work (grid culler only; in frames.csv).
     #[serde(skip)]
     pub grid: Option<gigawalk_runtime::GridStats>,
@@ -364,6 +368,8 @@ pub fn replay_on(
             traversal: Mode::Vfc.traversal(0.0),
             // One view: the runs' stitched tiles are compared with it.
             tiles: None,
+            speculative_rvg: false,
+            stc_delay_ms: 0.0,
             ..opts.runtime.clone()
         };
         progress.start("reference", list.cameras.len() as u64);
@@ -444,7 +450,16 @@ pub fn replay_on(
         let mut last_finish: Option<Instant> = None;
         let mut stopped = false;
         progress.start(&label, n as u64);
+        let mut speculative = 0u32;
         let result = rt.run(&ro, &mut list, &mut |r: FrameReport| {
+            if r.speculative {
+                // An extra frame drawn while STC was late: counted on the
+                // real frame that follows, and the interval to it starts
+                // here (it is what the screen showed).
+                speculative += 1;
+                last_finish = Some(r.finished_at);
+                return !stopped;
+            }
             let i = r.frame as usize;
             let frame_ms = last_finish.map(|t| (r.finished_at - t).as_secs_f64() * 1e3);
             let controller_us = match (&ctrl, frame_ms) {
@@ -474,6 +489,8 @@ pub fn replay_on(
                 occlusion_used: r.occlusion_used,
                 pixel_error_used: r.pixel_error,
                 controller_us,
+                speculative_before: std::mem::take(&mut speculative),
+                rvg_wait_ms: r.rvg_wait_ms,
                 grid: r.grid,
                 oq: r.oq,
                 ct: r.ct,

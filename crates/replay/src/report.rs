@@ -86,7 +86,7 @@ impl Replay {
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
              missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
              oq_queries,oq_round_trips,oq_ms,oq_untested,tile_ms_adaptive,tile_ms_naive,tile_tests,\
-             max_tile_triangles,mean_tile_triangles,pixel_error_used,popping\n",
+             max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -95,7 +95,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{:.3}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -144,6 +144,8 @@ impl Replay {
                     opt(f.tiles.map(|t| t.mean_triangles), 1),
                     f.pixel_error_used,
                     opt(f.popping, 6),
+                    f.speculative_before,
+                    f.rvg_wait_ms,
                 );
             }
         }

@@ -145,6 +145,13 @@ pub struct ModeSummary {
     /// compared pairs.
     #[serde(default)]
     pub popping: Option<f64>,
+    /// Speculative RVG: extra frames drawn while STC was late (all frames,
+    /// warm-up included), and RVG's median wait for STC a frame (ms;
+    /// pipelined schedule, 0 elsewhere).
+    #[serde(default)]
+    pub speculative_frames: u64,
+    #[serde(default)]
+    pub median_rvg_wait_ms: f64,
     #[serde(default)]
     pub mean_pixel_error_used: Option<f64>,
     #[serde(default)]
@@ -312,6 +319,8 @@ fn summarise(
         mean_ct_clipped: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.clipped as f64))),
         tiles: tile_opts.map(|(g, _)| g.to_string()),
         target_fps: target_ms.filter(|_| !us.is_empty()).map(|ms| 1e3 / ms),
+        speculative_frames: run.frames.iter().map(|f| f.speculative_before as u64).sum(),
+        median_rvg_wait_ms: med(|f| f.rvg_wait_ms),
         popping: {
             let p: Vec<f64> = run.frames.iter().filter_map(|f| f.popping).collect();
             (!p.is_empty()).then(|| mean(p.into_iter()))

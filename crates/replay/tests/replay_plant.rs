@@ -484,7 +484,7 @@ fn a_target_frame_rate_steers_the_tolerance_and_the_report_says_what_it_chose() 
             .lines()
             .next()
             .unwrap()
-            .ends_with(",pixel_error_used,popping"));
+            .contains(",pixel_error_used,popping,"));
     });
 }
 
@@ -509,5 +509,43 @@ fn popping_is_zero_for_what_draws_the_reference_and_above_zero_for_lod_switches(
         assert!(w.files.iter().all(|f| !f.ends_with("pixel_error.png")));
         let md = std::fs::read_to_string(dir.join("popping/summary.md")).unwrap();
         assert!(md.contains("Popping"), "{md}");
+    });
+}
+
+#[test]
+fn speculative_rvg_covers_a_slow_stc_with_extra_frames_and_keeps_every_real_one() {
+    on_plant(2, "speculative RVG", 16, |rt, path, _| {
+        let mut opts = ReplayOptions {
+            modes: vec![Mode::Occ],
+            ..options(&[1.0], 16, 4)
+        };
+        opts.runtime.stc_delay_ms = 60.0;
+        let plain = replay_plant(rt, path, &opts).unwrap();
+        opts.runtime.speculative_rvg = true;
+        let spec = replay_plant(rt, path, &opts).unwrap();
+        for r in [&plain, &spec] {
+            assert!(r.complete);
+            assert_eq!(r.runs[0].frames.len(), 16);
+        }
+        let (p, s) = (plain.summary(), spec.summary());
+        assert_eq!(p.modes[0].speculative_frames, 0);
+        assert!(
+            s.modes[0].speculative_frames > 0,
+            "no speculative frame with a 60 ms STC"
+        );
+        // Without speculation RVG waits for the slow STC.
+        assert!(
+            p.modes[0].median_rvg_wait_ms > 20.0,
+            "{}",
+            p.modes[0].median_rvg_wait_ms
+        );
+        // The real frames are still exact (occ is conservative).
+        assert_eq!(s.modes[0].wrongly_culled_pixels, Some(0));
+        let csv = spec.csv();
+        assert!(csv
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",speculative_before,rvg_wait_ms"));
     });
 }

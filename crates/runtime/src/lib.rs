@@ -207,6 +207,13 @@ pub struct FrameReport {
     /// The pixel-error tolerance the frame was culled with (the options',
     /// or the request's).
     pub pixel_error: f64,
+    /// A speculative frame (`RuntimeOptions::speculative_rvg`): the last
+    /// finished visible set drawn with camera `frame` while STC was late;
+    /// the real frame `frame` follows.
+    pub speculative: bool,
+    /// Milliseconds RVG waited for STC before this frame (pipelined
+    /// schedule; 0 elsewhere).
+    pub rvg_wait_ms: f64,
     /// All of STC, HZB build included.
     pub stc_ms: f64,
     pub rvg_ms: f64,

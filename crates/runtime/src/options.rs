@@ -338,6 +338,16 @@ pub struct RuntimeOptions {
     /// newest camera. Removes a frame of latency; may show brief occlusion
     /// errors when the camera moves fast. Pipelined schedule only.
     pub async_rvg: bool,
+    /// Speculative RVG (the paper's Section 8 proposal): when nothing of
+    /// STC's list for the next camera has come within the last frame's own
+    /// drawing time, RVG draws the last finished list with that camera
+    /// instead of waiting, once, then draws the real frame when it comes.
+    /// Reported as extra frames (`FrameReport::speculative`). Pipelined,
+    /// synchronous RVG only.
+    pub speculative_rvg: bool,
+    /// Measurement hook: STC sleeps this many ms a frame (a slow STC, to
+    /// measure what speculative or asynchronous RVG save). 0: off.
+    pub stc_delay_ms: f64,
     /// Streaming: what STC asks the loader for ahead of need. Off by
     /// default: on the 50M plant's walk the band cut frames with a
     /// stand-in (35-38 of 55 instead of 48) but drew more stand-ins and
@@ -388,6 +398,10 @@ pub enum OptionsError {
     NthFarthest(u8),
     #[error("asynchronous RVG needs the pipelined schedule")]
     AsyncNeedsPipelined,
+    #[error("speculative RVG needs the pipelined schedule with synchronous RVG")]
+    SpeculativeNeedsSynchronousPipeline,
+    #[error("STC delay {0} ms must be 0 to 10000")]
+    StcDelay(f64),
     #[error("chunk must be at least 1")]
     Chunk,
     #[error("grid cell {0} must be 1..=1024 pixels")]
@@ -414,6 +428,8 @@ impl Default for RuntimeOptions {
             devices: 2,
             chunk: 256,
             async_rvg: false,
+            speculative_rvg: false,
+            stc_delay_ms: 0.0,
             prefetch: Prefetching::Off,
             culler: CullMethod::Hzb,
             grid: GridOptions::default(),
@@ -456,6 +472,12 @@ impl RuntimeOptions {
         }
         if self.async_rvg && self.schedule == Schedule::Sequential {
             return Err(OptionsError::AsyncNeedsPipelined);
+        }
+        if self.speculative_rvg && (self.async_rvg || self.schedule == Schedule::Sequential) {
+            return Err(OptionsError::SpeculativeNeedsSynchronousPipeline);
+        }
+        if !(self.stc_delay_ms.is_finite() && (0.0..=10_000.0).contains(&self.stc_delay_ms)) {
+            return Err(OptionsError::StcDelay(self.stc_delay_ms));
         }
         if self.chunk == 0 {
             return Err(OptionsError::Chunk);
@@ -567,6 +589,19 @@ mod tests {
             },
             OptionsError::AsyncNeedsPipelined,
             "asynchronous RVG",
+        );
+        check(
+            &|o| {
+                o.speculative_rvg = true;
+                o.async_rvg = true;
+            },
+            OptionsError::SpeculativeNeedsSynchronousPipeline,
+            "speculative RVG",
+        );
+        check(
+            &|o| o.stc_delay_ms = f64::NAN,
+            OptionsError::StcDelay(f64::NAN),
+            "STC delay",
         );
     }
 

@@ -701,6 +701,11 @@ impl<'a> StcStage<'a> {
     ) -> Result<StcOutput, RuntimeError> {
         let _span = tracing::info_span!("STC", frame).entered();
         let t = Instant::now();
+        if self.opts.stc_delay_ms > 0.0 {
+            std::thread::sleep(std::time::Duration::from_secs_f64(
+                self.opts.stc_delay_ms / 1e3,
+            ));
+        }
         check_injected(self.opts, Stage::Stc, frame)?;
         let mut hzb_ms = 0.0;
         // The culler, when occlusion is on; the HZB needs OR's depth (none

@@ -20,6 +20,7 @@ use gigawalk_gpu::{
     open_devices_for_window, GpuContext, GpuError, OverlayFrame, OverlayText, VisiblePass,
     WindowError, WindowSurface,
 };
+use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{
     CameraError, CameraRequest, CameraSource, CullMethod, CullReason, DrawStyle, FrameReport,
     OccluderBudget, Presenter, Runtime, RuntimeError, RuntimeOptions,
@@ -229,6 +230,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         quit: false,
         message: None,
         error: None,
+        target_tolerance: None,
     }));
     let mut source = LiveSource {
         shared: shared.clone(),
@@ -244,6 +246,8 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         script: scripted.clone(),
         clock: FrameClock::default(),
     };
+    let (settings_target, target_fps, start_tolerance) =
+        (settings.target, settings.target_fps, settings.pixel_error);
     let mut state = LoopState {
         controller,
         settings,
@@ -259,6 +263,10 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         out_dir: args.out_dir.clone(),
         near,
         rendered: 0,
+        target: settings_target.then(|| {
+            FrameRateController::new(1e3 / target_fps, start_tolerance.max(MIN_TOLERANCE), 16.0)
+        }),
+        last_finish: None,
     };
     loop {
         let render = PhysicalSize::new(app.size.width.max(1), app.size.height.max(1));
@@ -284,7 +292,8 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         let result = runtime.run_presenting(
             &opts,
             &mut source,
-            &mut |_report| {
+            &mut |report| {
+                state.target_update(&report, &shared);
                 if let PumpStatus::Exit(_) =
                     event_loop.pump_app_events(Some(Duration::ZERO), &mut app)
                 {
@@ -377,6 +386,8 @@ struct Shared {
     message: Option<String>,
     /// A failure on the RVG thread that is not the runtime's (screenshot).
     error: Option<ViewError>,
+    /// The next frame's pixel error while a target frame rate is held.
+    target_tolerance: Option<f64>,
 }
 
 /// The window's side of the event loop: collects input for the frame loop.
@@ -493,9 +504,32 @@ struct LoopState {
     out_dir: PathBuf,
     near: f64,
     rendered: u64,
+    /// The target-frame-rate controller while T holds a frame rate, and
+    /// when the last frame finished.
+    target: Option<FrameRateController>,
+    last_finish: Option<Instant>,
 }
 
 impl LoopState {
+    /// Feeds a finished frame to the target-frame-rate controller and
+    /// publishes the tolerance for the next camera.
+    fn target_update(&mut self, report: &gigawalk_runtime::FrameReport, shared: &Mutex<Shared>) {
+        let ms = self
+            .last_finish
+            .map(|t| (report.finished_at - t).as_secs_f64() * 1e3);
+        self.last_finish = Some(report.finished_at);
+        let tolerance = match (&mut self.target, ms) {
+            (Some(c), Some(ms)) if !report.speculative => {
+                Some(c.update(ms, report.stats.drawn_triangles, report.pixel_error))
+            }
+            (Some(c), _) => Some(c.tolerance()),
+            (None, _) => None,
+        };
+        if let Ok(mut s) = shared.lock() {
+            s.target_tolerance = tolerance;
+        }
+    }
+
     /// Applies the input since the last frame and publishes the next
     /// camera and what the HUD shows; false to end the run (quit).
     fn after_frame(
@@ -527,6 +561,16 @@ impl LoopState {
                 Action::PixelErrorUp => self.settings.step_pixel_error(true),
                 Action::PixelErrorDown => self.settings.step_pixel_error(false),
                 Action::ToggleAsync => self.settings.async_rvg ^= true,
+                Action::ToggleTarget => {
+                    self.settings.target ^= true;
+                    self.target = self.settings.target.then(|| {
+                        FrameRateController::new(
+                            1e3 / self.settings.target_fps,
+                            self.settings.pixel_error.max(MIN_TOLERANCE),
+                            16.0,
+                        )
+                    });
+                }
                 Action::ToggleWireframe if self.wireframe_supported => {
                     self.settings.wireframe ^= true
                 }
@@ -616,7 +660,7 @@ struct LiveSource {
 
 impl CameraSource for LiveSource {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        let (camera, frozen, style, quit, minimised) = {
+        let (camera, frozen, style, quit, minimised, pixel_error) = {
             let s = self.shared.lock().map_err(|_| CameraError::Source {
                 frame,
                 source: "the window's state is poisoned: its thread panicked".into(),
@@ -631,6 +675,7 @@ impl CameraSource for LiveSource {
                 },
                 s.quit,
                 s.window_size.0 == 0 || s.window_size.1 == 0,
+                s.target_tolerance.filter(|_| s.settings.target),
             )
         };
         if quit {
@@ -657,7 +702,7 @@ impl CameraSource for LiveSource {
                 read_back: false,
                 hold_culling: false,
                 style,
-                pixel_error: None,
+                pixel_error,
             }));
         }
         if minimised {
@@ -668,7 +713,7 @@ impl CameraSource for LiveSource {
             read_back: false,
             hold_culling: frozen,
             style,
-            pixel_error: None,
+            pixel_error,
         }))
     }
 }
@@ -721,6 +766,7 @@ impl Presenter for ViewerPresenter<'_> {
                     t.ms_naive,
                 )
             }),
+            pixel_error: report.pixel_error,
         };
         let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
         if let Some(script) = &self.script {

@@ -57,6 +57,8 @@ pub struct FrameNumbers {
     /// Tiled display: the grid, the busiest tile's triangles, and the
     /// adaptive and naive methods' ms.
     pub tiles: Option<(String, u64, f64, f64)>,
+    /// The pixel error the frame was culled with.
+    pub pixel_error: f64,
 }
 
 /// The viewer's state the HUD shows besides the frame's numbers.
@@ -107,6 +109,12 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
             _ => format!("mode: {}", s.mode()),
         },
     ];
+    if s.target {
+        lines.push(format!(
+            "target {:.0} fps (T): {fps:.1} fps at pixel error {:.2}",
+            s.target_fps, n.pixel_error
+        ));
+    }
     if let Some((grid, busiest, adaptive, naive)) = &n.tiles {
         lines.push(format!(
             "tiles {grid}: busiest {} tris; to tiles {adaptive:.2} ms adaptive, {naive:.2} ms naive",

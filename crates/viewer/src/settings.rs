@@ -25,6 +25,10 @@ pub struct Settings {
     pub frozen: bool,
     pub hud: bool,
     pub help: bool,
+    /// Hold a frame rate (T toggles): the pixel error is chosen each frame
+    /// (from `pixel_error` up to 16 px) to hold `target_fps`.
+    pub target: bool,
+    pub target_fps: f64,
 }
 
 impl Default for Settings {
@@ -41,6 +45,8 @@ impl Default for Settings {
             frozen: false,
             hud: true,
             help: false,
+            target: false,
+            target_fps: 30.0,
         }
     }
 }

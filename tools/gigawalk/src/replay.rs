@@ -99,6 +99,12 @@ pub struct RuntimeArgs {
     /// Streaming: what STC asks the loader for before it is needed: band = the next finer LOD of what is drawn near its switching distance, ring = what a frustum a quarter wider would draw, both, or off (on the 50M plant's walk neither drew fewer stand-ins; band drew fewer frames with one)
     #[arg(long, value_name = "off|band|ring|both", default_value = "off")]
     prefetch: Prefetching,
+    /// Speculative RVG (the paper's Section 8 proposal): when STC's list for the next camera is late, draw the last finished list with that camera instead of waiting (extra frames, counted in frames.csv speculative_before); pipelined, synchronous RVG only
+    #[arg(long)]
+    speculative_rvg: bool,
+    /// Measurement: STC sleeps this many ms a frame (a slow STC, to see what speculative or asynchronous RVG save)
+    #[arg(long, default_value_t = 0.0)]
+    stc_delay_ms: f64,
     /// Tiled display (Nirnimesh et al.): split the viewport into COLSxROWS tiles (1-64 each; e.g. 4x4), each an off-axis frustum from the same eye drawn from its own list under its own scissor; the stitched image is what accuracy compares with the single-view reference
     #[arg(long, value_name = "COLSxROWS")]
     tiles: Option<TileGrid>,
@@ -165,6 +171,8 @@ impl RuntimeArgs {
             async_rvg: self.async_rvg,
             prefetch: self.prefetch,
             tiles: self.tiles,
+            speculative_rvg: self.speculative_rvg,
+            stc_delay_ms: self.stc_delay_ms,
             tile_culling: self.tile_culling,
             grid: GridOptions {
                 cell: self.grid_cell,
@@ -198,8 +206,6 @@ fn parse_mode(s: &str) -> Result<Mode, String> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let path = CameraPath::read(&args.path).context("cannot read the camera path")?;
-    let scene = SceneReader::open(&args.scene).context("cannot open the scene")?;
     let target_ms = match (args.target_fps, args.target_ms) {
         (Some(f), _) if f.is_finite() && f > 0.0 => Some(1e3 / f),
         (None, Some(ms)) if ms.is_finite() && ms > 0.0 => Some(ms),
@@ -214,6 +220,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.pixel_error_max
         );
     }
+    let path = CameraPath::read(&args.path).context("cannot read the camera path")?;
+    let scene = SceneReader::open(&args.scene).context("cannot open the scene")?;
     let opts = ReplayOptions {
         modes: args.modes,
         pixel_errors: args.pixel_error,

@@ -58,6 +58,9 @@ pub struct Args {
     /// Start with asynchronous rendering
     #[arg(long)]
     async_rvg: bool,
+    /// Hold this frame rate from the start (T toggles it; without this flag T holds 30 fps): the pixel error is chosen each frame, from --pixel-error up to 16
+    #[arg(long)]
+    target_fps: Option<f64>,
     /// Tiled display (Nirnimesh et al.): split the window into COLSxROWS tiles (1-64 each), each drawn from its own list under its own scissor; the HUD shows the busiest tile and what sending items to tiles cost
     #[arg(long, value_name = "COLSxROWS")]
     tiles: Option<gigawalk_runtime::TileGrid>,
@@ -102,6 +105,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             anyhow::bail!("--near {near} must be a finite number > 0");
         }
     }
+    if let Some(f) = a.target_fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+        anyhow::bail!("--target-fps {f}: must be a finite number above 0");
+    }
     if a.width == 0 || a.height == 0 {
         anyhow::bail!("--width and --height must be at least 1");
     }
@@ -127,6 +133,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             wireframe: a.wireframe,
             boxes: a.boxes,
             hud: !a.no_hud,
+            target: a.target_fps.is_some(),
+            target_fps: a.target_fps.unwrap_or(30.0),
             ..Settings::default()
         },
         out_dir: a.out_dir,

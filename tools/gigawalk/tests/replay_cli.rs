@@ -100,6 +100,11 @@ fn bad_occluder_budget_and_prefetch_are_rejected() {
         ("occluder-budget", "-3", "occluder budget"),
         ("occluder-budget", "1e19", "occluder budget"),
         ("prefetch", "on", "off, band, ring or both"),
+        ("target-fps", "0", "a target must be"),
+        ("target-ms", "-5", "a target must be"),
+        ("pixel-error-max", "-1", "--pixel-error-max"),
+        ("tiles", "0x3", "not a count from 1 to 64"),
+        ("tile-culling", "fast", "tile culling \"fast\""),
     ] {
         let flag = format!("--{flag}={bad}");
         let (ok, _, err) = gigawalk(&["replay", "x.gwk", "--path", "x.path", &flag]);

@@ -178,6 +178,20 @@ fn bad_occluder_budget_is_a_clear_error() {
 }
 
 #[test]
+fn bad_target_fps_and_tiles_are_clear_errors() {
+    for (flag, value, says) in [
+        ("--target-fps", "0", "--target-fps 0"),
+        ("--tiles", "4", "expected COLSxROWS"),
+        ("--tile-culling", "fast", "tile culling \"fast\""),
+    ] {
+        let (ok, _, err) = gigawalk(&["view", "x.gwk", "--frames", "1", flag, value], None);
+        assert!(!ok, "{flag} {value}");
+        assert!(err.contains(says), "{flag} {value}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
 fn missing_scene_is_a_clear_error() {
     let (ok, _, err) = gigawalk(&["view", "/nonexistent/scene.gwk", "--frames", "1"], None);
     assert!(!ok);

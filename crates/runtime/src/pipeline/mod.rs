@@ -185,6 +185,8 @@ pub(super) fn report(
         ct: end.stc.ct,
         tiles: end.stc.tiles.clone(),
         pixel_error: end.stc.tolerance,
+        speculative: false,
+        rvg_wait_ms: 0.0,
         stc_ms: end.stc.ms,
         rvg_ms,
         stats: end.stc.stats,
@@ -345,7 +347,8 @@ pub(super) fn run_threads<'scope, 'env>(
     let mut stopped = false;
     if first_error.is_none() {
         for report in reports.iter() {
-            frames += 1;
+            // Speculative frames are extra: the count is of cameras.
+            frames += u64::from(!report.speculative);
             if !on_frame(report) {
                 break;
             }

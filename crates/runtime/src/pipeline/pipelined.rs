@@ -2,7 +2,9 @@
 //! own threads and devices, joined by queues; frame i's occluders are
 //! frame i - lag's visible set.
 
-use crossbeam_channel::unbounded;
+use std::time::Duration;
+
+use crossbeam_channel::{unbounded, RecvTimeoutError};
 
 use super::*;
 use crate::stages::{OrStage, StcOutput, StcStage, Target};
@@ -52,7 +54,11 @@ pub(crate) fn run_pipelined(
                 Stage::Rvg,
                 Box::new(move || {
                     let rvg = t.rvg_stage(opts, b, rvg_link);
-                    rvg_thread(rvg, rvg_rx, report_tx, token_tx, presenter)
+                    let spec = opts.speculative_rvg.then_some(Speculative {
+                        skeleton: t.skeleton,
+                        opts,
+                    });
+                    rvg_thread(rvg, rvg_rx, report_tx, token_tx, presenter, spec)
                 }),
             ),
         ];
@@ -202,24 +208,120 @@ fn stc_thread(
     Ok(())
 }
 
+/// What speculative RVG needs to draw a set.
+struct Speculative<'a> {
+    skeleton: &'a gigawalk_scene::Skeleton,
+    opts: &'a RuntimeOptions,
+}
+
+/// RVG: draws each frame as STC's items arrive. A frame begins on its
+/// first items (or its end), not on `Begin`, so that with speculative RVG
+/// a late STC can be covered first: when nothing of the frame has come
+/// within the last frame's own drawing time, the last finished set is
+/// drawn with this frame's camera as an extra, speculative frame.
 fn rvg_thread(
     mut rvg: RvgStage,
     input: Receiver<StcToRvg>,
     out: Sender<FrameReport>,
     tokens: Sender<()>,
     presenter: &mut dyn Presenter,
+    spec: Option<Speculative>,
 ) -> Result<(), RuntimeError> {
     let mut span = None;
-    for m in input.iter() {
+    // The frame announced by `Begin` and not begun yet.
+    let mut pending: Option<(u64, Box<CullView>, DrawStyle)> = None;
+    // When RVG last finished drawing, and how long it waited for STC.
+    let mut idle_since = Instant::now();
+    let mut wait_ms = 0.0;
+    // The last finished set, its frame's drawing ms, and when this
+    // frame's drawing started.
+    let mut last: Option<(StcOutput, f64)> = None;
+    let mut drawing_since = Instant::now();
+    let mut speculated: Option<u64> = None;
+    loop {
+        let late = match (&spec, &last, &pending) {
+            (Some(_), Some((_, draw_ms)), Some((frame, ..))) if speculated != Some(*frame) => {
+                Some(Duration::from_secs_f64((draw_ms / 1e3).clamp(1e-3, 1.0)))
+            }
+            _ => None,
+        };
+        let m = match late {
+            Some(grace) => match input.recv_timeout(grace) {
+                Ok(m) => m,
+                Err(RecvTimeoutError::Disconnected) => break,
+                Err(RecvTimeoutError::Timeout) => {
+                    let (Some(sp), Some((set, _)), Some((frame, view, style))) =
+                        (&spec, &last, &pending)
+                    else {
+                        continue;
+                    };
+                    speculated = Some(*frame);
+                    let _s = tracing::info_span!("RVG speculative", frame).entered();
+                    let waited = idle_since.elapsed().as_secs_f64() * 1e3;
+                    rvg.begin(*frame, view, *style)?;
+                    draw_set(
+                        &mut rvg,
+                        sp.skeleton,
+                        set,
+                        sp.opts.chunk,
+                        Some((view, sp.opts)),
+                    )?;
+                    let end = FrameEnd {
+                        sample: Sample {
+                            frame: *frame,
+                            view: (**view).clone(),
+                            read_back: false,
+                            hold: false,
+                            style: *style,
+                            sampled_at: Instant::now(),
+                            tolerance: Some(set.tolerance),
+                        },
+                        occluder_items: 0,
+                        or_ms: 0.0,
+                        stc: StcOutput {
+                            ms: 0.0,
+                            hzb_ms: 0.0,
+                            ..set.clone()
+                        },
+                        reused: true,
+                    };
+                    let mut r = finish_frame(&mut rvg, presenter, end)?;
+                    r.speculative = true;
+                    r.rvg_wait_ms = waited;
+                    if out.send(r).is_err() {
+                        return Ok(());
+                    }
+                    idle_since = Instant::now();
+                    continue;
+                }
+            },
+            None => match input.recv() {
+                Ok(m) => m,
+                Err(_) => break,
+            },
+        };
+        if !matches!(m, StcToRvg::Begin(..)) {
+            if let Some((frame, view, style)) = pending.take() {
+                span = Some(tracing::info_span!("RVG", frame).entered());
+                wait_ms = idle_since.elapsed().as_secs_f64() * 1e3;
+                drawing_since = Instant::now();
+                rvg.begin(frame, &view, style)?;
+            }
+        }
         match m {
             StcToRvg::Begin(frame, view, style) => {
-                span = Some(tracing::info_span!("RVG", frame).entered());
-                rvg.begin(frame, &view, style)?;
+                pending = Some((frame, view, style));
             }
             StcToRvg::Scissor(rect) => rvg.scissor(rect),
             StcToRvg::Items(lods) => rvg.draw(&lods)?,
             StcToRvg::End(end) => {
-                let r = finish_frame(&mut rvg, presenter, *end)?;
+                let set = spec.as_ref().map(|_| end.stc.clone());
+                let mut r = finish_frame(&mut rvg, presenter, *end)?;
+                r.rvg_wait_ms = wait_ms;
+                if let Some(set) = set {
+                    last = Some((set, drawing_since.elapsed().as_secs_f64() * 1e3));
+                }
+                idle_since = Instant::now();
                 span = None;
                 // OR may have ended already; a closed token queue is fine.
                 let _ = tokens.send(());

@@ -368,68 +368,12 @@ impl Culler for CtCuller<'_> {
 mod tests {
     use super::*;
     use crate::{Camera, NoOcclusion, TraversalOptions, Traverser, Viewport};
-    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, NO_NODE};
+    use gigawalk_scene::Aabb;
 
     use crate::test_rng::Lcg;
 
-    /// A binary tree over `leaves` (median splits along x, built breadth
-    /// first so children are contiguous and after their parent), every
-    /// node with one LOD.
     fn tree(leaves: &[Aabb]) -> Skeleton {
-        // Breadth-first so children are contiguous and after parents.
-        let mut nodes: Vec<Node> = Vec::new();
-        let mut queue: std::collections::VecDeque<(Vec<Aabb>, u32)> = Default::default();
-        queue.push_back((leaves.to_vec(), NO_NODE));
-        let mut slots: Vec<(Vec<Aabb>, u32)> = Vec::new();
-        while let Some((boxes, parent)) = queue.pop_front() {
-            slots.push((boxes.clone(), parent));
-            if boxes.len() > 1 {
-                let mut b = boxes;
-                b.sort_by(|a, c| a.center().x.total_cmp(&c.center().x));
-                let r = b.split_off(b.len() / 2);
-                let me = slots.len() as u32 - 1;
-                queue.push_back((b, me));
-                queue.push_back((r, me));
-            }
-        }
-        for (i, (boxes, parent)) in slots.iter().enumerate() {
-            let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
-            nodes.push(Node {
-                bounds,
-                parent: *parent,
-                first_child: 0,
-                child_count: 0,
-                first_lod: i as u32,
-                lod_count: 1,
-            });
-        }
-        for i in 1..nodes.len() {
-            let p = nodes[i].parent as usize;
-            if nodes[p].child_count == 0 {
-                nodes[p].first_child = i as u32;
-            }
-            nodes[p].child_count += 1;
-        }
-        let lods = (0..nodes.len())
-            .map(|_| LodInfo {
-                error: 0.0,
-                triangles: 12,
-                vertices: 8,
-                origin: DVec3::ZERO,
-                index_format: IndexFormat::U16,
-                uniform_colour: None,
-                offset: 0,
-                len: 0,
-                checksum: 0,
-            })
-            .collect();
-        Skeleton {
-            origin: DVec3::ZERO,
-            bounds: nodes[0].bounds,
-            nodes,
-            lods,
-            provenance: Default::default(),
-        }
+        crate::test_rng::tree(leaves, 2)
     }
 
     /// A street: walls (occluders) along both sides, boxes behind them.

@@ -1,7 +1,68 @@
 //! A tiny deterministic generator for this crate's randomised unit tests
-//! (no dependency needed for them).
+//! (no dependency needed for them), and a tree over boxes to cull.
 
+use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Skeleton, NO_NODE};
 use glam::DVec3;
+
+/// A tree over `leaves` built breadth first (children contiguous and
+/// after their parent): a node's boxes sorted along x, y, z in turn (by its
+/// index) and split into `arity` runs. Every node has one 12-triangle LOD.
+pub(crate) fn tree(leaves: &[Aabb], arity: usize) -> Skeleton {
+    let mut slots: Vec<(Vec<Aabb>, u32)> = Vec::new();
+    let mut queue = std::collections::VecDeque::new();
+    queue.push_back((leaves.to_vec(), NO_NODE));
+    while let Some((mut boxes, parent)) = queue.pop_front() {
+        let me = slots.len() as u32;
+        slots.push((boxes.clone(), parent));
+        if boxes.len() > 1 {
+            let axis = (me % 3) as usize;
+            boxes.sort_by(|a, b| a.center()[axis].total_cmp(&b.center()[axis]));
+            let per = boxes.len().div_ceil(arity.clamp(2, boxes.len()));
+            for chunk in boxes.chunks(per) {
+                queue.push_back((chunk.to_vec(), me));
+            }
+        }
+    }
+    let mut nodes: Vec<Node> = slots
+        .iter()
+        .enumerate()
+        .map(|(i, (boxes, parent))| Node {
+            bounds: boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b)),
+            parent: *parent,
+            first_child: 0,
+            child_count: 0,
+            first_lod: i as u32,
+            lod_count: 1,
+        })
+        .collect();
+    for i in 1..nodes.len() {
+        let p = nodes[i].parent as usize;
+        if nodes[p].child_count == 0 {
+            nodes[p].first_child = i as u32;
+        }
+        nodes[p].child_count += 1;
+    }
+    let lods = (0..nodes.len())
+        .map(|_| LodInfo {
+            error: 0.0,
+            triangles: 12,
+            vertices: 8,
+            origin: DVec3::ZERO,
+            index_format: IndexFormat::U16,
+            uniform_colour: None,
+            offset: 0,
+            len: 0,
+            checksum: 0,
+        })
+        .collect();
+    Skeleton {
+        origin: DVec3::ZERO,
+        bounds: nodes[0].bounds,
+        nodes,
+        lods,
+        provenance: Default::default(),
+    }
+}
 
 pub(crate) struct Lcg(pub u64);
 

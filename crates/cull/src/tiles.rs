@@ -521,7 +521,7 @@ mod tests {
     use super::*;
     use crate::test_rng::Lcg;
     use crate::{Camera, Containment, Viewport};
-    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, NO_NODE};
+    use gigawalk_scene::{Aabb, NO_NODE};
 
     /// A random tree: 4-ary over `n` random boxes around the origin, each
     /// node with one LOD; returns the skeleton and its leaves.
@@ -537,61 +537,7 @@ mod tests {
                 Aabb::new(c - e, c + e)
             })
             .collect();
-        // Breadth-first: each node's children contiguous and after it.
-        let mut nodes: Vec<Node> = Vec::new();
-        let mut queue = std::collections::VecDeque::new();
-        queue.push_back((leaves, NO_NODE));
-        let mut slots = Vec::new();
-        while let Some((mut boxes, parent)) = queue.pop_front() {
-            let me = slots.len() as u32;
-            slots.push((boxes.clone(), parent));
-            if boxes.len() > 1 {
-                let axis = (me % 3) as usize;
-                boxes.sort_by(|a, b| a.center()[axis].total_cmp(&b.center()[axis]));
-                let k = 4.min(boxes.len());
-                let per = boxes.len().div_ceil(k);
-                for chunk in boxes.chunks(per) {
-                    queue.push_back((chunk.to_vec(), me));
-                }
-            }
-        }
-        for (i, (boxes, parent)) in slots.iter().enumerate() {
-            nodes.push(Node {
-                bounds: boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b)),
-                parent: *parent,
-                first_child: 0,
-                child_count: 0,
-                first_lod: i as u32,
-                lod_count: 1,
-            });
-        }
-        for i in 1..nodes.len() {
-            let p = nodes[i].parent as usize;
-            if nodes[p].child_count == 0 {
-                nodes[p].first_child = i as u32;
-            }
-            nodes[p].child_count += 1;
-        }
-        let lods = (0..nodes.len())
-            .map(|_| LodInfo {
-                error: 0.0,
-                triangles: 12,
-                vertices: 8,
-                origin: DVec3::ZERO,
-                index_format: IndexFormat::U16,
-                uniform_colour: None,
-                offset: 0,
-                len: 0,
-                checksum: 0,
-            })
-            .collect();
-        Skeleton {
-            origin: DVec3::ZERO,
-            bounds: nodes[0].bounds,
-            nodes,
-            lods,
-            provenance: Default::default(),
-        }
+        crate::test_rng::tree(&leaves, 4)
     }
 
     /// Whether some sampled point of the box lies strictly inside the NDC

@@ -42,7 +42,8 @@ fn colour(mode: Mode, shade: usize) -> RGBColor {
     RGBColor(f(base.0), f(base.1), f(base.2))
 }
 
-/// More than one pixel error among the runs that use one.
+/// More than one pixel error among the runs that use one, or a run held
+/// to a target frame rate.
 pub fn is_sweep(s: &Summary) -> bool {
     let mut errs: Vec<f64> = s
         .modes
@@ -52,7 +53,7 @@ pub fn is_sweep(s: &Summary) -> bool {
         .collect();
     errs.sort_by(f64::total_cmp);
     errs.dedup();
-    errs.len() > 1
+    errs.len() > 1 || s.modes.iter().any(|m| m.target_fps.is_some())
 }
 
 fn err<E: std::fmt::Display>(e: E) -> String {
@@ -194,7 +195,7 @@ pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
     lower
         .configure_mesh()
         .x_desc("frame (pose along the path)")
-        .y_desc("frame ms")
+        .y_desc(format!("frame ms (target {target:.1}, black)"))
         .label_style((FAMILY, 14))
         .draw()
         .map_err(err)?;
@@ -203,9 +204,7 @@ pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
             [(0.0, target), (frames - 1.0, target)],
             BLACK.stroke_width(1),
         ))
-        .map_err(err)?
-        .label(format!("target {target:.1} ms"))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+        .map_err(err)?;
     let mut shade = std::collections::HashMap::new();
     for r in runs {
         let s = shade.entry(r.mode).or_insert(0usize);
@@ -237,13 +236,6 @@ pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
         .border_style(BLACK)
         .draw()
         .map_err(err)?;
-    lower
-        .configure_series_labels()
-        .label_font((FAMILY, 14))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
     root.present().map_err(err)
 }
 
@@ -256,23 +248,59 @@ pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
 pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
     fonts();
     let with_accuracy = s.modes.iter().all(|m| m.bound_violating_fraction.is_some());
-    let x_of = |m: &crate::summary::ModeSummary| {
+    let with_popping = with_accuracy && s.modes.iter().all(|m| m.popping.is_some());
+    let root =
+        BitMapBackend::new(file, (if with_popping { 1400 } else { 900 }, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let bound = |m: &crate::summary::ModeSummary| {
         if with_accuracy {
             100.0 * m.bound_violating_fraction.unwrap_or(0.0)
         } else {
             m.pixel_error
         }
     };
-    let root = BitMapBackend::new(file, (900, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
+    let bound_desc = if with_accuracy {
+        "pixels breaking the pixel-error bound against the full-detail reference (%)"
+    } else {
+        "pixel error tolerance (px)"
+    };
+    if with_popping {
+        let (left, right) = root.split_horizontally(760);
+        tradeoff_panel(s, &left, "Speed against image error", &bound, bound_desc)?;
+        let popping = |m: &crate::summary::ModeSummary| 100.0 * m.popping.unwrap_or(0.0);
+        tradeoff_panel(
+            s,
+            &right,
+            "Speed against popping",
+            &popping,
+            "pixels popping a frame (%)",
+        )?;
+    } else {
+        tradeoff_panel(s, &root, "Speed against image error", &bound, bound_desc)?;
+    }
+    root.present().map_err(err)
+}
+
+/// One panel of tradeoff.png: mean fps against `x_of`, a line per mode
+/// through its fixed pixel errors, target-frame-rate runs as triangles.
+fn tradeoff_panel<DB: DrawingBackend>(
+    s: &Summary,
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    caption: &str,
+    x_of: &dyn Fn(&crate::summary::ModeSummary) -> f64,
+    x_desc: &str,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
     let xs = s.modes.iter().map(x_of);
     let x_hi = xs.fold(0f64, f64::max).max(1e-3) * 1.15;
     let (lo, hi) = s.modes.iter().fold((f64::INFINITY, 0f64), |(lo, hi), m| {
         (lo.min(m.mean_fps), hi.max(m.mean_fps))
     });
     let (lo, hi) = decades(lo, hi);
-    let mut chart = ChartBuilder::on(&root)
-        .caption("Speed against image error", (FAMILY, 22))
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FAMILY, 22))
         .margin(12)
         .x_label_area_size(42)
         .y_label_area_size(60)
@@ -280,24 +308,29 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc(if with_accuracy {
-            "pixels breaking the pixel-error bound against the full-detail reference (%)"
-        } else {
-            "pixel error tolerance (px)"
-        })
+        .x_desc(x_desc)
         .y_desc("mean frames per second (log)")
         .label_style((FAMILY, 14))
         .y_label_formatter(&|v| format!("{v}"))
         .draw()
         .map_err(err)?;
     for mode in Mode::ALL {
+        let of_mode =
+            |m: &&crate::summary::ModeSummary| m.name == mode.name() && m.mean_fps.is_finite();
         let mut pts: Vec<(f64, f64, f64)> = s
             .modes
             .iter()
-            .filter(|m| m.name == mode.name() && m.mean_fps.is_finite())
+            .filter(of_mode)
+            .filter(|m| m.target_fps.is_none())
             .map(|m| (x_of(m), m.mean_fps, m.pixel_error))
             .collect();
-        if pts.is_empty() {
+        let held: Vec<(f64, f64, f64)> = s
+            .modes
+            .iter()
+            .filter(of_mode)
+            .filter_map(|m| Some((x_of(m), m.mean_fps, m.target_fps?)))
+            .collect();
+        if pts.is_empty() && held.is_empty() {
             continue;
         }
         pts.sort_by(|a, b| a.2.total_cmp(&b.2));
@@ -325,6 +358,13 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
                     )
             }))
             .map_err(err)?;
+        chart
+            .draw_series(held.iter().map(|&(x, y, fps)| {
+                EmptyElement::at((x, y))
+                    + TriangleMarker::new((0, 0), 7, c.filled())
+                    + Text::new(format!("target {fps:.0} fps"), (8, 4), (FAMILY, 13))
+            }))
+            .map_err(err)?;
     }
     chart
         .configure_series_labels()
@@ -334,7 +374,7 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
         .position(SeriesLabelPosition::UpperRight)
         .draw()
         .map_err(err)?;
-    root.present().map_err(err)
+    Ok(())
 }
 
 #[cfg(test)]

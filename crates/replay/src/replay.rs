@@ -187,6 +187,9 @@ pub struct RunRecord {
     pub pixel_error: f64,
     /// The occlusion culler (`None` for modes without occlusion).
     pub culler: Option<CullMethod>,
+    /// Held to the replay's target frame rate (`pixel_error` is where the
+    /// controller started).
+    pub target: bool,
     pub frames: Vec<FrameRecord>,
 }
 
@@ -194,12 +197,19 @@ impl RunRecord {
     /// "och 1px" style label ("och 1px grid" for a culler other than the
     /// HZB).
     pub fn label(&self) -> String {
-        run_label(self.mode, self.pixel_error, self.culler)
+        run_label(self.mode, self.pixel_error, self.culler, self.target)
     }
 }
 
-pub(crate) fn run_label(mode: Mode, pixel_error: f64, culler: Option<CullMethod>) -> String {
-    let base = if mode.uses_pixel_error() {
+pub(crate) fn run_label(
+    mode: Mode,
+    pixel_error: f64,
+    culler: Option<CullMethod>,
+    target: bool,
+) -> String {
+    let base = if target {
+        format!("{mode} target")
+    } else if mode.uses_pixel_error() {
         format!("{mode} {pixel_error}px")
     } else {
         mode.name().to_string()
@@ -414,21 +424,23 @@ pub fn replay_on(
         }
     }
 
-    let all_runs = runs(&opts.modes, &opts.pixel_errors, &opts.cullers).len();
+    let held = opts.target.is_some();
+    let all_runs = runs(&opts.modes, &opts.pixel_errors, &opts.cullers, held).len();
     for Run {
         mode,
         pixel_error,
         culler,
-    } in runs(&opts.modes, &opts.pixel_errors, &opts.cullers)
+        target,
+    } in runs(&opts.modes, &opts.pixel_errors, &opts.cullers, held)
     {
-        let label = run_label(mode, pixel_error, culler);
+        let label = run_label(mode, pixel_error, culler, target);
         let ro = RuntimeOptions {
             traversal: mode.traversal(pixel_error),
             culler: culler.unwrap_or(opts.runtime.culler),
             ..opts.runtime.clone()
         };
         // A target frame rate steers the runs that have a pixel error.
-        let ctrl = opts.target.filter(|_| mode.uses_pixel_error()).map(|t| {
+        let ctrl = opts.target.filter(|_| target).map(|t| {
             Arc::new(Mutex::new(FrameRateController::new(
                 t.ms,
                 pixel_error,
@@ -547,6 +559,7 @@ pub fn replay_on(
             mode,
             pixel_error,
             culler,
+            target,
             frames,
         });
         if let Err(source) = result {

@@ -208,6 +208,7 @@ impl ModeSummary {
                 m,
                 self.pixel_error,
                 self.culler.as_deref().and_then(|c| c.parse().ok()),
+                self.target_fps.is_some(),
             ),
             Err(_) => self.name.clone(),
         }
@@ -318,17 +319,20 @@ fn summarise(
         mean_ct_candidates: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.candidates as f64))),
         mean_ct_clipped: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.clipped as f64))),
         tiles: tile_opts.map(|(g, _)| g.to_string()),
-        target_fps: target_ms.filter(|_| !us.is_empty()).map(|ms| 1e3 / ms),
+        target_fps: target_ms.filter(|_| run.target).map(|ms| 1e3 / ms),
         speculative_frames: run.frames.iter().map(|f| f.speculative_before as u64).sum(),
         median_rvg_wait_ms: med(|f| f.rvg_wait_ms),
         popping: {
             let p: Vec<f64> = run.frames.iter().filter_map(|f| f.popping).collect();
             (!p.is_empty()).then(|| mean(p.into_iter()))
         },
-        mean_pixel_error_used: (!us.is_empty()).then(|| mean(m.iter().map(|f| f.pixel_error_used))),
-        median_pixel_error_used: (!us.is_empty())
+        mean_pixel_error_used: run
+            .target
+            .then(|| mean(m.iter().map(|f| f.pixel_error_used))),
+        median_pixel_error_used: run
+            .target
             .then(|| median(&m.iter().map(|f| f.pixel_error_used).collect::<Vec<_>>())),
-        mean_controller_us: (!us.is_empty()).then(|| mean(us.iter().copied())),
+        mean_controller_us: (run.target && !us.is_empty()).then(|| mean(us.iter().copied())),
         tile_culling: tile_opts.map(|(_, m)| m.name().to_string()),
         cull_ms_adaptive: tile_fig(|t| t.ms_adaptive, true),
         cull_ms_naive: tile_fig(|t| t.ms_naive, true),
@@ -511,9 +515,14 @@ impl Summary {
             .modes
             .iter()
             .any(|m| m.culler.as_deref().is_some_and(|c| c != "hzb"));
+        let name = if m.target_fps.is_some() {
+            format!("{} target", m.name)
+        } else {
+            m.name.clone()
+        };
         match &m.culler {
-            Some(c) if other => format!("{} {c}", m.name),
-            _ => m.name.clone(),
+            Some(c) if other => format!("{name} {c}"),
+            _ => name,
         }
     }
 

@@ -451,7 +451,7 @@ fn a_streamed_replay_reports_its_memory_and_stand_ins_against_a_settled_referenc
 
 #[test]
 fn a_target_frame_rate_steers_the_tolerance_and_the_report_says_what_it_chose() {
-    on_plant(2, "target frame rate", 30, |rt, path, _| {
+    on_plant(2, "target frame rate", 30, |rt, path, dir| {
         // An unreachable target (0.1 ms a frame): the controller raises the
         // tolerance to its maximum; modes without a pixel error ignore it.
         let opts = ReplayOptions {
@@ -463,7 +463,16 @@ fn a_target_frame_rate_steers_the_tolerance_and_the_report_says_what_it_chose() 
             ..options(&[1.0], 30, 5)
         };
         let r = replay_plant(rt, path, &opts).unwrap();
-        let och = r.runs.iter().find(|r| r.mode == Mode::Och).unwrap();
+        // och runs at its fixed pixel error and once held to the target.
+        assert_eq!(r.runs.len(), 3);
+        let fixed = r
+            .runs
+            .iter()
+            .find(|r| r.mode == Mode::Och && !r.target)
+            .unwrap();
+        assert!(fixed.frames.iter().all(|f| f.pixel_error_used == 1.0));
+        let och = r.runs.iter().find(|r| r.target).unwrap();
+        assert_eq!(och.label(), "och target");
         let used: Vec<f64> = och.frames.iter().map(|f| f.pixel_error_used).collect();
         assert_eq!(used[0], 1.0, "starts at --pixel-error");
         assert!(used.iter().all(|&p| (0.125..=6.0).contains(&p)), "{used:?}");
@@ -471,7 +480,7 @@ fn a_target_frame_rate_steers_the_tolerance_and_the_report_says_what_it_chose() 
         let vfc = r.runs.iter().find(|r| r.mode == Mode::Vfc).unwrap();
         assert!(vfc.frames.iter().all(|f| f.pixel_error_used == 0.0));
         let s = r.summary();
-        let m = s.modes.iter().find(|m| m.name == "och").unwrap();
+        let m = s.modes.iter().find(|m| m.target_fps.is_some()).unwrap();
         assert_eq!(m.target_fps, Some(10_000.0));
         assert!(m.mean_pixel_error_used.unwrap() > 3.0);
         assert!(m.mean_controller_us.is_some());
@@ -485,6 +494,15 @@ fn a_target_frame_rate_steers_the_tolerance_and_the_report_says_what_it_chose() 
             .next()
             .unwrap()
             .contains(",pixel_error_used,popping,"));
+        let w = r.write_report(&dir.join("target")).unwrap();
+        for f in ["pixel_error.png", "tradeoff.png"] {
+            assert!(w.files.iter().any(|p| p.ends_with(f)), "{f}");
+        }
+        let md = std::fs::read_to_string(dir.join("target/summary.md")).unwrap();
+        assert!(
+            md.contains("## Target frame rate") && md.contains("och target"),
+            "{md}"
+        );
     });
 }
 

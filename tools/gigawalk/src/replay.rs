@@ -108,6 +108,9 @@ pub struct RuntimeArgs {
     /// Tiled display (Nirnimesh et al.): split the viewport into COLSxROWS tiles (1-64 each; e.g. 4x4), each an off-axis frustum from the same eye drawn from its own list under its own scissor; the stitched image is what accuracy compares with the single-view reference
     #[arg(long, value_name = "COLSxROWS")]
     tiles: Option<TileGrid>,
+    /// Tiled display: each tile's resolution (e.g. 1920x1080); the viewport becomes COLS x W by ROWS x H, in place of --width and --height
+    #[arg(long, value_name = "WxH", requires = "tiles", value_parser = parse_tile_size)]
+    tile_size: Option<(u32, u32)>,
     /// Tiled display: how culled items are sent to tiles: adaptive (the paper's object and frustum hierarchies together), naive (every item against every tile's frustum), object-hierarchy, frustum-hierarchy or binning (screen rectangles); adaptive and naive are both timed every frame
     #[arg(long, value_name = "METHOD", default_value = "adaptive")]
     tile_culling: TileMethod,
@@ -157,8 +160,14 @@ impl RuntimeArgs {
             } else {
                 Schedule::Pipelined
             },
-            width: self.width,
-            height: self.height,
+            width: match (self.tiles, self.tile_size) {
+                (Some(t), Some((w, _))) => t.cols.saturating_mul(w),
+                _ => self.width,
+            },
+            height: match (self.tiles, self.tile_size) {
+                (Some(t), Some((_, h))) => t.rows.saturating_mul(h),
+                _ => self.height,
+            },
             occluder_lag: self.occluder_lag,
             occluder_scale: self.occluder_scale,
             occluder_budget: self.occluder_budget,
@@ -199,6 +208,19 @@ impl RuntimeArgs {
             ..RuntimeOptions::default()
         }
     }
+}
+
+/// `WxH`, each 1..=16384.
+fn parse_tile_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("tile size {s:?}: expected WIDTHxHEIGHT in pixels, e.g. 1920x1080");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|n| (1..=16384).contains(n))
+    };
+    Ok((n(w).ok_or_else(bad)?, n(h).ok_or_else(bad)?))
 }
 
 fn parse_mode(s: &str) -> Result<Mode, String> {

@@ -105,6 +105,7 @@ fn bad_occluder_budget_and_prefetch_are_rejected() {
         ("pixel-error-max", "-1", "--pixel-error-max"),
         ("tiles", "0x3", "not a count from 1 to 64"),
         ("tile-culling", "fast", "tile culling \"fast\""),
+        ("tile-size", "1920", "expected WIDTHxHEIGHT"),
     ] {
         let flag = format!("--{flag}={bad}");
         let (ok, _, err) = gigawalk(&["replay", "x.gwk", "--path", "x.path", &flag]);
@@ -212,4 +213,45 @@ fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report()
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(json["complete"], false);
+}
+
+#[test]
+fn a_tiled_replay_sizes_the_view_from_its_tiles() {
+    if gigawalk_gpu::devices_or_skip(2, "gigawalk replay --tiles").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk, out) = plant(dir.path(), "20k");
+    let (ok, _, err) = gigawalk(&[
+        "replay",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--out",
+        s(&out),
+        "--modes",
+        "vfc,occ",
+        "--frames",
+        "4",
+        "--accuracy-every",
+        "2",
+        "--tiles",
+        "3x2",
+        "--tile-size",
+        "40x30",
+        "--tile-culling",
+        "frustum-hierarchy",
+    ]);
+    assert!(ok, "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        (summary["width"].as_u64(), summary["height"].as_u64()),
+        (Some(120), Some(60))
+    );
+    for m in summary["modes"].as_array().unwrap() {
+        assert_eq!(m["tiles"], "3x2");
+        assert_eq!(m["tile_culling"], "frustum-hierarchy");
+        assert_eq!(m["wrongly_culled_pixels"], 0, "{m}");
+    }
 }

@@ -504,7 +504,7 @@ struct LoopState {
     out_dir: PathBuf,
     near: f64,
     rendered: u64,
-    /// The target-frame-rate controller while T holds a frame rate, and
+    /// The target-frame-rate controller while K holds a frame rate, and
     /// when the last frame finished.
     target: Option<FrameRateController>,
     last_finish: Option<Instant>,

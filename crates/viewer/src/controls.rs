@@ -64,7 +64,7 @@ pub const BINDINGS: &[Binding] = &[
     Binding { keys: &[KeyCode::ShiftLeft, KeyCode::ShiftRight], label: "Shift", what: "hold: 5x faster", does: Move(Movement::Fast) },
     Binding { keys: &[KeyCode::KeyG], label: "G", what: "walk mode (eye height, level) on/off", does: Act(Action::ToggleWalk) },
     Binding { keys: &[KeyCode::KeyO], label: "O", what: "occlusion culling on/off", does: Act(Action::ToggleOcclusion) },
-    Binding { keys: &[KeyCode::KeyT], label: "T", what: "hold the target frame rate (--target-fps, default 30): pixel error chosen each frame", does: Act(Action::ToggleTarget) },
+    Binding { keys: &[KeyCode::KeyK], label: "K", what: "keep the target frame rate (--target-fps, default 30): pixel error chosen each frame", does: Act(Action::ToggleTarget) },
     Binding { keys: &[KeyCode::KeyC], label: "C", what: "next occlusion culler: hzb (GigaWalk), grid (lazy occlusion grid), oq (occlusion queries), ct (large occluders)", does: Act(Action::CycleCuller) },
     Binding { keys: &[KeyCode::KeyL], label: "L", what: "HLOD on/off", does: Act(Action::ToggleHlod) },
     Binding { keys: &[KeyCode::Equal, KeyCode::NumpadAdd, KeyCode::PageUp], label: "+ / PgUp", what: "pixel error up", does: Act(Action::PixelErrorUp) },

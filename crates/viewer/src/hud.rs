@@ -111,7 +111,7 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
     ];
     if s.target {
         lines.push(format!(
-            "target {:.0} fps (T): {fps:.1} fps at pixel error {:.2}",
+            "target {:.0} fps (K): {fps:.1} fps at pixel error {:.2}",
             s.target_fps, n.pixel_error
         ));
     }

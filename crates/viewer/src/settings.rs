@@ -25,7 +25,7 @@ pub struct Settings {
     pub frozen: bool,
     pub hud: bool,
     pub help: bool,
-    /// Hold a frame rate (T toggles): the pixel error is chosen each frame
+    /// Hold a frame rate (K toggles): the pixel error is chosen each frame
     /// (from `pixel_error` up to 16 px) to hold `target_fps`.
     pub target: bool,
     pub target_fps: f64,

@@ -58,7 +58,7 @@ pub struct Args {
     /// Start with asynchronous rendering
     #[arg(long)]
     async_rvg: bool,
-    /// Hold this frame rate from the start (T toggles it; without this flag T holds 30 fps): the pixel error is chosen each frame, from --pixel-error up to 16
+    /// Hold this frame rate from the start (K toggles it; without this flag K holds 30 fps): the pixel error is chosen each frame, from --pixel-error up to 16
     #[arg(long)]
     target_fps: Option<f64>,
     /// Tiled display (Nirnimesh et al.): split the window into COLSxROWS tiles (1-64 each), each drawn from its own list under its own scissor; the HUD shows the busiest tile and what sending items to tiles cost

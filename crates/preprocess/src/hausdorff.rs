@@ -48,6 +48,8 @@ use obvhs::{
 };
 use rustc_hash::FxHashSet;
 
+use crate::planar::Planar;
+
 /// Most midpoints measured on one triangle; past them the remaining
 /// pieces' own cover counts (a larger, still honest bound).
 pub const MAX_SPLITS: u32 = 4096;
@@ -105,6 +107,8 @@ pub struct Nearest {
     /// The triangle that answered the last query: neighbouring samples are
     /// usually answered by it again, without a traversal.
     hint: usize,
+    /// Flat regions the triangles cover exactly ([`crate::planar`]).
+    planar: Planar,
 }
 
 impl Nearest {
@@ -126,6 +130,7 @@ impl Nearest {
         Nearest {
             exact: tris.iter().map(corner_key).collect(),
             sliver: tris.iter().map(is_sliver).collect(),
+            planar: Planar::new(&tris),
             tris,
             bvh,
             stack: Vec::new(),
@@ -309,6 +314,12 @@ pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
                     let convex = q.iter().map(|&p| b.to(p, tri)).fold(0.0f32, f32::max);
                     piece = piece.min(convex);
                 }
+            }
+            if piece > goal {
+                // A flat region of `b` around the corners' nearest
+                // triangles bounds the whole piece by its corners.
+                let flat = b.planar.bound(&q, &d.map(|x| x.1)) as f32;
+                piece = piece.min(flat);
             }
             // NaN-safe: a NaN bound is kept (and poisons the result).
             if piece.is_nan() || piece <= goal || splits >= MAX_SPLITS {

@@ -27,6 +27,7 @@ pub mod occluders;
 pub mod params;
 pub mod partition;
 pub mod parts;
+mod planar;
 pub mod stats;
 #[cfg(test)]
 mod test_models;

@@ -239,7 +239,8 @@ pub struct Replay {
     pub runs: Vec<RunRecord>,
     /// False when the replay was stopped early ([`Progress::keep_going`]).
     pub complete: bool,
-    /// Reference frames rendered (every K-th pose).
+    /// Reference frames rendered (every K-th pose and the pose after it,
+    /// for popping).
     pub reference_frames: usize,
     /// Streaming: device bytes a device may hold (`None`: the whole scene
     /// is resident), and reference frames that did not settle (still drew

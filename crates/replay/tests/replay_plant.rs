@@ -295,11 +295,12 @@ impl Progress for StopAfter {
 #[test]
 fn stopping_keeps_what_was_measured() {
     on_plant(2, "replay stop", 20, |rt, path, dir| {
-        // Reference: 0, 5, 10, 15 (4 frames); then vfc stops after 3 frames.
+        // Reference: 0, 5, 10, 15 and the frame after each (popping: 8
+        // frames); then vfc stops after 3 frames.
         let opts = options(&[1.0], 20, 5);
-        let r = replay_on(rt, "s", &path.poses, "p", &opts, &mut StopAfter(7)).unwrap();
+        let r = replay_on(rt, "s", &path.poses, "p", &opts, &mut StopAfter(11)).unwrap();
         assert!(!r.complete);
-        assert_eq!(r.reference_frames, 4);
+        assert_eq!(r.reference_frames, 8);
         assert_eq!(r.runs.len(), 1);
         assert_eq!(r.runs[0].frames.len(), 3);
         let out = dir.join("partial");
@@ -376,7 +377,8 @@ fn every_runtime_knob_replays_with_accuracy() {
                 target: None,
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
-            assert_eq!(r.reference_frames, 3, "{runtime:?}");
+            // Frames 0, 4, 8 and the frame after each.
+            assert_eq!(r.reference_frames, 6, "{runtime:?}");
             for m in r.summary().modes {
                 assert_eq!(m.frames, 12, "{runtime:?} {}", m.name);
                 assert_eq!(m.accuracy_frames, 3, "{runtime:?} {}", m.name);
@@ -408,7 +410,7 @@ fn a_streamed_replay_reports_its_memory_and_stand_ins_against_a_settled_referenc
     );
     // Each reference camera was held until it drew no stand-in.
     assert_eq!(s.unsettled_reference_frames, 0);
-    assert_eq!(r.reference_frames, 4);
+    assert_eq!(r.reference_frames, 8);
     for m in &s.modes {
         assert!(
             m.peak_resident_bytes > 0 && m.peak_resident_bytes <= budget,

@@ -211,7 +211,9 @@ impl Planar {
                 (b - a).cross(c - a).length() / 2.0
             })
             .sum();
-        if !((hull_area - area).abs() <= AREA * area) {
+        // NaN-safe: a NaN area fails.
+        let close = (hull_area - area).abs() <= AREA * area;
+        if !close {
             return None;
         }
         let extent = hull

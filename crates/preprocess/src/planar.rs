@@ -20,9 +20,8 @@
 //! the areas make it 1. An edge used by three or more triangles, or any
 //! failed check, leaves the patch out (its triangles get no planar bound).
 
-use std::collections::HashMap;
-
 use glam::{DVec2, DVec3, Vec3A};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet};
 
 /// Relative tolerance of the planarity checks (of the patch's size) and of
 /// the area check.
@@ -97,7 +96,7 @@ impl Planar {
             regions: Vec::new(),
         };
         // Vertices by exact position, edges by vertex pair.
-        let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+        let mut ids: HashMap<[u32; 3], u32> = HashMap::default();
         let mut pos: Vec<DVec3> = Vec::new();
         let tv: Vec<[u32; 3]> = tris
             .iter()
@@ -111,7 +110,7 @@ impl Planar {
                 })
             })
             .collect();
-        let mut by_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+        let mut by_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::default();
         for (i, t) in tv.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -223,7 +222,7 @@ impl Planar {
             .max(f64::MIN_POSITIVE);
         let tol = 1e-9 * extent;
         // Every boundary edge on the hull's boundary: its midpoint is.
-        let mine: std::collections::HashSet<u32> = members.iter().copied().collect();
+        let mine: FxHashSet<u32> = members.iter().copied().collect();
         for &m in members {
             let t = tv[m as usize];
             for k in 0..3 {

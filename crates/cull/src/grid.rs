@@ -396,7 +396,7 @@ mod tests {
 
     #[test]
     fn the_grid_culler_hides_boxes_behind_what_was_drawn_and_nothing_else() {
-        use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, NO_NODE};
+        use gigawalk_scene::{Aabb, Node, NO_NODE};
         let bounds = Aabb {
             min: DVec3::new(-100.0, -100.0, -10.0),
             max: DVec3::new(100.0, 100.0, -10.0),
@@ -412,17 +412,7 @@ mod tests {
                 first_lod: 0,
                 lod_count: 1,
             }],
-            lods: vec![LodInfo {
-                error: 0.0,
-                triangles: 2,
-                vertices: 4,
-                origin: DVec3::ZERO,
-                index_format: IndexFormat::U16,
-                uniform_colour: None,
-                offset: 0,
-                len: 0,
-                checksum: 0,
-            }],
+            lods: vec![crate::test_rng::lod(0.0, 2)],
             provenance: Default::default(),
         };
         let view = CullView::new(

@@ -42,24 +42,13 @@ pub fn select_lod(
 
 #[cfg(test)]
 mod tests {
-    use gigawalk_scene::IndexFormat;
 
     use super::*;
 
     fn lods(errors: &[f32]) -> Vec<LodInfo> {
         errors
             .iter()
-            .map(|&error| LodInfo {
-                error,
-                triangles: 1,
-                vertices: 3,
-                origin: DVec3::ZERO,
-                index_format: IndexFormat::U16,
-                uniform_colour: None,
-                offset: 0,
-                len: 0,
-                checksum: 0,
-            })
+            .map(|&error| crate::test_rng::lod(error, 1))
             .collect()
     }
 

@@ -4,6 +4,21 @@
 use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Skeleton, NO_NODE};
 use glam::DVec3;
 
+/// A LOD record with only an error and a triangle count (no geometry).
+pub(crate) fn lod(error: f32, triangles: u32) -> LodInfo {
+    LodInfo {
+        error,
+        triangles,
+        vertices: 3 * triangles,
+        origin: DVec3::ZERO,
+        index_format: IndexFormat::U16,
+        uniform_colour: None,
+        offset: 0,
+        len: 0,
+        checksum: 0,
+    }
+}
+
 /// A tree over `leaves` built breadth first (children contiguous and
 /// after their parent): a node's boxes sorted along x, y, z in turn (by its
 /// index) and split into `arity` runs. Every node has one 12-triangle LOD.
@@ -42,19 +57,7 @@ pub(crate) fn tree(leaves: &[Aabb], arity: usize) -> Skeleton {
         }
         nodes[p].child_count += 1;
     }
-    let lods = (0..nodes.len())
-        .map(|_| LodInfo {
-            error: 0.0,
-            triangles: 12,
-            vertices: 8,
-            origin: DVec3::ZERO,
-            index_format: IndexFormat::U16,
-            uniform_colour: None,
-            offset: 0,
-            len: 0,
-            checksum: 0,
-        })
-        .collect();
+    let lods = (0..nodes.len()).map(|_| lod(0.0, 12)).collect();
     Skeleton {
         origin: DVec3::ZERO,
         bounds: nodes[0].bounds,

@@ -452,7 +452,7 @@ pub fn select_occluders(
 
 #[cfg(test)]
 mod tests {
-    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, NO_NODE};
+    use gigawalk_scene::{Aabb, Node, Provenance, NO_NODE};
     use glam::DVec3;
 
     use super::*;
@@ -493,17 +493,7 @@ mod tests {
                 lod_count: s.errors.len() as u32,
             });
             for (level, &error) in s.errors.iter().enumerate() {
-                lods.push(LodInfo {
-                    error,
-                    triangles: 1000 >> level,
-                    vertices: 0,
-                    origin: DVec3::ZERO,
-                    index_format: IndexFormat::U16,
-                    uniform_colour: None,
-                    offset: 0,
-                    len: 0,
-                    checksum: 0,
-                });
+                lods.push(crate::test_rng::lod(error, 1000 >> level));
             }
         }
         let bounds = nodes.first().map_or(Aabb::EMPTY, |n: &Node| n.bounds);

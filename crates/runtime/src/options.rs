@@ -599,10 +599,15 @@ mod tests {
             "speculative RVG",
         );
         check(
-            &|o| o.stc_delay_ms = f64::NAN,
-            OptionsError::StcDelay(f64::NAN),
+            &|o| o.stc_delay_ms = -1.0,
+            OptionsError::StcDelay(-1.0),
             "STC delay",
         );
+        let o = RuntimeOptions {
+            stc_delay_ms: f64::NAN,
+            ..RuntimeOptions::default()
+        };
+        assert!(matches!(o.validate(), Err(OptionsError::StcDelay(_))));
     }
 
     #[test]

@@ -486,3 +486,69 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
         assert_eq!(rt.occluder_budget(OccluderBudget::All), None);
     });
 }
+
+#[test]
+fn a_replay_asking_for_a_culler_the_scene_cannot_run_fails_before_any_frame() {
+    let Some(devices) = devices_or_skip(2, "replay culler checks") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("boxes.gwk");
+    // A scene written without the occluder sections.
+    write_boxes_scene(&path, &street(20, DVec3::ZERO));
+    let scene = SceneReader::open(&path).unwrap();
+    let poses: Vec<gigawalk_scene::path::Pose> = (0..4)
+        .map(|i| gigawalk_scene::path::Pose {
+            time: i as f64,
+            position: DVec3::new(0.0, 1.7, -(i as f64)),
+            orientation: glam::DQuat::IDENTITY,
+            fovy: 1.0,
+        })
+        .collect();
+    let opts = |cullers: Vec<gigawalk_runtime::CullMethod>| gigawalk_replay::ReplayOptions {
+        modes: vec![gigawalk_replay::Mode::Occ],
+        cullers,
+        frames: Some(4),
+        accuracy_every: 2,
+        ..Default::default()
+    };
+    let rt = Runtime::with_devices(&scene, devices).unwrap();
+    let e = gigawalk_replay::replay_on(
+        &rt,
+        "boxes.gwk",
+        &poses,
+        "p",
+        &opts(vec![gigawalk_runtime::CullMethod::Ct]),
+        &mut gigawalk_replay::NoProgress,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, gigawalk_replay::ReplayError::Options(m) if m.contains("preprocess it again")),
+        "{e}"
+    );
+    drop(rt);
+    // Occlusion queries need the whole scene on the device.
+    let Some(devices) = devices_or_skip(2, "replay culler checks") else {
+        return;
+    };
+    let big = dir.path().join("big.gwk");
+    write_boxes_scene(&big, &street(3000, DVec3::ZERO));
+    let scene = SceneReader::open(&big).unwrap();
+    let budget = (gigawalk_runtime::scene_device_bytes(scene.skeleton()) / 3)
+        .max(gigawalk_runtime::MIN_MEMORY_BUDGET);
+    let streamed = Runtime::streaming(&scene, devices, budget).unwrap();
+    assert!(streamed.is_streaming(), "budget {budget}");
+    let e = gigawalk_replay::replay_on(
+        &streamed,
+        "boxes.gwk",
+        &poses,
+        "p",
+        &opts(vec![gigawalk_runtime::CullMethod::Oq]),
+        &mut gigawalk_replay::NoProgress,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, gigawalk_replay::ReplayError::Options(m) if m.contains("--memory-budget")),
+        "{e}"
+    );
+}

@@ -318,6 +318,19 @@ pub fn replay_on(
 ) -> Result<Replay, ReplayError> {
     let start = Instant::now();
     validate(opts)?;
+    // Cullers this scene or runtime cannot run fail here, before the
+    // reference is rendered, not with a partial report after it.
+    let occluding = opts.modes.iter().any(|m| m.traversal(0.0).occlusion);
+    if occluding && opts.cullers.contains(&CullMethod::Ct) && !rt.has_occluders() {
+        return Err(ReplayError::Options(
+            "the ct culler needs the scene's occluders, and this scene file stores none (written before they were stored): preprocess it again".into(),
+        ));
+    }
+    if occluding && opts.cullers.contains(&CullMethod::Oq) && rt.is_streaming() {
+        return Err(ReplayError::Options(
+            "the oq culler draws on RVG's device, which must hold the whole scene: drop --memory-budget or the oq culler".into(),
+        ));
+    }
     let n = opts.frames.unwrap_or(poses.len()).min(poses.len());
     if n == 0 {
         return Err(ReplayError::EmptyPath);

@@ -289,6 +289,24 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
         "only {differing} pixels differ from the shaded frame"
     );
 
+    // A display wall's tiles stitch into the same view (draw order per
+    // tile may settle a few coplanar ties differently).
+    for extra in [
+        &["--tiles", "3x2"][..],
+        &["--tiles", "4x4", "--tile-culling", "binning"],
+    ] {
+        let tiled = shot(&dir.path().join("tiled.png"), extra);
+        let differing = shaded
+            .chunks(4)
+            .zip(tiled.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            differing * 200 < shaded.len() / 4,
+            "{extra:?}: {differing} pixels differ from the single view"
+        );
+    }
+
     // Streamed under a budget far below the scene (out of core): six
     // frames at a still start are enough for the view to fill in.
     let streamed = shot(

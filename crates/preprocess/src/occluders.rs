@@ -402,45 +402,19 @@ pub fn convex_faces(positions: &[DVec3], indices: &[u32], min_area: f64) -> Vec<
 }
 
 /// The convex hull of points on a plane with normal `n`, counter-clockwise
-/// around `n` (Andrew's monotone chain in the plane's own coordinates).
+/// around `n`, in the plane's own coordinates.
 fn convex_hull_on_plane(points: &[DVec3], n: DVec3) -> Option<Vec<DVec3>> {
     let u = n.any_orthonormal_vector();
     let v = n.cross(u);
     let origin = *points.first()?;
-    let mut p: Vec<(f64, f64, DVec3)> = points
+    let p = points
         .iter()
         .map(|q| {
             let r = *q - origin;
-            (r.dot(u), r.dot(v), *q)
+            (glam::DVec2::new(r.dot(u), r.dot(v)), *q)
         })
         .collect();
-    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    p.dedup_by(|a, b| a.0 == b.0 && a.1 == b.1);
-    if p.len() < 3 {
-        return None;
-    }
-    let cross = |o: &(f64, f64, DVec3), a: &(f64, f64, DVec3), b: &(f64, f64, DVec3)| {
-        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
-    };
-    let mut hull: Vec<(f64, f64, DVec3)> = Vec::new();
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &(f64, f64, DVec3)>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for q in iter {
-            while hull.len() >= start + 2
-                && cross(&hull[hull.len() - 2], &hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(*q);
-        }
-        hull.pop();
-    }
-    (hull.len() >= 3).then(|| hull.into_iter().map(|h| h.2).collect())
+    Some(crate::planar::hull2(p)?.into_iter().map(|h| h.1).collect())
 }
 
 fn polygon_area(poly: &[DVec3], n: DVec3) -> f64 {

@@ -196,12 +196,12 @@ impl Planar {
             let r = p - origin;
             DVec2::new(r.dot(u), r.dot(v))
         };
-        let mut points: Vec<DVec2> = members
+        let points: Vec<(DVec2, ())> = members
             .iter()
             .flat_map(|&m| tv[m as usize])
-            .map(|i| to2(pos[i as usize]))
+            .map(|i| (to2(pos[i as usize]), ()))
             .collect();
-        let hull = hull2(&mut points)?;
+        let hull: Vec<DVec2> = hull2(points)?.into_iter().map(|h| h.0).collect();
         let hull_area = area2(&hull);
         let area: f64 = members
             .iter()
@@ -289,26 +289,27 @@ impl Planar {
     }
 }
 
-/// Convex hull, counter-clockwise (Andrew's monotone chain); `None` when
-/// the points span no area.
-fn hull2(p: &mut Vec<DVec2>) -> Option<Vec<DVec2>> {
-    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    p.dedup();
+/// Convex hull of points in a plane, each carrying `T` along, counter-
+/// clockwise (Andrew's monotone chain; collinear points left out);
+/// `None` when the points span no area. Of points at one position the
+/// first is kept.
+pub(crate) fn hull2<T: Copy>(mut p: Vec<(DVec2, T)>) -> Option<Vec<(DVec2, T)>> {
+    p.sort_by(|a, b| a.0.x.total_cmp(&b.0.x).then(a.0.y.total_cmp(&b.0.y)));
+    p.dedup_by(|a, b| a.0 == b.0);
     if p.len() < 3 {
         return None;
     }
-    let mut h: Vec<DVec2> = Vec::with_capacity(2 * p.len());
+    let turn = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut h: Vec<(DVec2, T)> = Vec::with_capacity(2 * p.len());
     for pass in 0..2 {
         let start = h.len();
-        let pts: Vec<DVec2> = if pass == 0 {
-            p.clone()
+        let pts: Box<dyn Iterator<Item = &(DVec2, T)>> = if pass == 0 {
+            Box::new(p.iter())
         } else {
-            p.iter().rev().copied().collect()
+            Box::new(p.iter().rev())
         };
-        for q in pts {
-            while h.len() >= start + 2
-                && (h[h.len() - 1] - h[h.len() - 2]).perp_dot(q - h[h.len() - 2]) <= 0.0
-            {
+        for &q in pts {
+            while h.len() >= start + 2 && turn(h[h.len() - 2].0, h[h.len() - 1].0, q.0) <= 0.0 {
                 h.pop();
             }
             h.push(q);

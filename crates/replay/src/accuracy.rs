@@ -260,12 +260,12 @@ pub fn bound_violations(reference: &DepthImage, result: &DepthImage, p: f64) -> 
 }
 
 /// Whether pixel `p` differs between two images: any colour channel by
-/// more than 2 of 255, or depth by more than 1e-3 relative.
+/// more than 2 of 255, or depth not the same surface
+/// ([`BOUND_RELATIVE_DEPTH`], as the bound's test).
 fn changed(a: &FrameImage, b: &FrameImage, p: usize) -> bool {
     let (ca, cb) = (&a.colour[4 * p..4 * p + 3], &b.colour[4 * p..4 * p + 3]);
     let colour = ca.iter().zip(cb).any(|(x, y)| x.abs_diff(*y) > 2);
-    let (da, db) = (a.depth.depth[p], b.depth.depth[p]);
-    colour || (da - db).abs() > 1e-3 * da.abs().max(db.abs())
+    colour || !same_at_centre(a.depth.depth[p], b.depth.depth[p])
 }
 
 /// Popping between two consecutive frames: the share of pixels that change

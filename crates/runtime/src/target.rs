@@ -40,8 +40,6 @@ pub struct FrameRateController {
     smoothed_ms: Option<f64>,
     /// The last frame fed: its tolerance and triangles.
     last: Option<(f64, f64)>,
-    /// Steps taken (for the report).
-    pub steps: u64,
 }
 
 impl FrameRateController {
@@ -55,17 +53,12 @@ impl FrameRateController {
             alpha: 1.0,
             smoothed_ms: None,
             last: None,
-            steps: 0,
         }
     }
 
     /// The tolerance for the next frame.
     pub fn tolerance(&self) -> f64 {
         self.tolerance
-    }
-
-    pub fn target_ms(&self) -> f64 {
-        self.target_ms
     }
 
     /// Feeds a finished frame: its time, the triangles it drew and the
@@ -100,9 +93,6 @@ impl FrameRateController {
         let next = wanted
             .clamp(self.tolerance / MAX_STEP, self.tolerance * MAX_STEP)
             .clamp(MIN_TOLERANCE, self.max);
-        if next != self.tolerance {
-            self.steps += 1;
-        }
         self.tolerance = next;
         next
     }

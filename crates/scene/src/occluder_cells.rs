@@ -18,7 +18,7 @@
 use glam::DVec3;
 
 use crate::format::Put;
-use crate::{ReadAt, ReadError, ReadErrorKind, SceneReader};
+use crate::{ReadAt, ReadError, SceneReader};
 
 pub const TAG_OCCLUDER_CELLS: [u8; 4] = *b"OCVC";
 pub const OCCLUDER_CELLS_VERSION: u32 = 1;
@@ -263,19 +263,7 @@ impl<R: ReadAt> SceneReader<R> {
     /// `None` when the file has no OCVC section (written before it
     /// existed).
     pub fn occluder_cells(&self, occluders: usize) -> Result<Option<OccluderCells>, ReadError> {
-        let Some(bytes) = self.optional_section(TAG_OCCLUDER_CELLS)? else {
-            return Ok(None);
-        };
-        decode_occluder_cells(&bytes, occluders)
-            .map(Some)
-            .map_err(|(offset, detail)| ReadError {
-                file: self.file_name().to_string(),
-                kind: ReadErrorKind::Corrupt {
-                    section: "OCVC".into(),
-                    offset,
-                    detail,
-                },
-            })
+        self.decode_optional(TAG_OCCLUDER_CELLS, |b| decode_occluder_cells(b, occluders))
     }
 }
 

@@ -8,7 +8,7 @@
 use glam::DVec3;
 
 use crate::format::{Get, Put};
-use crate::{ReadAt, ReadError, ReadErrorKind, SceneReader};
+use crate::{ReadAt, ReadError, SceneReader};
 
 pub const TAG_OCCLUDERS: [u8; 4] = *b"OCCL";
 pub const OCCLUDERS_VERSION: u32 = 1;
@@ -92,19 +92,7 @@ impl<R: ReadAt> SceneReader<R> {
     /// The scene's occluders; `None` when the file has no OCCL section
     /// (written before it existed, or without occluders).
     pub fn occluders(&self) -> Result<Option<Vec<OccluderRecord>>, ReadError> {
-        let Some(bytes) = self.optional_section(TAG_OCCLUDERS)? else {
-            return Ok(None);
-        };
-        decode_occluders(&bytes)
-            .map(Some)
-            .map_err(|(offset, detail)| ReadError {
-                file: self.file_name().to_string(),
-                kind: ReadErrorKind::Corrupt {
-                    section: "OCCL".into(),
-                    offset,
-                    detail,
-                },
-            })
+        self.decode_optional(TAG_OCCLUDERS, decode_occluders)
     }
 }
 

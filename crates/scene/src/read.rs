@@ -142,13 +142,6 @@ impl<R: ReadAt> SceneReader<R> {
         self.version
     }
 
-    /// Reads, checks (checksum, index range, geometry inside its node's
-    /// box) and decodes one LOD's geometry.
-    /// The file's path (or in-memory description), as errors name it.
-    pub fn file_name(&self) -> &str {
-        &self.file
-    }
-
     /// The bytes of optional section `tag`, CRC checked; `None` when the
     /// file has no such section.
     pub fn optional_section(&self, tag: [u8; 4]) -> Result<Option<Vec<u8>>, ReadError> {
@@ -170,6 +163,27 @@ impl<R: ReadAt> SceneReader<R> {
         Ok(Some(bytes))
     }
 
+    /// Optional section `tag` decoded by `decode`, whose error (byte
+    /// offset, what is wrong) becomes a corrupt-section error naming the
+    /// file and section; `None` when the file has no such section.
+    pub fn decode_optional<T>(
+        &self,
+        tag: [u8; 4],
+        decode: impl FnOnce(&[u8]) -> Result<T, (u64, String)>,
+    ) -> Result<Option<T>, ReadError> {
+        let Some(bytes) = self.optional_section(tag)? else {
+            return Ok(None);
+        };
+        decode(&bytes)
+            .map(Some)
+            .map_err(|(offset, detail)| ReadError {
+                file: self.file.clone(),
+                kind: corrupt(&format::section_name(tag), offset, detail),
+            })
+    }
+
+    /// Reads, checks (checksum, index range, geometry inside its node's
+    /// box) and decodes one LOD's geometry.
     pub fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
         self.read_lod_kind(lod).map_err(|kind| ReadError {
             file: self.file.clone(),

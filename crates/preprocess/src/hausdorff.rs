@@ -37,6 +37,12 @@
 //! (1 + spacing) x the true distance, plus the floor. Triangles B holds
 //! exactly are at distance 0 and need no samples.
 //!
+//! Whole clusters first: a BVH node of `A` whose box (centre c,
+//! half-diagonal r) has d(c, B) + r within the goal is bounded by that
+//! without visiting its triangles, since every point of the box is within
+//! r of c. Coarse levels, and fine levels away from what changed, settle
+//! most of `A` this way with a query per cluster.
+//!
 //! Queries run in f32 on positions relative to a nearby origin; the bound
 //! adds [`ROUNDING`] x the surfaces' extent for the arithmetic's rounding.
 
@@ -107,8 +113,9 @@ pub struct Nearest {
     /// The triangle that answered the last query: neighbouring samples are
     /// usually answered by it again, without a traversal.
     hint: usize,
-    /// Flat regions the triangles cover exactly ([`crate::planar`]).
-    planar: Planar,
+    /// Flat regions the triangles cover exactly ([`crate::planar`]),
+    /// found when first needed.
+    planar: Option<Planar>,
 }
 
 impl Nearest {
@@ -130,7 +137,7 @@ impl Nearest {
         Nearest {
             exact: tris.iter().map(corner_key).collect(),
             sliver: tris.iter().map(is_sliver).collect(),
-            planar: Planar::new(&tris),
+            planar: None,
             tris,
             bvh,
             stack: Vec::new(),
@@ -163,6 +170,29 @@ impl Nearest {
             };
         }
         (d.sqrt(), self.hint as u32)
+    }
+
+    /// The distance from `p` to some triangle within `r` of it, `None`
+    /// when there is none.
+    fn within(&mut self, p: Vec3A, r: f32) -> Option<f32> {
+        // NaN-safe: a NaN radius finds nothing.
+        if r.is_nan() || r < 0.0 {
+            return None;
+        }
+        let r2 = r * r;
+        let d = self.sq(p, self.hint);
+        if d <= r2 {
+            return Some(d.sqrt());
+        }
+        self.search(p, r2, true).map(f32::sqrt)
+    }
+
+    /// [`Planar::bound`] on this surface's flat regions.
+    fn flat(&mut self, corners: &[Vec3A; 3], near: &[u32], limit: f32) -> f64 {
+        let tris = &self.tris;
+        self.planar
+            .get_or_insert_with(|| Planar::new(tris))
+            .bound(corners, near, f64::from(limit))
     }
 
     /// Distance from `p` to triangle `t`.
@@ -244,52 +274,123 @@ type Piece = ([Vec3A; 3], [(f32, u32); 3]);
 /// Triangles of `a` that `b` holds exactly (bit-identical corners, as a
 /// simplifier's untouched triangles are) are at distance 0 and skipped.
 pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
+    let tree = Nearest::new(a);
+    one_sided_in(a, &tree.bvh, b, sampling).0
+}
+
+/// [`one_sided`] with a BVH over `a`'s triangles (primitive i = triangle
+/// i), such as the one its [`Nearest`] holds.
+///
+/// The BVH lets a whole cluster of `a` be bounded at once: every point p
+/// in a box with centre c and half-diagonal r has d(p, b) <= d(c, b) + r.
+/// Where the goal is large next to a cluster (coarse levels, and most of a
+/// fine level away from its changes) one query settles hundreds of
+/// triangles; elsewhere the traversal reaches the triangles, bounded one
+/// by one as below. Also returns how many clusters were bounded whole.
+fn one_sided_in(
+    a: Surface<'_>,
+    a_bvh: &Bvh2,
+    b: &mut Nearest,
+    sampling: &Sampling,
+) -> (f32, usize) {
     if a.triangles() == 0 {
-        return 0.0;
+        return (0.0, 0);
     }
     if b.tris.is_empty() {
-        return f32::INFINITY;
+        return (f32::INFINITY, 0);
     }
-    let skip: Vec<bool> = (0..a.triangles())
-        .map(|t| b.holds(&a.triangle(t)))
-        .collect();
-    // Pass 1: the vertices of the other triangles; first a spread-out few,
-    // so the running maximum is near its final value early and most later
-    // samples are settled without a full search.
+    // A spread-out few vertices first, so the running maximum is near its
+    // final value early and the goal below is not needlessly tight.
     let mut max = 0.0f32;
-    for (t, _) in skip
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| !**s)
-        .step_by(PRE_PASS_STRIDE)
-    {
-        let p = Vec3A::from_array(a.positions[a.indices[3 * t] as usize]);
-        max = max.max(b.upper(p, max).0);
+    for t in (0..a.triangles()).step_by(PRE_PASS_STRIDE) {
+        if !b.holds(&a.triangle(t)) {
+            let p = Vec3A::from_array(a.positions[a.indices[3 * t] as usize]);
+            max = max.max(b.upper(p, max).0);
+        }
     }
-    let mut at = vec![(f32::NAN, u32::MAX); a.positions.len()];
-    for (t, _) in skip.iter().enumerate().filter(|(_, s)| !**s) {
-        for &i in &a.indices[3 * t..3 * t + 3] {
-            let d = &mut at[i as usize];
-            if d.0.is_nan() {
-                *d = b.upper(Vec3A::from_array(a.positions[i as usize]), max);
-                max = max.max(d.0);
+    let goal = |max: f32| (1.0 + sampling.spacing) * max + sampling.floor;
+    let mut run = Run {
+        at: vec![(f32::NAN, u32::MAX); a.positions.len()],
+        max,
+        bound: max,
+        stack: Vec::new(),
+    };
+    let mut clusters = 0;
+    let complete = a_bvh.primitive_indices.len() == a.triangles() && !a_bvh.nodes.is_empty();
+    if !complete {
+        // Not every triangle is in the tree: bound them one by one.
+        for t in 0..a.triangles() {
+            run.triangle(a, t, b, sampling);
+        }
+    } else {
+        let mut nodes = vec![0u32];
+        while let Some(ni) = nodes.pop() {
+            let node = &a_bvh.nodes[ni as usize];
+            let bx = node.aabb();
+            let r = (bx.max - bx.min).length() * 0.5;
+            let g = goal(run.max);
+            if r < g {
+                let c = (bx.min + bx.max) * 0.5;
+                if let Some(d) = b.within(c, g - r) {
+                    run.bound = run.bound.max(d + r);
+                    clusters += 1;
+                    continue;
+                }
+            }
+            if node.is_leaf() {
+                for k in node.first_index..node.first_index + node.prim_count {
+                    let t = a_bvh.primitive_indices[k as usize] as usize;
+                    run.triangle(a, t, b, sampling);
+                }
+            } else {
+                nodes.push(node.first_index + 1);
+                nodes.push(node.first_index);
             }
         }
     }
-    // Pass 2: bound each triangle, splitting it where the bound is above
-    // the goal. Two bounds of a piece hold: the distance to one triangle
-    // of `b` is convex, so its largest value over the piece is at a
-    // corner, and the piece is within max_i d(corner_i, t) of `b` for any
-    // triangle t (tried: those nearest to each corner); and the distance
-    // to `b` is 1-Lipschitz, so the piece is within max_i d_i + L / sqrt(3).
-    // A piece above the goal is split at the midpoint of its longest edge
-    // and the midpoint measured.
-    let inv_sqrt3 = 1.0 / 3.0f32.sqrt();
-    let mut bound = max;
-    let mut stack: Vec<Piece> = Vec::new();
-    for (t, _) in skip.iter().enumerate().filter(|(_, s)| !**s) {
+    let slack = ROUNDING * a.magnitude().max(b.magnitude());
+    (run.bound + slack, clusters)
+}
+
+/// The state of one [`one_sided`] measurement.
+struct Run {
+    /// Per vertex of `a`: its distance bound and nearest triangle of `b`
+    /// (NaN until measured).
+    at: Vec<(f32, u32)>,
+    /// The largest distance measured from a point of `a`.
+    max: f32,
+    /// The bound so far.
+    bound: f32,
+    stack: Vec<Piece>,
+}
+
+impl Run {
+    /// Bounds triangle `t` of `a`, splitting it where the bound is above
+    /// the goal. Two bounds of a piece hold: the distance to one triangle
+    /// of `b` is convex, so its largest value over the piece is at a
+    /// corner, and the piece is within max_i d(corner_i, t) of `b` for any
+    /// triangle t (tried: those nearest to each corner); and the distance
+    /// to `b` is 1-Lipschitz, so the piece is within max_i d_i + L / sqrt(3).
+    /// A piece above the goal is split at the midpoint of its longest edge
+    /// and the midpoint measured.
+    fn triangle(&mut self, a: Surface<'_>, t: usize, b: &mut Nearest, sampling: &Sampling) {
+        let corners = a.triangle(t);
+        if b.holds(&corners) {
+            return;
+        }
         let idx = &a.indices[3 * t..3 * t + 3];
-        stack.push((a.triangle(t), [0, 1, 2].map(|k| at[idx[k] as usize])));
+        let mut d = [(0.0, 0); 3];
+        for (k, &i) in idx.iter().enumerate() {
+            let m = &mut self.at[i as usize];
+            if m.0.is_nan() {
+                *m = b.upper(corners[k], self.max);
+                self.max = self.max.max(m.0);
+            }
+            d[k] = *m;
+        }
+        let inv_sqrt3 = 1.0 / 3.0f32.sqrt();
+        let stack = &mut self.stack;
+        stack.push((corners, d));
         let mut splits = 0;
         while let Some((q, d)) = stack.pop() {
             let e = [
@@ -304,40 +405,52 @@ pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
             } else {
                 2
             };
-            let goal = (1.0 + sampling.spacing) * max + sampling.floor;
+            let goal = (1.0 + sampling.spacing) * self.max + sampling.floor;
             let mut piece = d[0].0.max(d[1].0).max(d[2].0) + e[k].sqrt() * inv_sqrt3;
             if piece > goal {
                 for (c, &(_, tri)) in d.iter().enumerate() {
                     if d[..c].iter().any(|x| x.1 == tri) {
                         continue;
                     }
-                    let convex = q.iter().map(|&p| b.to(p, tri)).fold(0.0f32, f32::max);
+                    // Corners answered by `tri` are at their known
+                    // distance; a corner beyond the goal rules `tri` out.
+                    let mut convex = 0.0f32;
+                    for (&p, &(dc, tc)) in q.iter().zip(&d) {
+                        let x = if tc == tri { dc } else { b.to(p, tri) };
+                        convex = convex.max(x);
+                        if convex > goal {
+                            // Not a bound: the other corners are unmeasured.
+                            convex = f32::INFINITY;
+                            break;
+                        }
+                    }
                     piece = piece.min(convex);
+                    if piece <= goal {
+                        break;
+                    }
                 }
             }
             if piece > goal {
                 // A flat region of `b` around the corners' nearest
                 // triangles bounds the whole piece by its corners.
-                let flat = b.planar.bound(&q, &d.map(|x| x.1)) as f32;
+                let flat = b.flat(&q, &d.map(|x| x.1), goal) as f32;
                 piece = piece.min(flat);
             }
             // NaN-safe: a NaN bound is kept (and poisons the result).
             if piece.is_nan() || piece <= goal || splits >= MAX_SPLITS {
-                bound = bound.max(piece);
+                self.bound = self.bound.max(piece);
                 continue;
             }
             splits += 1;
             // The longest edge is q[k]-q[k+1].
             let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
             let m = (q[k] + q[k1]) * 0.5;
-            let dm = b.upper(m, max);
-            max = max.max(dm.0);
+            let dm = b.upper(m, self.max);
+            self.max = self.max.max(dm.0);
             stack.push(([q[k], m, q[k2]], [d[k], dm, d[k2]]));
             stack.push(([m, q[k1], q[k2]], [dm, d[k1], d[k2]]));
         }
     }
-    let slack = ROUNDING * a.magnitude().max(b.magnitude());
-    bound + slack
 }
 
 impl Nearest {
@@ -366,8 +479,8 @@ pub fn symmetric(
     sampling: &Sampling,
 ) -> f32 {
     let mut to_lod = Nearest::new(lod);
-    let forward = one_sided(reference, &mut to_lod, sampling);
-    let backward = one_sided(lod, reference_queries, sampling);
+    let forward = one_sided_in(reference, &reference_queries.bvh, &mut to_lod, sampling).0;
+    let backward = one_sided_in(lod, &to_lod.bvh, reference_queries, sampling).0;
     forward.max(backward)
 }
 
@@ -591,6 +704,96 @@ mod tests {
         let mut qa = Nearest::new(surface(&a));
         let h = symmetric(surface(&both), &mut qa, surface(&a), &S);
         assert!((7.0..7.0 * 1.25 + 1e-3).contains(&h), "{h}");
+    }
+
+    /// A bumpy heightfield over [0, 8]^2 as an n x n grid of quads, less
+    /// the quads `drop` rejects.
+    fn heightfield(
+        n: u32,
+        lift: f32,
+        drop: impl Fn(u32, u32) -> bool,
+    ) -> (Vec<[f32; 3]>, Vec<u32>) {
+        let h = |x: f32, y: f32| (x * 0.9).sin() * (y * 0.7).cos() + lift;
+        let step = 8.0 / n as f32;
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 * step, j as f32 * step);
+                p.push([x, y, h(x, y)]);
+            }
+        }
+        let mut idx = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                if drop(i, j) {
+                    continue;
+                }
+                let v = j * (n + 1) + i;
+                idx.extend([v, v + 1, v + n + 2, v, v + n + 2, v + n + 1]);
+            }
+        }
+        (p, idx)
+    }
+
+    /// The largest distance from dense random points (and every vertex)
+    /// of `a` to `b`, by brute force over `b`'s triangles.
+    fn brute(a: &(Vec<[f32; 3]>, Vec<u32>), b: &(Vec<[f32; 3]>, Vec<u32>)) -> f32 {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand::rngs::SmallRng::seed_from_u64(3);
+        let (sa, sb) = (surface(a), surface(b));
+        let to_b = |p: Vec3A| {
+            (0..sb.triangles())
+                .map(|t| point_triangle_sq(p, &sb.triangle(t)))
+                .fold(f32::INFINITY, f32::min)
+                .sqrt()
+        };
+        let mut worst = 0.0f32;
+        for t in 0..sa.triangles() {
+            let [p, q, r] = sa.triangle(t);
+            worst = worst.max(to_b(p)).max(to_b(q)).max(to_b(r));
+            for _ in 0..12 {
+                let (u, v): (f32, f32) = (rng.random(), rng.random());
+                let (u, v) = if u + v > 1.0 {
+                    (1.0 - u, 1.0 - v)
+                } else {
+                    (u, v)
+                };
+                worst = worst.max(to_b(p + (q - p) * u + (r - p) * v));
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn cluster_bounds_hold_against_brute_force() {
+        // A fine bumpy surface against coarser versions of itself: lifted,
+        // with a hole, and with a far corner gone. Clusters of the fine
+        // surface are certified whole where the goal allows; the result
+        // must still bound every sampled point, and stay within the
+        // sampling's (1 + spacing) of the truth.
+        let fine = heightfield(24, 0.0, |_, _| false);
+        let cases = [
+            heightfield(6, 0.0, |_, _| false),
+            heightfield(6, 0.3, |_, _| false),
+            heightfield(8, 0.0, |i, j| (3..5).contains(&i) && (3..5).contains(&j)),
+            heightfield(8, 0.0, |i, j| i + j > 12),
+        ];
+        let mut clusters = 0;
+        for (k, coarse) in cases.iter().enumerate() {
+            for (a, b) in [(&fine, coarse), (coarse, &fine)] {
+                let mut q = Nearest::new(surface(b));
+                let tree = Nearest::new(surface(a));
+                let (bound, whole) = one_sided_in(surface(a), &tree.bvh, &mut q, &S);
+                clusters += whole;
+                let truth = brute(a, b);
+                assert!(bound >= truth, "case {k}: bound {bound} < sampled {truth}");
+                assert!(
+                    bound <= (1.0 + S.spacing) * truth * 1.05 + S.floor,
+                    "case {k}: bound {bound} far above sampled {truth}"
+                );
+            }
+        }
+        assert!(clusters > 0, "no cluster was bounded whole");
     }
 
     #[test]

@@ -21,7 +21,7 @@
 //! failed check, leaves the patch out (its triangles get no planar bound).
 
 use glam::{DVec2, DVec3, Vec3A};
-use rustc_hash::{FxHashMap as HashMap, FxHashSet};
+use rustc_hash::FxHashMap as HashMap;
 
 /// Relative tolerance of the planarity checks (of the patch's size) and of
 /// the area check.
@@ -44,13 +44,19 @@ struct Region {
 
 impl Region {
     /// An upper bound on the distance from any point of the triangle with
-    /// these corners to the region.
-    fn bound(&self, corners: &[Vec3A; 3]) -> f64 {
-        let mut along = 0.0f64;
+    /// these corners to the region; infinite once it is known to exceed
+    /// `limit`.
+    fn bound(&self, corners: &[Vec3A; 3], limit: f64) -> f64 {
+        let ps = corners.map(|c| c.as_dvec3());
+        let along = ps
+            .iter()
+            .map(|&p| (self.normal.dot(p) - self.offset).abs())
+            .fold(0.0f64, f64::max);
+        if along + self.slack > limit {
+            return f64::INFINITY;
+        }
         let mut within = 0.0f64;
-        for c in corners {
-            let p = c.as_dvec3();
-            along = along.max((self.normal.dot(p) - self.offset).abs());
+        for p in ps {
             let r = p - self.origin;
             within = within.max(outside(
                 &self.hull,
@@ -110,21 +116,14 @@ impl Planar {
                 })
             })
             .collect();
-        let mut by_edge: HashMap<(u32, u32), Vec<u32>> = HashMap::default();
-        for (i, t) in tv.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                by_edge
-                    .entry((a.min(b), a.max(b)))
-                    .or_default()
-                    .push(i as u32);
-            }
-        }
+        let adj = adjacency(&tv);
         let normal = |t: &[u32; 3]| {
             let [a, b, c] = t.map(|i| pos[i as usize]);
             (b - a).cross(c - a)
         };
         let mut seen = vec![false; tris.len()];
+        // Per triangle: the seed of the patch it was last put in.
+        let mut patch = vec![u32::MAX; tris.len()];
         for seed in 0..tris.len() {
             if seen[seed] {
                 continue;
@@ -142,13 +141,14 @@ impl Planar {
             let mut next = 0;
             let mut manifold = true;
             while next < members.len() {
-                let t = tv[members[next] as usize];
+                let t_index = members[next] as usize;
                 next += 1;
-                for k in 0..3 {
-                    let (a, b) = (t[k], t[(k + 1) % 3]);
-                    let users = &by_edge[&(a.min(b), a.max(b))];
-                    manifold &= users.len() <= 2;
-                    for &j in users {
+                for &j in &adj[t_index] {
+                    manifold &= j != SHARED;
+                    {
+                        if j == BORDER || j == SHARED {
+                            continue;
+                        }
                         let j = j as usize;
                         if seen[j] {
                             continue;
@@ -169,7 +169,10 @@ impl Planar {
             if members.len() < 2 || !manifold {
                 continue;
             }
-            if let Some(region) = Self::region(&members, &tv, &pos, &by_edge, n, d) {
+            for &m in &members {
+                patch[m as usize] = seed as u32;
+            }
+            if let Some(region) = Self::region(&members, &tv, &pos, &adj, &patch, n, d) {
                 let id = out.regions.len() as u32;
                 out.regions.push(region);
                 for &m in &members {
@@ -185,7 +188,8 @@ impl Planar {
         members: &[u32],
         tv: &[[u32; 3]],
         pos: &[DVec3],
-        by_edge: &HashMap<(u32, u32), Vec<u32>>,
+        adj: &[[u32; 3]],
+        patch: &[u32],
         n: DVec3,
         d: f64,
     ) -> Option<Region> {
@@ -222,15 +226,19 @@ impl Planar {
             .max(f64::MIN_POSITIVE);
         let tol = 1e-9 * extent;
         // Every boundary edge on the hull's boundary: its midpoint is.
-        let mine: FxHashSet<u32> = members.iter().copied().collect();
+        let mine = patch[members[0] as usize];
         for &m in members {
             let t = tv[m as usize];
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                let inside_users = by_edge[&(a.min(b), a.max(b))]
-                    .iter()
-                    .filter(|j| mine.contains(j))
-                    .count();
+                // Patches are manifold: the edge's other user, if any, is
+                // the only one.
+                let other = adj[m as usize][k];
+                let inside_users = if other != BORDER && patch[other as usize] == mine {
+                    2
+                } else {
+                    1
+                };
                 if inside_users == 1 {
                     let mid = to2((pos[a as usize] + pos[b as usize]) * 0.5);
                     let on = (0..hull.len()).any(|i| {
@@ -263,8 +271,9 @@ impl Planar {
 
     /// The best bound the regions of triangles `near` give on the distance
     /// from any point of the triangle `corners` to the surface (infinite
-    /// when none of them is in a region).
-    pub fn bound(&self, corners: &[Vec3A; 3], near: &[u32]) -> f64 {
+    /// when none of them is in a region, or when a region's is seen to
+    /// exceed `limit` before it is complete).
+    pub fn bound(&self, corners: &[Vec3A; 3], near: &[u32], limit: f64) -> f64 {
         let mut best = f64::INFINITY;
         for (k, &t) in near.iter().enumerate() {
             let Some(&r) = self.region.get(t as usize) else {
@@ -277,7 +286,7 @@ impl Planar {
             {
                 continue;
             }
-            best = best.min(self.regions[r as usize].bound(corners));
+            best = best.min(self.regions[r as usize].bound(corners, limit));
         }
         best
     }
@@ -287,6 +296,42 @@ impl Planar {
     pub fn regions(&self) -> usize {
         self.regions.len()
     }
+}
+
+/// [`adjacency`]: an edge no other triangle uses.
+const BORDER: u32 = u32::MAX;
+/// [`adjacency`]: an edge three or more triangles use.
+const SHARED: u32 = u32::MAX - 1;
+
+/// Per triangle and edge k (corners k, k + 1): the one other triangle
+/// using that edge, [`BORDER`] or [`SHARED`].
+fn adjacency(tv: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut edges: Vec<(u64, u32)> = Vec::with_capacity(3 * tv.len());
+    for (i, t) in tv.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+            edges.push((key, 3 * i as u32 + k as u32));
+        }
+    }
+    edges.sort_unstable();
+    let mut adj = vec![[BORDER; 3]; tv.len()];
+    for group in edges.chunk_by(|x, y| x.0 == y.0) {
+        let slot = |e: u32| (e / 3) as usize;
+        match group {
+            [_] => {}
+            [(_, e), (_, f)] => {
+                adj[slot(*e)][(e % 3) as usize] = f / 3;
+                adj[slot(*f)][(f % 3) as usize] = e / 3;
+            }
+            _ => {
+                for (_, e) in group {
+                    adj[slot(*e)][(e % 3) as usize] = SHARED;
+                }
+            }
+        }
+    }
+    adj
 }
 
 /// Convex hull of points in a plane, each carrying `T` along, counter-
@@ -362,11 +407,14 @@ mod tests {
         assert_eq!(p.regions(), 1);
         // A piece 0.25 above the plane spanning most of the grid.
         let piece = [v(0.3, 0.2, 0.25), v(3.7, 0.5, 0.25), v(1.0, 3.9, 0.25)];
-        let b = p.bound(&piece, &[0, 5, 30]);
+        let b = p.bound(&piece, &[0, 5, 30], f64::INFINITY);
         assert!((b - 0.25).abs() < 1e-6, "{b}");
+        // A limit only gives up on bounds above it.
+        assert_eq!(p.bound(&piece, &[0, 5, 30], 0.3), b);
+        assert_eq!(p.bound(&piece, &[0, 5, 30], 0.2), f64::INFINITY);
         // Reaching out of the square by 1: the bound grows by it.
         let out = [v(-1.0, 2.0, 0.0), v(1.0, 2.0, 0.0), v(1.0, 3.0, 0.0)];
-        let b = p.bound(&out, &[0]);
+        let b = p.bound(&out, &[0], f64::INFINITY);
         assert!((b - 1.0).abs() < 1e-6, "{b}");
         // The bound holds against brute force on random points of pieces.
         let mut s = 7u64;
@@ -378,7 +426,7 @@ mod tests {
         };
         for _ in 0..300 {
             let piece = [0, 1, 2].map(|_| v(r() * 6.0 - 1.0, r() * 6.0 - 1.0, r() - 0.5));
-            let b = p.bound(&piece, &[3]);
+            let b = p.bound(&piece, &[3], f64::INFINITY);
             for _ in 0..20 {
                 let (a, c) = (r(), r());
                 let (a, c) = if a + c > 1.0 {
@@ -416,6 +464,9 @@ mod tests {
         ];
         assert_eq!(Planar::new(&bent).regions(), 0);
         let p = Planar::new(&holed);
-        assert_eq!(p.bound(&[v(0.0, 0.0, 0.0); 3], &[0, 1]), f64::INFINITY);
+        assert_eq!(
+            p.bound(&[v(0.0, 0.0, 0.0); 3], &[0, 1], f64::INFINITY),
+            f64::INFINITY
+        );
     }
 }

@@ -32,6 +32,24 @@ pub const WRONGLY_CULLED_RELATIVE_DEPTH: f32 = 1e-5;
 /// pixel's footprint; at 1920x1080 about one).
 pub const BOUND_RELATIVE_DEPTH: f32 = 1e-3;
 
+/// The relative depth match of [`bound_exceedances`] at pixel-error
+/// tolerance `p` and `ppr` pixels per radian (viewport height / (2
+/// tan(fovy / 2))): [`BOUND_RELATIVE_DEPTH`] plus p / ppr. A surface moved
+/// by the object-space error a tolerance of p pixels allows at view
+/// distance z, p z / ppr, moves along the view ray by at most that too: a
+/// relative depth of p / ppr. [`BOUND_RELATIVE_DEPTH`] stays as the
+/// allowance for rasterising the same surface with different triangles.
+/// A NaN, negative or infinite ratio adds nothing.
+pub fn scaled_relative_depth(p: f64, ppr: f64) -> f32 {
+    let extra = p / ppr;
+    let extra = if extra.is_finite() && extra > 0.0 {
+        extra as f32
+    } else {
+        0.0
+    };
+    BOUND_RELATIVE_DEPTH + extra
+}
+
 /// One frame's comparison.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Accuracy {
@@ -46,18 +64,24 @@ pub struct Accuracy {
     /// the result's surface has no match in the reference within the
     /// window, or the reference's none in the result.
     pub bound_violating_pixels: u64,
+    /// Pixels that break the bound with the depth match scaled to the
+    /// tolerance ([`bound_exceedances`]): what the bound itself promises,
+    /// on screen and in depth. At most `bound_violating_pixels`.
+    pub bound_exceeding_pixels: u64,
     /// Sum of squared 8-bit RGB differences, for pooling PSNR over frames.
     pub squared_error: f64,
 }
 
 impl Accuracy {
     /// Compares `result`, rendered at pixel-error tolerance
-    /// `pixel_tolerance` (0 for full detail), with `reference`; `None` when
-    /// their sizes differ.
+    /// `pixel_tolerance` (0 for full detail) by a camera with
+    /// `pixels_per_radian`, with `reference`; `None` when their sizes
+    /// differ.
     pub fn compare(
         reference: &FrameImage,
         result: &FrameImage,
         pixel_tolerance: f64,
+        pixels_per_radian: f64,
     ) -> Option<Accuracy> {
         let (r, x) = (&reference.depth, &result.depth);
         let n = (r.width as usize) * (r.height as usize);
@@ -94,6 +118,11 @@ impl Accuracy {
             .filter(|(r, x)| **r > **x * (1.0 + WRONGLY_CULLED_RELATIVE_DEPTH))
             .count() as u64;
         acc.bound_violating_pixels = bound_violations(r, x, pixel_tolerance)?;
+        acc.bound_exceeding_pixels = if acc.bound_violating_pixels == 0 {
+            0
+        } else {
+            bound_exceedances(r, x, pixel_tolerance, pixels_per_radian)?
+        };
         Some(acc)
     }
 
@@ -103,6 +132,7 @@ impl Accuracy {
         self.differing_pixels += o.differing_pixels;
         self.wrongly_culled_pixels += o.wrongly_culled_pixels;
         self.bound_violating_pixels += o.bound_violating_pixels;
+        self.bound_exceeding_pixels += o.bound_exceeding_pixels;
         self.squared_error += o.squared_error;
     }
 
@@ -116,6 +146,10 @@ impl Accuracy {
 
     pub fn bound_violating_fraction(&self) -> f64 {
         self.bound_violating_pixels as f64 / self.pixels.max(1) as f64
+    }
+
+    pub fn bound_exceeding_fraction(&self) -> f64 {
+        self.bound_exceeding_pixels as f64 / self.pixels.max(1) as f64
     }
 
     /// PSNR of the RGB channels in dB, from the pooled mean squared error;
@@ -155,8 +189,14 @@ struct SameSurface {
 }
 
 impl SameSurface {
+    /// The match of [`BOUND_RELATIVE_DEPTH`].
     fn of(d: f32) -> SameSurface {
-        let t = 1.0 + BOUND_RELATIVE_DEPTH;
+        SameSurface::within(d, BOUND_RELATIVE_DEPTH)
+    }
+
+    /// The match of relative depth `relative`.
+    fn within(d: f32, relative: f32) -> SameSurface {
+        let t = 1.0 + relative;
         if d.is_finite() && d > 0.0 {
             SameSurface {
                 lo: d / t,
@@ -196,14 +236,14 @@ fn violates_in_window(
     reference: &[f32],
     result: &[f32],
     (w, h): (usize, usize),
-    r: usize,
+    (r, relative): (usize, f32),
     (x, y): (usize, usize),
 ) -> bool {
     let i = y * w + x;
     let (x0, x1) = (x.saturating_sub(r), x.saturating_add(r).min(w - 1));
     let (y0, y1) = (y.saturating_sub(r), y.saturating_add(r).min(h - 1));
     let near = |image: &[f32], d: f32| {
-        let m = SameSurface::of(d);
+        let m = SameSurface::within(d, relative);
         // Whole rows without an early exit inside: a window row is at most
         // 2r + 1 samples, which a vectorised fold checks faster than a
         // branch per sample.
@@ -226,6 +266,32 @@ fn violates_in_window(
 /// Parallel over rows on rayon's pool; most pixels match at the centre, so
 /// the window is searched only around differences.
 pub fn bound_violations(reference: &DepthImage, result: &DepthImage, p: f64) -> Option<u64> {
+    window_mismatches(reference, result, p, BOUND_RELATIVE_DEPTH)
+}
+
+/// [`bound_violations`] with the depth match scaled to the tolerance
+/// ([`scaled_relative_depth`]`(p, ppr)`): pixels where the image departs
+/// from the reference by more than the bound promises, p pixels on screen
+/// and p pixels' worth of object-space error along the view ray. Where
+/// [`bound_violations`] counts and this does not, a surface moved in
+/// depth by more than [`BOUND_RELATIVE_DEPTH`] but within the bound.
+pub fn bound_exceedances(
+    reference: &DepthImage,
+    result: &DepthImage,
+    p: f64,
+    ppr: f64,
+) -> Option<u64> {
+    window_mismatches(reference, result, p, scaled_relative_depth(p, ppr))
+}
+
+/// Pixels whose depths differ beyond `relative` at the centre and have no
+/// match within [`bound_window`]`(p)` one way or the other.
+fn window_mismatches(
+    reference: &DepthImage,
+    result: &DepthImage,
+    p: f64,
+    relative: f32,
+) -> Option<u64> {
     let (w, h) = (reference.width as usize, reference.height as usize);
     let n = w * h;
     if result.width != reference.width
@@ -251,7 +317,8 @@ pub fn bound_violations(reference: &DepthImage, result: &DepthImage, p: f64) -> 
                     .zip(&b[row])
                     .enumerate()
                     .filter(|&(x, (&ra, &rb))| {
-                        !same_at_centre(ra, rb) && violates_in_window(a, b, (w, h), r, (x, y))
+                        !same_at_centre(ra, rb)
+                            && violates_in_window(a, b, (w, h), (r, relative), (x, y))
                     })
                     .count() as u64
             })
@@ -310,7 +377,7 @@ mod tests {
     #[test]
     fn identical_images() {
         let a = image(&[[1, 2, 3, 255], [0, 0, 0, 0]], &[0.5, 0.0]);
-        let acc = Accuracy::compare(&a, &a, 0.0).unwrap();
+        let acc = Accuracy::compare(&a, &a, 0.0, 300.0).unwrap();
         assert_eq!(
             (acc.pixels, acc.differing_pixels, acc.wrongly_culled_pixels),
             (2, 0, 0)
@@ -323,7 +390,7 @@ mod tests {
         // Reference: an object at depth 0.5 in pixel 0; result: empty there.
         let r = image(&[[200, 0, 0, 255], [0, 0, 0, 255]], &[0.5, 0.0]);
         let x = image(&[[0, 0, 0, 255], [0, 0, 0, 255]], &[0.0, 0.0]);
-        let acc = Accuracy::compare(&r, &x, 0.0).unwrap();
+        let acc = Accuracy::compare(&r, &x, 0.0, 300.0).unwrap();
         assert_eq!((acc.differing_pixels, acc.wrongly_culled_pixels), (1, 1));
         // MSE = 200^2 / 6 -> PSNR = 10 log10(255^2 * 6 / 200^2).
         let want = 10.0 * (255.0f64 * 255.0 * 6.0 / 40000.0).log10();
@@ -336,7 +403,7 @@ mod tests {
         // (a coarse LOD bulging out): a difference, not a missing object.
         let r = image(&[[9, 9, 9, 255]], &[0.25]);
         let x = image(&[[7, 9, 9, 255]], &[0.5]);
-        let acc = Accuracy::compare(&r, &x, 0.0).unwrap();
+        let acc = Accuracy::compare(&r, &x, 0.0, 300.0).unwrap();
         assert_eq!((acc.differing_pixels, acc.wrongly_culled_pixels), (1, 0));
     }
 
@@ -346,7 +413,7 @@ mod tests {
         let r = image(&[[9, 9, 9, 255]], &[f32::from_bits(d.to_bits() + 4)]);
         let x = image(&[[9, 9, 9, 255]], &[d]);
         assert_eq!(
-            Accuracy::compare(&r, &x, 0.0)
+            Accuracy::compare(&r, &x, 0.0, 300.0)
                 .unwrap()
                 .wrongly_culled_pixels,
             0
@@ -357,7 +424,7 @@ mod tests {
     fn size_mismatch() {
         let r = image(&[[9, 9, 9, 255]], &[0.25]);
         let x = image(&[[9, 9, 9, 255], [9, 9, 9, 255]], &[0.25, 0.25]);
-        assert_eq!(Accuracy::compare(&r, &x, 0.0), None);
+        assert_eq!(Accuracy::compare(&r, &x, 0.0, 300.0), None);
     }
 
     /// A depth image from rows of characters: '.' background (0), 'a'
@@ -395,7 +462,13 @@ mod tests {
                     .map(|x| {
                         let i = y * w + x;
                         !same_at_centre(a.depth[i], b.depth[i])
-                            && violates_in_window(&a.depth, &b.depth, (w, h), r, (x, y))
+                            && violates_in_window(
+                                &a.depth,
+                                &b.depth,
+                                (w, h),
+                                (r, BOUND_RELATIVE_DEPTH),
+                                (x, y),
+                            )
                     })
                     .map(|v| match v {
                         true => 'X',
@@ -572,11 +645,11 @@ mod tests {
             depth: depth(&["..a."]),
             ..r.clone()
         };
-        let strict = Accuracy::compare(&r, &x, 0.0).unwrap();
+        let strict = Accuracy::compare(&r, &x, 0.0, 300.0).unwrap();
         assert_eq!(strict.bound_violating_pixels, 2);
         assert_eq!(strict.bound_violating_fraction(), 0.5);
         assert_eq!(
-            Accuracy::compare(&r, &x, 1.0)
+            Accuracy::compare(&r, &x, 1.0, 300.0)
                 .unwrap()
                 .bound_violating_pixels,
             0
@@ -584,5 +657,56 @@ mod tests {
         let mut pooled = strict;
         pooled.add(&strict);
         assert_eq!((pooled.pixels, pooled.bound_violating_pixels), (8, 4));
+    }
+
+    #[test]
+    fn scaled_depth_match_counts_only_moves_beyond_the_bound() {
+        // A 3x3 wall at depth 0.5 (reversed-Z: distance near / 0.5), and the
+        // same wall moved back along the view ray by a relative `m`.
+        let wall = depth(&["aaa"; 3]);
+        let moved = |m: f32| DepthImage {
+            depth: vec![0.5 / (1.0 + m); 9],
+            ..wall.clone()
+        };
+        // 1 px at 300 pixels per radian allows 1/300 = 0.33% in depth.
+        let (p, ppr) = (1.0, 300.0);
+        assert!((scaled_relative_depth(p, ppr) - (1e-3 + 1.0 / 300.0)).abs() < 1e-7);
+        // 0.2%: beyond the fixed 0.1% match, within the bound.
+        let within = moved(2e-3);
+        assert_eq!(bound_violations(&wall, &within, p), Some(9));
+        assert_eq!(bound_exceedances(&wall, &within, p, ppr), Some(0));
+        // 1%: beyond both.
+        let beyond = moved(1e-2);
+        assert_eq!(bound_exceedances(&wall, &beyond, p, ppr), Some(9));
+        // A bigger tolerance or a coarser screen allows more.
+        assert_eq!(bound_exceedances(&wall, &beyond, 4.0, ppr), Some(0));
+        assert_eq!(bound_exceedances(&wall, &beyond, p, 60.0), Some(0));
+        // Degenerate ratios fall back to the fixed match.
+        for ppr in [0.0, -1.0, f64::NAN] {
+            assert_eq!(scaled_relative_depth(p, ppr), BOUND_RELATIVE_DEPTH);
+        }
+        // Background still matches only background; vanished geometry
+        // counts whatever the scale.
+        assert_eq!(
+            bound_exceedances(&wall, &depth(&["..."; 3]), p, 1.0),
+            Some(9)
+        );
+        // compare() fills both and exceedances never exceed violations.
+        let c = vec![9u8; 36];
+        let frame = |d: DepthImage| FrameImage {
+            colour: c.clone(),
+            depth: d,
+        };
+        let acc = Accuracy::compare(&frame(wall.clone()), &frame(within), p, ppr).unwrap();
+        assert_eq!(
+            (acc.bound_violating_pixels, acc.bound_exceeding_pixels),
+            (9, 0)
+        );
+        let acc = Accuracy::compare(&frame(wall), &frame(beyond), p, ppr).unwrap();
+        assert_eq!(
+            (acc.bound_violating_pixels, acc.bound_exceeding_pixels),
+            (9, 9)
+        );
+        assert_eq!(acc.bound_exceeding_fraction(), 1.0);
     }
 }

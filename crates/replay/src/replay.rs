@@ -557,8 +557,11 @@ pub fn replay_on(
         };
         for (at, img) in compared {
             let i = frames[at].frame as usize;
+            let ppr = cameras.get(i).map_or(f64::NAN, |c| {
+                c.camera.pixels_per_radian(Viewport::new(w, h))
+            });
             frames[at].accuracy = reference_of(i)
-                .and_then(|r| Accuracy::compare(r, &img, frames[at].pixel_error_used));
+                .and_then(|r| Accuracy::compare(r, &img, frames[at].pixel_error_used, ppr));
             frames[at].popping = match (
                 reference_of(i),
                 reference_of(i + 1),

@@ -86,7 +86,8 @@ impl Replay {
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
              missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
              oq_queries,oq_round_trips,oq_ms,oq_untested,tile_ms_adaptive,tile_ms_naive,tile_tests,\
-             max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms\n",
+             max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms,\
+             bound_exceeding_pixels,bound_exceeding_fraction\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -95,7 +96,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{:.3}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{:.3},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -146,6 +147,8 @@ impl Replay {
                     opt(f.popping, 6),
                     f.speculative_before,
                     f.rvg_wait_ms,
+                    a.map_or(String::new(), |a| a.bound_exceeding_pixels.to_string()),
+                    opt(a.map(|a| a.bound_exceeding_fraction()), 6),
                 );
             }
         }

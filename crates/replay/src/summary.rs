@@ -179,6 +179,13 @@ pub struct ModeSummary {
     pub bound_violating_pixels: Option<u64>,
     /// bound_violating_pixels over all compared pixels.
     pub bound_violating_fraction: Option<f64>,
+    /// Pixels breaking the bound with the depth match scaled to the
+    /// tolerance (`bound_exceedances`), summed over the compared frames.
+    #[serde(default)]
+    pub bound_exceeding_pixels: Option<u64>,
+    /// bound_exceeding_pixels over all compared pixels.
+    #[serde(default)]
+    pub bound_exceeding_fraction: Option<f64>,
     /// From the pooled mean squared error; null when every compared frame
     /// is identical to the reference (infinite PSNR) or nothing was compared.
     pub psnr_db: Option<f64>,
@@ -360,6 +367,8 @@ fn summarise(
         differing_pixels_fraction: has_acc.then(|| acc.differing_fraction()),
         bound_violating_pixels: has_acc.then_some(acc.bound_violating_pixels),
         bound_violating_fraction: has_acc.then(|| acc.bound_violating_fraction()),
+        bound_exceeding_pixels: has_acc.then_some(acc.bound_exceeding_pixels),
+        bound_exceeding_fraction: has_acc.then(|| acc.bound_exceeding_fraction()),
         psnr_db: if has_acc { acc.psnr_db() } else { None },
         peak_resident_bytes: run
             .frames
@@ -452,12 +461,12 @@ impl Summary {
     /// `gigawalk demo` print.
     pub fn table(&self) -> String {
         let mut s = String::from(
-            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | PSNR dB |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | beyond the bound px | PSNR dB |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         );
         for m in &self.modes {
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 self.mode_cell(m),
                 m.pixel_error,
                 num(m.mean_fps, 2),
@@ -472,6 +481,8 @@ impl Summary {
                     .map_or("-".into(), |x| format!("{:.2}%", 100.0 * x)),
                 // Three decimals: a few pixels per frame are worth seeing.
                 m.bound_violating_fraction
+                    .map_or("-".into(), |x| format!("{:.3}%", 100.0 * x)),
+                m.bound_exceeding_fraction
                     .map_or("-".into(), |x| format!("{:.3}%", 100.0 * x)),
                 match (m.accuracy_frames, m.psnr_db) {
                     (0, _) => "-".into(),

@@ -153,6 +153,8 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
                 "differing_pixels_fraction",
                 "bound_violating_pixels",
                 "bound_violating_fraction",
+                "bound_exceeding_pixels",
+                "bound_exceeding_fraction",
                 "psnr_db",
             ] {
                 assert!(m.get(key).is_some(), "{key} missing from {m}");
@@ -160,6 +162,10 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
             // Every run was compared, so the bound is measured, not null.
             assert!(m["bound_violating_pixels"].is_u64(), "{m}");
             assert!(m["bound_violating_fraction"].is_f64(), "{m}");
+            assert!(
+                m["bound_exceeding_pixels"].as_u64() <= m["bound_violating_pixels"].as_u64(),
+                "{m}"
+            );
             assert!(m["mean_fps"].as_f64().unwrap() > 0.0);
             assert_eq!(m["frames"], frames);
             assert_eq!(m["measured_frames"], frames - 3);
@@ -186,7 +192,12 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
         // empty.
         for r in &rows {
             let compared = !r[col("accuracy_pixels")].is_empty();
-            for c in ["bound_violating_pixels", "bound_violating_fraction"] {
+            for c in [
+                "bound_violating_pixels",
+                "bound_violating_fraction",
+                "bound_exceeding_pixels",
+                "bound_exceeding_fraction",
+            ] {
                 assert_eq!(!r[col(c)].is_empty(), compared, "{c} in {r:?}");
             }
         }
@@ -203,6 +214,7 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
         let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
         assert!(md.contains("| och | 2 |") && md.contains("fps.png"), "{md}");
         assert!(md.contains("bound-violating px"), "{md}");
+        assert!(md.contains("beyond the bound px"), "{md}");
     });
 }
 
@@ -262,6 +274,16 @@ fn och_draws_less_and_conservative_modes_lose_no_pixel() {
             let m = get(name, 1.0);
             let f = m.bound_violating_fraction.unwrap_or(1.0);
             assert!(f <= 2e-3, "{name} at 1px: bound-violating fraction {f}");
+            // With the depth match scaled to the tolerance (1e-3 + 1/ppr),
+            // what is left is where the image departs from the reference by
+            // more than the bound allows: measured 0.005% here (72 pixels
+            // of 1.47M, against 0.079% bound-violating), not traced yet; a
+            // likely source is surfaces seen edge-on, where a pixel
+            // centre's depth differs from the displaced point's by more
+            // than the match's 1e-3 allowance. 5e-4 leaves room for rasterizer differences
+            // and is far below a vanished surface's share.
+            let e = m.bound_exceeding_fraction.unwrap_or(1.0);
+            assert!(e <= 5e-4, "{name} at 1px: beyond-the-bound fraction {e}");
         }
         // ...and the 1 px runs did use coarser levels.
         let (t1, t0) = (
@@ -562,10 +584,8 @@ fn speculative_rvg_covers_a_slow_stc_with_extra_frames_and_keeps_every_real_one(
         // The real frames are still exact (occ is conservative).
         assert_eq!(s.modes[0].wrongly_culled_pixels, Some(0));
         let csv = spec.csv();
-        assert!(csv
-            .lines()
-            .next()
-            .unwrap()
-            .ends_with(",speculative_before,rvg_wait_ms"));
+        assert!(csv.lines().next().unwrap().ends_with(
+            ",speculative_before,rvg_wait_ms,bound_exceeding_pixels,bound_exceeding_fraction"
+        ));
     });
 }

@@ -145,24 +145,19 @@ impl Planar {
                 next += 1;
                 for &j in &adj[t_index] {
                     manifold &= j != SHARED;
-                    {
-                        if j == BORDER || j == SHARED {
-                            continue;
-                        }
-                        let j = j as usize;
-                        if seen[j] {
-                            continue;
-                        }
-                        let coplanar = normal(&tv[j])
-                            .try_normalize()
-                            .is_some_and(|m| m.dot(n) > 1.0 - 1e-12)
-                            && tv[j]
-                                .iter()
-                                .all(|&i| (n.dot(pos[i as usize]) - d).abs() <= FLAT * size);
-                        if coplanar {
-                            seen[j] = true;
-                            members.push(j as u32);
-                        }
+                    if j == BORDER || j == SHARED || seen[j as usize] {
+                        continue;
+                    }
+                    let j = j as usize;
+                    let coplanar = normal(&tv[j])
+                        .try_normalize()
+                        .is_some_and(|m| m.dot(n) > 1.0 - 1e-12)
+                        && tv[j]
+                            .iter()
+                            .all(|&i| (n.dot(pos[i as usize]) - d).abs() <= FLAT * size);
+                    if coplanar {
+                        seen[j] = true;
+                        members.push(j as u32);
                     }
                 }
             }

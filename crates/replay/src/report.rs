@@ -184,8 +184,9 @@ pub fn markdown(s: &Summary) -> String {
     if s.accuracy_every > 0 {
         let _ = writeln!(
             m,
-            "- accuracy: every {}th frame (read back, so those frames include a colour and depth read-back) against a full-detail, frustum-culling-only reference of the same camera; pixel counts summed over the compared frames, PSNR from their pooled mean squared error (\"identical\": every compared frame is bit-identical); \"bound-violating\": pixels whose surface (view distance within {}%) appears nowhere within ceil(pixel error) + 1 pixels in the other image, either way (docs/report-format.md)",
+            "- accuracy: every {}th frame (read back, so those frames include a colour and depth read-back) against a full-detail, frustum-culling-only reference of the same camera; pixel counts summed over the compared frames, PSNR from their pooled mean squared error (\"identical\": every compared frame is bit-identical); \"bound-violating\": pixels whose surface (view distance within {}%) appears nowhere within ceil(pixel error) + 1 pixels in the other image, either way; \"beyond the bound\": the same with the view-distance match scaled to the tolerance, {}% + pixel error / pixels per radian (docs/report-format.md)",
             s.accuracy_every,
+            100.0 * crate::accuracy::BOUND_RELATIVE_DEPTH,
             100.0 * crate::accuracy::BOUND_RELATIVE_DEPTH
         );
     } else {

@@ -41,8 +41,8 @@ pub mod verify;
 /// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1;
 /// 3: vanished pieces of inner nodes covered; 4: occluders (OCCL); 5:
 /// their view cells (OCVC); 6: errors measured a cluster at a time (as
-/// sound, slightly different bounds); 7: `node_budget` 1024 by default.
-pub const REVISION: u32 = 7;
+/// sound, slightly different bounds).
+pub const REVISION: u32 = 6;
 
 use std::path::Path;
 use std::time::Instant;

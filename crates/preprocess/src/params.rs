@@ -70,11 +70,7 @@ pub struct Params {
     /// becomes drawable once that many triangles reach the pixel
     /// tolerance, and switching to its children multiplies the triangles
     /// drawn by about 1 / lod_ratio. Larger: fewer, bigger draws and a
-    /// larger scene file; smaller: more nodes to traverse. 1024 measured
-    /// against 2048 on 4M, 20M and 50M plants (och at 1 px, 640x360): up
-    /// to 4% fewer triangles drawn, fewer bound-violating pixels on all
-    /// three, and a 1.13x-1.53x faster preprocess (the error measurement
-    /// of inner nodes scales with their merges).
+    /// larger scene file; smaller: more nodes to traverse.
     pub node_budget: u32,
     /// Error measurement: the cover of the samples taken on each surface,
     /// as a fraction of the largest distance found at the vertices
@@ -111,7 +107,7 @@ impl Default for Params {
             lod_ratio: 0.5,
             lod_floor: 64,
             collapse_levels: 1,
-            node_budget: 1024,
+            node_budget: 2048,
             bound_spacing: 0.25,
             bound_floor: 1e-3,
             cell_height: 8,

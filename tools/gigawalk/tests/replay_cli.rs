@@ -20,6 +20,13 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `gigawalk replay SCENE --path PATH --out OUT` with `more` flags.
+fn replay(gwk: &Path, path: &Path, out: &Path, more: &[&str]) -> (bool, String, String) {
+    let mut args = vec!["replay", s(gwk), "--path", s(path), "--out", s(out)];
+    args.extend_from_slice(more);
+    gigawalk(&args)
+}
+
 /// A generated plant of `triangles` with a 12-pose walk, preprocessed in
 /// `dir`: its path and scene files, and a report directory.
 fn plant(dir: &Path, triangles: &str) -> (PathBuf, PathBuf, PathBuf) {
@@ -122,24 +129,23 @@ fn small_plant_replays_into_a_report() {
     }
     let dir = tempfile::tempdir().unwrap();
     let (path, gwk, out) = plant(dir.path(), "20k");
-    let (ok, stdout, err) = gigawalk(&[
-        "replay",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--out",
-        s(&out),
-        "--width",
-        "96",
-        "--height",
-        "54",
-        "--accuracy-every",
-        "4",
-        "--warmup",
-        "2",
-        "--modes",
-        "vfc,och",
-    ]);
+    let (ok, stdout, err) = replay(
+        &gwk,
+        &path,
+        &out,
+        &[
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--accuracy-every",
+            "4",
+            "--warmup",
+            "2",
+            "--modes",
+            "vfc,och",
+        ],
+    );
     assert!(ok, "{err}");
     // Loading the whole scene before the first frame is reported too.
     assert!(err.contains("LODs before the first frame"), "{err}");
@@ -184,24 +190,23 @@ fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report()
         }
     }
     std::fs::write(&gwk, &bytes).unwrap();
-    let (ok, _, err) = gigawalk(&[
-        "replay",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--out",
-        s(&out),
-        "--width",
-        "96",
-        "--height",
-        "54",
-        "--accuracy-every",
-        "0",
-        "--modes",
-        "occ",
-        "--memory-budget",
-        "256k",
-    ]);
+    let (ok, _, err) = replay(
+        &gwk,
+        &path,
+        &out,
+        &[
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--accuracy-every",
+            "0",
+            "--modes",
+            "occ",
+            "--memory-budget",
+            "256k",
+        ],
+    );
     assert!(!ok, "a corrupted LOD must fail the replay");
     // Progress while the pinned set loads (one line each way off a terminal).
     assert!(err.contains("LODs before the first frame"), "{err}");
@@ -222,26 +227,25 @@ fn a_tiled_replay_sizes_the_view_from_its_tiles() {
     }
     let dir = tempfile::tempdir().unwrap();
     let (path, gwk, out) = plant(dir.path(), "20k");
-    let (ok, _, err) = gigawalk(&[
-        "replay",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--out",
-        s(&out),
-        "--modes",
-        "vfc,occ",
-        "--frames",
-        "4",
-        "--accuracy-every",
-        "2",
-        "--tiles",
-        "3x2",
-        "--tile-size",
-        "40x30",
-        "--tile-culling",
-        "frustum-hierarchy",
-    ]);
+    let (ok, _, err) = replay(
+        &gwk,
+        &path,
+        &out,
+        &[
+            "--modes",
+            "vfc,occ",
+            "--frames",
+            "4",
+            "--accuracy-every",
+            "2",
+            "--tiles",
+            "3x2",
+            "--tile-size",
+            "40x30",
+            "--tile-culling",
+            "frustum-hierarchy",
+        ],
+    );
     assert!(ok, "{err}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();

@@ -11,8 +11,9 @@ use gigawalk_cull::{
     Camera, CullView, Hzb, HzbOcclusion, NoOcclusion, OcclusionTest, Reduction, RelBox,
     TraversalOptions, Traverser, Viewport, ALL_PLANES,
 };
-use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};
+use gigawalk_scene::{Aabb, Node, Provenance, Skeleton, NO_NODE};
 use gigawalk_suite::raster::DepthImage;
+use gigawalk_suite::scenes::bare_lod as lod;
 use glam::DVec3;
 use rand::rngs::SmallRng;
 use rand::{RngExt, SeedableRng};
@@ -33,20 +34,6 @@ fn buildings() -> Vec<Aabb> {
         }
     }
     out
-}
-
-fn lod(error: f32, triangles: u32) -> LodInfo {
-    LodInfo {
-        error,
-        triangles,
-        vertices: 0,
-        origin: DVec3::ZERO,
-        index_format: IndexFormat::U16,
-        uniform_colour: None,
-        offset: 0,
-        len: 0,
-        checksum: 0,
-    }
 }
 
 /// A binary median-split hierarchy over the boxes, nodes in breadth-first

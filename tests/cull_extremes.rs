@@ -11,8 +11,9 @@ use gigawalk_cull::{
     BoxProjection, Containment, CullView, DrawItem, Hzb, HzbOcclusion, Reduction, TraversalOptions,
     Viewport, ALL_PLANES,
 };
-use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};
+use gigawalk_scene::{Aabb, Node, Provenance, Skeleton, NO_NODE};
 use gigawalk_suite::raster::DepthImage;
+use gigawalk_suite::scenes::bare_lod;
 use glam::DVec3;
 use rand::rngs::SmallRng;
 use rand::SeedableRng;
@@ -189,17 +190,7 @@ fn zero_thickness_boxes_face_on_and_edge_on() {
 
 /// A root over one leaf per box, LOD errors proportional to `scale`.
 fn flat_skeleton(boxes: &[Aabb], scale: f64) -> Skeleton {
-    let lod = |error: f64, triangles| LodInfo {
-        error: error as f32,
-        triangles,
-        vertices: 0,
-        origin: DVec3::ZERO,
-        index_format: IndexFormat::U16,
-        uniform_colour: None,
-        offset: 0,
-        len: 0,
-        checksum: 0,
-    };
+    let lod = |error: f64, triangles| bare_lod(error as f32, triangles);
     let bounds = boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
     let mut nodes = vec![Node {
         bounds,

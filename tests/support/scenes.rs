@@ -4,8 +4,26 @@
 
 use std::path::Path;
 
-use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneWriter, NO_NODE};
+use gigawalk_scene::{
+    Aabb, Colours, IndexFormat, LodInfo, LodMesh, Node, Provenance, SceneWriter, NO_NODE,
+};
 use glam::{DVec3, Vec3};
+
+/// A LOD record with only an error and a triangle count (no geometry,
+/// no vertices), for skeletons that are culled but never drawn.
+pub fn bare_lod(error: f32, triangles: u32) -> LodInfo {
+    LodInfo {
+        error,
+        triangles,
+        vertices: 0,
+        origin: DVec3::ZERO,
+        index_format: IndexFormat::U16,
+        uniform_colour: None,
+        offset: 0,
+        len: 0,
+        checksum: 0,
+    }
+}
 
 /// A closed box mesh of `b` (12 triangles), positions relative to `b.min`.
 pub fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {

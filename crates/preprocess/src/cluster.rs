@@ -175,6 +175,9 @@ pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
 
 #[cfg(test)]
 mod tests {
+    use rand::rngs::SmallRng;
+    use rand::{RngExt, SeedableRng};
+
     use super::*;
 
     fn unit_box(x: f64, y: f64, z: f64) -> Aabb {
@@ -261,13 +264,8 @@ mod tests {
     #[test]
     fn edges_match_brute_force() {
         let mut boxes = Vec::new();
-        let mut s = 12345u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) as f64 / (1u64 << 31) as f64
-        };
+        let mut rng = SmallRng::seed_from_u64(12345);
+        let mut rnd = || rng.random::<f64>();
         for _ in 0..300 {
             let min = DVec3::new(rnd() * 100.0, rnd() * 100.0, rnd() * 10.0);
             boxes.push(Aabb::new(

@@ -369,6 +369,9 @@ fn area2(poly: &[DVec2]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use rand::rngs::SmallRng;
+    use rand::{RngExt, SeedableRng};
+
     use super::*;
 
     fn v(x: f32, y: f32, z: f32) -> Vec3A {
@@ -412,13 +415,8 @@ mod tests {
         let b = p.bound(&out, &[0], f64::INFINITY);
         assert!((b - 1.0).abs() < 1e-6, "{b}");
         // The bound holds against brute force on random points of pieces.
-        let mut s = 7u64;
-        let mut r = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = SmallRng::seed_from_u64(7);
+        let mut r = || rng.random::<f32>();
         for _ in 0..300 {
             let piece = [0, 1, 2].map(|_| v(r() * 6.0 - 1.0, r() * 6.0 - 1.0, r() - 0.5));
             let b = p.bound(&piece, &[3], f64::INFINITY);

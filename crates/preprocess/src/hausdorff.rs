@@ -78,6 +78,14 @@ pub struct Sampling {
     pub floor: f32,
 }
 
+impl Sampling {
+    /// The bound a piece must reach to be settled, with `max` the largest
+    /// distance measured so far: (1 + spacing) max + floor.
+    fn goal(&self, max: f32) -> f32 {
+        (1.0 + self.spacing) * max + self.floor
+    }
+}
+
 /// A triangle surface: positions (relative to some origin) and indices.
 #[derive(Clone, Copy, Debug)]
 pub struct Surface<'a> {
@@ -308,7 +316,6 @@ fn one_sided_in(
             max = max.max(b.upper(p, max).0);
         }
     }
-    let goal = |max: f32| (1.0 + sampling.spacing) * max + sampling.floor;
     let mut run = Run {
         at: vec![(f32::NAN, u32::MAX); a.positions.len()],
         max,
@@ -328,7 +335,7 @@ fn one_sided_in(
             let node = &a_bvh.nodes[ni as usize];
             let bx = node.aabb();
             let r = (bx.max - bx.min).length() * 0.5;
-            let g = goal(run.max);
+            let g = sampling.goal(run.max);
             if r < g {
                 let c = (bx.min + bx.max) * 0.5;
                 if let Some(d) = b.within(c, g - r) {
@@ -405,7 +412,7 @@ impl Run {
             } else {
                 2
             };
-            let goal = (1.0 + sampling.spacing) * self.max + sampling.floor;
+            let goal = sampling.goal(self.max);
             let mut piece = d[0].0.max(d[1].0).max(d[2].0) + e[k].sqrt() * inv_sqrt3;
             if piece > goal {
                 for (c, &(_, tri)) in d.iter().enumerate() {

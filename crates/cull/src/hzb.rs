@@ -59,6 +59,9 @@ pub struct HzbLevel {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Hzb {
     levels: Vec<HzbLevel>,
+    /// The finest level that stores what the reduction promises: 0 for
+    /// `Farthest`, 1 for an approximate `NthFarthest` (level 0 is exact).
+    finest: usize,
 }
 
 /// Rows per rayon task: small enough to split 1080 rows over a few cores,
@@ -119,6 +122,10 @@ impl Hzb {
             sizes.push((w.div_ceil(2), h.div_ceil(2)));
         }
         self.levels.resize_with(sizes.len(), HzbLevel::default);
+        self.finest = match reduction {
+            Reduction::NthFarthest(n) if n > 1 => 1.min(sizes.len() - 1),
+            _ => 0,
+        };
         for (level, &(w, h)) in self.levels.iter_mut().zip(&sizes) {
             level.width = w;
             level.height = h;
@@ -189,14 +196,7 @@ impl Hzb {
     /// rectangle, so the answer is never nearer than any of them.
     pub fn farthest_in_rect(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> f32 {
         debug_assert!(x0 <= x1 && x1 < self.width() && y0 <= y1 && y1 < self.height());
-        // 2^k >= span guarantees at most 2 cells per axis; one level finer
-        // may also do, and is tighter.
-        let span = (x1 - x0).max(y1 - y0) + 1;
-        let mut k = (u32::BITS - (span - 1).leading_zeros()).saturating_sub(1);
-        if (x1 >> k) - (x0 >> k) > 1 || (y1 >> k) - (y0 >> k) > 1 {
-            k += 1;
-        }
-        let k = (k as usize).min(self.levels.len() - 1);
+        let k = self.cover_level(x0, y0, x1, y1);
         let level = &self.levels[k];
         let lw = level.width as usize;
         let (cx0, cx1) = ((x0 >> k) as usize, (x1 >> k) as usize);
@@ -205,6 +205,118 @@ impl Hzb {
         let a = farther(d[cy0 * lw + cx0], d[cy0 * lw + cx1]);
         let b = farther(d[cy1 * lw + cx0], d[cy1 * lw + cx1]);
         farther(a, b)
+    }
+
+    /// Whether every pixel of the level-0 rectangle `[x0, x1] x [y0, y1]`
+    /// (inclusive, as [`Hzb::farthest_in_rect`]) satisfies `hides` on its
+    /// stored depth, where `hides(d)` must hold for every depth nearer than
+    /// a `d` it holds for (reversed Z: every larger value).
+    ///
+    /// Starts from the 2x2 cells of [`Hzb::farthest_in_rect`] and refines
+    /// only the cells that do not hide as a whole, down to single pixels
+    /// (to level 1 for an `NthFarthest` pyramid, whose level 0 would undo
+    /// the approximation): where a box's footprint covers a cell only in
+    /// part, the pixels outside the footprint no longer decide. After
+    /// `max_cells` cells it stops and answers `false` (not hidden), so the
+    /// answer is conservative at any budget and exact (the same as testing
+    /// every pixel) when the budget suffices.
+    pub fn rect_hides(
+        &self,
+        x0: u32,
+        y0: u32,
+        x1: u32,
+        y1: u32,
+        max_cells: usize,
+        hides: impl Fn(f32) -> bool,
+    ) -> bool {
+        debug_assert!(x0 <= x1 && x1 < self.width() && y0 <= y1 && y1 < self.height());
+        let q = RectQuery {
+            hzb: self,
+            rect: [x0, y0, x1, y1],
+            hides,
+        };
+        let top = self.cover_level(x0, y0, x1, y1);
+        let mut budget = max_cells;
+        q.cells_hide(
+            top,
+            [x0 >> top, y0 >> top, x1 >> top, y1 >> top],
+            &mut budget,
+        )
+    }
+
+    /// The finest level where the rectangle spans at most 2x2 cells.
+    fn cover_level(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> usize {
+        // 2^k >= span guarantees at most 2 cells per axis; one level finer
+        // may also do, and is tighter.
+        let span = (x1 - x0).max(y1 - y0) + 1;
+        let mut k = (u32::BITS - (span - 1).leading_zeros()).saturating_sub(1);
+        if (x1 >> k) - (x0 >> k) > 1 || (y1 >> k) - (y0 >> k) > 1 {
+            k += 1;
+        }
+        (k as usize).min(self.levels.len() - 1)
+    }
+}
+
+/// One [`Hzb::rect_hides`] query: the rectangle and the predicate.
+struct RectQuery<'a, F> {
+    hzb: &'a Hzb,
+    /// `[x0, y0, x1, y1]`, inclusive level-0 pixels.
+    rect: [u32; 4],
+    hides: F,
+}
+
+impl<F: Fn(f32) -> bool> RectQuery<'_, F> {
+    /// Whether every rectangle pixel under the level-`k` cells
+    /// `[cx0, cy0, cx1, cy1]` (inclusive) hides. All the cells are read
+    /// before any is refined, so a cell that settles the answer on its own
+    /// ends the query before deeper work on its siblings.
+    fn cells_hide(&self, k: usize, [cx0, cy0, cx1, cy1]: [u32; 4], budget: &mut usize) -> bool {
+        let level = &self.hzb.levels[k];
+        let lw = level.width as usize;
+        // At most 2x2 cells; those that do not hide and need refining.
+        let mut refine = [(0u32, 0u32); 4];
+        let mut n = 0;
+        for cy in cy0..=cy1 {
+            for cx in cx0..=cx1 {
+                if *budget == 0 {
+                    return false;
+                }
+                *budget -= 1;
+                if (self.hides)(level.data[cy as usize * lw + cx as usize]) {
+                    continue;
+                }
+                // A cell at the finest trusted level, or covering only
+                // rectangle pixels, stores the depth of some rectangle
+                // pixel (some finest-level cell of it): visible.
+                if k <= self.hzb.finest || self.inside(k, cx, cy) {
+                    return false;
+                }
+                refine[n] = (cx, cy);
+                n += 1;
+            }
+        }
+        let [x0, y0, x1, y1] = self.rect;
+        let j = k - 1;
+        refine[..n].iter().all(|&(cx, cy)| {
+            // The children of (cx, cy) at level j that meet the rectangle.
+            let children = [
+                (2 * cx).max(x0 >> j),
+                (2 * cy).max(y0 >> j),
+                (2 * cx + 1).min(x1 >> j),
+                (2 * cy + 1).min(y1 >> j),
+            ];
+            self.cells_hide(j, children, budget)
+        })
+    }
+
+    /// Whether cell (cx, cy) of level k covers only rectangle pixels.
+    fn inside(&self, k: usize, cx: u32, cy: u32) -> bool {
+        let [x0, y0, x1, y1] = self.rect;
+        let (w, h) = (self.hzb.width(), self.hzb.height());
+        let (px0, py0) = (cx << k, cy << k);
+        let px1 = (((cx + 1) << k) - 1).min(w - 1);
+        let py1 = (((cy + 1) << k) - 1).min(h - 1);
+        px0 >= x0 && px1 <= x1 && py0 >= y0 && py1 <= y1
     }
 }
 
@@ -341,6 +453,61 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn rect_hides_is_exact_with_budget_and_conservative_without() {
+        for (w, h) in [(1, 9), (9, 1), (6, 5), (13, 11), (16, 16)] {
+            let d: Vec<f32> = (0..w * h)
+                .map(|i| ((i * 7919 + 13) % 101) as f32 / 100.0)
+                .collect();
+            let hzb = Hzb::build(w, h, &d, Reduction::Farthest).unwrap();
+            for t in [0.05, 0.3, 0.6, 0.95] {
+                let hides = |v: f32| v > t;
+                for y0 in 0..h {
+                    for y1 in y0..h {
+                        for x0 in 0..w {
+                            for x1 in x0..w {
+                                let want = brute_farthest(w, &d, x0, y0, x1, y1) > t;
+                                let exact = hzb.rect_hides(x0, y0, x1, y1, usize::MAX, hides);
+                                assert_eq!(exact, want, "{w}x{h} rect {x0},{y0}..{x1},{y1} t {t}");
+                                for budget in [0, 1, 3, 7] {
+                                    let got = hzb.rect_hides(x0, y0, x1, y1, budget, hides);
+                                    assert!(!got || want, "budget {budget} hid a visible rect");
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rect_hides_refines_where_the_2x2_cells_overhang() {
+        // Near (0.9) in columns 0..=10, far (0.1) from 11 on: a rectangle
+        // over columns 7..=10 is read from 4-pixel cells reaching column 11.
+        let (w, h) = (16u32, 16u32);
+        let d: Vec<f32> = (0..w * h)
+            .map(|i| if i % w <= 10 { 0.9 } else { 0.1 })
+            .collect();
+        let hzb = Hzb::build(w, h, &d, Reduction::Farthest).unwrap();
+        assert_eq!(hzb.farthest_in_rect(7, 2, 10, 5), 0.1);
+        assert!(hzb.rect_hides(7, 2, 10, 5, usize::MAX, |v| v > 0.5));
+        assert!(!hzb.rect_hides(7, 2, 11, 5, usize::MAX, |v| v > 0.5));
+    }
+
+    #[test]
+    fn rect_hides_keeps_the_nth_farthest_approximation() {
+        // A one-pixel hole at (1, 1) in a 4x4 image; the 3x3 rectangle is
+        // read from level 1. Refining to the exact level 0 would undo the
+        // hole the 2nd-farthest reduction ignores.
+        let mut d = [0.8; 16];
+        d[5] = 0.0;
+        let far = Hzb::build(4, 4, &d, Reduction::Farthest).unwrap();
+        let second = Hzb::build(4, 4, &d, Reduction::NthFarthest(2)).unwrap();
+        assert!(!far.rect_hides(0, 0, 2, 2, usize::MAX, |v| v > 0.5));
+        assert!(second.rect_hides(0, 0, 2, 2, usize::MAX, |v| v > 0.5));
     }
 
     #[test]

@@ -433,8 +433,9 @@ mod tests {
         assert_eq!(hzb.farthest_in_rect(0, 0, 5, 3), 0.9);
     }
 
-    #[test]
-    fn rect_queries_match_brute_force_on_every_rect() {
+    /// Calls `check(hzb, depth, width, [x0, y0, x1, y1])` on every
+    /// rectangle of five images, odd, even and one pixel wide.
+    fn every_rect(mut check: impl FnMut(&Hzb, &[f32], u32, [u32; 4])) {
         for (w, h) in [(1, 9), (9, 1), (6, 5), (13, 11), (16, 16)] {
             let d: Vec<f32> = (0..w * h)
                 .map(|i| ((i * 7919 + 13) % 101) as f32 / 100.0)
@@ -444,10 +445,7 @@ mod tests {
                 for y1 in y0..h {
                     for x0 in 0..w {
                         for x1 in x0..w {
-                            let got = hzb.farthest_in_rect(x0, y0, x1, y1);
-                            let want = brute_farthest(w, &d, x0, y0, x1, y1);
-                            // Never nearer than the true farthest.
-                            assert!(got <= want, "{w}x{h} rect {x0},{y0}..{x1},{y1}");
+                            check(&hzb, &d, w, [x0, y0, x1, y1]);
                         }
                     }
                 }
@@ -456,31 +454,30 @@ mod tests {
     }
 
     #[test]
+    fn rect_queries_match_brute_force_on_every_rect() {
+        every_rect(|hzb, d, w, [x0, y0, x1, y1]| {
+            let got = hzb.farthest_in_rect(x0, y0, x1, y1);
+            let want = brute_farthest(w, d, x0, y0, x1, y1);
+            // Never nearer than the true farthest.
+            assert!(got <= want, "{w} wide, rect {x0},{y0}..{x1},{y1}");
+        });
+    }
+
+    #[test]
     fn rect_hides_is_exact_with_budget_and_conservative_without() {
-        for (w, h) in [(1, 9), (9, 1), (6, 5), (13, 11), (16, 16)] {
-            let d: Vec<f32> = (0..w * h)
-                .map(|i| ((i * 7919 + 13) % 101) as f32 / 100.0)
-                .collect();
-            let hzb = Hzb::build(w, h, &d, Reduction::Farthest).unwrap();
+        every_rect(|hzb, d, w, [x0, y0, x1, y1]| {
+            let farthest = brute_farthest(w, d, x0, y0, x1, y1);
             for t in [0.05, 0.3, 0.6, 0.95] {
                 let hides = |v: f32| v > t;
-                for y0 in 0..h {
-                    for y1 in y0..h {
-                        for x0 in 0..w {
-                            for x1 in x0..w {
-                                let want = brute_farthest(w, &d, x0, y0, x1, y1) > t;
-                                let exact = hzb.rect_hides(x0, y0, x1, y1, usize::MAX, hides);
-                                assert_eq!(exact, want, "{w}x{h} rect {x0},{y0}..{x1},{y1} t {t}");
-                                for budget in [0, 1, 3, 7] {
-                                    let got = hzb.rect_hides(x0, y0, x1, y1, budget, hides);
-                                    assert!(!got || want, "budget {budget} hid a visible rect");
-                                }
-                            }
-                        }
-                    }
+                let want = farthest > t;
+                let exact = hzb.rect_hides(x0, y0, x1, y1, usize::MAX, hides);
+                assert_eq!(exact, want, "{w} wide, rect {x0},{y0}..{x1},{y1}, t {t}");
+                for budget in [0, 1, 3, 7] {
+                    let got = hzb.rect_hides(x0, y0, x1, y1, budget, hides);
+                    assert!(!got || want, "budget {budget} hid a visible rect");
                 }
             }
-        }
+        });
     }
 
     #[test]

@@ -12,9 +12,10 @@
 //! test takes the decimal scales 1e-3, 1e3 and 1e6 a user's export really
 //! has: each vertex is rounded by up to half an f32 ulp, so the full-detail
 //! image may differ in a few pixels' coverage at triangle edges, and the
-//! preprocessor's f32 simplification makes slightly different LODs (a few
-//! triangles more or less, errors a few per cent apart): the test bounds
-//! those differences instead of asking for equality.
+//! preprocessor's f32 simplification makes other LODs (greedy collapse
+//! orders change with the rounding; errors a few per cent apart, now and
+//! then a level more or less): the test bounds those differences, by the
+//! spread measured over ten decimal scales, instead of asking for equality.
 
 use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
 use gigawalk_gpu::{devices_or_skip, FrameImage};
@@ -208,23 +209,31 @@ fn plant_at_decimal_scales_1e_minus_3_to_1e6_draws_the_same_within_rounding() {
                  beyond 1e-5 (largest relative difference {max_rel})"
             );
         }
-        // Other LODs, about as many triangles (measured: walk totals within
-        // 1.1%, frames within 7.3%) ...
+        // Other LODs, about as many triangles. Greedy simplification is
+        // not continuous in its input: vertices rounded differently make
+        // other collapse orders, other LOD chains and other measured
+        // errors, so the LODs drawn move by whole levels here and there.
+        // Measured over ten decimal scales from 1e-3 to 1e6 (0.3, 0.9,
+        // 1.1, 3, 7, 10, ...): walk totals within 11.4% of scale 1's and
+        // frames within 21% at the default node budget (1024); 5.4% and
+        // 17% at 2048. A unit bug (an absolute epsilon, a fixed near
+        // plane) moves far more: the old near plane lost half the walk's
+        // triangles (`fixed_near_plane_of_old_cut_the_kilometre_plant`).
         let (t1, t) = (triangles(&och1), triangles(&och));
         assert!(
-            t.abs_diff(t1) * 20 <= t1,
+            t.abs_diff(t1) * 100 <= t1 * 15,
             "och scale {s}: {t} triangles over the walk, {t1} at scale 1"
         );
         for (i, (a, b)) in och1.iter().zip(&och).enumerate() {
             assert!(
-                b.triangles.abs_diff(a.triangles) * 5 <= a.triangles,
+                b.triangles.abs_diff(a.triangles) * 100 <= a.triangles * 30,
                 "och scale {s}: frame {i} draws {} triangles, {} at scale 1",
                 b.triangles,
                 a.triangles
             );
         }
         // ... and no further from the scale's own full-detail image than
-        // scale 1's och is from its own (measured: 0.72-0.80x of scale 1's
+        // scale 1's och is from its own (measured: 0.70-1.06x of scale 1's
         // bound-violating pixels; at 160x90 the bound metric's fixed 0.1%
         // depth match is a third of a pixel's error, so neither is 0).
         let v = violating(&vfc, &och);

@@ -107,7 +107,7 @@ impl Default for Params {
             lod_ratio: 0.5,
             lod_floor: 64,
             collapse_levels: 1,
-            node_budget: 2048,
+            node_budget: 1024,
             bound_spacing: 0.25,
             bound_floor: 1e-3,
             cell_height: 8,

@@ -57,7 +57,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     collapse_levels: u32,
     /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it
-    #[arg(long, default_value_t = 2048)]
+    #[arg(long, default_value_t = 1024)]
     node_budget: u32,
     /// LOD errors: each stored error is a measured bound on the Hausdorff distance to the full-detail surface; samples cover each surface to this fraction of the distance found (tighter = slower)
     #[arg(long, default_value_t = 0.25)]

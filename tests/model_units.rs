@@ -214,9 +214,9 @@ fn plant_at_decimal_scales_1e_minus_3_to_1e6_draws_the_same_within_rounding() {
         // other collapse orders, other LOD chains and other measured
         // errors, so the LODs drawn move by whole levels here and there.
         // Measured over ten decimal scales from 1e-3 to 1e6 (0.3, 0.9,
-        // 1.1, 3, 7, 10, ...): walk totals within 11.4% of scale 1's and
-        // frames within 21% at the default node budget (1024); 5.4% and
-        // 17% at 2048. A unit bug (an absolute epsilon, a fixed near
+        // 1.1, 3, 7, 10, ...): walk totals within 7.2% of scale 1's and
+        // frames within 12.3% at the default node budget (1024; 11.4% and
+        // 21% with the on-axis pixel error); 5.4% and 17% at 2048. A unit bug (an absolute epsilon, a fixed near
         // plane) moves far more: the old near plane lost half the walk's
         // triangles (`fixed_near_plane_of_old_cut_the_kilometre_plant`).
         let (t1, t) = (triangles(&och1), triangles(&och));
@@ -232,13 +232,17 @@ fn plant_at_decimal_scales_1e_minus_3_to_1e6_draws_the_same_within_rounding() {
                 a.triangles
             );
         }
-        // ... and no further from the scale's own full-detail image than
-        // scale 1's och is from its own (measured: 0.70-1.06x of scale 1's
-        // bound-violating pixels; at 160x90 the bound metric's fixed 0.1%
-        // depth match is a third of a pixel's error, so neither is 0).
+        // ... and about as far from the scale's own full-detail image as
+        // scale 1's och is from its own. With the off-axis pixel error the
+        // walk's bound-violating pixels are few (1,289 of 144,000 at scale
+        // 1; at 160x90 the metric's fixed 0.1% depth match is a third of a
+        // pixel's error, so not 0), and the other LODs of a decimal scale
+        // move them by 0.88-2.21x (ten scales measured; with the on-axis
+        // pixel error they were 4-5x as many at every scale). A unit bug
+        // that broke the bound would multiply them.
         let v = violating(&vfc, &och);
         assert!(
-            v * 4 <= violating1 * 5,
+            v * 2 <= violating1 * 5,
             "och scale {s}: {v} bound-violating pixels over the walk, {violating1} at scale 1"
         );
     }

@@ -184,8 +184,9 @@ impl Camera {
 
     /// Pixels per unit of object-space error at distance 1:
     /// viewport height / (2 tan(fovy / 2)). Pixel error = object-space error x
-    /// this / distance to the nearest point of the node's box (GigaWalk
-    /// Section 4.3).
+    /// this / distance (GigaWalk Section 4.3), the distance being
+    /// [`crate::CullView::lod_distance`] (the nearest point's, shortened off
+    /// the view axis).
     pub fn pixels_per_radian(&self, viewport: Viewport) -> f64 {
         viewport.height as f64 / (2.0 * self.tan_half_fovy())
     }

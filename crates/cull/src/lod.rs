@@ -12,6 +12,8 @@ pub fn distance_to_rel_box(min: DVec3, max: DVec3) -> f64 {
 
 /// Screen-space error in pixels of an LOD with object-space `error` seen at
 /// `distance`: error x (viewport height / (2 tan(fovy / 2))) / distance.
+/// Traversal passes [`crate::CullView::lod_distance`], which makes this a
+/// bound off the view axis too.
 /// Infinite when the eye touches the box (distance 0) and the error is not 0.
 pub fn pixel_error(error: f32, distance: f64, pixels_per_radian: f64) -> f64 {
     let e = error as f64 * pixels_per_radian;

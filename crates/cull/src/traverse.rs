@@ -119,16 +119,14 @@ enum Choice {
 /// The one LOD rule, shared by traversal and re-selection so both pick the
 /// same LODs for the same camera (the condition for conservative culling,
 /// GigaWalk Section 5.3).
-fn choose(
-    skeleton: &Skeleton,
-    node: u32,
-    distance: f64,
-    view: &CullView,
-    o: &TraversalOptions,
-) -> Choice {
+fn choose(skeleton: &Skeleton, node: u32, view: &CullView, o: &TraversalOptions) -> Choice {
     let n = &skeleton.nodes[node as usize];
     let lods = skeleton.lods.get(n.lods()).unwrap_or(&[]);
     let full_detail = o.pixel_tolerance.is_nan() || o.pixel_tolerance <= 0.0;
+    let distance = || {
+        let (min, max) = view.rel_f64(&n.bounds);
+        view.lod_distance(min, max)
+    };
     if n.is_leaf() {
         if lods.is_empty() {
             return Choice::Skip;
@@ -136,12 +134,12 @@ fn choose(
         if full_detail {
             return Choice::Draw(0);
         }
-        let l = select_lod(lods, distance, view.pixels_per_radian, o.pixel_tolerance);
+        let l = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_tolerance);
         // Too coarse even at its finest: draw the finest, there is no finer.
         return Choice::Draw(l.unwrap_or(0) as u32);
     }
     if o.hlod && !full_detail {
-        if let Some(l) = select_lod(lods, distance, view.pixels_per_radian, o.pixel_tolerance) {
+        if let Some(l) = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_tolerance) {
             return Choice::Draw(l as u32);
         }
     }
@@ -263,11 +261,11 @@ impl Traverser {
         };
         queue(&mut self.heap, culler, &contexts, 0, ALL_PLANES, true, 0);
         while let Some(Entry {
-            distance,
             node,
             mask,
             test,
             ctx,
+            ..
         }) = self.heap.pop()
         {
             stats.visited += 1;
@@ -301,7 +299,7 @@ impl Traverser {
                     contexts.push(next);
                 }
             }
-            match choose(skeleton, node, distance, view, options) {
+            match choose(skeleton, node, view, options) {
                 Choice::Draw(lod) => {
                     stats.drawn_nodes += 1;
                     let l = skeleton.lods.get(n.first_lod as usize + lod as usize);
@@ -380,7 +378,7 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
             if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
                 continue;
             }
-            match choose(skeleton, node, distance_to_rel_box(min, max), view, options) {
+            match choose(skeleton, node, view, options) {
                 Choice::Draw(lod) => {
                     count += 1;
                     sink.draw(DrawItem { node, lod });

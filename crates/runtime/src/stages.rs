@@ -474,8 +474,11 @@ impl Prefetch<'_> {
             return;
         };
         let (min, max) = view.rel_f64(&n.bounds);
-        let distance = gigawalk_cull::lod::distance_to_rel_box(min, max);
-        let pe = gigawalk_cull::lod::pixel_error(l.error, distance, view.pixels_per_radian);
+        let pe = gigawalk_cull::lod::pixel_error(
+            l.error,
+            view.lod_distance(min, max),
+            view.pixels_per_radian,
+        );
         if pe <= PREFETCH_BAND * tolerance {
             return;
         }

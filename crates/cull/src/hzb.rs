@@ -295,6 +295,10 @@ impl<F: Fn(f32) -> bool> RectQuery<'_, F> {
                 n += 1;
             }
         }
+        if n == 0 {
+            return true;
+        }
+        // Only cells above the finest level are refined, so k >= 1 here.
         let [x0, y0, x1, y1] = self.rect;
         let j = k - 1;
         refine[..n].iter().all(|&(cx, cy)| {

@@ -5,6 +5,7 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use gigawalk_scene::Skeleton;
+use glam::DVec3;
 
 use crate::lod::{distance_to_rel_box, select_lod};
 use crate::{
@@ -119,14 +120,20 @@ enum Choice {
 /// The one LOD rule, shared by traversal and re-selection so both pick the
 /// same LODs for the same camera (the condition for conservative culling,
 /// GigaWalk Section 5.3).
-fn choose(skeleton: &Skeleton, node: u32, view: &CullView, o: &TraversalOptions) -> Choice {
+///
+/// `(min, max)` is the node's box relative to the camera
+/// ([`CullView::rel_f64`]), which both callers already hold.
+fn choose(
+    skeleton: &Skeleton,
+    node: u32,
+    (min, max): (DVec3, DVec3),
+    view: &CullView,
+    o: &TraversalOptions,
+) -> Choice {
     let n = &skeleton.nodes[node as usize];
     let lods = skeleton.lods.get(n.lods()).unwrap_or(&[]);
     let full_detail = o.pixel_tolerance.is_nan() || o.pixel_tolerance <= 0.0;
-    let distance = || {
-        let (min, max) = view.rel_f64(&n.bounds);
-        view.lod_distance(min, max)
-    };
+    let distance = || view.lod_distance(min, max);
     if n.is_leaf() {
         if lods.is_empty() {
             return Choice::Skip;
@@ -299,7 +306,7 @@ impl Traverser {
                     contexts.push(next);
                 }
             }
-            match choose(skeleton, node, view, options) {
+            match choose(skeleton, node, (min, max), view, options) {
                 Choice::Draw(lod) => {
                     stats.drawn_nodes += 1;
                     let l = skeleton.lods.get(n.first_lod as usize + lod as usize);
@@ -378,7 +385,7 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
             if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
                 continue;
             }
-            match choose(skeleton, node, view, options) {
+            match choose(skeleton, node, (min, max), view, options) {
                 Choice::Draw(lod) => {
                     count += 1;
                     sink.draw(DrawItem { node, lod });

@@ -12,7 +12,7 @@
 
 use std::error::Error;
 
-use gigawalk_cull::lod::{distance_to_rel_box, pixel_error};
+use gigawalk_cull::lod::pixel_error;
 use gigawalk_cull::{
     default_near, Camera, CullView, NoOcclusion, TraversalOptions, Traverser, Viewport,
 };
@@ -82,11 +82,8 @@ fn main() -> Result<(), Box<dyn Error>> {
             };
             let t = l.triangles as u64;
             let (min, max) = view.rel_f64(&n.bounds);
-            let pe = pixel_error(
-                l.error,
-                distance_to_rel_box(min, max),
-                view.pixels_per_radian,
-            );
+            // The distance traversal chose the level by (off-axis bound).
+            let pe = pixel_error(l.error, view.lod_distance(min, max), view.pixels_per_radian);
             by_depth[depth[it.node as usize]] += t;
             let bucket = if l.error == 0.0 {
                 5

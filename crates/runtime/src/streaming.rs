@@ -3,7 +3,8 @@
 //! device keeps LODs in a fixed [`GeometryPool`] under a memory budget; a
 //! loader thread reads the LODs the visible render asks for, and every
 //! device takes them in between its draws; the least recently drawn LODs
-//! make room. Until a LOD arrives RVG draws the finest resident coarser
+//! make room, and a LOD asked for may displace stand-ins still in use
+//! (`DeviceStream::take`). Until a LOD arrives RVG draws the finest resident coarser
 //! stand-in (a coarser LOD of the node, else an ancestor's HLOD) and the
 //! frame counts it as substituted. OR draws only resident occluders, never
 //! a stand-in, so occlusion culling stays conservative.
@@ -127,6 +128,9 @@ pub struct StreamStats {
     pub loaded_bytes: u64,
     /// LODs evicted during the frame.
     pub evicted_lods: u64,
+    /// ...of which stand-ins in use, displaced by a LOD asked for (see
+    /// `DeviceStream::take`).
+    pub displaced_stand_ins: u64,
     /// Requests sent to the loader during the frame.
     pub requests: u64,
     /// Draws of a coarser stand-in because the chosen LOD was not resident.
@@ -281,6 +285,9 @@ pub(crate) struct DeviceStream {
     pool: GeometryPool,
     /// Frame + 1 when each LOD was last drawn (0: never).
     last_used: Vec<u64>,
+    /// Frame + 1 when each LOD was last drawn as itself, chosen by STC or
+    /// as an occluder, not as a stand-in for another (0: never).
+    last_chosen: Vec<u64>,
     /// Resident, unpinned LODs by (last_used, lod): eviction order.
     lru: BTreeSet<(u64, u32)>,
     /// Frame + 1 of each LOD's last request (0: none).
@@ -318,6 +325,7 @@ impl DeviceStream {
             device,
             pool,
             last_used: vec![0; n],
+            last_chosen: vec![0; n],
             lru: BTreeSet::new(),
             requested: vec![0; n],
             frame: 0,
@@ -350,8 +358,12 @@ impl DeviceStream {
         }
     }
 
-    fn touch(&mut self, plan: &Plan, lod: u32, frame: u64) {
+    /// `lod` is drawn in `frame`: `chosen` as itself, else as a stand-in.
+    fn touch(&mut self, plan: &Plan, lod: u32, frame: u64, chosen: bool) {
         let l = lod as usize;
+        if chosen {
+            self.last_chosen[l] = self.last_chosen[l].max(frame + 1);
+        }
         // Stages on one device draw different frames (OR i + 1, RVG i):
         // keep the newest.
         if self.last_used[l] < frame + 1 {
@@ -364,13 +376,26 @@ impl DeviceStream {
     }
 
     /// Puts a loaded LOD in the pool, evicting the least recently drawn
-    /// LODs not drawn in the newest two frames; drops it when even that
-    /// leaves no room (it is asked for again later).
+    /// LODs not drawn in the newest two frames; one this device asked for
+    /// may also displace LODs those frames drew only as stand-ins. Drops
+    /// it when even that leaves no room (it is asked for again later).
+    ///
+    /// Stand-ins may go because they are there only for what is missing:
+    /// when the LODs the camera needs fit the budget but those and their
+    /// stand-ins do not, keeping the stand-ins would drop every arrival
+    /// forever (a camera held still would never settle). Each arrival that
+    /// displaces them is a chosen LOD, which is not displaced in turn, so
+    /// a held camera converges; the frames meanwhile draw coarser
+    /// stand-ins (an ancestor's, down to the pinned set), never a hole.
     fn take(&mut self, ctx: &GpuContext, plan: &Plan, loaded: &Loaded) {
         let (id, lod) = (&loaded.0, &loaded.1);
         if self.pool.contains(*id) || !self.pool.could_hold(lod) {
             return;
         }
+        let asked = self.requested.get(*id as usize).copied().unwrap_or(0);
+        // Asked for lately: a LOD still wanted is asked for again every
+        // STALE_FRAMES frames (a prefetch never is).
+        let demanded = asked != 0 && asked + 2 * STALE_FRAMES > self.newest;
         loop {
             if self.pool.insert(ctx, *id, lod) {
                 plan.set_held(*id, self.device, true);
@@ -405,10 +430,39 @@ impl DeviceStream {
                     _ => break,
                 }
             }
+            if freed == 0 && demanded {
+                freed = self.displace_stand_ins(plan, 2 * lod.bytes());
+            }
             if freed == 0 {
                 return;
             }
         }
+    }
+
+    /// Evicts LODs the newest two frames drew only as stand-ins, least
+    /// recently drawn first, until about `want` bytes are free; the bytes
+    /// freed.
+    fn displace_stand_ins(&mut self, plan: &Plan, want: u64) -> u64 {
+        let victims: Vec<(u64, u32)> = self
+            .lru
+            .range((self.newest, 0)..)
+            .filter(|&&(_, l)| self.last_chosen[l as usize] < self.newest)
+            .copied()
+            .collect();
+        let mut freed = 0;
+        for (used, victim) in victims {
+            if freed >= want {
+                break;
+            }
+            self.lru.remove(&(used, victim));
+            let before = self.pool.used_bytes();
+            self.pool.remove(victim);
+            plan.set_held(victim, self.device, false);
+            freed += before - self.pool.used_bytes();
+            self.stats.evicted_lods += 1;
+            self.stats.displaced_stand_ins += 1;
+        }
+        freed
     }
 
     /// The LODs to draw for `lods` (chosen by STC) this frame: resident
@@ -442,7 +496,7 @@ impl DeviceStream {
         let mut out = Vec::with_capacity(lods.len());
         for &lod in lods {
             if self.pool.contains(lod) {
-                self.touch(plan, lod, frame);
+                self.touch(plan, lod, frame, true);
                 out.push(lod);
                 continue;
             }
@@ -468,7 +522,7 @@ impl DeviceStream {
             match self.stand_in(skeleton, plan, lod) {
                 StandIn::Draw(s) => {
                     self.stats.substituted += 1;
-                    self.touch(plan, s, frame);
+                    self.touch(plan, s, frame, false);
                     out.push(s);
                 }
                 StandIn::Drawn => self.stats.substituted += 1,
@@ -705,6 +759,110 @@ mod tests {
         let (dtx, drx) = bounded(64);
         loader(&Fake { bad: u32::MAX }, rrx, prx, vec![dtx], plan, 1).unwrap();
         drx.try_iter().map(|l| l.0).collect()
+    }
+
+    /// A root over three leaves; leaf 1 has a fine LOD 1 (40 triangles)
+    /// and a coarse LOD 2 (20), leaves 2 and 3 one LOD each (3, 4: 40).
+    /// Only the root's one-triangle LOD 0 is pinned (a budget of 100.5
+    /// triangles' bytes pins 12 at most).
+    fn three_leaves() -> (Skeleton, Vec<LodMesh>, u64) {
+        use gigawalk_scene::{Aabb, IndexFormat, Node, NO_NODE};
+        let unit = Aabb::new(glam::DVec3::ZERO, glam::DVec3::ONE);
+        let node = |parent, first_child, child_count, first_lod, lod_count| Node {
+            bounds: unit,
+            parent,
+            first_child,
+            child_count,
+            first_lod,
+            lod_count,
+        };
+        let nodes = vec![
+            node(NO_NODE, 1, 3, 0, 1),
+            node(0, 0, 0, 1, 2),
+            node(0, 0, 0, 3, 1),
+            node(0, 0, 0, 4, 1),
+        ];
+        let mesh = |t: u32| LodMesh {
+            origin: glam::DVec3::ZERO,
+            positions: vec![[0.0; 3]; 3 * t as usize],
+            normals: vec![[0.0, 0.0, 1.0]; 3 * t as usize],
+            colours: Colours::Uniform([9, 9, 9, 255]),
+            indices: (0..3 * t).collect(),
+        };
+        let meshes: Vec<LodMesh> = [1, 40, 20, 40, 40].into_iter().map(mesh).collect();
+        let lods = meshes
+            .iter()
+            .map(|m| LodInfo {
+                error: 0.0,
+                triangles: m.indices.len() as u32 / 3,
+                vertices: m.positions.len() as u32,
+                origin: m.origin,
+                index_format: IndexFormat::U16,
+                uniform_colour: None,
+                offset: 0,
+                len: 0,
+                checksum: 0,
+            })
+            .collect();
+        let skeleton = Skeleton {
+            origin: glam::DVec3::ZERO,
+            bounds: unit,
+            nodes,
+            lods,
+            provenance: Default::default(),
+        };
+        let (v, i) = lod_bytes(&skeleton.lods[0]);
+        (skeleton, meshes, 100 * (v + i) + (v + i) / 2)
+    }
+
+    #[test]
+    fn an_arrival_asked_for_displaces_stand_ins_in_use_and_a_prefetch_does_not() {
+        let Some(d) = gigawalk_gpu::devices_or_skip(1, "stand-in displacement") else {
+            return;
+        };
+        let ctx = &d[0];
+        let (skeleton, meshes, budget) = three_leaves();
+        let plan = Plan::new(&skeleton, budget);
+        assert_eq!(plan.pinned().collect::<Vec<_>>(), [0]);
+        let mut s = DeviceStream::new(ctx, 0, &skeleton, &plan, 1 << 28).unwrap();
+        s.pin(ctx, &plan, 0, &DecodedLod::new(&meshes[0]));
+        let (req_tx, req_rx) = unbounded();
+        let (in_tx, in_rx) = unbounded();
+        let link = Link {
+            requests: Some(req_tx),
+            inbox: in_rx,
+        };
+        let deliver = |lod: u32| {
+            in_tx
+                .send(Arc::new((lod, DecodedLod::new(&meshes[lod as usize]))))
+                .unwrap()
+        };
+        let frame = |s: &mut DeviceStream, f: u64, lods: &[u32]| {
+            s.prepare(ctx, &skeleton, &plan, &link, f, lods, Use::Visible)
+                .unwrap()
+        };
+        // Frame 0 draws leaf 1 coarse (2) and leaf 2 (3): 61 triangles
+        // (3 first, so that the room 2 leaves is next to the free end: the
+        // pool's ranges must be contiguous).
+        deliver(3);
+        deliver(2);
+        assert_eq!(frame(&mut s, 0, &[2, 3]), [2, 3]);
+        // Frames 1 and 2 want leaf 1 fine (1): asked for, LOD 2 stands in.
+        assert_eq!(frame(&mut s, 1, &[1, 3]), [2, 3]);
+        assert_eq!(req_rx.try_iter().map(|r| r.lod).collect::<Vec<_>>(), [1]);
+        // A prefetch of leaf 3 (4) arrives: 40 triangles do not fit beside
+        // 61, and what is there was all drawn in the newest two frames.
+        deliver(4);
+        assert_eq!(frame(&mut s, 2, &[1, 3]), [2, 3]);
+        assert!(!s.pool.contains(4) && s.pool.contains(2));
+        // LOD 1 arrives: the chosen LODs with it fit (81 triangles), with
+        // the stand-in too they do not (101). The stand-in goes.
+        deliver(1);
+        assert_eq!(frame(&mut s, 3, &[1, 3]), [1, 3]);
+        assert!(s.pool.contains(1) && s.pool.contains(3) && !s.pool.contains(2));
+        let stats = s.take_stats();
+        assert_eq!(stats.displaced_stand_ins, 1);
+        assert!(stats.resident_bytes <= budget);
     }
 
     #[test]

@@ -313,6 +313,14 @@ impl GeometryPool {
         matches!(self.slots.get(lod as usize), Some(Some(_)))
     }
 
+    /// Device bytes `lod` takes (0 when it is not resident).
+    pub fn bytes_of(&self, lod: u32) -> u64 {
+        match self.slots.get(lod as usize) {
+            Some(Some(s)) => s.bytes,
+            _ => 0,
+        }
+    }
+
     /// Whether `lod` could fit in an empty pool.
     pub fn could_hold(&self, lod: &DecodedLod) -> bool {
         self.pages.iter().any(|p| {

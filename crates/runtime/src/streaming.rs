@@ -431,7 +431,7 @@ impl DeviceStream {
                 }
             }
             if freed == 0 && demanded {
-                freed = self.displace_stand_ins(plan, 2 * lod.bytes());
+                freed = self.displace_stand_ins(plan, lod.bytes(), 2 * lod.bytes());
             }
             if freed == 0 {
                 return;
@@ -441,14 +441,20 @@ impl DeviceStream {
 
     /// Evicts LODs the newest two frames drew only as stand-ins, least
     /// recently drawn first, until about `want` bytes are free; the bytes
-    /// freed.
-    fn displace_stand_ins(&mut self, plan: &Plan, want: u64) -> u64 {
+    /// freed. None when all of them and the free room would not hold
+    /// `need` bytes (the stand-ins would go for nothing).
+    fn displace_stand_ins(&mut self, plan: &Plan, need: u64, want: u64) -> u64 {
         let victims: Vec<(u64, u32)> = self
             .lru
             .range((self.newest, 0)..)
             .filter(|&&(_, l)| self.last_chosen[l as usize] < self.newest)
             .copied()
             .collect();
+        let free = self.pool.capacity_bytes() - self.pool.used_bytes();
+        let held: u64 = victims.iter().map(|&(_, l)| self.pool.bytes_of(l)).sum();
+        if free + held < need {
+            return 0;
+        }
         let mut freed = 0;
         for (used, victim) in victims {
             if freed >= want {
@@ -763,8 +769,9 @@ mod tests {
 
     /// A root over three leaves; leaf 1 has a fine LOD 1 (40 triangles)
     /// and a coarse LOD 2 (20), leaves 2 and 3 one LOD each (3, 4: 40).
-    /// Only the root's one-triangle LOD 0 is pinned (a budget of 100.5
-    /// triangles' bytes pins 12 at most).
+    /// Only the root's one-triangle LOD 0 is pinned under budgets of 70 to
+    /// 100 triangles (the pinned share is an eighth). Also the bytes of a
+    /// triangle.
     fn three_leaves() -> (Skeleton, Vec<LodMesh>, u64) {
         use gigawalk_scene::{Aabb, IndexFormat, Node, NO_NODE};
         let unit = Aabb::new(glam::DVec3::ZERO, glam::DVec3::ONE);
@@ -812,17 +819,18 @@ mod tests {
             provenance: Default::default(),
         };
         let (v, i) = lod_bytes(&skeleton.lods[0]);
-        (skeleton, meshes, 100 * (v + i) + (v + i) / 2)
+        (skeleton, meshes, v + i)
     }
 
-    #[test]
-    fn an_arrival_asked_for_displaces_stand_ins_in_use_and_a_prefetch_does_not() {
-        let Some(d) = gigawalk_gpu::devices_or_skip(1, "stand-in displacement") else {
-            return;
-        };
-        let ctx = &d[0];
-        let (skeleton, meshes, budget) = three_leaves();
-        let plan = Plan::new(&skeleton, budget);
+    /// Frames 0-3 of a walk on [`three_leaves`] under a budget of
+    /// `budget` triangles' bytes (and a half): frame 0 draws leaf 1 coarse
+    /// (LOD 2) and leaf 2 (3); frames 1-3 want leaf 1 fine (1), asked for
+    /// in frame 1, with 2 standing in until it arrives in frame 3; a
+    /// prefetch of leaf 3 (4) arrives in frame 2. What frame 3 draws, and
+    /// its figures.
+    fn stand_in_walk(ctx: &GpuContext, budget: u64) -> (Vec<u32>, Vec<u32>, StreamStats) {
+        let (skeleton, meshes, triangle) = three_leaves();
+        let plan = Plan::new(&skeleton, budget * triangle + triangle / 2);
         assert_eq!(plan.pinned().collect::<Vec<_>>(), [0]);
         let mut s = DeviceStream::new(ctx, 0, &skeleton, &plan, 1 << 28).unwrap();
         s.pin(ctx, &plan, 0, &DecodedLod::new(&meshes[0]));
@@ -841,28 +849,42 @@ mod tests {
             s.prepare(ctx, &skeleton, &plan, &link, f, lods, Use::Visible)
                 .unwrap()
         };
-        // Frame 0 draws leaf 1 coarse (2) and leaf 2 (3): 61 triangles
-        // (3 first, so that the room 2 leaves is next to the free end: the
+        // 3 first, so that the room 2 leaves is next to the free end (the
         // pool's ranges must be contiguous).
         deliver(3);
         deliver(2);
         assert_eq!(frame(&mut s, 0, &[2, 3]), [2, 3]);
-        // Frames 1 and 2 want leaf 1 fine (1): asked for, LOD 2 stands in.
         assert_eq!(frame(&mut s, 1, &[1, 3]), [2, 3]);
         assert_eq!(req_rx.try_iter().map(|r| r.lod).collect::<Vec<_>>(), [1]);
-        // A prefetch of leaf 3 (4) arrives: 40 triangles do not fit beside
-        // 61, and what is there was all drawn in the newest two frames.
         deliver(4);
         assert_eq!(frame(&mut s, 2, &[1, 3]), [2, 3]);
+        // The prefetch did not fit beside what the newest two frames drew
+        // and displaced nothing.
         assert!(!s.pool.contains(4) && s.pool.contains(2));
-        // LOD 1 arrives: the chosen LODs with it fit (81 triangles), with
-        // the stand-in too they do not (101). The stand-in goes.
         deliver(1);
-        assert_eq!(frame(&mut s, 3, &[1, 3]), [1, 3]);
-        assert!(s.pool.contains(1) && s.pool.contains(3) && !s.pool.contains(2));
-        let stats = s.take_stats();
+        let drawn = frame(&mut s, 3, &[1, 3]);
+        let resident = (0..5).filter(|&l| s.pool.contains(l)).collect();
+        (drawn, resident, s.take_stats())
+    }
+
+    #[test]
+    fn an_arrival_asked_for_displaces_stand_ins_in_use_only_when_that_makes_room() {
+        let Some(d) = gigawalk_gpu::devices_or_skip(1, "stand-in displacement") else {
+            return;
+        };
+        // 100 triangles: the chosen LODs with LOD 1 fit (81 triangles),
+        // with the stand-in too they do not (101). The stand-in goes.
+        let (drawn, resident, stats) = stand_in_walk(&d[0], 100);
+        assert_eq!(drawn, [1, 3]);
+        assert_eq!(resident, [0, 1, 3]);
         assert_eq!(stats.displaced_stand_ins, 1);
-        assert!(stats.resident_bytes <= budget);
+        assert!(stats.resident_bytes <= stats.pool_bytes);
+        // 70 triangles: LOD 1 does not fit even without the stand-in (81):
+        // the stand-in stays and is drawn.
+        let (drawn, resident, stats) = stand_in_walk(&d[0], 70);
+        assert_eq!(drawn, [2, 3]);
+        assert_eq!(resident, [0, 2, 3]);
+        assert_eq!(stats.displaced_stand_ins, 0);
     }
 
     #[test]

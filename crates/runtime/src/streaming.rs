@@ -430,12 +430,7 @@ impl DeviceStream {
                     // Never what the newest two frames drew: OR's frame
                     // i + 1 and RVG's frame i share one device's pool.
                     Some((used, victim)) if used < self.newest => {
-                        self.lru.remove(&(used, victim));
-                        let before = self.pool.used_bytes();
-                        self.pool.remove(victim);
-                        plan.set_held(victim, self.device, false);
-                        freed += before - self.pool.used_bytes();
-                        self.stats.evicted_lods += 1;
+                        freed += self.evict(plan, used, victim);
                     }
                     _ => break,
                 }
@@ -471,15 +466,21 @@ impl DeviceStream {
             if free + freed >= need {
                 break;
             }
-            self.lru.remove(&(used, victim));
-            let before = self.pool.used_bytes();
-            self.pool.remove(victim);
-            plan.set_held(victim, self.device, false);
-            freed += before - self.pool.used_bytes();
-            self.stats.evicted_lods += 1;
+            freed += self.evict(plan, used, victim);
             self.stats.displaced_stand_ins += 1;
         }
         freed
+    }
+
+    /// Takes `victim` (last drawn in frame `used` - 1) out of the pool;
+    /// the bytes freed.
+    fn evict(&mut self, plan: &Plan, used: u64, victim: u32) -> u64 {
+        self.lru.remove(&(used, victim));
+        let before = self.pool.used_bytes();
+        self.pool.remove(victim);
+        plan.set_held(victim, self.device, false);
+        self.stats.evicted_lods += 1;
+        before - self.pool.used_bytes()
     }
 
     /// The LODs to draw for `lods` (chosen by STC) this frame: resident

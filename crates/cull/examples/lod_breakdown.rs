@@ -67,6 +67,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     // parent's finest HLOD was not acceptable: the switch from a node to
     // its children is where error slack comes from).
     let mut slack_coarsest = [0u64; 6];
+    // Items with a coarser level in their node: that level's pixel error /
+    // tolerance (<= 1.5, 2, 4, 8, above), and the triangles it would have
+    // drawn instead, by the same buckets (how much a level between the
+    // two could save).
+    let (mut next, mut next_tris) = ([0u64; 5], [0u64; 5]);
     let mut items = Vec::new();
     for pose in path.poses.iter().step_by(every) {
         frames += 1;
@@ -95,6 +100,12 @@ fn main() -> Result<(), Box<dyn Error>> {
             slack[bucket] += t;
             if it.lod + 1 == n.lod_count {
                 slack_coarsest[bucket] += t;
+            } else if let Some(c) = sk.lods.get(n.first_lod as usize + it.lod as usize + 1) {
+                let r = pixel_error(c.error, view.lod_distance(min, max), view.pixels_per_radian)
+                    / tolerance;
+                let b = [1.5, 2.0, 4.0, 8.0].iter().filter(|&&x| r > x).count();
+                next[b] += t;
+                next_tris[b] += c.triangles as u64;
             }
             let level = (it.lod as usize).min(LEVELS - 1);
             if n.is_leaf() {
@@ -133,6 +144,14 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!(
         "  of which at the node's coarsest level:                      {}",
         row(&slack_coarsest)
+    );
+    println!(
+        "next coarser level's error / tolerance (<=1.5 <=2 <=4 <=8 >8): {}",
+        row(&next)
+    );
+    println!(
+        "  its triangles:                                               {}",
+        row(&next_tris)
     );
     Ok(())
 }

@@ -4,9 +4,9 @@
 //! loader thread reads the LODs the visible render asks for, and every
 //! device takes them in between its draws; the least recently drawn LODs
 //! make room, and a LOD asked for may displace stand-ins still in use
-//! (`DeviceStream::take`). Until a LOD arrives RVG draws the finest resident coarser
-//! stand-in (a coarser LOD of the node, else an ancestor's HLOD) and the
-//! frame counts it as substituted. OR draws only resident occluders, never
+//! (`DeviceStream::take`). Until a LOD arrives RVG draws the finest
+//! resident coarser stand-in (a coarser LOD of the node, else an
+//! ancestor's HLOD) and the frame counts it as substituted. OR draws only resident occluders, never
 //! a stand-in, so occlusion culling stays conservative.
 //!
 //! A small pinned set (the coarsest LOD of the nodes nearest the root, up

@@ -292,8 +292,9 @@ pub(crate) struct DeviceStream {
     lru: BTreeSet<(u64, u32)>,
     /// Frame + 1 of each LOD's last request (0: none).
     requested: Vec<u64>,
-    /// LODs that found no room when they last arrived.
-    dropped: Vec<bool>,
+    /// Newest frame + 1 when each LOD last arrived and found no room (0:
+    /// never, or it has been resident since).
+    dropped: Vec<u64>,
     /// The visible frame being drawn, its ancestor stand-ins, its figures.
     frame: u64,
     /// The newest frame any stage drew on this device.
@@ -330,7 +331,7 @@ impl DeviceStream {
             last_chosen: vec![0; n],
             lru: BTreeSet::new(),
             requested: vec![0; n],
-            dropped: vec![false; n],
+            dropped: vec![0; n],
             frame: 0,
             newest: 0,
             standins: HashSet::new(),
@@ -380,9 +381,11 @@ impl DeviceStream {
 
     /// Puts a loaded LOD in the pool, evicting the least recently drawn
     /// LODs not drawn in the newest two frames; one this device asked for
-    /// again after it was dropped once may also displace LODs those frames
-    /// drew only as stand-ins. Drops it when even that leaves no room (it
-    /// is asked for again later).
+    /// again after it was dropped lately may also displace LODs those
+    /// frames drew only as stand-ins. Drops it when even that leaves no
+    /// room (it is asked for again later). An arrival asked for counts as
+    /// chosen in the newest frame, so it is no stand-in to displace before
+    /// its frame draws it.
     ///
     /// Stand-ins may go because they are there only for what is missing:
     /// when the LODs the camera needs fit the budget but those and their
@@ -405,10 +408,12 @@ impl DeviceStream {
         // STALE_FRAMES frames (a prefetch never is).
         let demanded = asked != 0 && asked + 2 * STALE_FRAMES > self.newest;
         let l = *id as usize;
-        let starved = demanded && self.dropped[l];
+        // ...and dropped lately for want of room.
+        let dropped = self.dropped[l];
+        let starved = demanded && dropped != 0 && dropped + 2 * STALE_FRAMES > self.newest;
         loop {
             if self.pool.insert(ctx, *id, lod) {
-                self.dropped[l] = false;
+                self.dropped[l] = 0;
                 plan.set_held(*id, self.device, true);
                 self.stats.loaded_lods += 1;
                 self.stats.loaded_bytes += lod.bytes();
@@ -418,6 +423,11 @@ impl DeviceStream {
                 // OR's device, which draws it only a frame later as an
                 // occluder, evicted it before it was ever used.)
                 self.last_used[l] = self.last_used[l].max(self.newest + 1);
+                // Asked for: chosen (a second starved arrival in the same
+                // inbox would otherwise displace it before it is drawn).
+                if demanded {
+                    self.last_chosen[l] = self.last_chosen[l].max(self.newest + 1);
+                }
                 if !plan.pinned[l] {
                     self.lru.insert((self.last_used[l], *id));
                 }
@@ -439,16 +449,18 @@ impl DeviceStream {
                 freed = self.displace_stand_ins(plan, lod.bytes());
             }
             if freed == 0 {
-                self.dropped[l] = true;
+                self.dropped[l] = self.newest + 1;
                 return;
             }
         }
     }
 
     /// Evicts LODs the newest two frames drew only as stand-ins, least
-    /// recently drawn first, until `need` more bytes are free; the bytes
-    /// freed. None when all of them and the free room would not hold
-    /// `need` bytes (the stand-ins would go for nothing).
+    /// recently drawn first, until `need` bytes are free, and at least one
+    /// (the pool needs contiguous room: `take` calls again while the
+    /// arrival does not fit); the bytes freed. None when all of them and
+    /// the free room would not hold `need` bytes (the stand-ins would go
+    /// for nothing).
     fn displace_stand_ins(&mut self, plan: &Plan, need: u64) -> u64 {
         let victims: Vec<(u64, u32)> = self
             .lru
@@ -463,7 +475,7 @@ impl DeviceStream {
         }
         let mut freed = 0;
         for (used, victim) in victims {
-            if free + freed >= need {
+            if freed > 0 && free + freed >= need {
                 break;
             }
             freed += self.evict(plan, used, victim);
@@ -834,52 +846,38 @@ mod tests {
         (skeleton, meshes, v + i)
     }
 
-    /// Frames 0-4 of a walk on [`three_leaves`] under a budget of
-    /// `budget` triangles' bytes (and a half): frame 0 draws leaf 1 coarse
-    /// (LOD 2) and leaf 2 (3); frames 1-4 want leaf 1 fine (1), asked for
-    /// in frame 1 and again in frame 3, with 2 standing in; a prefetch of
-    /// leaf 3 (4) arrives in frame 2, LOD 1 in frames 3 and 4. What frames
-    /// 3 and 4 draw, what is resident after, and frame 4's figures.
-    fn stand_in_walk(ctx: &GpuContext, budget: u64) -> ([Vec<u32>; 2], Vec<u32>, StreamStats) {
+    /// A walk on [`three_leaves`] under a budget of `budget` triangles'
+    /// bytes (and a half): frame i takes in `script[i].0` (in that order)
+    /// and draws for the chosen LODs `script[i].1`. What each frame drew
+    /// and its figures, and what is resident after.
+    fn stand_in_walk(
+        ctx: &GpuContext,
+        budget: u64,
+        script: &[(&[u32], &[u32])],
+    ) -> (Vec<Vec<u32>>, Vec<StreamStats>, Vec<u32>) {
         let (skeleton, meshes, triangle) = three_leaves();
         let plan = Plan::new(&skeleton, budget * triangle + triangle / 2);
         assert_eq!(plan.pinned().collect::<Vec<_>>(), [0]);
         let mut s = DeviceStream::new(ctx, 0, &skeleton, &plan, 1 << 28).unwrap();
         s.pin(ctx, &plan, 0, &DecodedLod::new(&meshes[0]));
-        let (req_tx, req_rx) = unbounded();
+        let (req_tx, _req_rx) = unbounded();
         let (in_tx, in_rx) = unbounded();
         let link = Link {
             requests: Some(req_tx),
             inbox: in_rx,
         };
-        let deliver = |lod: u32| {
-            in_tx
-                .send(Arc::new((lod, DecodedLod::new(&meshes[lod as usize]))))
-                .unwrap()
-        };
-        let frame = |s: &mut DeviceStream, f: u64, lods: &[u32]| {
-            s.prepare(ctx, &skeleton, &plan, &link, f, lods, Use::Visible)
-                .unwrap()
-        };
-        // 3 first, so that the room 2 leaves is next to the free end (the
-        // pool's ranges must be contiguous).
-        deliver(3);
-        deliver(2);
-        assert_eq!(frame(&mut s, 0, &[2, 3]), [2, 3]);
-        assert_eq!(frame(&mut s, 1, &[1, 3]), [2, 3]);
-        assert_eq!(req_rx.try_iter().map(|r| r.lod).collect::<Vec<_>>(), [1]);
-        deliver(4);
-        assert_eq!(frame(&mut s, 2, &[1, 3]), [2, 3]);
-        // The prefetch did not fit beside what the newest two frames drew
-        // and displaced nothing.
-        assert!(!s.pool.contains(4) && s.pool.contains(2));
-        deliver(1);
-        let third = frame(&mut s, 3, &[1, 3]);
-        s.take_stats();
-        deliver(1);
-        let fourth = frame(&mut s, 4, &[1, 3]);
+        let (mut drawn, mut stats) = (Vec::new(), Vec::new());
+        for (f, (arrive, chosen)) in script.iter().enumerate() {
+            for &lod in arrive.iter() {
+                let mesh = DecodedLod::new(&meshes[lod as usize]);
+                in_tx.send(Arc::new((lod, mesh))).unwrap();
+            }
+            let out = s.prepare(ctx, &skeleton, &plan, &link, f as u64, chosen, Use::Visible);
+            drawn.push(out.unwrap());
+            stats.push(s.take_stats());
+        }
         let resident = (0..5).filter(|&l| s.pool.contains(l)).collect();
-        ([third, fourth], resident, s.take_stats())
+        (drawn, stats, resident)
     }
 
     #[test]
@@ -887,21 +885,63 @@ mod tests {
         let Some(d) = gigawalk_gpu::devices_or_skip(1, "stand-in displacement") else {
             return;
         };
+        // Frame 0 draws leaf 1 coarse (LOD 2) and leaf 2 (3; first, so that
+        // the room 2 leaves is next to the free end: the pool's ranges must
+        // be contiguous). Frames 1-4 want leaf 1 fine (1), asked for in
+        // frame 1 and again in 3, with 2 standing in. A prefetch of leaf 3
+        // (4) arrives twice in frame 2, LOD 1 in frames 3 and 4.
+        let script: [(&[u32], &[u32]); 5] = [
+            (&[3, 2], &[2, 3]),
+            (&[], &[1, 3]),
+            (&[4, 4], &[1, 3]),
+            (&[1], &[1, 3]),
+            (&[1], &[1, 3]),
+        ];
         // 100 triangles: the chosen LODs with LOD 1 fit (81 triangles),
-        // with the stand-in too they do not (101). LOD 1's first arrival
+        // with the stand-in too they do not (101). The prefetch does not
+        // fit beside what the newest two frames drew and, never asked for,
+        // displaces nothing however often it comes. LOD 1's first arrival
         // is dropped (a moving camera may no longer want it), its second
         // displaces the stand-in.
-        let (drawn, resident, stats) = stand_in_walk(&d[0], 100);
-        assert_eq!(drawn, [vec![2, 3], vec![1, 3]]);
+        let (drawn, stats, resident) = stand_in_walk(&d[0], 100, &script);
+        assert_eq!(
+            drawn,
+            [[2, 3]; 4].iter().chain(&[[1, 3]]).collect::<Vec<_>>()
+        );
         assert_eq!(resident, [0, 1, 3]);
-        assert_eq!(stats.displaced_stand_ins, 1);
-        assert!(stats.resident_bytes <= stats.pool_bytes);
+        let displaced: Vec<u64> = stats.iter().map(|s| s.displaced_stand_ins).collect();
+        assert_eq!(displaced, [0, 0, 0, 0, 1]);
         // 70 triangles: LOD 1 does not fit even without the stand-in (81):
         // the stand-in stays and is drawn.
-        let (drawn, resident, stats) = stand_in_walk(&d[0], 70);
-        assert_eq!(drawn, [vec![2, 3], vec![2, 3]]);
+        let (drawn, stats, resident) = stand_in_walk(&d[0], 70, &script);
+        assert_eq!(drawn[4], [2, 3]);
         assert_eq!(resident, [0, 2, 3]);
-        assert_eq!(stats.displaced_stand_ins, 0);
+        assert!(stats.iter().all(|s| s.displaced_stand_ins == 0));
+    }
+
+    #[test]
+    fn a_starved_arrival_does_not_displace_one_that_just_arrived() {
+        let Some(d) = gigawalk_gpu::devices_or_skip(1, "stand-in displacement") else {
+            return;
+        };
+        // Frames 1-4 want leaf 1 fine (1), leaf 2 (3) and leaf 3 (4); 2
+        // stands in for 1, the root's pinned LOD 0 for 4. LOD 4 is dropped
+        // in frame 2 and LOD 1 in frame 3; in frame 4 both come again, 1
+        // first: it displaces the stand-in 2, and 4, starved too, finds no
+        // stand-in left to displace. Counted as a stand-in (never drawn
+        // yet), LOD 1 would have gone for it, for nothing gained.
+        let script: [(&[u32], &[u32]); 5] = [
+            (&[3, 2], &[2, 3]),
+            (&[], &[1, 3, 4]),
+            (&[4], &[1, 3, 4]),
+            (&[1], &[1, 3, 4]),
+            (&[1, 4], &[1, 3, 4]),
+        ];
+        let (drawn, stats, resident) = stand_in_walk(&d[0], 100, &script);
+        assert_eq!(drawn[1..4], [[2, 3, 0], [2, 3, 0], [2, 3, 0]]);
+        assert_eq!(drawn[4], [1, 3, 0]);
+        assert_eq!(resident, [0, 1, 3]);
+        assert_eq!(stats[4].displaced_stand_ins, 1);
     }
 
     #[test]

@@ -88,7 +88,8 @@ fn main() -> Result<(), Box<dyn Error>> {
             let t = l.triangles as u64;
             let (min, max) = view.rel_f64(&n.bounds);
             // The distance traversal chose the level by (off-axis bound).
-            let pe = pixel_error(l.error, view.lod_distance(min, max), view.pixels_per_radian);
+            let distance = view.lod_distance(min, max);
+            let pe = pixel_error(l.error, distance, view.pixels_per_radian);
             by_depth[depth[it.node as usize]] += t;
             let bucket = if l.error == 0.0 {
                 5
@@ -101,8 +102,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             if it.lod + 1 == n.lod_count {
                 slack_coarsest[bucket] += t;
             } else if let Some(c) = sk.lods.get(n.first_lod as usize + it.lod as usize + 1) {
-                let r = pixel_error(c.error, view.lod_distance(min, max), view.pixels_per_radian)
-                    / tolerance;
+                let r = pixel_error(c.error, distance, view.pixels_per_radian) / tolerance;
                 let b = [1.5, 2.0, 4.0, 8.0].iter().filter(|&&x| r > x).count();
                 next[b] += t;
                 next_tris[b] += c.triangles as u64;

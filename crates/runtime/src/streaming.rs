@@ -6,8 +6,9 @@
 //! make room, and a LOD asked for may displace stand-ins still in use
 //! (`DeviceStream::take`). Until a LOD arrives RVG draws the finest
 //! resident coarser stand-in (a coarser LOD of the node, else an
-//! ancestor's HLOD) and the frame counts it as substituted. OR draws only resident occluders, never
-//! a stand-in, so occlusion culling stays conservative.
+//! ancestor's HLOD) and the frame counts it as substituted. OR draws only
+//! resident occluders, never a stand-in, so occlusion culling stays
+//! conservative.
 //!
 //! A small pinned set (the coarsest LOD of the nodes nearest the root, up
 //! to [`PINNED_SHARE`] of the budget and at most [`PINNED_MAX`]) is loaded
@@ -876,7 +877,9 @@ mod tests {
             drawn.push(out.unwrap());
             stats.push(s.take_stats());
         }
-        let resident = (0..5).filter(|&l| s.pool.contains(l)).collect();
+        let resident = (0..meshes.len() as u32)
+            .filter(|&l| s.pool.contains(l))
+            .collect();
         (drawn, stats, resident)
     }
 

@@ -3,7 +3,7 @@
 
 mod cull_common;
 
-use cull_common::{check_no_false_culls, random_scene, Tally};
+use cull_common::{check_no_false_culls, check_no_false_culls_split, random_scene, Tally};
 use rand::rngs::SmallRng;
 use rand::{RngExt, SeedableRng};
 
@@ -55,4 +55,27 @@ fn no_false_culls_on_large_images() {
         200,
     );
     assert!(t.culled > 0, "{t:?}");
+}
+
+#[test]
+fn split_boxes_cull_more_and_never_falsely() {
+    // Splitting a box that does not hide as a whole only adds culls (a
+    // box hides when its halves do), and each of them passes the
+    // brute-force check, even split far deeper than the default.
+    let (mut unsplit, mut split) = (0, 0);
+    for seed in 30_000..30_400 {
+        let mut rng = SmallRng::seed_from_u64(seed);
+        let (w, h) = (rng.random_range(16..=240), rng.random_range(16..=240));
+        let scene = random_scene(&mut rng, w, h, 40);
+        let label = format!("seed {seed}");
+        let (v0, t0) = check_no_false_culls_split(&scene, &label, 0);
+        let (v6, t6) = check_no_false_culls_split(&scene, &label, 6);
+        for (i, (&a, &b)) in v0.iter().zip(&v6).enumerate() {
+            assert!(a || !b, "{label}: box {i} hidden unsplit but visible split");
+        }
+        unsplit += t0.culled;
+        split += t6.culled;
+    }
+    // Not vacuous: splitting must cull boxes the whole-box test keeps.
+    assert!(split > unsplit, "split {split} vs unsplit {unsplit}");
 }

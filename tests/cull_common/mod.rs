@@ -147,11 +147,16 @@ pub struct Tally {
 /// nearer than (or as near as) the stored depth: a culled box must fail
 /// the GreaterEqual depth test everywhere. Returns the per-box decisions.
 pub fn check_no_false_culls(scene: &Scene, label: &str) -> (Vec<bool>, Tally) {
+    check_no_false_culls_split(scene, label, gigawalk_cull::SPLITS)
+}
+
+/// [`check_no_false_culls`] with boxes split `splits` times deep.
+pub fn check_no_false_culls_split(scene: &Scene, label: &str, splits: u8) -> (Vec<bool>, Tally) {
     let img = render_occluders(scene);
     let hzb = Hzb::build(img.width, img.height, &img.depth, Reduction::Farthest).unwrap();
     let view = CullView::new(scene.camera, scene.viewport);
     let vp = scene.camera.view_projection_rel_f64();
-    let test = HzbOcclusion::new(&hzb);
+    let test = HzbOcclusion::new(&hzb).with_splits(splits);
     let mut tally = Tally::default();
     let mut decisions = Vec::with_capacity(scene.tests.len());
     for (i, b) in scene.tests.iter().enumerate() {

@@ -12,7 +12,9 @@
 //! partly is decided by the box's own pixels when its value does not hide
 //! the box. So a box is occluded exactly when every pixel of its
 //! footprint is farther than its nearest depth: the grid answers the
-//! brute-force scan, with far fewer pixel reads. The eager variant
+//! brute-force scan, with far fewer pixel reads. A box that does not hide
+//! as a whole is split in halves as the HZB test does
+//! ([`crate::HzbOcclusion`]). The eager variant
 //! refreshes cells as they are drawn over (same answers; the paper's
 //! comparison of the two is in pixel reads).
 
@@ -21,7 +23,7 @@ use std::time::Instant;
 use gigawalk_scene::Skeleton;
 use glam::{DMat4, DVec3};
 
-use crate::occlusion::{footprint, occludes, Footprint};
+use crate::occlusion::{hides_split, occludes, SPLITS};
 use crate::raster::{PixelRect, SoftDepth};
 use crate::{CullView, Culler, DrawItem, RelBox, Verdict};
 
@@ -273,11 +275,10 @@ impl Culler for GridCuller<'_> {
     fn test(&mut self, view: &CullView, _: u32, b: &RelBox, _: &()) -> (Verdict, ()) {
         let t = Instant::now();
         let (w, h) = (self.grid.depth.width(), self.grid.depth.height());
-        let hidden = match footprint(view, b, w, h) {
-            Footprint::Visible => false,
-            Footprint::Beside => true,
-            Footprint::Pixels { rect, nearest } => self.grid.hides(rect, nearest),
-        };
+        let grid = &mut *self.grid;
+        let hidden = hides_split(view, b, w, h, SPLITS, &mut |rect, nearest| {
+            grid.hides(rect, nearest)
+        });
         self.grid.stats.test_ms += t.elapsed().as_secs_f64() * 1e3;
         let v = if hidden {
             Verdict::Occluded

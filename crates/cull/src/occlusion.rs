@@ -78,34 +78,44 @@ impl<'a> HzbOcclusion<'a> {
     pub fn with_splits(self, splits: u8) -> Self {
         HzbOcclusion { splits, ..self }
     }
-
-    fn visible(&self, view: &CullView, b: &RelBox, splits: u8) -> bool {
-        match footprint(view, b, self.hzb.width(), self.hzb.height()) {
-            // A half of a box crossing the near plane crosses it too.
-            Footprint::Visible => return true,
-            Footprint::Beside => return false,
-            Footprint::Pixels { rect: r, nearest } => {
-                if self
-                    .hzb
-                    .rect_hides(r.x0, r.y0, r.x1, r.y1, REFINE_CELLS, |d| {
-                        occludes(nearest, d)
-                    })
-                {
-                    return false;
-                }
-            }
-        }
-        if splits == 0 {
-            return true;
-        }
-        let [near, far] = halves(b);
-        self.visible(view, &near, splits - 1) || self.visible(view, &far, splits - 1)
-    }
 }
 
 impl OcclusionTest for HzbOcclusion<'_> {
     fn is_visible(&self, view: &CullView, b: &RelBox) -> bool {
-        self.visible(view, b, self.splits)
+        let (w, h) = (self.hzb.width(), self.hzb.height());
+        !hides_split(view, b, w, h, self.splits, &mut |r, nearest| {
+            self.hzb
+                .rect_hides(r.x0, r.y0, r.x1, r.y1, REFINE_CELLS, |d| {
+                    occludes(nearest, d)
+                })
+        })
+    }
+}
+
+/// Whether a box hides in a `w x h` depth image, where `hides(rect,
+/// nearest)` says whether every pixel of `rect` hides a box part whose
+/// nearest depth is `nearest` (conservatively): the box as a whole, or
+/// else both its [`halves`], up to `splits` times deep. A box crossing
+/// the near plane shows (so does any half of it that crosses it); one
+/// wholly beside the image hides.
+pub(crate) fn hides_split(
+    view: &CullView,
+    b: &RelBox,
+    w: u32,
+    h: u32,
+    splits: u8,
+    hides: &mut impl FnMut(PixelRect, f32) -> bool,
+) -> bool {
+    match footprint(view, b, w, h) {
+        Footprint::Visible => false,
+        Footprint::Beside => true,
+        Footprint::Pixels { rect, nearest } => {
+            hides(rect, nearest)
+                || (splits > 0
+                    && halves(b)
+                        .iter()
+                        .all(|half| hides_split(view, half, w, h, splits - 1, hides)))
+        }
     }
 }
 

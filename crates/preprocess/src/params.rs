@@ -58,11 +58,13 @@ pub struct Params {
     /// The simplified levels 1..=collapse_levels of every chain (a leaf's
     /// levels after its own mesh, an inner node's from its first HLOD) are
     /// made by edge collapse (meshopt's topology-preserving simplify, which
-    /// thins pieces rather than dropping them); coarser ones by sloppy
-    /// vertex clustering. Measured on the 4M plant (frustum-only traversal
-    /// at 1 px, 640x360): 8 instead of 1 draws 18% fewer triangles for
-    /// 2.2x the preprocess time and a scene of 1.84x instead of 1.64x the
-    /// raw geometry.
+    /// thins pieces rather than dropping them); coarser ones, and any level
+    /// where collapse stalls, by sloppy vertex clustering. Measured on the
+    /// 4M demo plant's walk (och, 1 px, 640x360, node budget 512): 8
+    /// draws 41.4k triangles a frame against 49.6k with 1, at fewer
+    /// bound-violating pixels and the same preprocess time; with a 1024
+    /// budget it cost 1.3-2.2x the time (docs/PERFORMANCE.md "Node
+    /// budget and edge collapse").
     pub collapse_levels: u32,
     /// Triangles of an inner node's finest HLOD, at most. Its children are
     /// cut at a matching error so they hold about `node_budget / lod_ratio`
@@ -70,7 +72,9 @@ pub struct Params {
     /// becomes drawable once that many triangles reach the pixel
     /// tolerance, and switching to its children multiplies the triangles
     /// drawn by about 1 / lod_ratio. Larger: fewer, bigger draws and a
-    /// larger scene file; smaller: more nodes to traverse.
+    /// larger scene file; smaller: more nodes to traverse. With one collapse
+    /// level, 512 drew 8% and 10% fewer triangles than 1024 on the 4M and
+    /// 20M plants' walks (och, 1 px), in a 1.2x smaller scene.
     pub node_budget: u32,
     /// Error measurement: the cover of the samples taken on each surface,
     /// as a fraction of the largest distance found at the vertices
@@ -106,8 +110,8 @@ impl Default for Params {
             r2_factor: 0.5,
             lod_ratio: 0.5,
             lod_floor: 64,
-            collapse_levels: 1,
-            node_budget: 1024,
+            collapse_levels: 8,
+            node_budget: 512,
             bound_spacing: 0.25,
             bound_floor: 1e-3,
             cell_height: 8,

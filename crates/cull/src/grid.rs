@@ -10,11 +10,11 @@
 //! it hides the box, so would the fresh one) and refreshes the cell only
 //! when the old value would say "visible". A cell the box covers only
 //! partly is decided by the box's own pixels when its value does not hide
-//! the box. So a box is occluded exactly when every pixel of its
-//! footprint is farther than its nearest depth: the grid answers the
+//! the box. So a footprint test hides a box exactly when every pixel of
+//! its footprint is farther than its nearest depth: the grid answers the
 //! brute-force scan, with far fewer pixel reads. A box that does not hide
 //! as a whole is split in halves as the HZB test does
-//! ([`crate::HzbOcclusion`]). The eager variant
+//! ([`crate::HzbOcclusion`]), and hides when they do. The eager variant
 //! refreshes cells as they are drawn over (same answers; the paper's
 //! comparison of the two is in pixel reads).
 
@@ -33,7 +33,8 @@ pub const DEFAULT_GRID_CELL: u32 = 32;
 /// What the grid did in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GridStats {
-    /// Box tests answered.
+    /// Footprint tests answered (a box split in halves asks one per part
+    /// tested).
     pub tests: u64,
     /// Depth pixels read: refreshing cells and scanning partly covered ones.
     pub pixel_reads: u64,

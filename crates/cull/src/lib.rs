@@ -56,7 +56,7 @@ pub use grid::{
 pub use hzb::{Hzb, HzbError, HzbLevel, Reduction};
 pub use lod::select_lod;
 pub use object_space::{occlusion, pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
-pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, SPLITS};
+pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, MAX_SPLITS, SPLITS};
 pub use raster::{PixelRect, SoftDepth, DEPTH_REL_SLACK, DEPTH_SLOPE_PX, INNER_MARGIN_PX};
 pub use traverse::{
     reselect_lods, select_occluders, traverse, CullReason, DrawItem, DrawSink, TraversalOptions,

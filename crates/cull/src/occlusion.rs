@@ -53,8 +53,9 @@ pub const DEPTH_SLACK: f32 = 1.0 / 65536.0;
 /// in view depth) is tested everywhere with the depth of its nearest
 /// corner; its far half has a farther nearest depth and a smaller
 /// footprint. The halves' union is the box (both share one f32 midpoint),
-/// so splitting stays conservative; it only costs tests, and a visible box
-/// pays about `splits + 1` of them.
+/// so splitting stays conservative; it only costs tests: a visible box
+/// whose nearer half shows pays `splits + 1` footprint tests, and any box
+/// at most `2^(splits + 1) - 1`.
 ///
 /// The footprint is computed in the HZB's own pixel grid from NDC, so an HZB
 /// built from a lower-resolution depth image (GigaWalk Section 5.3) works
@@ -63,7 +64,7 @@ pub const DEPTH_SLACK: f32 = 1.0 / 65536.0;
 pub struct HzbOcclusion<'a> {
     pub hzb: &'a Hzb,
     /// How many times deep a box that does not hide is split (0: never).
-    pub splits: u8,
+    splits: u8,
 }
 
 impl<'a> HzbOcclusion<'a> {
@@ -74,9 +75,13 @@ impl<'a> HzbOcclusion<'a> {
         }
     }
 
-    /// The same test with boxes split `splits` times deep.
+    /// The same test with boxes split `splits` times deep, at most
+    /// [`MAX_SPLITS`] (the tests per box grow as `2^(splits + 1)`).
     pub fn with_splits(self, splits: u8) -> Self {
-        HzbOcclusion { splits, ..self }
+        HzbOcclusion {
+            splits: splits.min(MAX_SPLITS),
+            ..self
+        }
     }
 }
 
@@ -124,6 +129,9 @@ pub(crate) fn hides_split(
 /// "Split boxes".
 pub const SPLITS: u8 = 2;
 
+/// The most splits [`HzbOcclusion::with_splits`] takes.
+pub const MAX_SPLITS: u8 = 8;
+
 /// A camera-relative box cut in two across its longest axis at one f32
 /// midpoint (so the halves cover it exactly), the half nearer the eye
 /// first: a visible box is then usually settled by its first half.
@@ -148,9 +156,10 @@ fn halves(b: &RelBox) -> [RelBox; 2] {
     }
 }
 
-/// Cells one box test may read while refining past its 2x2 cells; past
-/// it the box counts as visible. Measured (640x360, och at 1 px, revision
-/// 6 scenes): 16 cells leave 5% (4M plant) and 7% (20M plant) more
+/// Cells one footprint test may read while refining past its 2x2 cells;
+/// past it the box (or the split part of it) counts as visible, so a box
+/// split in halves may read this many per part. Measured before boxes
+/// were split (640x360, och at 1 px, revision 6 scenes): 16 cells leave 5% (4M plant) and 7% (20M plant) more
 /// triangles than an unlimited refinement, 64 and 256 within 0.2%, with
 /// traversal time unchanged. See docs/PERFORMANCE.md "HZB refinement".
 pub const REFINE_CELLS: usize = 256;
@@ -327,6 +336,14 @@ mod tests {
         // Brought nearer than the near wall, it shows however split.
         let b = RelBox::from_f64(DVec3::new(1.0, -0.5, -100.0), DVec3::new(2.0, 0.5, -9.5));
         assert!(test.with_splits(6).is_visible(&view, &b));
+    }
+
+    #[test]
+    fn splits_are_capped() {
+        let hzb = wall(10.0);
+        assert_eq!(HzbOcclusion::new(&hzb).splits, SPLITS);
+        assert_eq!(HzbOcclusion::new(&hzb).with_splits(255).splits, MAX_SPLITS);
+        assert_eq!(HzbOcclusion::new(&hzb).with_splits(0).splits, 0);
     }
 
     #[test]

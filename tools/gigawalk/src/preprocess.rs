@@ -56,7 +56,7 @@ pub struct Args {
     /// LODs (4.3): simplified levels 1..=N of every chain use edge collapse (meshopt simplify), coarser ones sloppy vertex clustering (1 draws 20% more triangles on the 4M plant at 1 px, in about the same preprocess time)
     #[arg(long, default_value_t = 8)]
     collapse_levels: u32,
-    /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it (with one collapse level, 1024 drew 8-10% more triangles at 1 px on the 4M and 20M plants than 512, in a 1.2x larger scene)
+    /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it (with one collapse level, 512 drew 8% and 10% fewer triangles than 1024 at 1 px on the 4M and 20M plants, in a 1.2x smaller scene)
     #[arg(long, default_value_t = 512)]
     node_budget: u32,
     /// LOD errors: each stored error is a measured bound on the Hausdorff distance to the full-detail surface; samples cover each surface to this fraction of the distance found. Tighter errors draw fewer triangles at a tolerance and cost preprocess time (4M plant: 0.1 = -2.4% triangles at 1 px, +19% time; 0.5 = +7.6%, -7%; docs/PERFORMANCE.md)

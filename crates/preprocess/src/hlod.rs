@@ -28,7 +28,7 @@ use crate::parts::Part;
 /// A level is accepted only if it has at most this fraction of the previous
 /// level's triangles; otherwise the simplifier has stalled (e.g. on many
 /// tiny disconnected pieces that edge collapses cannot remove).
-const MIN_SHRINK: f64 = 0.65;
+pub(crate) const MIN_SHRINK: f64 = 0.65;
 
 /// Geometry being simplified: f32 positions relative to `origin`.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -173,11 +173,12 @@ impl Params {
                 why: "r1 x r2-factor must be at least 1 (an aspect ratio is at least 1)",
             });
         }
-        if !(self.lod_ratio > 0.0 && self.lod_ratio < 1.0) {
+        if !(self.lod_ratio > 0.0 && self.lod_ratio <= crate::hlod::MIN_SHRINK) {
             return Err(ParamError {
                 name: "lod-ratio",
                 value: self.lod_ratio,
-                why: "must be between 0 and 1",
+                why: "must be above 0 and at most 0.65 (a level keeps at most 65% of the \
+                      previous level's triangles, so a larger target makes almost no levels)",
             });
         }
         if self.node_budget == 0 {
@@ -355,11 +356,18 @@ mod tests {
             ..Params::default()
         };
         assert_eq!(p.validate().unwrap_err().name, "s1");
+        for r in [1.0, 0.7, 0.0, f64::NAN] {
+            let p = Params {
+                lod_ratio: r,
+                ..Params::default()
+            };
+            assert_eq!(p.validate().unwrap_err().name, "lod-ratio", "{r}");
+        }
         let p = Params {
-            lod_ratio: 1.0,
+            lod_ratio: 0.65,
             ..Params::default()
         };
-        assert_eq!(p.validate().unwrap_err().name, "lod-ratio");
+        assert!(p.validate().is_ok());
         let p = Params {
             v: f64::NAN,
             ..Params::default()

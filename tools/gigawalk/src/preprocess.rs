@@ -47,7 +47,7 @@ pub struct Args {
     /// Partition-II aspect threshold as a multiple of r1 (6.3.1: r2 = 0.5 r1)
     #[arg(long, default_value_t = 0.5)]
     r2_factor: f64,
-    /// LODs (4.3): each level aims for this fraction of the previous level's triangles (and keeps at most 65% of them); 0.4-0.6 draw the same triangles on the 4M plant
+    /// LODs (4.3): each level aims for this fraction of the previous level's triangles (and keeps at most 65% of them, so at most 0.65); 0.4-0.6 drew the same triangles on the 4M plant with one collapse level, 0.35 draws a little more with the defaults
     #[arg(long, default_value_t = 0.5)]
     lod_ratio: f64,
     /// LODs (4.3): a chain stops once a level has at most this many triangles

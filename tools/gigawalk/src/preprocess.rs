@@ -21,58 +21,58 @@ pub struct Args {
     #[arg(long)]
     stats: Option<PathBuf>,
     /// Partition-I: split objects with more triangles than this (paper 4.2.1, 6.3.1: t1 = 1000)
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = Params::default().t1)]
     t1: u32,
     /// Partition-I: ...and a box diagonal above this fraction of the model's diagonal (6.3.1: s1 = 0.1 x model size)
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = Params::default().s1)]
     s1: f64,
     /// Partition-I: ...or a box aspect ratio (largest/smallest side) above this (6.3.1: r1 = 2.5)
-    #[arg(long, default_value_t = 2.5)]
+    #[arg(long, default_value_t = Params::default().r1)]
     r1: f64,
     /// Clustering: objects closer than this fraction of the largest object box dimension share an edge (4.2.2, 6.3.1: D = 0.1 x max box dimension)
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = Params::default().d)]
     d: f64,
     /// Clustering: largest cluster box volume as a fraction of the scene box volume (6.3.1: V = 1e-3 x scene volume)
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = Params::default().v)]
     v: f64,
     /// Clustering: Felzenszwalb-Huttenlocher K, in thousandths of D (6.3.1: K = 1500; see docs/preprocess.md for the units)
-    #[arg(long, default_value_t = 1500.0)]
+    #[arg(long, default_value_t = Params::default().k)]
     k: f64,
     /// Partition-II triangle threshold as a multiple of t1 (4.2.3; the paper's 6.3.1 uses 10). Default 1: long clusters near the eye would draw their full detail far away too
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = Params::default().t2_factor)]
     t2_factor: f64,
     /// Partition-II size threshold as a multiple of s1 (6.3.1: s2 = 2 s1)
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = Params::default().s2_factor)]
     s2_factor: f64,
     /// Partition-II aspect threshold as a multiple of r1 (6.3.1: r2 = 0.5 r1)
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = Params::default().r2_factor)]
     r2_factor: f64,
     /// LODs (4.3): each level aims for this fraction of the previous level's triangles (and keeps at most 65% of them, so at most 0.65); 0.4-0.6 drew the same triangles on the 4M plant with one collapse level, 0.35 draws a little more with the defaults
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = Params::default().lod_ratio)]
     lod_ratio: f64,
     /// LODs (4.3): a chain stops once a level has at most this many triangles
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = Params::default().lod_floor)]
     lod_floor: u32,
     /// LODs (4.3): simplified levels 1..=N of every chain use edge collapse (meshopt simplify), coarser ones sloppy vertex clustering (1 draws 20% more triangles on the 4M plant at 1 px, in about the same preprocess time)
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = Params::default().collapse_levels)]
     collapse_levels: u32,
     /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it (with one collapse level, 512 drew 8% and 10% fewer triangles than 1024 at 1 px on the 4M and 20M plants, in a 1.2x smaller scene)
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = Params::default().node_budget)]
     node_budget: u32,
     /// LOD errors: each stored error is a measured bound on the Hausdorff distance to the full-detail surface; samples cover each surface to this fraction of the distance found. Tighter errors draw fewer triangles at a tolerance and cost preprocess time (4M plant: 0.1 = -2.4% triangles at 1 px, +19% time; 0.5 = +7.6%, -7%; docs/PERFORMANCE.md)
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = Params::default().bound_spacing)]
     bound_spacing: f64,
     /// LOD errors: the finest sample cover, as a fraction of the node's box diagonal
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = Params::default().bound_floor)]
     bound_floor: f64,
     /// Object-space culling (ct): levels of the view-cell kD-tree over the eye's space (Coorg and Teller 3.1: 8, about 250 cells); 0: one cell
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = Params::default().cell_height)]
     cell_height: u32,
     /// Object-space culling (ct): occluders listed per view cell and direction, best first by the area-angle metric (paper: 32)
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = Params::default().cell_occluders)]
     cell_occluders: u32,
     /// Object-space culling (ct): view directions per cell: 4, 8 (the paper's count) or 16 around the up axis (+Y, glTF's), or 6, 14 or 26 over the whole sphere
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = Params::default().cell_directions)]
     cell_directions: u32,
 }
 

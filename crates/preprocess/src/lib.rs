@@ -41,8 +41,10 @@ pub mod verify;
 /// 2: error-driven LOD levels, every leaf piece kept, Partition-II at t1;
 /// 3: vanished pieces of inner nodes covered; 4: occluders (OCCL); 5:
 /// their view cells (OCVC); 6: errors measured a cluster at a time (as
-/// sound, slightly different bounds).
-pub const REVISION: u32 = 6;
+/// sound, slightly different bounds); 7: a collapsed level measured far
+/// beyond its simplifier's limit gives way to clustering when that is
+/// nearer.
+pub const REVISION: u32 = 7;
 
 use std::path::Path;
 use std::time::Instant;

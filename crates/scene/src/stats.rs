@@ -25,6 +25,14 @@ pub struct SceneStats {
     pub hlod_triangles_per_depth: Vec<u64>,
     /// The HLOD chains of the inner nodes at each tree depth (root = 0).
     pub hlod_levels_per_depth: Vec<DepthLevels>,
+    /// The whole scene drawn at one error, frustum and occlusion aside:
+    /// `(error, triangles)` at errors of the scene box's diagonal / 2^k,
+    /// k = 1..=16, each node drawn from its coarsest level within the
+    /// error, else through its children. At pixel error p a node at
+    /// distance d is drawn at error p d / ppr, so how fast the triangles
+    /// fall as the error doubles says what the far field costs (an
+    /// opaque surface's LODs would fall about 4x per doubling).
+    pub triangles_at_error: Vec<(f64, u64)>,
     pub bounds_min: [f64; 3],
     pub bounds_max: [f64; 3],
     pub origin: [f64; 3],
@@ -49,12 +57,31 @@ pub struct DepthLevels {
     pub finest_triangles_median: u64,
     /// Median finest-HLOD error as a fraction of the node's box diagonal.
     pub finest_error_median: f64,
+    /// What crossing a node's switching distance costs: the triangles its
+    /// subtree draws at the finest HLOD's error (each node its coarsest
+    /// level within it, else its children's) over the finest HLOD's
+    /// triangles. Median and largest over the depth's inner nodes with
+    /// levels (0 when none has any); frustum and occlusion aside.
+    pub switch_factor_median: f64,
+    pub switch_factor_max: f64,
 }
 
 /// The median of `v` (sorted in place); the upper one of an even count.
 fn median<T: Copy + PartialOrd + Default>(v: &mut [T]) -> T {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     v.get(v.len() / 2).copied().unwrap_or_default()
+}
+
+/// Triangles the subtree of `node` draws at `error`: the node's coarsest
+/// level within it, else its children's (a leaf's finest level is exact).
+fn triangles_within(s: &crate::Skeleton, node: u32, error: f32) -> u64 {
+    match s.node_lods(node).iter().rev().find(|l| l.error <= error) {
+        Some(l) => u64::from(l.triangles),
+        None => s.nodes[node as usize]
+            .children()
+            .map(|c| triangles_within(s, c, error))
+            .sum(),
+    }
 }
 
 impl SceneStats {
@@ -106,6 +133,17 @@ impl SceneStats {
                 .iter()
                 .filter_map(|&i| s.node_lods(i as u32).first().map(|l| l.triangles as u64))
                 .collect();
+            let mut switch: Vec<f64> = inner
+                .iter()
+                .filter_map(|&i| {
+                    let l = s.node_lods(i as u32).first()?;
+                    let below: u64 = s.nodes[i]
+                        .children()
+                        .map(|c| triangles_within(s, c, l.error))
+                        .sum();
+                    Some(below as f64 / f64::from(l.triangles.max(1)))
+                })
+                .collect();
             let mut errs: Vec<f64> = inner
                 .iter()
                 .filter_map(|&i| {
@@ -123,9 +161,22 @@ impl SceneStats {
                 levels_median: median(&mut counts),
                 finest_triangles_median: median(&mut tris),
                 finest_error_median: median(&mut errs),
+                switch_factor_max: switch.iter().copied().fold(0.0, f64::max),
+                switch_factor_median: median(&mut switch),
             });
         }
         let triangles = s.finest_triangles();
+        let diagonal = s.bounds.diagonal();
+        let triangles_at_error = (1..=16)
+            .map(|k| {
+                let e = diagonal / f64::from(1u32 << k);
+                let t = (0..s.nodes.len() as u32)
+                    .filter(|&i| s.nodes[i as usize].parent == NO_NODE)
+                    .map(|root| triangles_within(s, root, e as f32))
+                    .sum();
+                (e, t)
+            })
+            .collect();
         let (major, minor) = r.version();
         SceneStats {
             format_version: format!("{major}.{minor}"),
@@ -138,6 +189,7 @@ impl SceneStats {
             leaf_triangles_per_level: per_level,
             hlod_triangles_per_depth: per_depth,
             hlod_levels_per_depth: levels_per_depth,
+            triangles_at_error,
             bounds_min: s.bounds.min.to_array(),
             bounds_max: s.bounds.max.to_array(),
             origin: s.origin.to_array(),

@@ -64,11 +64,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for (d, t) in s.hlod_triangles_per_depth.iter().enumerate() {
         out!("  depth {d:<3} {t:>14}")?;
     }
-    out!("HLOD levels per tree depth (inner nodes; finest HLOD's median triangles and error / box diagonal):")?;
-    out!("  depth  inner  leaves  levels min/median/max  finest tris  finest error")?;
+    out!("HLOD levels per tree depth (inner nodes; finest HLOD's median triangles and error / box diagonal;")?;
+    out!("  switch: triangles the children draw at that error / the finest HLOD's, median and largest):")?;
+    out!(
+        "  depth  inner  leaves  levels min/median/max  finest tris  finest error  switch med/max"
+    )?;
     for l in &s.hlod_levels_per_depth {
         out!(
-            "  {:<5} {:>6} {:>7}  {:>6}/{}/{:<12} {:>11}  {:>11.2}%",
+            "  {:<5} {:>6} {:>7}  {:>6}/{}/{:<12} {:>11}  {:>11.2}%  {:>6.2}/{:.2}",
             l.depth,
             l.inner_nodes,
             l.leaves,
@@ -76,8 +79,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             l.levels_median,
             l.levels_max,
             l.finest_triangles_median,
-            100.0 * l.finest_error_median
+            100.0 * l.finest_error_median,
+            l.switch_factor_median,
+            l.switch_factor_max
         )?;
+    }
+    out!("whole-scene triangles at one error (each node its coarsest level within it):")?;
+    for (e, t) in &s.triangles_at_error {
+        out!("  error {e:<12.6} {t:>14}")?;
     }
     out!("sections:")?;
     for (name, len) in &s.sections {

@@ -84,6 +84,7 @@ fn info_text_and_json() {
     );
     assert!(out.contains("source    hand.glb"), "{out}");
     assert!(out.contains("HLOD levels per tree depth"), "{out}");
+    assert!(out.contains("whole-scene triangles at one error"), "{out}");
 
     let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--json"]);
     assert!(ok, "{err}");
@@ -100,6 +101,20 @@ fn info_text_and_json() {
     assert_eq!(d[0]["finest_triangles_median"], 1);
     let e = d[0]["finest_error_median"].as_f64().unwrap();
     assert!((e - 3.0 / 170f64.sqrt()).abs() < 1e-9, "{e}");
+    // Within the root's error 3 each leaf draws its 1-triangle level.
+    assert_eq!(d[0]["switch_factor_median"], 2.0);
+    assert_eq!(d[0]["switch_factor_max"], 2.0);
+    // Diagonal sqrt(170) = 13.04: error 6.5 and 3.3 take the root's
+    // 1-triangle HLOD, 1.6 the leaves' 1-triangle levels, below 1 the
+    // leaves' 2 triangles each.
+    let at: Vec<(f64, u64)> = serde_json::from_value(v["triangles_at_error"].clone()).unwrap();
+    assert_eq!(at.len(), 16);
+    assert!((at[0].0 - 170f64.sqrt() / 2.0).abs() < 1e-9, "{at:?}");
+    assert_eq!(
+        at.iter().map(|x| x.1).take(4).collect::<Vec<_>>(),
+        [1, 1, 2, 4]
+    );
+    assert!(at.iter().skip(3).all(|x| x.1 == 4), "{at:?}");
     assert_eq!(
         (d[1]["inner_nodes"].clone(), d[1]["leaves"].clone()),
         (0.into(), 2.into())

@@ -331,7 +331,7 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, offs
     } else {
         f32::MAX
     };
-    let mut limit_error = r.sampling.floor.max(cap * 1e-6);
+    let mut limit_error = r.sampling.floor.max(cap * 1e-6).max(f32::MIN_POSITIVE);
     while let Some(last) = lods.last() {
         let n = last.mesh.triangles();
         if n <= p.floor {
@@ -372,6 +372,9 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, offs
         // of 0.27. When the measured distance is far above the limit,
         // clustering at the same limits is measured too and the nearer
         // level kept.
+        // `measured` includes what earlier levels moved, so an inner
+        // node's later levels (after a first level made without a limit)
+        // may be compared more often than needed: time, not a wrong choice.
         // NaN-safe: a NaN or infinite measurement is suspect too.
         let plausible = measured.is_finite() && measured <= SUSPECT_OVER_LIMIT * e;
         if was_collapse && !plausible {
@@ -758,11 +761,14 @@ mod tests {
         // off in a 17-unit leaf. Clustering at the same limits keeps them.
         let mesh = obj_mesh(include_str!("../testdata/ladder_leaf.obj"));
         assert_eq!(mesh.triangles(), 888);
-        let diagonal = 17.3;
+        // The leaf's box (0.5 x 17 x 0.5).
+        let diagonal = 17.02;
         let lods = leaf_lods(mesh, diagonal, &P);
         assert!(lods.len() >= 3, "{} levels", lods.len());
+        // Far below the 8.95 of the halved rails; the levels found are
+        // within 0.1 (a rung's length is 0.44).
         assert!(
-            lods[1].error < 0.01 * diagonal as f32,
+            lods[1].error < 1.0,
             "level 1: {} triangles at error {}",
             lods[1].mesh.triangles(),
             lods[1].error

@@ -332,6 +332,11 @@ impl<'s> Runtime<'s> {
             .collect::<Result<Vec<_>, _>>()?;
         // The pinned set, read once for every device.
         let total = plan.pinned().count() as u64;
+        if total == 0 {
+            // Nothing fits the pinned share (the first node's coarsest LOD
+            // is larger): say so rather than nothing.
+            progress(0, 0);
+        }
         for (done, l) in (1..).zip(plan.pinned()) {
             let mesh = scene.read_lod(l).map_err(|source| RuntimeError::Load {
                 source: Box::new(source),
@@ -374,7 +379,7 @@ impl<'s> Runtime<'s> {
     /// streams it under `budget` a device ([`Runtime::streaming`]).
     /// `progress` hears (LODs read, LODs to read) after each LOD read before
     /// the first frame: every LOD when resident, the pinned set when
-    /// streamed.
+    /// streamed; (0, 0) once when there is none to read.
     pub fn with_budget<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,

@@ -72,16 +72,24 @@ fn median<T: Copy + PartialOrd + Default>(v: &mut [T]) -> T {
     v.get(v.len() / 2).copied().unwrap_or_default()
 }
 
-/// Triangles the subtree of `node` draws at `error`: the node's coarsest
-/// level within it, else its children's (a leaf's finest level is exact).
+/// Triangles the subtree of `node` draws at `error`: each node its
+/// coarsest level within it, else its children's; a leaf with no level
+/// within it draws its finest (as traversal does). Iterative: a
+/// validated scene may still be one long chain of nodes.
 fn triangles_within(s: &crate::Skeleton, node: u32, error: f32) -> u64 {
-    match s.node_lods(node).iter().rev().find(|l| l.error <= error) {
-        Some(l) => u64::from(l.triangles),
-        None => s.nodes[node as usize]
-            .children()
-            .map(|c| triangles_within(s, c, error))
-            .sum(),
+    let mut total = 0;
+    let mut stack = vec![node];
+    while let Some(n) = stack.pop() {
+        let lods = s.node_lods(n);
+        match lods.iter().rev().find(|l| l.error <= error) {
+            Some(l) => total += u64::from(l.triangles),
+            None if s.nodes[n as usize].is_leaf() => {
+                total += lods.first().map_or(0, |l| u64::from(l.triangles));
+            }
+            None => stack.extend(s.nodes[n as usize].children()),
+        }
     }
+    total
 }
 
 impl SceneStats {

@@ -86,7 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     out!("whole-scene triangles at one error (each node its coarsest level within it):")?;
     for (e, t) in &s.triangles_at_error {
-        out!("  error {e:<12.6} {t:>14}")?;
+        out!("  error {e:<12.4e} {t:>14}")?;
     }
     out!("sections:")?;
     for (name, len) in &s.sections {

@@ -733,25 +733,6 @@ mod tests {
         assert!(lods.last().unwrap().mesh.triangles() < lods[0].mesh.triangles() / 2);
     }
 
-    /// The positions and triangles of a small OBJ file (`v` and `f` lines).
-    fn obj_mesh(text: &str) -> WorkMesh {
-        let mut m = WorkMesh::default();
-        for line in text.lines() {
-            let mut t = line.split_whitespace();
-            match t.next() {
-                Some("v") => {
-                    let p: Vec<f32> = t.map(|x| x.parse().unwrap()).collect();
-                    m.positions.push([p[0], p[1], p[2]]);
-                    m.normals.push([0.0, 1.0, 0.0]);
-                    m.colours.push([128, 128, 128, 255]);
-                }
-                Some("f") => m.indices.extend(t.map(|x| x.parse::<u32>().unwrap() - 1)),
-                _ => {}
-            }
-        }
-        m
-    }
-
     #[test]
     fn a_level_that_shortens_thin_tubes_gives_way_to_clustering() {
         // Edge collapse's quadric error barely sees a thin tube's end
@@ -759,7 +740,12 @@ mod tests {
         // the first level that kept at most 65% of the triangles (at an
         // error limit of 0.27) had halved both rails, measured 8.95 units
         // off in a 17-unit leaf. Clustering at the same limits keeps them.
-        let mesh = obj_mesh(include_str!("../testdata/ladder_leaf.obj"));
+        let model = gigawalk_import::import_obj_str(
+            include_str!("../testdata/ladder_leaf.obj"),
+            "ladder_leaf.obj",
+        )
+        .unwrap();
+        let mesh = mesh_of(model.objects.into_iter().next().unwrap());
         assert_eq!(mesh.triangles(), 888);
         // The leaf's box (0.5 x 17 x 0.5).
         let diagonal = 17.02;

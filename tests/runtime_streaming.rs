@@ -210,11 +210,14 @@ fn an_eviction_storm_keeps_drawing_stand_ins() {
     let scene = SceneReader::open(&file).unwrap();
     let Some(d) = devices(2) else { return };
     // A twelfth of the scene: the walk at full detail needs far more (it
-    // evicts all the time), the first pose at 1 px about two thirds of
-    // it. At a sixteenth that pose took 86% of the pool, and 1 run in 6
-    // (2026-11-30, revision 7 scenes) never placed its last LODs (not
-    // traced: a pool that does not compact need not fit a set that
-    // nearly fills it; ARCHITECTURE, invariants).
+    // evicts all the time), the first pose at 1 px about half of it. At a
+    // sixteenth that pose failed to settle 1 run in 6 (2026-11-30, traced):
+    // its LODs took 132k of the 271k pool when OR's occluders were all
+    // resident, but when the held run began with them missing, occlusion
+    // culled less, the pose chose 271k of LODs plus 33k pinned, and the
+    // occluders that would have shrunk that set found no room either
+    // (ARCHITECTURE, invariants). The pool's old vertex/index split failed
+    // the same pose another way: no vertex room with a fifth of it free.
     let budget = scene_bytes(&scene) / 12;
     assert!(
         budget >= MIN_MEMORY_BUDGET,

@@ -220,28 +220,40 @@ impl Residency for ResidentGeometry {
     }
 }
 
-/// One pair of pool buffers and what of them is taken, in elements.
+/// Bytes of the pool's allocation unit: one vertex, or five indices. A
+/// LOD takes whole units (its indices padded to a unit), so every LOD's
+/// vertices start on a whole `base_vertex` of the buffer.
+const UNIT_BYTES: u64 = VERTEX_BYTES;
+/// Indices in a unit.
+const UNIT_INDICES: u32 = (UNIT_BYTES / INDEX_BYTES) as u32;
+const _: () = assert!(UNIT_BYTES.is_multiple_of(INDEX_BYTES));
+
+/// One pool buffer (bound as both the vertex and the index buffer) and
+/// what of it is taken, in units.
 struct Page {
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    free_vertices: RangeAllocator<u32>,
-    free_indices: RangeAllocator<u32>,
+    buffer: wgpu::Buffer,
+    free: RangeAllocator<u32>,
 }
 
 /// Where a resident LOD sits in the pool.
 #[derive(Clone, Debug)]
 struct Slot {
     range: LodRange,
-    vertices: Range<u32>,
-    indices: Range<u32>,
+    units: Range<u32>,
     bytes: u64,
 }
 
-/// A fixed amount of one device's memory for geometry (vertex and index
-/// buffers made once, at most the device's buffer limit each), that LODs
-/// are put into and taken out of one by one. It keeps no policy: the
-/// caller chooses what to insert and what to remove (the runtime's memory
-/// budget, least recently drawn first).
+/// A fixed amount of one device's memory for geometry (buffers made once,
+/// at most the device's buffer limit each), that LODs are put into and
+/// taken out of one by one. It keeps no policy: the caller chooses what to
+/// insert and what to remove (the runtime's memory budget, least recently
+/// drawn first).
+///
+/// A LOD's vertices and indices lie side by side in one range of one
+/// buffer, so any LOD fits wherever its bytes are free in one piece: with
+/// separate vertex and index buffers split in the scene's proportions, a
+/// working set richer in vertices than the scene ran out of vertex room
+/// with a fifth of the pool free (a held camera then never settled).
 ///
 /// Overwriting a removed LOD's range is safe while earlier frames still
 /// draw from it on the GPU: `Queue::write_buffer` takes effect at the next
@@ -253,41 +265,47 @@ pub struct GeometryPool {
     capacity_bytes: u64,
 }
 
+/// Units `lod` takes in a pool (vertices, then indices), if a `u32` range
+/// can hold them.
+fn pool_units(lod: &DecodedLod) -> Option<u32> {
+    let units =
+        lod.vertices.len() as u64 + lod.indices.len().div_ceil(UNIT_INDICES as usize) as u64;
+    u32::try_from(units.max(1)).ok()
+}
+
 impl GeometryPool {
-    /// A pool for a scene of `lods` LODs with room for `vertex_bytes` of
-    /// vertices and `index_bytes` of indices (rounded down to whole
-    /// elements), split into buffers of at most `max_buffer_bytes`.
+    /// A pool for a scene of `lods` LODs with room for `bytes` of
+    /// geometry (rounded down to whole units of 20 bytes), split into
+    /// buffers of at most `max_buffer_bytes`.
     pub fn new(
         ctx: &GpuContext,
         lods: usize,
-        vertex_bytes: u64,
-        index_bytes: u64,
+        bytes: u64,
         max_buffer_bytes: u64,
     ) -> Result<Self, GpuError> {
-        let max = max_buffer_bytes.min(u32::MAX as u64 * INDEX_BYTES);
-        // Element counts a buffer can address (u32 ranges, i32 base vertex).
-        let max_v = (max / VERTEX_BYTES).min(i32::MAX as u64);
-        let max_i = (max / INDEX_BYTES).min(u32::MAX as u64);
-        if max_v == 0 || max_i == 0 {
+        // Units a buffer can address: the first index (five a unit) is a
+        // u32, the base vertex (one a unit) an i32.
+        let max = (max_buffer_bytes / UNIT_BYTES).min(u32::MAX as u64 / UNIT_INDICES as u64);
+        if max == 0 {
             return Err(GpuError::TooLarge {
                 what: "a geometry pool buffer".into(),
                 needed: VERTEX_BYTES,
                 limit: max_buffer_bytes,
             });
         }
-        let (nv, ni) = (vertex_bytes / VERTEX_BYTES, index_bytes / INDEX_BYTES);
-        let pages = nv.div_ceil(max_v).max(ni.div_ceil(max_i)).max(1);
-        let (pv, pi) = (nv / pages, ni / pages);
+        let units = bytes / UNIT_BYTES;
+        let pages = units.div_ceil(max).max(1);
+        let per = units / pages;
         let mut out = Vec::with_capacity(pages as usize);
         for p in 0..pages {
-            let make = |what: &str, bytes, usage| {
-                geometry_buffer(ctx, &format!("pool {what} {p}"), bytes, usage)
-            };
             out.push(Page {
-                vertices: make("vertices", pv * VERTEX_BYTES, wgpu::BufferUsages::VERTEX),
-                indices: make("indices", pi * INDEX_BYTES, wgpu::BufferUsages::INDEX),
-                free_vertices: RangeAllocator::new(0..pv as u32),
-                free_indices: RangeAllocator::new(0..pi as u32),
+                buffer: geometry_buffer(
+                    ctx,
+                    &format!("pool {p}"),
+                    per * UNIT_BYTES,
+                    wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::INDEX,
+                ),
+                free: RangeAllocator::new(0..per as u32),
             });
         }
         ctx.check()?;
@@ -295,7 +313,7 @@ impl GeometryPool {
             pages: out,
             slots: vec![None; lods],
             used_bytes: 0,
-            capacity_bytes: pages * (pv * VERTEX_BYTES + pi * INDEX_BYTES),
+            capacity_bytes: pages * per * UNIT_BYTES,
         })
     }
 
@@ -304,7 +322,8 @@ impl GeometryPool {
         self.capacity_bytes
     }
 
-    /// Device bytes the resident LODs take.
+    /// Device bytes the resident LODs take (each rounded up to whole
+    /// units: at most 16 bytes more than its vertices and indices).
     pub fn used_bytes(&self) -> u64 {
         self.used_bytes
     }
@@ -323,54 +342,53 @@ impl GeometryPool {
 
     /// Whether `lod` could fit in an empty pool.
     pub fn could_hold(&self, lod: &DecodedLod) -> bool {
-        self.pages.iter().any(|p| {
-            p.free_vertices.initial_range().len() >= lod.vertices.len()
-                && p.free_indices.initial_range().len() >= lod.indices.len()
+        pool_units(lod).is_some_and(|u| {
+            self.pages
+                .iter()
+                .any(|p| p.free.initial_range().len() >= u as usize)
         })
     }
 
     /// Puts `lod` (id `id`) in the pool and writes it to the device; false
-    /// when no page has room for it (nothing changes then). A LOD already
-    /// resident stays where it is.
+    /// when no page has room for it in one piece (nothing changes then). A
+    /// LOD already resident stays where it is.
     pub fn insert(&mut self, ctx: &GpuContext, id: u32, lod: &DecodedLod) -> bool {
         if self.contains(id) {
             return true;
         }
+        let Some(units) = pool_units(lod) else {
+            return false;
+        };
         if id as usize >= self.slots.len() {
             return false;
         }
-        let (nv, ni) = (lod.vertices.len() as u32, lod.indices.len() as u32);
         for (b, page) in self.pages.iter_mut().enumerate() {
-            let Ok(v) = page.free_vertices.allocate_range(nv.max(1)) else {
+            let Ok(r) = page.free.allocate_range(units) else {
                 continue;
             };
-            let Ok(i) = page.free_indices.allocate_range(ni.max(1)) else {
-                page.free_vertices.free_range(v);
-                continue;
-            };
-            ctx.queue.write_buffer(
-                &page.vertices,
-                v.start as u64 * VERTEX_BYTES,
-                bytemuck::cast_slice(&lod.vertices),
-            );
-            ctx.queue.write_buffer(
-                &page.indices,
-                i.start as u64 * INDEX_BYTES,
-                bytemuck::cast_slice(&lod.indices),
-            );
+            let indices_at = r.start + lod.vertices.len() as u32;
+            for (at, data) in [
+                (r.start, bytemuck::cast_slice::<_, u8>(&lod.vertices)),
+                (indices_at, bytemuck::cast_slice(&lod.indices)),
+            ] {
+                if !data.is_empty() {
+                    ctx.queue
+                        .write_buffer(&page.buffer, at as u64 * UNIT_BYTES, data);
+                }
+            }
+            let bytes = r.len() as u64 * UNIT_BYTES;
             self.slots[id as usize] = Some(Slot {
                 range: LodRange {
                     buffer: b as u32,
-                    first_index: i.start,
-                    index_count: ni,
-                    base_vertex: v.start as i32,
+                    first_index: indices_at * UNIT_INDICES,
+                    index_count: lod.indices.len() as u32,
+                    base_vertex: r.start as i32,
                     origin: lod.origin,
                 },
-                vertices: v,
-                indices: i,
-                bytes: lod.bytes(),
+                units: r,
+                bytes,
             });
-            self.used_bytes += lod.bytes();
+            self.used_bytes += bytes;
             return true;
         }
         false
@@ -381,10 +399,10 @@ impl GeometryPool {
         let Some(slot) = self.slots.get_mut(id as usize).and_then(Option::take) else {
             return;
         };
-        let page = &mut self.pages[slot.range.buffer as usize];
         self.used_bytes -= slot.bytes;
-        page.free_vertices.free_range(slot.vertices);
-        page.free_indices.free_range(slot.indices);
+        self.pages[slot.range.buffer as usize]
+            .free
+            .free_range(slot.units);
     }
 }
 
@@ -393,7 +411,7 @@ impl Residency for GeometryPool {
         self.slots.get(lod as usize)?.as_ref().map(|s| s.range)
     }
     fn buffers(&self, buffer: u32) -> (&wgpu::Buffer, &wgpu::Buffer) {
-        let p = &self.pages[buffer as usize];
-        (&p.vertices, &p.indices)
+        let p = &self.pages[buffer as usize].buffer;
+        (p, p)
     }
 }

@@ -3,7 +3,10 @@
 //! from the origin renders like the same scene at the origin.
 
 use gigawalk_cull::Camera;
-use gigawalk_gpu::{devices_or_skip, DepthPass, DrawStyle, HostGeometry, View, VisiblePass};
+use gigawalk_gpu::{
+    devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, HostGeometry, View,
+    VisiblePass,
+};
 use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use glam::{DVec3, Vec3};
 
@@ -262,4 +265,71 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
     // A new frame clears the depth.
     q.begin(&ctx, &v);
     assert!(q.query(&ctx, Some(&geometry), &[behind]).unwrap()[0] > 0);
+}
+
+/// A streaming pool holds LODs of any mix of vertices and indices up to its
+/// bytes, and draws them as the resident geometry does. (Its vertex and
+/// index buffers were once split in the scene's proportions: a working set
+/// richer in vertices than the scene found no vertex room with a fifth of
+/// the pool free, and a held camera never settled.)
+#[test]
+fn a_pool_takes_any_mix_of_vertices_and_indices_and_draws_like_resident_geometry() {
+    let Some(ctx) = devices_or_skip(1, "geometry pool").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    write_scene(&path, DVec3::ZERO);
+    let scene = SceneReader::open(&path).unwrap();
+    let boxes: Vec<DecodedLod> = (0..2)
+        .map(|l| DecodedLod::new(&scene.read_lod(l).unwrap()))
+        .collect();
+    // Fillers of equal bytes: all vertices but one triangle, and all
+    // indices (degenerate triangles) but two vertices.
+    let filler = |vertices: usize, indices: usize| DecodedLod {
+        vertices: vec![boxes[0].vertices[0]; vertices],
+        indices: vec![0; indices],
+        origin: DVec3::ZERO,
+    };
+    let (vertex_heavy, index_heavy) = (filler(50, 5), filler(2, 245));
+    assert_eq!(vertex_heavy.bytes(), index_heavy.bytes());
+    // A LOD takes whole units of a vertex's 20 bytes: the pool is exactly
+    // full once all three are in.
+    let units = |l: &DecodedLod| l.bytes().next_multiple_of(20);
+    let bytes = boxes.iter().map(units).sum::<u64>() + units(&vertex_heavy);
+    let mut pool = GeometryPool::new(&ctx, 4, bytes, 1 << 20).unwrap();
+    assert_eq!(pool.capacity_bytes(), bytes);
+    assert!(pool.insert(&ctx, 2, &vertex_heavy));
+    assert!(pool.insert(&ctx, 1, &boxes[1]));
+    assert!(pool.insert(&ctx, 0, &boxes[0]));
+    assert_eq!(pool.used_bytes(), bytes);
+    assert!(!pool.insert(&ctx, 3, &filler(1, 0)), "a full pool refuses");
+    pool.remove(2);
+    assert!(
+        pool.insert(&ctx, 2, &index_heavy),
+        "the index-heavy LOD fits where the vertex-heavy one was"
+    );
+    assert_eq!(pool.used_bytes(), bytes);
+
+    let resident = HostGeometry::load(&scene, 1 << 20)
+        .unwrap()
+        .upload(&ctx)
+        .unwrap();
+    let v = view(DVec3::ZERO, 64, 48);
+    let draw = |geometry: &dyn gigawalk_gpu::Residency| {
+        let mut rvg = VisiblePass::new(&ctx, 64, 48);
+        rvg.begin(&ctx, &v, DrawStyle::Shaded);
+        rvg.draw(&ctx, geometry, &[0, 1]);
+        let frame = rvg.finish(&ctx, true).unwrap().unwrap();
+        let depth = DepthPass::new(&ctx, 64, 48)
+            .render(&ctx, geometry, &v, &[0, 1])
+            .unwrap();
+        (frame.colour, frame.depth.depth, depth.depth)
+    };
+    let (from_pool, from_resident) = (draw(&pool), draw(&resident));
+    assert!(
+        from_resident.0.chunks_exact(4).any(|p| p[0] > 200),
+        "the red box is drawn"
+    );
+    assert_eq!(from_pool, from_resident);
 }

@@ -314,16 +314,8 @@ impl DeviceStream {
         plan: &Plan,
         max_buffer: u64,
     ) -> Result<Self, RuntimeError> {
-        let (v, i) = scene_bytes(skeleton);
-        let vertex_bytes = (plan.budget as f64 * v as f64 / (v + i).max(1) as f64) as u64;
-        let pool = GeometryPool::new(
-            ctx,
-            skeleton.lods.len(),
-            vertex_bytes,
-            plan.budget - vertex_bytes.min(plan.budget),
-            max_buffer,
-        )
-        .map_err(|source| RuntimeError::Setup { source })?;
+        let pool = GeometryPool::new(ctx, skeleton.lods.len(), plan.budget, max_buffer)
+            .map_err(|source| RuntimeError::Setup { source })?;
         let n = skeleton.lods.len();
         Ok(DeviceStream {
             device,

@@ -365,9 +365,18 @@ impl<'a> OrStage<'a> {
         reselect_lods(self.skeleton, view, &traversal, occluders, &mut |i| {
             items.push(i)
         });
-        // `run_presenting` resolved `Auto` for these devices.
-        if let OccluderBudget::Triangles(budget) = self.opts.occluder_budget {
-            select_occluders(self.skeleton, view, &mut items, budget);
+        // `run_presenting` resolved `Auto` for these devices. Streaming, all
+        // of them best first too: the pool keeps those that fit it first.
+        let streaming =
+            matches!(&self.render, OrRender::Gpu { device, .. } if device.plan.is_some());
+        match self.opts.occluder_budget {
+            OccluderBudget::Triangles(budget) => {
+                select_occluders(self.skeleton, view, &mut items, budget);
+            }
+            _ if streaming => {
+                select_occluders(self.skeleton, view, &mut items, u64::MAX);
+            }
+            _ => {}
         }
         if items.is_empty() {
             // No occluder (a budget of 0, or nothing in view): an all-far

@@ -301,6 +301,8 @@ pub(crate) struct DeviceStream {
     /// The newest frame any stage drew on this device.
     newest: u64,
     standins: HashSet<u32>,
+    /// Device bytes of the pinned LODs in the pool.
+    pinned_bytes: u64,
     stats: StreamStats,
 }
 
@@ -328,6 +330,7 @@ impl DeviceStream {
             frame: 0,
             newest: 0,
             standins: HashSet::new(),
+            pinned_bytes: 0,
             stats: StreamStats::default(),
         })
     }
@@ -339,6 +342,7 @@ impl DeviceStream {
     pub fn pin(&mut self, ctx: &GpuContext, plan: &Plan, id: u32, lod: &DecodedLod) {
         if self.pool.insert(ctx, id, lod) {
             plan.set_held(id, self.device, true);
+            self.pinned_bytes += self.pool.bytes_of(id);
         }
     }
 
@@ -516,31 +520,60 @@ impl DeviceStream {
                 Err(TryRecvError::Disconnected) => return None,
             }
         }
+        // Occluders come best first (OR ranks them when streaming): those
+        // that fit beside the pinned set, greedily, are kept from eviction
+        // and asked for; the rest are drawn while resident, not kept. So
+        // when a pose's occluders outgrow the pool, the ones that hide most
+        // stay: kept all alike, whichever arrived last found no room, and
+        // when those were the ones that hid most, occlusion culled less,
+        // the visible set grew past the budget and never shrank again (a
+        // held camera drew stand-ins for good).
+        let room = self.pool.capacity_bytes().saturating_sub(self.pinned_bytes);
+        let mut kept = 0u64;
         let mut out = Vec::with_capacity(lods.len());
         for &lod in lods {
+            let l = lod as usize;
+            let keep = usage == Use::Visible || plan.pinned.get(l).copied().unwrap_or(false) || {
+                let bytes = match self.pool.bytes_of(lod) {
+                    0 => skeleton.lods.get(l).map_or(0, |i| {
+                        let (v, i) = lod_bytes(i);
+                        v + i
+                    }),
+                    b => b,
+                };
+                let fits = kept + bytes <= room;
+                kept += if fits { bytes } else { 0 };
+                fits
+            };
             if self.pool.contains(lod) {
-                self.touch(plan, lod, frame, true);
+                if keep {
+                    self.touch(plan, lod, frame, true);
+                }
                 out.push(lod);
                 continue;
             }
-            if usage == Use::Occluders || lod as usize >= self.requested.len() {
+            if !keep || l >= self.requested.len() {
                 continue;
             }
-            let asked = self.requested[lod as usize];
+            let asked = self.requested[l];
             if asked == 0 || asked + STALE_FRAMES <= frame + 1 {
                 if let Some(tx) = &link.requests {
                     match tx.try_send(Request {
                         lod,
                         frame,
-                        prefetch: false,
+                        // OR's: served when no stand-in waits for a load.
+                        prefetch: usage == Use::Occluders,
                     }) {
                         Ok(()) => {
-                            self.requested[lod as usize] = frame + 1;
+                            self.requested[l] = frame + 1;
                             self.stats.requests += 1;
                         }
                         Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {}
                     }
                 }
+            }
+            if usage == Use::Occluders {
+                continue;
             }
             match self.stand_in(skeleton, plan, lod) {
                 StandIn::Draw(s) => {
@@ -674,7 +707,7 @@ pub(crate) fn loader(
     let mut prefetching = true;
     loop {
         if pending.is_empty() {
-            // Idle: wait for either queue (prefetches only while STC runs).
+            // Idle: wait for either queue (prefetches only while STC or OR runs).
             if prefetching {
                 crossbeam_channel::select! {
                     recv(requests) -> r => match r {
@@ -848,12 +881,25 @@ mod tests {
         budget: u64,
         script: &[(&[u32], &[u32])],
     ) -> (Vec<Vec<u32>>, Vec<StreamStats>, Vec<u32>) {
+        let (drawn, stats, resident, _) = walk(ctx, budget, Use::Visible, script);
+        (drawn, stats, resident)
+    }
+
+    /// [`stand_in_walk`] for a stage that uses the LODs as `usage`; also
+    /// what it asked the loader for.
+    #[allow(clippy::type_complexity)]
+    fn walk(
+        ctx: &GpuContext,
+        budget: u64,
+        usage: Use,
+        script: &[(&[u32], &[u32])],
+    ) -> (Vec<Vec<u32>>, Vec<StreamStats>, Vec<u32>, Vec<Request>) {
         let (skeleton, meshes, triangle) = three_leaves();
         let plan = Plan::new(&skeleton, budget * triangle + triangle / 2);
         assert_eq!(plan.pinned().collect::<Vec<_>>(), [0]);
         let mut s = DeviceStream::new(ctx, 0, &skeleton, &plan, 1 << 28).unwrap();
         s.pin(ctx, &plan, 0, &DecodedLod::new(&meshes[0]));
-        let (req_tx, _req_rx) = unbounded();
+        let (req_tx, req_rx) = unbounded();
         let (in_tx, in_rx) = unbounded();
         let link = Link {
             requests: Some(req_tx),
@@ -865,14 +911,41 @@ mod tests {
                 let mesh = DecodedLod::new(&meshes[lod as usize]);
                 in_tx.send(Arc::new((lod, mesh))).unwrap();
             }
-            let out = s.prepare(ctx, &skeleton, &plan, &link, f as u64, chosen, Use::Visible);
+            let out = s.prepare(ctx, &skeleton, &plan, &link, f as u64, chosen, usage);
             drawn.push(out.unwrap());
             stats.push(s.take_stats());
         }
         let resident = (0..meshes.len() as u32)
             .filter(|&l| s.pool.contains(l))
             .collect();
-        (drawn, stats, resident)
+        (drawn, stats, resident, req_rx.try_iter().collect())
+    }
+
+    #[test]
+    fn occluders_that_fit_are_kept_and_asked_for_best_first_and_the_rest_go_first() {
+        let Some(d) = gigawalk_gpu::devices_or_skip(1, "occluder keeping") else {
+            return;
+        };
+        // OR's occluders, best first: leaf 3 (LOD 4, not resident), leaf 2
+        // (3) and leaf 1 (1), 40 triangles each; 3 and 1 arrive in frame
+        // 0. In a pool of 100 triangles beside the pinned root, 4 and 3
+        // fit: 4 is asked for (as a prefetch) and 3 kept, 1 is drawn but
+        // not kept, so when 4 arrives in frame 3 it takes 1's room. (Kept
+        // alike, 1 stayed and 4 was dropped, never asked for by OR: when
+        // the occluders dropped were those that hid most, a held camera's
+        // visible set grew past the budget for good.)
+        let script: [(&[u32], &[u32]); 4] = [
+            (&[3, 1], &[4, 3, 1]),
+            (&[], &[4, 3, 1]),
+            (&[], &[4, 3, 1]),
+            (&[4], &[4, 3, 1]),
+        ];
+        let (drawn, _, resident, asked) = walk(&d[0], 100, Use::Occluders, &script);
+        assert_eq!(drawn[..3], [[3, 1], [3, 1], [3, 1]]);
+        assert_eq!(drawn[3], [4, 3]);
+        assert_eq!(resident, [0, 3, 4]);
+        assert!(!asked.is_empty());
+        assert!(asked.iter().all(|r| r.lod == 4 && r.prefetch), "{asked:?}");
     }
 
     #[test]

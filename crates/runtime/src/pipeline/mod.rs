@@ -267,8 +267,12 @@ pub(super) fn stream_links<'a>(
     let (requests_tx, requests) = bounded(REQUEST_QUEUE);
     let (a_tx, a_rx) = bounded(INBOX);
     let mut devices = vec![a_tx];
+    let (prefetch_tx, prefetches) = bounded(PREFETCH_QUEUE);
+    // OR on a device of its own asks for the occluders it keeps there, as
+    // prefetches (RVG's stand-ins first). On RVG's device it asks for
+    // nothing: its asking would hold back RVG's demands for the same LODs.
     let or_link = Link {
-        requests: None,
+        requests: (a != b).then(|| prefetch_tx.clone()),
         inbox: a_rx.clone(),
     };
     let rvg_inbox = if a == b {
@@ -278,7 +282,6 @@ pub(super) fn stream_links<'a>(
         devices.push(b_tx);
         b_rx
     };
-    let (prefetch_tx, prefetches) = bounded(PREFETCH_QUEUE);
     let stc = opts.prefetch.any().then(|| Prefetch {
         requests: prefetch_tx,
         plan,

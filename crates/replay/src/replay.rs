@@ -321,7 +321,13 @@ pub fn replay_on(
     // Cullers this scene or runtime cannot run fail here, before the
     // reference is rendered, not with a partial report after it.
     let occluding = opts.modes.iter().any(|m| m.traversal(0.0).occlusion);
-    if occluding && opts.cullers.contains(&CullMethod::Ct) && !rt.has_occluders() {
+    // A stored but corrupt OCCL or OCVC is an error naming it, not "none".
+    if occluding
+        && opts.cullers.contains(&CullMethod::Ct)
+        && !rt
+            .has_occluders()
+            .map_err(|e| ReplayError::Start(Box::new(e)))?
+    {
         return Err(ReplayError::Options(
             "the ct culler needs the scene's occluders, and this scene file stores none (written before they were stored): preprocess it again".into(),
         ));

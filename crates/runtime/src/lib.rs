@@ -395,10 +395,19 @@ impl<'s> Runtime<'s> {
         }
     }
 
-    /// Whether the scene stores occluders for the `ct` culler (a scene
-    /// that cannot be read says no; the run would say why).
-    pub fn has_occluders(&self) -> bool {
-        matches!(self.source.occluders(), Ok(Some(_)))
+    /// Whether the scene stores occluders for the `ct` culler: reads its
+    /// OCCL and OCVC sections. `false` only when the file has no OCCL
+    /// section; a stored OCCL or OCVC that fails its checksum or its
+    /// checks is an error naming the file and section, not "no occluders".
+    pub fn has_occluders(&self) -> Result<bool, RuntimeError> {
+        let load = |source| RuntimeError::Load {
+            source: Box::new(source),
+        };
+        let Some(records) = self.source.occluders().map_err(load)? else {
+            return Ok(false);
+        };
+        self.source.occluder_cells(records.len()).map_err(load)?;
+        Ok(true)
     }
 
     /// Whether geometry is streamed under a memory budget.

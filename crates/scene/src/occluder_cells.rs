@@ -260,8 +260,10 @@ pub fn decode_occluder_cells(
 
 impl<R: ReadAt> SceneReader<R> {
     /// The scene's view cells, checked against its `occluders` occluders;
-    /// `None` when the file has no OCVC section (written before it
-    /// existed).
+    /// `None` only when the table of contents lists no OCVC section
+    /// (written before it existed). A stored section that fails its
+    /// checksum or its checks is an error naming the file and OCVC, never
+    /// `None`.
     pub fn occluder_cells(&self, occluders: usize) -> Result<Option<OccluderCells>, ReadError> {
         self.decode_optional(TAG_OCCLUDER_CELLS, |b| decode_occluder_cells(b, occluders))
     }

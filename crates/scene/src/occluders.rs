@@ -89,8 +89,10 @@ pub fn decode_occluders(bytes: &[u8]) -> Result<Vec<OccluderRecord>, (u64, Strin
 }
 
 impl<R: ReadAt> SceneReader<R> {
-    /// The scene's occluders; `None` when the file has no OCCL section
-    /// (written before it existed, or without occluders).
+    /// The scene's occluders; `None` only when the table of contents lists
+    /// no OCCL section (written before it existed). A stored section that
+    /// fails its checksum or its checks is an error naming the file and
+    /// OCCL, never `None`.
     pub fn occluders(&self) -> Result<Option<Vec<OccluderRecord>>, ReadError> {
         self.decode_optional(TAG_OCCLUDERS, decode_occluders)
     }

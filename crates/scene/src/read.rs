@@ -142,30 +142,38 @@ impl<R: ReadAt> SceneReader<R> {
         self.version
     }
 
-    /// The bytes of optional section `tag`, CRC checked; `None` when the
-    /// file has no such section.
+    /// The bytes of optional section `tag`, CRC checked; `None` only when
+    /// the table of contents lists no such section. A listed section that
+    /// fails its checksum is an error naming the file and section, never
+    /// `None`.
     pub fn optional_section(&self, tag: [u8; 4]) -> Result<Option<Vec<u8>>, ReadError> {
+        let Some(e) = self.optional.iter().find(|e| e.tag == tag) else {
+            return Ok(None);
+        };
+        self.checked_optional(e).map(Some)
+    }
+
+    /// One optional section's bytes, CRC checked.
+    fn checked_optional(&self, e: &TocEntry) -> Result<Vec<u8>, ReadError> {
         let err = |kind| ReadError {
             file: self.file.clone(),
             kind,
         };
-        let Some(e) = self.optional.iter().find(|e| e.tag == tag) else {
-            return Ok(None);
-        };
         let bytes = read_bytes(&self.src, e.offset, e.len).map_err(err)?;
         if crc32fast::hash(&bytes) != e.crc {
             return Err(err(ReadErrorKind::Checksum {
-                section: format::section_name(tag),
+                section: format::section_name(e.tag),
                 offset: e.offset,
                 end: e.offset + e.len,
             }));
         }
-        Ok(Some(bytes))
+        Ok(bytes)
     }
 
     /// Optional section `tag` decoded by `decode`, whose error (byte
     /// offset, what is wrong) becomes a corrupt-section error naming the
-    /// file and section; `None` when the file has no such section.
+    /// file and section; `None` only when the file has no such section (a
+    /// bad checksum is an error, as for [`SceneReader::optional_section`]).
     pub fn decode_optional<T>(
         &self,
         tag: [u8; 4],
@@ -253,7 +261,9 @@ impl<R: ReadAt> SceneReader<R> {
         })
     }
 
-    /// Reads every byte: checks the geometry section's checksum and every
+    /// Reads every byte: checks the geometry section's checksum, every
+    /// optional section's checksum (known to this reader or not), the
+    /// contents of the optional sections it knows (OCCL, OCVC) and every
     /// LOD. What `gigawalk info --verify` runs.
     pub fn verify(&self) -> Result<(), ReadError> {
         let e = |kind| ReadError {
@@ -281,6 +291,11 @@ impl<R: ReadAt> SceneReader<R> {
                 end,
             }));
         }
+        for o in &self.optional {
+            self.checked_optional(o)?;
+        }
+        let occluders = self.occluders()?.map_or(0, |o| o.len());
+        self.occluder_cells(occluders)?;
         for lod in 0..self.skeleton.lods.len() as u32 {
             self.read_lod(lod)?;
         }

@@ -12,7 +12,13 @@ use proptest::prelude::*;
 fn scene_bytes() -> Vec<u8> {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
-    common::write_tree(&path, &common::wide(5, glam::DVec3::new(3.0, -2.0, 1.0)));
+    // With occluders and view cells: damage to an optional section is
+    // damage too (verify checks every section).
+    common::write_tree_with(
+        &path,
+        &common::wide(5, glam::DVec3::new(3.0, -2.0, 1.0)),
+        common::occluder_sections(),
+    );
     std::fs::read(path).unwrap()
 }
 

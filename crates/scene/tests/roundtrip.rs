@@ -390,3 +390,100 @@ fn truncation_is_named() {
         "{e}"
     );
 }
+
+/// A stored optional section that fails its checksum or its checks is an
+/// error naming the file and the section, from `verify` (what `gigawalk
+/// info --verify` runs) and from the reader that decodes it; only a section
+/// the table of contents does not list reads as absent.
+#[test]
+fn a_damaged_optional_section_is_an_error_naming_it_never_absent() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    let mut optional = occluder_sections();
+    optional.push((*b"XTRA", b"a section no gigawalk knows".to_vec()));
+    write_tree_with(&path, &wide(3, DVec3::ZERO), optional);
+    let good = std::fs::read(&path).unwrap();
+    let r = SceneReader::from_source(good.clone(), "s.gwk").unwrap();
+    assert_eq!(r.occluders().unwrap().map(|o| o.len()), Some(2));
+    assert_eq!(r.occluder_cells(2).unwrap().map(|c| c.leaves()), Some(2));
+    r.verify().unwrap();
+    let sections = r.sections().to_vec();
+
+    for tag in ["OCCL", "OCVC", "XTRA"] {
+        let s = sections.iter().find(|s| s.name == tag).unwrap();
+        let mut bytes = good.clone();
+        bytes[(s.offset + s.len / 2) as usize] ^= 0x10;
+        // Opening reads no optional section.
+        let r = SceneReader::from_source(bytes, "damaged.gwk").unwrap();
+        let e = r.verify().unwrap_err();
+        assert!(
+            matches!(&e.kind, ReadErrorKind::Checksum { section, .. } if section == tag),
+            "{tag}: {e}"
+        );
+        assert!(e.to_string().starts_with("damaged.gwk: "), "{e}");
+        assert!(
+            e.to_string()
+                .contains(&format!("checksum mismatch in {tag}")),
+            "{e}"
+        );
+        let occluders = r.occluders();
+        let cells = r.occluder_cells(2);
+        match tag {
+            "OCCL" => {
+                let e = occluders.unwrap_err();
+                assert!(
+                    matches!(&e.kind, ReadErrorKind::Checksum { section, .. } if section == "OCCL"),
+                    "{e}"
+                );
+                assert!(cells.unwrap().is_some());
+            }
+            "OCVC" => {
+                assert_eq!(occluders.unwrap().map(|o| o.len()), Some(2));
+                let e = cells.unwrap_err();
+                assert!(
+                    matches!(&e.kind, ReadErrorKind::Checksum { section, .. } if section == "OCVC"),
+                    "{e}"
+                );
+            }
+            _ => {
+                assert!(occluders.unwrap().is_some());
+                assert!(cells.unwrap().is_some());
+            }
+        }
+    }
+
+    // Contents that fail their checks under a valid checksum: OCCL of an
+    // unknown version, OCVC naming an occluder OCCL does not hold.
+    let mut sections = occluder_sections();
+    sections[0].1[0] = 9;
+    let bad_occl = dir.path().join("bad-occl.gwk");
+    write_tree_with(&bad_occl, &wide(3, DVec3::ZERO), sections);
+    let r = SceneReader::open(&bad_occl).unwrap();
+    for e in [r.verify().unwrap_err(), r.occluders().unwrap_err()] {
+        assert!(
+            matches!(&e.kind, ReadErrorKind::Corrupt { section, .. } if section == "OCCL"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("bad-occl.gwk"), "{e}");
+    }
+    let mut sections = occluder_sections();
+    sections[0].1 = gigawalk_scene::occluders::encode_occluders(&[]);
+    let bad_ocvc = dir.path().join("bad-ocvc.gwk");
+    write_tree_with(&bad_ocvc, &wide(3, DVec3::ZERO), sections);
+    let r = SceneReader::open(&bad_ocvc).unwrap();
+    for e in [r.verify().unwrap_err(), r.occluder_cells(0).unwrap_err()] {
+        assert!(
+            matches!(&e.kind, ReadErrorKind::Corrupt { section, .. } if section == "OCVC"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("names occluder"), "{e}");
+    }
+
+    // Truly absent: none, and the scene verifies.
+    let plain = dir.path().join("plain.gwk");
+    write_tree(&plain, &wide(3, DVec3::ZERO));
+    let r = SceneReader::open(&plain).unwrap();
+    assert_eq!(r.occluders().unwrap(), None);
+    assert_eq!(r.occluder_cells(0).unwrap(), None);
+    r.verify().unwrap();
+}

@@ -208,7 +208,8 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((OQ_STREAMED.to_string(), Instant::now()));
         eprintln!("{OQ_STREAMED}");
     }
-    let occluders = runtime.has_occluders();
+    // A stored but corrupt OCCL or OCVC ends the viewer naming it.
+    let occluders = runtime.has_occluders()?;
     if settings.culler == CullMethod::Ct && !occluders {
         settings.culler = CullMethod::Hzb;
         start_message = Some((NO_OCCLUDERS.to_string(), Instant::now()));

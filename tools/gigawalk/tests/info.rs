@@ -19,6 +19,11 @@ fn gigawalk(args: &[&str]) -> (bool, String, String) {
 
 /// Root with two leaf triangles; each leaf has LODs of 2 and 1 triangles.
 fn write_scene(path: &std::path::Path) {
+    write_scene_with(path, Vec::new());
+}
+
+/// [`write_scene`] with optional sections (tag, bytes) added.
+fn write_scene_with(path: &std::path::Path, optional: Vec<([u8; 4], Vec<u8>)>) {
     let tri = |x: f32, n: usize| LodMesh {
         origin: DVec3::ZERO,
         positions: (0..n + 2)
@@ -29,6 +34,9 @@ fn write_scene(path: &std::path::Path) {
         indices: (0..n as u32).flat_map(|i| [i, i + 1, i + 2]).collect(),
     };
     let mut w = SceneWriter::create(path).unwrap();
+    for (tag, bytes) in optional {
+        w.add_optional_section(tag, bytes);
+    }
     w.add_lod(&tri(0.0, 1), 3.0).unwrap(); // root HLOD
     w.add_lod(&tri(0.0, 2), 0.0).unwrap();
     w.add_lod(&tri(0.0, 1), 1.0).unwrap();
@@ -122,6 +130,67 @@ fn info_text_and_json() {
     assert_eq!(v["provenance"]["parameters"]["t1"], 1000);
     let bpt = v["bytes_per_triangle"].as_f64().unwrap();
     assert_eq!(bpt, std::fs::metadata(&path).unwrap().len() as f64 / 4.0);
+}
+
+/// One occluder over the first leaf and one view cell listing it, as OCCL
+/// and OCVC sections for [`write_scene_with`].
+fn occluder_sections() -> Vec<([u8; 4], Vec<u8>)> {
+    use gigawalk_scene::occluder_cells::{self, CellNode, OccluderCells};
+    use gigawalk_scene::occluders::{self, OccluderRecord};
+    let occluder = OccluderRecord {
+        vertices: vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(3.0, 1.0, 0.0),
+        ],
+        area: 1.5,
+    };
+    let cells = OccluderCells {
+        nodes: vec![CellNode::Leaf(0)],
+        directions: vec![DVec3::X],
+        k: 1,
+        lists: vec![vec![0]],
+    };
+    vec![
+        (
+            occluders::TAG_OCCLUDERS,
+            occluders::encode_occluders(&[occluder]),
+        ),
+        (
+            occluder_cells::TAG_OCCLUDER_CELLS,
+            occluder_cells::encode_occluder_cells(&cells),
+        ),
+    ]
+}
+
+#[test]
+fn verify_names_a_damaged_optional_section() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("occ.gwk");
+    write_scene_with(&path, occluder_sections());
+    let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--verify"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("OCCL") && out.contains("OCVC"), "{out}");
+    let good = std::fs::read(&path).unwrap();
+    let sections = gigawalk_scene::SceneReader::open(&path)
+        .unwrap()
+        .sections()
+        .to_vec();
+    for tag in ["OCCL", "OCVC"] {
+        let s = sections.iter().find(|s| s.name == tag).unwrap();
+        let mut bytes = good.clone();
+        bytes[(s.offset + s.len / 2) as usize] ^= 0x10;
+        let damaged = dir.path().join(format!("damaged-{tag}.gwk"));
+        std::fs::write(&damaged, &bytes).unwrap();
+        let (ok, _, err) = gigawalk(&["info", damaged.to_str().unwrap(), "--verify"]);
+        assert!(!ok, "{tag}: a damaged section must fail --verify");
+        assert!(
+            err.contains(&format!("damaged-{tag}.gwk"))
+                && err.contains(&format!("checksum mismatch in {tag}")),
+            "{tag}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
 }
 
 #[test]

@@ -221,6 +221,51 @@ fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report()
 }
 
 #[test]
+fn a_damaged_occluder_section_is_an_error_naming_it_not_none() {
+    if gigawalk_gpu::devices_or_skip(2, "gigawalk replay --cullers ct, damaged OCCL/OCVC").is_none()
+    {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk, out) = plant(dir.path(), "20k");
+    let good = std::fs::read(&gwk).unwrap();
+    let sections = gigawalk_scene::SceneReader::open(&gwk)
+        .unwrap()
+        .sections()
+        .to_vec();
+    for tag in ["OCCL", "OCVC"] {
+        let s = sections.iter().find(|s| s.name == tag).unwrap();
+        let mut bytes = good.clone();
+        bytes[(s.offset + s.len / 2) as usize] ^= 0x10;
+        std::fs::write(&gwk, &bytes).unwrap();
+        let (ok, _, err) = replay(
+            &gwk,
+            &path,
+            &out,
+            &[
+                "--width",
+                "96",
+                "--height",
+                "54",
+                "--accuracy-every",
+                "0",
+                "--modes",
+                "occ",
+                "--cullers",
+                "ct",
+            ],
+        );
+        assert!(!ok, "{tag}: a damaged section must fail the replay");
+        assert!(
+            err.contains("p.gwk") && err.contains(&format!("checksum mismatch in {tag}")),
+            "{tag}: {err}"
+        );
+        assert!(!err.contains("stores none"), "{tag}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
 fn a_tiled_replay_sizes_the_view_from_its_tiles() {
     if gigawalk_gpu::devices_or_skip(2, "gigawalk replay --tiles").is_none() {
         return;

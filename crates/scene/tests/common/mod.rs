@@ -81,6 +81,56 @@ pub fn wide(children: usize, offset: DVec3) -> TreeSpec {
 /// Writes the tree: leaves get two LODs (a box, error 0; the same box,
 /// error 0.5), inner nodes one LOD (their box, error 1 + height).
 pub fn write_tree(path: &Path, spec: &TreeSpec) -> WriteSummary {
+    write_tree_with(path, spec, Vec::new())
+}
+
+/// Two square occluders and their view cells (a split at x = 0, two
+/// leaves, two directions), as OCCL and OCVC sections for
+/// [`write_tree_with`].
+pub fn occluder_sections() -> Vec<([u8; 4], Vec<u8>)> {
+    use gigawalk_scene::occluder_cells::{self, CellNode, OccluderCells};
+    use gigawalk_scene::occluders::{self, OccluderRecord};
+    let square = |x: f64| OccluderRecord {
+        vertices: vec![
+            DVec3::new(x, 0.0, 0.0),
+            DVec3::new(x + 1.0, 0.0, 0.0),
+            DVec3::new(x + 1.0, 1.0, 0.0),
+            DVec3::new(x, 1.0, 0.0),
+        ],
+        area: 1.0,
+    };
+    let cells = OccluderCells {
+        nodes: vec![
+            CellNode::Split {
+                axis: 0,
+                at: 0.0,
+                first: 1,
+            },
+            CellNode::Leaf(0),
+            CellNode::Leaf(1),
+        ],
+        directions: vec![DVec3::X, DVec3::NEG_X],
+        k: 2,
+        lists: vec![vec![0, 1], vec![1], vec![], vec![1, 0]],
+    };
+    vec![
+        (
+            occluders::TAG_OCCLUDERS,
+            occluders::encode_occluders(&[square(0.0), square(4.0)]),
+        ),
+        (
+            occluder_cells::TAG_OCCLUDER_CELLS,
+            occluder_cells::encode_occluder_cells(&cells),
+        ),
+    ]
+}
+
+/// [`write_tree`] with optional sections (tag, bytes) added.
+pub fn write_tree_with(
+    path: &Path,
+    spec: &TreeSpec,
+    optional: Vec<([u8; 4], Vec<u8>)>,
+) -> WriteSummary {
     let n = spec.parents.len();
     let mut bounds: Vec<Aabb> = spec
         .leaf_boxes
@@ -94,6 +144,9 @@ pub fn write_tree(path: &Path, spec: &TreeSpec) -> WriteSummary {
         height[p] = height[p].max(height[i] + 1);
     }
     let mut w = SceneWriter::create(path).expect("create");
+    for (tag, bytes) in optional {
+        w.add_optional_section(tag, bytes);
+    }
     let mut nodes = Vec::with_capacity(n);
     for i in 0..n {
         let colour = [(i % 251) as u8, 100, 200, 255];

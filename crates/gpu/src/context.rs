@@ -1,18 +1,32 @@
 //! Opening wgpu devices: two by default (two adapters when the machine has
-//! two GPUs, else two devices on one adapter), and a clear error when no
-//! adapter exists.
+//! two GPUs, else two devices on one adapter), on adapters that qualify
+//! (`capabilities.rs`), and a clear error naming every adapter seen and
+//! what it lacks when none does.
 
 use std::sync::{Arc, Mutex};
 
 /// Why the GPU side failed.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("no GPU adapter found (backends tried: {backends}); on a machine without a GPU install Mesa's software Vulkan driver: apt-get install mesa-vulkan-drivers")]
-    NoAdapter { backends: String },
+    /// No adapter qualifies: `seen` names each adapter found and what it
+    /// lacks, or the backends tried when there was none.
+    #[error("no GPU adapter gigawalk can use ({seen}); {how}", how = crate::capabilities::HOW_TO_GET_ONE)]
+    NoAdapter { seen: String },
+    #[error("no usable GPU adapter's name contains {wanted:?} (usable: {usable}); `gigawalk info --adapters` lists them")]
+    NoMatchingAdapter { wanted: String, usable: String },
     #[error("cannot open a device on adapter {adapter}: {source}")]
     RequestDevice {
         adapter: String,
         source: wgpu::RequestDeviceError,
+    },
+    #[error(
+        "LOD {lod} has {vertices} vertices, more than device {device} can index ({max} a LOD)"
+    )]
+    IndexRange {
+        lod: u32,
+        vertices: u64,
+        device: String,
+        max: u64,
     },
     #[error("cannot open {count} devices: the pipeline uses 1 or 2")]
     DeviceCount { count: usize },
@@ -39,6 +53,11 @@ pub struct GpuContext {
     /// errors through a callback; we turn them into [`GpuError::Device`]
     /// instead of the default panic.
     errors: Arc<Mutex<Option<String>>>,
+    /// Whether depth textures are read back through a copy pass (the
+    /// adapter cannot copy depth to a buffer, as on GL).
+    pub(crate) depth_via_pass: bool,
+    /// Whether index values may use all 32 bits.
+    full_index_range: bool,
 }
 
 impl GpuContext {
@@ -52,6 +71,31 @@ impl GpuContext {
         self.device
             .features()
             .contains(wgpu::Features::POLYGON_MODE_LINE)
+    }
+
+    /// The most vertices one LOD may have here: its indices are local to it
+    /// and must stay within the adapter's index range (2^32, or 2^24 where
+    /// the adapter lacks `FULL_DRAW_INDEX_UINT32`, as some GL drivers do).
+    pub fn max_lod_vertices(&self) -> u64 {
+        if self.full_index_range {
+            1 << 32
+        } else {
+            1 << 24
+        }
+    }
+
+    /// Whether depth is read back through a copy into a colour target
+    /// (adapters without depth-texture copies, e.g. GL) rather than copied
+    /// directly.
+    pub fn reads_depth_through_a_pass(&self) -> bool {
+        self.depth_via_pass
+    }
+
+    /// Reads depth back through the copy pass even where direct copies
+    /// work, so tests compare the two paths on one adapter.
+    #[cfg(feature = "testing")]
+    pub fn force_depth_copy_pass(&mut self) {
+        self.depth_via_pass = true;
     }
 
     /// Returns the first GPU error seen since the device was opened.
@@ -88,32 +132,83 @@ pub(crate) fn rank(t: wgpu::DeviceType) -> u8 {
     }
 }
 
-fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+pub(crate) fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
     wgpu::Instance::new(desc)
 }
 
-/// An instance with adapters: WGPU_BACKEND=vulkan|gl|... picks backends as
-/// in wgpu's examples; otherwise the primary backends (Vulkan, Metal, DX12),
-/// and GL only when they have no adapter (probing GL prints noise on
-/// headless machines).
-pub(crate) fn instance_with_adapters() -> (wgpu::Instance, Vec<wgpu::Adapter>, wgpu::Backends) {
+/// The adapters devices may be opened on, best first, from one instance.
+pub(crate) struct Candidates {
+    pub(crate) instance: wgpu::Instance,
+    /// Qualifying adapters, best first (and matching the name asked for).
+    pub(crate) usable: Vec<wgpu::Adapter>,
+    /// The backends `instance` was made for.
+    pub(crate) backends: wgpu::Backends,
+}
+
+/// An instance with qualifying adapters: WGPU_BACKEND=vulkan|gl|... picks
+/// backends as in wgpu's examples; otherwise the primary backends (Vulkan,
+/// Metal, DX12), and GL only when they have no qualifying adapter (probing
+/// GL prints noise on headless machines). `adapter`: only adapters whose
+/// name contains it (case-insensitive). `instance_for` makes the instance
+/// for a set of backends (a window's needs its display handle).
+pub(crate) fn candidates(
+    adapter: Option<&str>,
+    instance_for: &mut dyn FnMut(wgpu::Backends) -> wgpu::Instance,
+) -> Result<Candidates, GpuError> {
     let tries = match wgpu::Backends::from_env() {
         Some(b) => vec![b],
         None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::SECONDARY],
     };
-    let mut last = None;
+    let mut seen = Vec::new();
+    let mut usable_names = Vec::new();
+    let mut tried = Vec::new();
     for backends in tries {
-        let instance = instance(backends);
-        let list = adapters(&instance);
-        if !list.is_empty() {
-            return (instance, list, backends);
+        tried.push(format!("{backends:?}"));
+        let instance = instance_for(backends);
+        let all = adapters(&instance);
+        let mut usable = Vec::new();
+        for a in all {
+            let report = crate::capabilities::AdapterReport::of(&a);
+            if !report.qualifies() {
+                tracing::warn!("skipping GPU adapter {}", report.line());
+                seen.push(report.line());
+                continue;
+            }
+            usable_names.push(report.name());
+            if adapter.is_none_or(|want| name_matches(&report.info.name, want)) {
+                usable.push(a);
+            }
         }
-        last = Some((instance, backends));
+        if !usable.is_empty() {
+            return Ok(Candidates {
+                instance,
+                usable,
+                backends,
+            });
+        }
     }
-    let (instance, backends) = last.expect("at least one try");
-    (instance, Vec::new(), backends)
+    if let (Some(wanted), false) = (adapter, usable_names.is_empty()) {
+        return Err(GpuError::NoMatchingAdapter {
+            wanted: wanted.to_string(),
+            usable: usable_names.join(", "),
+        });
+    }
+    if seen.is_empty() {
+        seen.push(format!(
+            "none found; backends tried: {}",
+            tried.join(", then ")
+        ));
+    }
+    Err(GpuError::NoAdapter {
+        seen: seen.join("; "),
+    })
+}
+
+/// Whether an adapter called `name` is the one `--adapter want` asks for.
+pub(crate) fn name_matches(name: &str, want: &str) -> bool {
+    name.to_lowercase().contains(&want.to_lowercase())
 }
 
 /// Adapters, best first: hardware before software, then by backend
@@ -127,17 +222,24 @@ pub(crate) fn adapters(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
     list
 }
 
-/// Opens `count` (1 or 2) devices. With two, each gets its own hardware
-/// adapter when the machine has two GPUs, else both share the best adapter.
-/// Any other count is [`GpuError::DeviceCount`].
+/// Opens `count` (1 or 2) devices on the best qualifying adapter. With two,
+/// each gets its own hardware adapter when the machine has two GPUs, else
+/// both share the best adapter. Any other count is
+/// [`GpuError::DeviceCount`]; no qualifying adapter is
+/// [`GpuError::NoAdapter`], naming each adapter seen and what it lacks.
 pub fn open_devices(count: usize) -> Result<Vec<GpuContext>, GpuError> {
+    open_devices_on(count, None)
+}
+
+/// Like [`open_devices`], only on adapters whose name contains `adapter`
+/// (case-insensitive; `--adapter`), else [`GpuError::NoMatchingAdapter`].
+pub fn open_devices_on(count: usize, adapter: Option<&str>) -> Result<Vec<GpuContext>, GpuError> {
     device_name(0, count)?;
-    let (instance, list, backends) = instance_with_adapters();
-    let best = list.first().ok_or_else(|| GpuError::NoAdapter {
-        backends: format!("{backends:?}"),
-    })?;
+    let c = candidates(adapter, &mut instance)?;
+    let best = &c.usable[0];
     let best_info = best.get_info();
-    let hardware: Vec<&wgpu::Adapter> = list
+    let hardware: Vec<&wgpu::Adapter> = c
+        .usable
         .iter()
         .filter(|a| {
             let i = a.get_info();
@@ -152,16 +254,42 @@ pub fn open_devices(count: usize) -> Result<Vec<GpuContext>, GpuError> {
         } else if k == 0 {
             best.clone()
         } else {
-            // A second device on the same adapter: wgpu allows one device
-            // per Adapter object, so enumerate again for a fresh one.
-            adapters(&instance)
-                .into_iter()
-                .find(|a| a.get_info() == best_info)
-                .unwrap_or_else(|| best.clone())
+            second_adapter(&c, best, &mut instance)
         };
         out.push(open(&adapter, name)?);
     }
     Ok(out)
+}
+
+/// The adapter [`open_devices_on`] would open devices on, without opening
+/// any (for `gigawalk info --adapters`).
+pub fn chosen_adapter(adapter: Option<&str>) -> Result<wgpu::AdapterInfo, GpuError> {
+    Ok(candidates(adapter, &mut instance)?.usable[0].get_info())
+}
+
+/// A fresh Adapter object for a second device on `best`'s adapter: wgpu
+/// allows one device per Adapter object, so enumerate again. On GL, again
+/// from a new instance: every enumeration of one instance shares its one
+/// EGL context, each adapter behind its own lock, so two devices on two
+/// threads make it current at once and EGL fails (BadAccess); a new
+/// instance has a context of its own.
+pub(crate) fn second_adapter(
+    c: &Candidates,
+    best: &wgpu::Adapter,
+    instance_for: &mut dyn FnMut(wgpu::Backends) -> wgpu::Instance,
+) -> wgpu::Adapter {
+    let info = best.get_info();
+    let fresh;
+    let instance = if info.backend == wgpu::Backend::Gl {
+        fresh = instance_for(c.backends);
+        &fresh
+    } else {
+        &c.instance
+    };
+    adapters(instance)
+        .into_iter()
+        .find(|a| a.get_info() == info)
+        .unwrap_or_else(|| best.clone())
 }
 
 pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, GpuError> {
@@ -193,17 +321,22 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
             *s = Some(e.to_string());
         }
     }));
+    let flags = adapter.get_downlevel_capabilities().flags;
+    let depth_via_pass = !flags.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+    let full_index_range = flags.contains(wgpu::DownlevelFlags::FULL_DRAW_INDEX_UINT32);
     Ok(GpuContext {
         device,
         queue,
         info,
         name: label,
         errors,
+        depth_via_pass,
+        full_index_range,
     })
 }
 
 /// For tests that need a GPU (feature `testing`): opens `count` devices, or
-/// returns `None` after a loud message when no adapter exists, unless the
+/// returns `None` after a loud message when no adapter qualifies, unless the
 /// environment variable `GIGAWALK_REQUIRE_ADAPTER` is set (CI sets it), in
 /// which case a missing adapter panics so the test fails.
 #[cfg(feature = "testing")]
@@ -213,7 +346,7 @@ pub fn devices_or_skip(count: usize, test: &str) -> Option<Vec<GpuContext>> {
         Err(GpuError::NoAdapter { .. })
             if std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none() =>
         {
-            eprintln!("\n!!! SKIPPING {test}: no GPU adapter (install mesa-vulkan-drivers to run it) !!!\n");
+            eprintln!("\n!!! SKIPPING {test}: no usable GPU adapter (install mesa-vulkan-drivers to run it) !!!\n");
             None
         }
         Err(e) => panic!("{test}: {e}"),

@@ -1,7 +1,7 @@
 //! gigawalk's GPU side, the only crate that names wgpu.
 //!
 //! Main types: [`GpuContext`] (one device; [`open_devices`] opens the two
-//! the pipeline uses), [`HostGeometry`] / [`ResidentGeometry`] (the scene's
+//! the pipeline uses, on adapters that have what [`AdapterReport`] checks), [`HostGeometry`] / [`ResidentGeometry`] (the scene's
 //! geometry in a few large buffers per device, behind the [`Residency`]
 //! trait), [`DepthPass`] (OR: occluder depth, read back for the HZB) and
 //! [`VisiblePass`] (RVG: colour + depth of the visible set, drawn in
@@ -12,6 +12,7 @@
 //! plane, 0 at infinity; clear to 0, keep the greater); images read back
 //! row-major with row 0 at the top.
 
+mod capabilities;
 mod context;
 mod overlay;
 mod passes;
@@ -20,12 +21,16 @@ mod queries;
 mod residency;
 pub mod shader_types;
 
+pub use capabilities::{
+    list_adapters, AdapterReport, Optional, HOW_TO_GET_ONE, REQUIRED_DOWNLEVEL, REQUIRED_FORMATS,
+};
 #[cfg(feature = "testing")]
 pub use context::devices_or_skip;
-pub use context::{open_devices, GpuContext, GpuError};
+pub use context::{chosen_adapter, open_devices, open_devices_on, GpuContext, GpuError};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
-    DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT, DEPTH_FORMAT,
+    DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT,
+    DEPTH_COPY_WGSL, DEPTH_FORMAT,
 };
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};

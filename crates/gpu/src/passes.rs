@@ -35,6 +35,11 @@ pub struct FrameImage {
 }
 
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Where depth is copied, bit for bit, to be read back on adapters that
+/// cannot copy a depth texture to a buffer (GL): integer formats are
+/// renderable everywhere, 32-bit floats not on every GLES.
+pub(crate) const DEPTH_COPY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub const DEPTH_COPY_WGSL: &str = include_str!("../../../shaders/depth_copy.wgsl");
 pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 /// How RVG draws triangles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -591,10 +596,14 @@ pub(crate) fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuEr
 #[derive(Default)]
 pub(crate) struct ReadBack {
     buffer: Option<wgpu::Buffer>,
+    /// The copy pass for depth, on adapters that need it (made on first use).
+    depth_copy: Option<DepthCopy>,
 }
 
 impl ReadBack {
-    /// Reads a `Depth32Float` texture back as a [`DepthImage`].
+    /// Reads a `Depth32Float` texture back as a [`DepthImage`]: copied
+    /// directly, or, where the adapter cannot copy depth (GL), drawn bit
+    /// for bit into an R32Uint target that is copied.
     fn depth(
         &mut self,
         ctx: &GpuContext,
@@ -602,7 +611,14 @@ impl ReadBack {
         w: u32,
         h: u32,
     ) -> Result<DepthImage, GpuError> {
-        let depth = self.read(ctx, tex, w, h, 4, wgpu::TextureAspect::DepthOnly)?;
+        let depth = if ctx.depth_via_pass {
+            let copy = self.depth_copy.get_or_insert_with(|| DepthCopy::new(ctx));
+            let target = copy.draw(ctx, tex, w, h);
+            let bits: Vec<u32> = self.read(ctx, &target, w, h, 4, wgpu::TextureAspect::All)?;
+            bits.into_iter().map(f32::from_bits).collect()
+        } else {
+            self.read(ctx, tex, w, h, 4, wgpu::TextureAspect::DepthOnly)?
+        };
         Ok(DepthImage {
             width: w,
             height: h,
@@ -678,5 +694,120 @@ impl ReadBack {
         buf.unmap();
         self.buffer = Some(buf);
         Ok(out)
+    }
+}
+
+/// The depth copy pass (`shaders/depth_copy.wgsl`), with its target and
+/// bind group kept while the depth texture and size stay the same.
+struct DepthCopy {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    /// The depth texture last copied, its bind group, and the target.
+    bound: Option<(wgpu::Texture, wgpu::BindGroup, wgpu::Texture)>,
+}
+
+impl DepthCopy {
+    fn new(ctx: &GpuContext) -> DepthCopy {
+        let d = &ctx.device;
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("depth copy"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("depth copy"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("depth copy"),
+            source: wgpu::ShaderSource::Wgsl(DEPTH_COPY_WGSL.into()),
+        });
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("depth copy"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: DEPTH_COPY_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        DepthCopy {
+            pipeline,
+            layout,
+            bound: None,
+        }
+    }
+
+    /// Draws `tex`'s depth into the R32Uint target and returns it (the
+    /// caller's copy is submitted after this pass, on the same queue).
+    fn draw(&mut self, ctx: &GpuContext, tex: &wgpu::Texture, w: u32, h: u32) -> wgpu::Texture {
+        let fresh = match &self.bound {
+            Some((t, _, target)) => t != tex || target.width() != w || target.height() != h,
+            None => true,
+        };
+        if fresh {
+            let view = tex.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..Default::default()
+            });
+            let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("depth copy"),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                }],
+            });
+            let target = target(ctx, "depth copy", w, h, DEPTH_COPY_FORMAT);
+            self.bound = Some((tex.clone(), bind_group, target));
+        }
+        let (_, bind_group, target) = self.bound.as_ref().expect("bound above");
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let view = target.create_view(&Default::default());
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth copy"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        target.clone()
     }
 }

@@ -4,7 +4,7 @@
 //! the offscreen colour into a composite target, the overlays on top, an
 //! optional read-back (screenshots) and a blit to the surface.
 
-use crate::context::{adapters, device_name, instance_with_adapters, open, rank};
+use crate::context::{candidates, device_name, open, rank, second_adapter};
 use crate::overlay::{OverlayFrame, OverlayRenderer};
 use crate::passes::ReadBack;
 use crate::{GpuContext, GpuError, VisiblePass, COLOUR_FORMAT};
@@ -22,27 +22,34 @@ pub enum WindowError {
     Gpu(#[from] GpuError),
 }
 
-/// Opens `count` (1 or 2) devices, all on an adapter that can present to
-/// `window` (the surface and the adapters come from one wgpu instance, as
-/// wgpu requires), and the window's surface. Any other count is
-/// [`GpuError::DeviceCount`].
-pub fn open_devices_for_window(
+/// Opens `count` (1 or 2) devices, all on a qualifying adapter that can
+/// present to `window` (the surface and the adapters come from one wgpu
+/// instance, as wgpu requires; the instance knows the window's display,
+/// which GL needs), and the window's surface. `adapter`: only adapters
+/// whose name contains it. Any other count is [`GpuError::DeviceCount`].
+pub fn open_devices_for_window<W>(
     count: usize,
-    window: impl Into<wgpu::SurfaceTarget<'static>>,
-) -> Result<(Vec<GpuContext>, WindowSurface), WindowError> {
+    adapter: Option<&str>,
+    window: W,
+) -> Result<(Vec<GpuContext>, WindowSurface), WindowError>
+where
+    W: wgpu::wgt::WgpuHasDisplayHandle + Clone + Into<wgpu::SurfaceTarget<'static>>,
+{
     device_name(0, count)?;
-    let (instance, list, backends) = instance_with_adapters();
-    if list.is_empty() {
-        return Err(GpuError::NoAdapter {
-            backends: format!("{backends:?}"),
-        }
-        .into());
-    }
-    let surface = instance
+    let display = window.clone();
+    let mut instance_for = |backends| {
+        let mut desc = wgpu::InstanceDescriptor::new_with_display_handle(Box::new(display.clone()));
+        desc.backends = backends;
+        wgpu::Instance::new(desc)
+    };
+    let c = candidates(adapter, &mut instance_for)?;
+    let surface = c
+        .instance
         .create_surface(window)
         .map_err(|e| WindowError::Surface(e.to_string()))?;
-    let Some(best) = list.iter().find(|a| a.is_surface_supported(&surface)) else {
-        let names: Vec<String> = list
+    let Some(best) = c.usable.iter().find(|a| a.is_surface_supported(&surface)) else {
+        let names: Vec<String> = c
+            .usable
             .iter()
             .map(|a| format!("{} ({:?})", a.get_info().name, a.get_info().backend))
             .collect();
@@ -57,18 +64,15 @@ pub fn open_devices_for_window(
         info.backend,
         rank(info.device_type)
     );
+    // The last device (RVG's) presents, so it is the one on the surface's
+    // instance; on GL a second device comes from an instance of its own.
     let mut devices = Vec::with_capacity(count);
     for k in 0..count {
         let name = device_name(k, count)?;
-        // wgpu allows one device per Adapter object: enumerate again for
-        // the second device on the same adapter.
-        let adapter = if k == 0 {
+        let adapter = if k + 1 == count {
             best.clone()
         } else {
-            adapters(&instance)
-                .into_iter()
-                .find(|a| a.get_info() == info)
-                .unwrap_or_else(|| best.clone())
+            second_adapter(&c, best, &mut instance_for)
         };
         devices.push(open(&adapter, name)?);
     }

@@ -150,6 +150,69 @@ fn depth_and_colour_follow_the_conventions() {
     assert!(bg[0] < 60 && bg[1] < 60 && bg[2] < 70, "background {bg:?}");
 }
 
+/// OR's depth and RVG's colour and depth with the camera below the boxes
+/// (so they show in the image's upper half), read back as the adapter
+/// does it, and then through the depth copy pass.
+fn render_both_depth_paths() -> Option<[(Vec<f32>, Vec<u8>, Vec<f32>); 2]> {
+    let mut ctx = devices_or_skip(1, "depth copy pass").map(|mut d| d.remove(0))?;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    let shift = DVec3::new(-3e5, 7e4, 1e6);
+    write_scene(&path, shift);
+    let scene = SceneReader::open(&path).unwrap();
+    let geometry = HostGeometry::load(&scene, 1 << 20)
+        .unwrap()
+        .upload(&ctx)
+        .unwrap();
+    let (w, h) = (80, 50);
+    let v = view(shift + DVec3::new(0.0, -1.5, 0.0), w, h);
+    let mut out = Vec::new();
+    for forced in [false, true] {
+        if forced {
+            ctx.force_depth_copy_pass();
+        }
+        let depth = DepthPass::new(&ctx, w, h)
+            .render(&ctx, &geometry, &v, &[0, 1])
+            .unwrap();
+        let mut rvg = VisiblePass::new(&ctx, w, h);
+        rvg.begin(&ctx, &v, DrawStyle::Shaded);
+        rvg.draw(&ctx, &geometry, &[0, 1]);
+        let frame = rvg.finish(&ctx, true).unwrap().unwrap();
+        out.push((depth.depth, frame.colour, frame.depth.depth));
+    }
+    out.try_into().ok()
+}
+
+/// Adapters without depth-texture copies (GL) read depth through a pass
+/// that draws it into an R32Uint target; the HZB and the accuracy
+/// reference compare depths exactly, so it must read the same bits, the
+/// same way up, as a direct copy.
+#[test]
+fn depth_through_the_copy_pass_is_the_direct_copy_bit_for_bit() {
+    let Some([direct, pass]) = render_both_depth_paths() else {
+        return;
+    };
+    let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&direct.0), bits(&pass.0), "OR depth");
+    assert_eq!(bits(&direct.2), bits(&pass.2), "RVG depth");
+    assert_eq!(direct.1, pass.1, "colour");
+    // The right way up: drawn pixels (depth > 0) are where the colour is
+    // not background, and in the upper half (row 0 at the top).
+    let (w, h) = (80usize, 50usize);
+    let drawn: Vec<bool> = pass.0.iter().map(|&d| d > 0.0).collect();
+    let coloured: Vec<bool> = pass.1.chunks(4).map(|p| p[0] > 100 || p[1] > 100).collect();
+    assert_eq!(
+        drawn, coloured,
+        "depth and colour disagree on what is drawn"
+    );
+    let upper = drawn[..w * h / 2].iter().filter(|&&d| d).count();
+    let lower = drawn[w * h / 2..].iter().filter(|&&d| d).count();
+    assert!(
+        upper > 4 * lower.max(1),
+        "drawn pixels: {upper} upper, {lower} lower"
+    );
+}
+
 #[test]
 fn far_from_origin_renders_like_the_origin() {
     let Some(near) = render(DVec3::ZERO) else {
@@ -217,11 +280,15 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
     let Some(ctx) = devices_or_skip(1, "occlusion queries").map(|mut d| d.remove(0)) else {
         return;
     };
-    // lavapipe counts samples.
-    assert_eq!(
-        gigawalk_gpu::query_counts(&ctx).unwrap(),
-        gigawalk_gpu::QueryCounts::Exact
-    );
+    // lavapipe counts samples; GL's queries say only zero or not
+    // (ANY_SAMPLES_PASSED_CONSERVATIVE), and then only that is checked.
+    let exact = gigawalk_gpu::query_counts(&ctx).unwrap() == gigawalk_gpu::QueryCounts::Exact;
+    if !exact {
+        eprintln!(
+            "{}: occlusion queries say only zero or not; checking that much",
+            ctx.name
+        );
+    }
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
     let shift = DVec3::new(1e6, -2e5, 3e6);
@@ -256,8 +323,12 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
         after[0], 0,
         "a box wholly behind the red box passed samples"
     );
-    assert_eq!(after[1], before[1], "a box in front passes its whole area");
-    assert_eq!(after[2], before[2], "a box beside it is not hidden");
+    if exact {
+        assert_eq!(after[1], before[1], "a box in front passes its whole area");
+        assert_eq!(after[2], before[2], "a box beside it is not hidden");
+    } else {
+        assert!(after[1] > 0 && after[2] > 0, "{after:?}");
+    }
     // More boxes than a query set holds: split into round trips.
     let many = q.query(&ctx, Some(&geometry), &vec![behind; 5000]).unwrap();
     assert_eq!(many.len(), 5000);

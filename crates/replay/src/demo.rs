@@ -189,5 +189,6 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
         accuracy_every: 10,
         warmup: 5,
         target: None,
+        adapter: None,
     }
 }

@@ -55,6 +55,9 @@ pub struct ReplayOptions {
     /// `och`) choose each frame's tolerance to hold it, starting from their
     /// pixel error ([`gigawalk_runtime::target`]); `None`: fixed.
     pub target: Option<TargetFps>,
+    /// Open devices only on an adapter whose name contains this
+    /// (case-insensitive; `--adapter`); `None`: the best that qualifies.
+    pub adapter: Option<String>,
 }
 
 /// `--target-fps` / `--target-ms`.
@@ -79,6 +82,7 @@ impl Default for ReplayOptions {
             accuracy_every: 10,
             warmup: 5,
             target: None,
+            adapter: None,
         }
     }
 }
@@ -295,15 +299,39 @@ pub fn replay<R: ReadAt + Sync>(
     if poses.is_empty() {
         return Err(ReplayError::EmptyPath);
     }
-    let devices = match opts.runtime.schedule {
-        Schedule::Sequential => 1,
-        Schedule::Pipelined => opts.runtime.devices,
-    };
-    let rt = Runtime::open(scene, devices, opts.memory_budget, &mut |done, total| {
-        progress.loading(done, total)
-    })
+    let rt = Runtime::open(
+        scene,
+        device_count(opts),
+        opts.adapter.as_deref(),
+        opts.memory_budget,
+        &mut |done, total| progress.loading(done, total),
+    )
     .map_err(|e| ReplayError::Start(Box::new(e)))?;
     replay_on(&rt, scene_name, poses, path_name, opts, progress)
+}
+
+/// Devices a replay with `opts` opens: one in the sequential schedule.
+fn device_count(opts: &ReplayOptions) -> usize {
+    match opts.runtime.schedule {
+        Schedule::Sequential => 1,
+        Schedule::Pipelined => opts.runtime.devices,
+    }
+}
+
+/// Opens the devices a replay with `opts` would use, checks the viewport
+/// fits them, and closes them again ([`gigawalk_runtime::probe_devices`]):
+/// call it before long work (generating, preprocessing, loading a scene)
+/// so a machine that cannot render hears so at once. Returns the devices'
+/// names.
+pub fn probe_devices(opts: &ReplayOptions) -> Result<Vec<String>, ReplayError> {
+    validate(opts)?;
+    gigawalk_runtime::probe_devices(
+        device_count(opts),
+        opts.adapter.as_deref(),
+        opts.runtime.width,
+        opts.runtime.height,
+    )
+    .map_err(|e| ReplayError::Start(Box::new(e)))
 }
 
 /// Like [`replay()`] on a runtime the caller made (tests open their own

@@ -47,6 +47,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
         accuracy_every: 3,
         warmup: 2,
         target: None,
+        adapter: None,
     }
 }
 

@@ -83,6 +83,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
         accuracy_every: every,
         warmup: 3,
         target: None,
+        adapter: None,
     }
 }
 
@@ -397,6 +398,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 accuracy_every: 4,
                 warmup: 2,
                 target: None,
+                adapter: None,
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             // Frames 0, 4, 8 and the frame after each.

@@ -30,7 +30,10 @@ pub use gigawalk_cull::tiles::{TileGrid, TileMethod};
 pub use gigawalk_cull::{
     Camera, CullReason, DrawItem, GridStats, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
-pub use gigawalk_gpu::{DrawStyle, FrameImage, GpuContext, GpuError, VisiblePass};
+pub use gigawalk_gpu::{
+    chosen_adapter, list_adapters, AdapterReport, DrawStyle, FrameImage, GpuContext, GpuError,
+    Optional, QueryCounts, VisiblePass,
+};
 pub use options::{
     CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, OqOptions,
     Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
@@ -54,6 +57,13 @@ pub enum RuntimeError {
     Setup { source: GpuError },
     #[error("setup: {count} devices given, the pipeline uses 1 or 2")]
     DeviceCount { count: usize },
+    #[error("setup: a {width}x{height} viewport is larger than device {device} draws ({max} pixels a side at most)")]
+    Viewport {
+        width: u32,
+        height: u32,
+        device: String,
+        max: u32,
+    },
     #[error("{stage}: {source}")]
     Gpu { stage: Stage, source: GpuError },
     #[error("STC, frame {frame}: {source}")]
@@ -276,6 +286,7 @@ impl<'s> Runtime<'s> {
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
         check_device_count(devices.len())?;
+        check_index_range(scene.skeleton(), &devices)?;
         let host =
             HostGeometry::load_reporting(scene, buffer_limit(&devices), progress).map_err(setup)?;
         let geometry = devices
@@ -313,6 +324,7 @@ impl<'s> Runtime<'s> {
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
         check_device_count(devices.len())?;
+        check_index_range(scene.skeleton(), &devices)?;
         if budget < MIN_MEMORY_BUDGET {
             return Err(RuntimeError::MemoryBudget {
                 budget,
@@ -364,15 +376,18 @@ impl<'s> Runtime<'s> {
         })
     }
 
-    /// Opens `devices` (1 or 2) wgpu devices, then as
-    /// [`Runtime::with_budget`].
+    /// Opens `devices` (1 or 2) wgpu devices (on an adapter whose name
+    /// contains `adapter`, if given), then as [`Runtime::with_budget`].
     pub fn open<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: usize,
+        adapter: Option<&str>,
         budget: MemoryBudget,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
-        Self::with_budget(scene, open_devices(devices)?, budget, progress)
+        check_device_count(devices)?;
+        let devices = gigawalk_gpu::open_devices_on(devices, adapter).map_err(setup)?;
+        Self::with_budget(scene, devices, budget, progress)
     }
 
     /// Loads the scene whole onto `devices` ([`Runtime::with_devices`]) or
@@ -558,6 +573,57 @@ fn check_device_count(count: usize) -> Result<(), RuntimeError> {
     } else {
         Err(RuntimeError::DeviceCount { count })
     }
+}
+
+/// Every LOD's indices stay within each device's index range (some GL
+/// drivers index at most 2^24 vertices): an error naming the first LOD
+/// that does not, before anything is loaded.
+fn check_index_range(skeleton: &Skeleton, devices: &[GpuContext]) -> Result<(), RuntimeError> {
+    let Some((lod, most)) = (0..)
+        .zip(&skeleton.lods)
+        .max_by_key(|(_, l)| l.vertices)
+        .map(|(k, l)| (k, l.vertices as u64))
+    else {
+        return Ok(());
+    };
+    for d in devices {
+        if most > d.max_lod_vertices() {
+            return Err(setup(GpuError::IndexRange {
+                lod,
+                vertices: most,
+                device: d.name.clone(),
+                max: d.max_lod_vertices(),
+            }));
+        }
+    }
+    Ok(())
+}
+
+/// Opens the `count` (1 or 2) devices a run would use (on an adapter whose
+/// name contains `adapter`, if given), checks that they take a `width` x
+/// `height` viewport, and closes them again; returns their names. For
+/// callers with long work before the run (generating, preprocessing,
+/// loading): a machine that cannot render hears so in about a second.
+pub fn probe_devices(
+    count: usize,
+    adapter: Option<&str>,
+    width: u32,
+    height: u32,
+) -> Result<Vec<String>, RuntimeError> {
+    check_device_count(count)?;
+    let devices = gigawalk_gpu::open_devices_on(count, adapter).map_err(setup)?;
+    for d in &devices {
+        let max = d.device.limits().max_texture_dimension_2d;
+        if width > max || height > max {
+            return Err(RuntimeError::Viewport {
+                width,
+                height,
+                device: d.name.clone(),
+                max,
+            });
+        }
+    }
+    Ok(devices.into_iter().map(|d| d.name).collect())
 }
 
 /// Opens `count` (1 or 2) wgpu devices.

@@ -57,6 +57,8 @@ pub struct ViewArgs {
     pub height: u32,
     /// wgpu devices for the pipeline (1 or 2).
     pub devices: usize,
+    /// Only adapters whose name contains this (case-insensitive).
+    pub adapter: Option<String>,
     /// Near plane, model units; `None`: `gigawalk_cull::default_near` of
     /// the scene's bounds.
     pub near: Option<f64>,
@@ -100,6 +102,8 @@ pub enum ViewError {
     Screenshot(#[from] ScreenshotError),
     #[error(transparent)]
     Record(#[from] PathWriteError),
+    #[error("--wireframe: {devices} cannot draw lines (no POLYGON_MODE_LINE, e.g. GLES); leave it out")]
+    NoWireframe { devices: String },
     #[error("the scripted run ended before frame {wanted} (rendered {rendered})")]
     TooFewFrames { wanted: u64, rendered: u64 },
 }
@@ -191,15 +195,18 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         .window
         .clone()
         .ok_or_else(|| ViewError::Display("the window was not created within 10 s".into()))?;
-    let (devices, surface) = open_devices_for_window(args.devices, window.clone())?;
+    let (devices, surface) =
+        open_devices_for_window(args.devices, args.adapter.as_deref(), window.clone())?;
     let device_names = device_summary(&devices);
     let wireframe_supported = devices.iter().all(GpuContext::supports_wireframe);
     let mut start_message = None;
     let mut settings = args.settings.clone();
     if settings.wireframe && !wireframe_supported {
-        settings.wireframe = false;
-        start_message = Some((WIREFRAME_UNSUPPORTED.to_string(), Instant::now()));
-        eprintln!("{WIREFRAME_UNSUPPORTED}");
+        // Asked for on the command line: refuse rather than draw something
+        // else (T in the window says the same on the HUD).
+        return Err(ViewError::NoWireframe {
+            devices: device_names,
+        });
     }
     let runtime = Runtime::with_budget(&scene, devices, args.memory_budget, &mut load_lines())?;
     tracing::info!("viewing {} on {device_names}", args.scene.display());

@@ -38,6 +38,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         poses: args.frames,
         ..DemoScene::default()
     };
+    let mut opts = demo::replay_options(args.frames, args.runtime.width, args.runtime.height);
+    opts.runtime = args.runtime.options();
+    opts.near = args.runtime.near;
+    opts.memory_budget = args.runtime.memory_budget;
+    opts.adapter = args.runtime.adapter.clone();
+    // Before minutes of generating and preprocessing: can this machine
+    // render at all?
+    let devices =
+        gigawalk_replay::probe_devices(&opts).context("gigawalk demo cannot render here")?;
+    eprintln!("rendering on {}", devices.join(" and "));
     let progress = PhaseLines;
     let prepared = spec
         .prepare(
@@ -49,10 +59,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .context("cannot prepare the demo scene")?;
     let scene = SceneReader::open(&prepared.scene).context("cannot open the demo scene")?;
     let path = CameraPath::read(&prepared.path).context("cannot read the demo path")?;
-    let mut opts = demo::replay_options(args.frames, args.runtime.width, args.runtime.height);
-    opts.runtime = args.runtime.options();
-    opts.near = args.runtime.near;
-    opts.memory_budget = args.runtime.memory_budget;
     let replay = run_replay(
         &scene,
         &prepared.scene.display().to_string(),

@@ -1,4 +1,5 @@
-//! `gigawalk info`: what a scene file holds.
+//! `gigawalk info`: what a scene file holds; with `--adapters`, the GPU
+//! adapters this machine has and whether gigawalk can use them.
 
 use std::path::PathBuf;
 
@@ -8,7 +9,16 @@ use gigawalk_scene::{SceneReader, SceneStats};
 #[derive(clap::Args)]
 pub struct Args {
     /// The scene file (.gwk) to describe
-    scene: PathBuf,
+    #[arg(required_unless_present = "adapters")]
+    scene: Option<PathBuf>,
+    /// List every GPU adapter on every backend instead: type, backend,
+    /// driver, whether gigawalk can use it and why not, and which one a run
+    /// would use (with --adapter NAME: which one that picks)
+    #[arg(long, conflicts_with = "verify")]
+    adapters: bool,
+    /// With --adapters: the name a run's --adapter would be given
+    #[arg(long, value_name = "NAME", requires = "adapters")]
+    adapter: Option<String>,
     /// Print machine-readable JSON instead of text
     #[arg(long)]
     json: bool,
@@ -19,7 +29,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let r = SceneReader::open(&args.scene)?;
+    let scene = match (&args.scene, args.adapters) {
+        (_, true) => return crate::adapters::print(args.json, args.adapter.as_deref()),
+        (Some(scene), false) => scene,
+        (None, false) => anyhow::bail!("gigawalk info needs a scene file or --adapters"),
+    };
+    let r = SceneReader::open(scene)?;
     if args.verify {
         r.verify()?;
     }
@@ -31,7 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )?;
         return Ok(());
     }
-    out!("scene       {}", args.scene.display())?;
+    out!("scene       {}", scene.display())?;
     out!(
         "format      v{}{}",
         s.format_version,

@@ -12,6 +12,7 @@ macro_rules! out {
     };
 }
 
+mod adapters;
 mod demo;
 mod generate;
 mod gpu_run;
@@ -144,8 +145,12 @@ fn quiet_headless_vulkan_device_select() {
 /// also every span to a Chrome trace file.
 fn init_tracing(trace: Option<&std::path::Path>) -> Option<tracing_chrome::FlushGuard> {
     use tracing_subscriber::prelude::*;
+    // EGL logs an error for each platform it tries before the one that
+    // works (on a headless machine with Mesa: "DRI2: failed to load
+    // driver", then llvmpipe runs fine); an adapter that cannot be used is
+    // reported by gigawalk itself. RUST_LOG shows them again.
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,wgpu_hal::gles::egl=off"));
     let fmt = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
         .with_filter(filter);

@@ -63,6 +63,9 @@ pub struct RuntimeArgs {
     /// Viewport width
     #[arg(long, default_value_t = 640)]
     pub width: u32,
+    /// Use the GPU adapter whose name contains this (case-insensitive; `gigawalk info --adapters` lists them); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend [default: the best adapter that qualifies, hardware first]
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
     /// Viewport height
     #[arg(long, default_value_t = 360)]
     pub height: u32,
@@ -258,6 +261,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ms,
             max_pixel_error: args.pixel_error_max,
         }),
+        adapter: args.runtime.adapter.clone(),
     };
     let replay = run_replay(
         &scene,

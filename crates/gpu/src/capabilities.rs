@@ -1,0 +1,198 @@
+//! What gigawalk needs of an adapter, stated once, and every adapter checked
+//! against it before a device is opened: an adapter that cannot run the
+//! passes is skipped with the reason, instead of failing with a validation
+//! error minutes into a run.
+//!
+//! Required (every pass): the downlevel flags in [`REQUIRED_DOWNLEVEL`],
+//! the limits of [`wgpu::Limits::downlevel_defaults`] (what [`crate::open_devices`]
+//! requests), and the texture formats in [`REQUIRED_FORMATS`].
+//! Optional, each with what happens without it ([`Optional`]): depth
+//! texture copies (without them depth is read back through a small pass
+//! that copies it into a colour target, `DepthReader`), occlusion
+//! queries with sample counts (only `oq`'s adaptive culling needs them) and
+//! line polygon mode (wireframe), and index values beyond 2^24 (larger
+//! LODs).
+
+use wgpu::{DownlevelFlags, TextureFormat, TextureUsages};
+
+/// Downlevel flags every pass needs, each with why.
+pub const REQUIRED_DOWNLEVEL: [(DownlevelFlags, &str); 2] = [
+    (
+        DownlevelFlags::BASE_VERTEX,
+        "draws with a base vertex (many LODs share one buffer)",
+    ),
+    (
+        DownlevelFlags::UNRESTRICTED_INDEX_BUFFER,
+        "one buffer bound as both vertex and index buffer (the streaming pool)",
+    ),
+];
+
+/// Texture formats every pass needs, with the usages and why.
+pub const REQUIRED_FORMATS: [(TextureFormat, TextureUsages, &str); 3] = [
+    (
+        crate::DEPTH_FORMAT,
+        TextureUsages::RENDER_ATTACHMENT.union(TextureUsages::TEXTURE_BINDING),
+        "OR's and RVG's depth, sampled when read back",
+    ),
+    (
+        crate::COLOUR_FORMAT,
+        TextureUsages::RENDER_ATTACHMENT.union(TextureUsages::COPY_SRC),
+        "RVG's colour, read back for references and screenshots",
+    ),
+    (
+        crate::passes::DEPTH_COPY_FORMAT,
+        TextureUsages::RENDER_ATTACHMENT.union(TextureUsages::COPY_SRC),
+        "depth copied to a colour target for read-back",
+    ),
+];
+
+/// What an adapter may lack and still run gigawalk, and what changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Optional {
+    /// Copying a depth texture to a buffer (`DEPTH_TEXTURE_AND_BUFFER_COPIES`;
+    /// GL lacks it): depth is read back through a copy pass instead.
+    DepthCopies,
+    /// Line polygon mode (`POLYGON_MODE_LINE`; GLES lacks it): no wireframe.
+    Wireframe,
+    /// Index values up to 2^32 - 1 (`FULL_DRAW_INDEX_UINT32`; some GL
+    /// drivers, llvmpipe among them, promise only 2^24 - 1): a LOD may have
+    /// at most 2^24 vertices (indices are local to a LOD), checked when a
+    /// scene is loaded ([`crate::GpuContext::max_lod_vertices`]).
+    IndexRange,
+}
+
+impl Optional {
+    /// What the adapter lacks, and what that changes.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Optional::DepthCopies => {
+                "no depth-texture copies: depth is read back through a copy pass"
+            }
+            Optional::Wireframe => "no line polygon mode: no wireframe",
+            Optional::IndexRange => {
+                "index values only up to 2^24 - 1: a LOD may have at most 16,777,216 vertices"
+            }
+        }
+    }
+}
+
+/// One adapter as seen, and whether it can run gigawalk.
+#[derive(Clone, Debug)]
+pub struct AdapterReport {
+    pub info: wgpu::AdapterInfo,
+    /// What it lacks that gigawalk needs; empty when it qualifies.
+    pub missing: Vec<String>,
+    /// Optional capabilities it lacks (it may still qualify).
+    pub optional_missing: Vec<Optional>,
+    /// What its occlusion queries return, where a device was opened to
+    /// find out ([`list_adapters`]; qualifying adapters only).
+    pub query_counts: Option<crate::QueryCounts>,
+}
+
+impl AdapterReport {
+    /// Checks `adapter` against what gigawalk needs.
+    pub fn of(adapter: &wgpu::Adapter) -> AdapterReport {
+        let info = adapter.get_info();
+        let downlevel = adapter.get_downlevel_capabilities();
+        let mut missing: Vec<String> = REQUIRED_DOWNLEVEL
+            .iter()
+            .filter(|(flag, _)| !downlevel.flags.contains(*flag))
+            .map(|(_, why)| (*why).to_string())
+            .collect();
+        let mut limits = Vec::new();
+        wgpu::Limits::downlevel_defaults().check_limits_with_fail_fn(
+            &adapter.limits(),
+            false,
+            |name, needed, has| limits.push(format!("{name} {has} (needs {needed})")),
+        );
+        if !limits.is_empty() {
+            missing.push(format!("limits: {}", limits.join(", ")));
+        }
+        for (format, usages, why) in REQUIRED_FORMATS {
+            let has = adapter.get_texture_format_features(format).allowed_usages;
+            if !has.contains(usages) {
+                missing.push(format!("{format:?} as {:?} ({why})", usages - has));
+            }
+        }
+        let mut optional_missing = Vec::new();
+        if !downlevel
+            .flags
+            .contains(DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES)
+        {
+            optional_missing.push(Optional::DepthCopies);
+        }
+        if !adapter
+            .features()
+            .contains(wgpu::Features::POLYGON_MODE_LINE)
+        {
+            optional_missing.push(Optional::Wireframe);
+        }
+        if !downlevel
+            .flags
+            .contains(DownlevelFlags::FULL_DRAW_INDEX_UINT32)
+        {
+            optional_missing.push(Optional::IndexRange);
+        }
+        AdapterReport {
+            info,
+            missing,
+            optional_missing,
+            query_counts: None,
+        }
+    }
+
+    pub fn qualifies(&self) -> bool {
+        self.missing.is_empty()
+    }
+
+    /// "llvmpipe (LLVM 15.0.6, 256 bits) (Gl, Cpu)".
+    pub fn name(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.info.name, self.info.backend, self.info.device_type
+        )
+    }
+
+    /// One line: the adapter, and what it lacks or that it qualifies.
+    pub fn line(&self) -> String {
+        if self.qualifies() {
+            format!("{}: usable", self.name())
+        } else {
+            format!("{} lacks {}", self.name(), self.missing.join("; "))
+        }
+    }
+}
+
+/// How to get an adapter gigawalk can use, for the "none" error.
+pub const HOW_TO_GET_ONE: &str = "on Linux without a GPU install Mesa's software Vulkan driver (apt-get install mesa-vulkan-drivers); otherwise install a GPU driver with Vulkan, Metal, DX12 or OpenGL 3.3+ / GLES 3.2";
+
+/// Every adapter on every backend (Vulkan, Metal, DX12, GL) that wgpu finds
+/// here, each checked, and on each that qualifies a device opened to see
+/// whether its occlusion queries count samples; `WGPU_BACKEND` narrows the
+/// backends as everywhere. For `gigawalk info --adapters`: it probes GL
+/// even when another backend has adapters, which opening devices does not.
+pub fn list_adapters() -> Vec<AdapterReport> {
+    let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+    let mut out = Vec::new();
+    for backend in [
+        wgpu::Backends::VULKAN,
+        wgpu::Backends::METAL,
+        wgpu::Backends::DX12,
+        wgpu::Backends::GL,
+    ] {
+        if !backends.contains(backend) {
+            continue;
+        }
+        let instance = crate::context::instance(backend);
+        for adapter in crate::context::adapters(&instance) {
+            let mut report = AdapterReport::of(&adapter);
+            if report.qualifies() {
+                report.query_counts = crate::context::open(&adapter, "probe")
+                    .and_then(|ctx| crate::query_counts(&ctx))
+                    .ok();
+            }
+            out.push(report);
+        }
+    }
+    out
+}

@@ -69,6 +69,18 @@ pub enum ImportError {
         value: i64,
         vertices: usize,
     },
+    /// An OBJ face or line element whose texture-coordinate or normal index
+    /// (`kind` is "texcoord" or "normal") points outside those defined so
+    /// far; `count` is how many there are.
+    #[error("{file}: {object}: {kind} index {value} at position {position} is out of range ({count} {kind}s)")]
+    ObjIndexOutOfRange {
+        file: String,
+        object: String,
+        kind: &'static str,
+        position: usize,
+        value: i64,
+        count: usize,
+    },
     #[error("{file}: {object}: vertex {vertex} has a non-finite position {position:?}")]
     NonFinitePosition {
         file: String,

@@ -121,7 +121,9 @@ pub(crate) fn import_gltf(
     };
     let glb;
     let (json_bytes, blob): (&[u8], Option<&[u8]>) = if bytes.starts_with(b"glTF") {
-        glb = gltf::Glb::from_slice(bytes).map_err(|e| malformed(format!("{e}")))?;
+        // gltf's GLB splitter trusts the header's length field (see glb.rs).
+        let container = crate::glb::check(bytes).map_err(malformed)?;
+        glb = gltf::Glb::from_slice(container).map_err(|e| malformed(format!("{e}")))?;
         (&glb.json[..], glb.bin.as_deref())
     } else {
         (bytes, None)

@@ -14,6 +14,7 @@
 //! index; bad input never panics.
 
 mod error;
+mod glb;
 mod gltf_extensions;
 mod gltf_import;
 mod meshopt_views;

@@ -2,8 +2,20 @@
 //! its material's `Kd` the colour. A missing .mtl is a warning.
 //!
 //! `tobj` reports a bad face index or a NaN vertex without saying where, so
-//! a cheap pre-scan of the text finds the line, group and index first.
+//! a cheap pre-scan of the text finds the line, group and index first. The
+//! pre-scan is also what keeps tobj 4.0.5 from panicking: it resolves a
+//! relative index that points before the first element to a huge `usize`
+//! (and index 0 to "missing") and then computes `vt * 2 + 1` and
+//! `vn * 3 + 2` on it unchecked (lib.rs, `add_vertex`), which overflows in
+//! debug builds; only the position index is bounds-checked with saturating
+//! arithmetic. So every position, texcoord and normal index of `f` and `l`
+//! lines is checked here against the counts defined before it.
+//!
+//! tobj's .mtl parser unwraps a colour line with fewer than three values
+//! (`Kd 1 1`, lib.rs `parse_float3`), a panic in every build, so material
+//! libraries are read and checked here (`load_mtl`) before tobj parses them.
 
+use std::cell::RefCell;
 use std::io::BufRead as _;
 use std::path::Path;
 
@@ -35,8 +47,10 @@ pub(crate) fn import_obj(
         ..Default::default()
     };
     let mut reader = std::io::BufReader::new(text.as_bytes());
+    // Material libraries that fail our check, with the reason.
+    let mtl_problems = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| match base_dir {
-        Some(dir) => tobj::load_mtl(dir.join(mtl)),
+        Some(dir) => load_mtl(&dir.join(mtl), &mtl_problems),
         None => Err(tobj::LoadError::OpenFileFailed),
     })
     .map_err(|e| ImportError::MalformedObj {
@@ -44,10 +58,17 @@ pub(crate) fn import_obj(
         message: e.to_string(),
     })?;
     let mut stats = ImportStats::default();
+    let mtl_problems = mtl_problems.into_inner();
+    for problem in &mtl_problems {
+        stats.warnings.push(format!(
+            "{file}: material library not loaded ({problem}); objects using it get the default colour"
+        ));
+    }
     let materials = match materials {
         Ok(m) => m,
         Err(e) => {
-            if text.lines().any(|l| l.trim_start().starts_with("mtllib")) {
+            if mtl_problems.is_empty() && text.lines().any(|l| l.trim_start().starts_with("mtllib"))
+            {
                 stats.warnings.push(format!(
                     "{file}: material library not loaded ({e}); objects get the default colour"
                 ));
@@ -131,18 +152,75 @@ pub(crate) fn import_obj(
     Ok(Model { objects, stats })
 }
 
+/// Reads a material library for tobj, first checking what tobj's parser
+/// would panic on; a problem is recorded in `problems` (becoming a warning)
+/// and the library is not loaded.
+fn load_mtl(path: &Path, problems: &RefCell<Vec<String>>) -> tobj::MTLLoadResult {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::InvalidData => {
+            return Err(tobj::LoadError::ReadError)
+        }
+        Err(_) => return Err(tobj::LoadError::OpenFileFailed),
+    };
+    if let Err(reason) = check_mtl(&text) {
+        problems
+            .borrow_mut()
+            .push(format!("{}: {reason}", path.display()));
+        return Err(tobj::LoadError::MaterialParseError);
+    }
+    tobj::load_mtl_buf(&mut text.as_bytes())
+}
+
+/// tobj 4.0.5 `parse_float3` collects at most three words of a colour line
+/// and unwraps them into an array, so a line with fewer panics. Lines are
+/// split as tobj splits them (`BufRead::lines`, then whitespace).
+fn check_mtl(text: &str) -> Result<(), String> {
+    for (i, line) in text.as_bytes().lines().enumerate() {
+        let Ok(line) = line else { break };
+        let mut words = line.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() {
+            let values = words.count();
+            if values < 3 {
+                return Err(format!(
+                    "line {}: {key} needs 3 values, found {values}",
+                    i + 1
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What a face element's slots index, with the count defined so far.
+#[derive(Clone, Copy)]
+enum Slot {
+    Position,
+    Texcoord,
+    Normal,
+}
+
 /// Finds the first non-finite vertex or out-of-range face index, naming the
-/// line, group and index, before tobj reports either without a location.
+/// line, group and index, before tobj reports either without a location
+/// (or, for texcoord and normal indices, overflows on them; see the module
+/// comment). Counts elements as tobj does: every `v`, `vt` and `vn` line
+/// adds one (one that tobj cannot parse stops the import there anyway).
+/// Indices resolve as in the OBJ format: 1-based, negative ones counting
+/// back from the latest element, and only elements defined earlier in the
+/// file count.
 fn prescan(text: &str, file: &str) -> Result<(), ImportError> {
     let mut vertices = 0usize;
+    let mut texcoords = 0usize;
+    let mut normals = 0usize;
     let mut group = String::from("default");
     for (i, line) in std::io::BufReader::new(text.as_bytes()).lines().enumerate() {
         let Ok(line) = line else { break };
         let line_no = i + 1;
         let mut words = line.split_whitespace();
-        match words.next() {
+        let what = match words.next() {
             Some("o") | Some("g") => {
                 group = words.collect::<Vec<_>>().join(" ");
+                continue;
             }
             Some("v") => {
                 let coords: Vec<f64> = words.take(3).filter_map(|w| w.parse().ok()).collect();
@@ -159,31 +237,68 @@ fn prescan(text: &str, file: &str) -> Result<(), ImportError> {
                     });
                 }
                 vertices += 1;
+                continue;
             }
-            Some("f") => {
-                for (position, w) in words.enumerate() {
-                    let Some(Ok(index)) = w.split('/').next().map(|s| s.parse::<i64>()) else {
-                        continue; // malformed: let tobj word the error
-                    };
-                    // OBJ indices are 1-based; negative ones count back from
-                    // the latest vertex.
-                    let resolved = if index < 0 {
-                        vertices as i64 + index
-                    } else {
-                        index - 1
-                    };
-                    if resolved < 0 || resolved >= vertices as i64 {
-                        return Err(ImportError::IndexOutOfRange {
-                            file: file.to_owned(),
-                            object: format!("group \"{group}\" face at line {line_no}"),
-                            position,
-                            value: index,
-                            vertices,
-                        });
-                    }
+            Some("vt") => {
+                texcoords += 1;
+                continue;
+            }
+            Some("vn") => {
+                normals += 1;
+                continue;
+            }
+            // tobj reads `l` lines as faces too (a degenerate triangle).
+            Some("f") => "face",
+            Some("l") => "line element",
+            _ => continue,
+        };
+        for (position, w) in words.enumerate() {
+            // tobj reads at most three slots (more is its parse error).
+            let slots = [Slot::Position, Slot::Texcoord, Slot::Normal];
+            for (slot, part) in slots.into_iter().zip(w.split('/')) {
+                if part.is_empty() {
+                    continue; // absent, as the texcoord in `1//2`
                 }
+                let Ok(index) = part.parse::<i64>() else {
+                    continue; // malformed: let tobj word the error
+                };
+                let count = match slot {
+                    Slot::Position => vertices,
+                    Slot::Texcoord => texcoords,
+                    Slot::Normal => normals,
+                };
+                let resolved = if index < 0 {
+                    count as i64 + index
+                } else {
+                    index - 1
+                };
+                if resolved >= 0 && resolved < count as i64 {
+                    continue;
+                }
+                let file = file.to_owned();
+                let object = format!("group \"{group}\" {what} at line {line_no}");
+                return Err(match slot {
+                    Slot::Position => ImportError::IndexOutOfRange {
+                        file,
+                        object,
+                        position,
+                        value: index,
+                        vertices,
+                    },
+                    Slot::Texcoord | Slot::Normal => ImportError::ObjIndexOutOfRange {
+                        file,
+                        object,
+                        kind: if matches!(slot, Slot::Texcoord) {
+                            "texcoord"
+                        } else {
+                            "normal"
+                        },
+                        position,
+                        value: index,
+                        count,
+                    },
+                });
             }
-            _ => {}
         }
     }
     Ok(())

@@ -663,3 +663,21 @@ fn every_quantized_position_type_dequantizes_by_the_gltf_rules() {
         [1.0, 1.0 / 65535.0, 0.2],
     );
 }
+
+/// Writes the quantized and meshopt-compressed files as seeds for the
+/// import_gltf fuzz target (fuzz/seeds/import_gltf, run by
+/// benches/fuzz.sh): `cargo test -p gigawalk-import --test compressed --
+/// --ignored write_fuzz_seeds`.
+#[test]
+#[ignore]
+fn write_fuzz_seeds() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/import_gltf");
+    let mesh = grid();
+    for (name, bytes) in [
+        ("grid_quantized.glb", quantized_glb(&mesh)),
+        ("grid_meshopt.glb", quantized_meshopt_glb(&mesh)),
+    ] {
+        import(&bytes, name);
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+}

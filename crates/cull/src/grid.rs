@@ -89,6 +89,12 @@ impl OcclusionGrid {
         self.lazy
     }
 
+    /// The GPU's absolute depth error, which the software depth leaves room
+    /// for ([`SoftDepth::set_absolute_slack`]).
+    pub fn set_absolute_slack(&mut self, slack: f64) {
+        self.depth.set_absolute_slack(slack);
+    }
+
     /// Clears to an empty `width x height` image; zeroes the stats.
     pub fn reset(&mut self, width: u32, height: u32) {
         self.depth.reset(width, height);

@@ -59,6 +59,9 @@ pub struct SoftDepth {
     clip: Vec<DVec4>,
     /// Only pixels in `[x, y, w, h]` are written (a tile), when set.
     scissor: Option<[u32; 4]>,
+    /// Written depth is lowered by this much too: the GPU's absolute
+    /// depth error ([`SoftDepth::set_absolute_slack`]).
+    abs_slack: f64,
 }
 
 impl SoftDepth {
@@ -73,6 +76,14 @@ impl SoftDepth {
         self.depth.clear();
         self.depth.resize(width as usize * height as usize, 0.0);
         self.scissor = None;
+    }
+
+    /// Lowers every depth written by `slack` (absolute), for a GPU whose
+    /// stored depth may lie that far from the exact one (wgpu's GL
+    /// backend), so the software depth stays never nearer than it. Kept
+    /// across [`SoftDepth::reset`].
+    pub fn set_absolute_slack(&mut self, slack: f64) {
+        self.abs_slack = slack.max(0.0);
     }
 
     /// Later draws write only pixels in `[x, y, w, h]` (`None`: anywhere),
@@ -254,7 +265,7 @@ impl SoftDepth {
             let z_row = a.z + dzdy * (py - a.y);
             for x in x0..=x1 {
                 let z = (z_row + dzdx * (x as f64 + 0.5 - a.x)).min(zmax);
-                let z = (z - slope_slack - z.abs() * DEPTH_REL_SLACK) as f32;
+                let z = (z - slope_slack - z.abs() * DEPTH_REL_SLACK - self.abs_slack) as f32;
                 let d = &mut row[x as usize];
                 if z > *d {
                     *d = z;

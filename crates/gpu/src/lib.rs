@@ -26,7 +26,9 @@ pub use capabilities::{
 };
 #[cfg(feature = "testing")]
 pub use context::devices_or_skip;
-pub use context::{chosen_adapter, open_devices, open_devices_on, GpuContext, GpuError};
+pub use context::{
+    chosen_adapter, open_devices, open_devices_on, GpuContext, GpuError, GL_DEPTH_ERROR,
+};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
     DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT,

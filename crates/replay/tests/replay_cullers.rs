@@ -209,7 +209,25 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
     assert!(zero.frames.iter().all(|f| f.occlusion_culled == 0));
     assert!(zero.frames.iter().all(|f| f.oq.unwrap().queries == 0));
     // Adaptive culling culls more than conservative queries (approximate:
-    // what it costs is in the accuracy figures).
+    // what it costs is in the accuracy figures). It needs queries that
+    // count samples (GL's say only zero or not, and the runtime refuses).
+    if gigawalk_gpu::query_counts(rt.device(1)).unwrap() != gigawalk_gpu::QueryCounts::Exact {
+        let mut opts = options(&[CullMethod::Oq], Schedule::Pipelined, 20);
+        opts.modes = vec![Mode::Occ];
+        opts.runtime.oq.adaptive = 400;
+        let e = replay_on(
+            &rt,
+            "c.gwk",
+            &g.path.poses,
+            "c.path",
+            &opts,
+            &mut NoProgress,
+        )
+        .err()
+        .expect("adaptive culling refused without sample counts");
+        assert!(e.to_string().contains("sample counts"), "{e}");
+        return;
+    }
     let (adaptive, _) = replay(&|o| o.oq.adaptive = 400);
     let tris = |r: &gigawalk_replay::RunRecord| -> u64 {
         r.frames.iter().map(|f| f.drawn_triangles).sum()

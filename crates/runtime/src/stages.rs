@@ -165,6 +165,14 @@ impl<'a> Target<'a> {
         prefetch: Option<Prefetch<'a>>,
     ) -> Result<StcStage<'a>, RuntimeError> {
         let mut stc = StcStage::new(self.skeleton, self.source, opts, prefetch);
+        if let Some(rt) = self.gpu {
+            // The HZB reads OR's depth (device 0), the grid's software
+            // depth stands in for RVG's: both leave room for the backend's
+            // depth error (GL's).
+            stc.or_depth_error = rt.devices[0].depth_error();
+            stc.grid
+                .set_absolute_slack(f64::from(rt.devices[rvg_device].depth_error()));
+        }
         if opts.culler == CullMethod::Oq && opts.traversal.occlusion {
             let unavailable = |why: &str| RuntimeError::CullerUnavailable {
                 culler: CullMethod::Oq,
@@ -577,6 +585,12 @@ pub(crate) struct StcStage<'a> {
     pub opts: &'a RuntimeOptions,
     traverser: Traverser,
     hzb: Hzb,
+    /// OR's device's absolute depth error ([`GpuContext::depth_error`]):
+    /// its depth is lowered by this much before the HZB is built from it,
+    /// so the HZB is never nearer than the exact occluders.
+    or_depth_error: f32,
+    /// OR's depth so lowered (kept between frames).
+    lowered: Vec<f32>,
     grid: OcclusionGrid,
     triangles: TriangleCache<'a>,
     /// The occlusion-query culler's device state.
@@ -693,6 +707,8 @@ impl<'a> StcStage<'a> {
             opts,
             traverser: Traverser::new(),
             hzb: Hzb::new(),
+            or_depth_error: 0.0,
+            lowered: Vec::new(),
             grid: OcclusionGrid::new(opts.grid.cell, opts.grid.lazy),
             triangles: TriangleCache::new(source, opts.grid.cache_bytes),
             oq: None,
@@ -728,8 +744,17 @@ impl<'a> StcStage<'a> {
             (Some(CullMethod::Hzb), Some(d)) => {
                 let th = Instant::now();
                 let _s = tracing::info_span!("HZB build", frame).entered();
+                let depth = if self.or_depth_error > 0.0 {
+                    let e = self.or_depth_error;
+                    self.lowered.clear();
+                    self.lowered
+                        .extend(d.depth.iter().map(|&z| (z - e).max(0.0)));
+                    &self.lowered
+                } else {
+                    &d.depth
+                };
                 self.hzb
-                    .rebuild(d.width, d.height, &d.depth, self.opts.hzb_reduction)
+                    .rebuild(d.width, d.height, depth, self.opts.hzb_reduction)
                     .map_err(|source| RuntimeError::Hzb { frame, source })?;
                 hzb_ms = ms_since(th);
                 true

@@ -102,7 +102,9 @@ pub enum ViewError {
     Screenshot(#[from] ScreenshotError),
     #[error(transparent)]
     Record(#[from] PathWriteError),
-    #[error("--wireframe: {devices} cannot draw lines (no POLYGON_MODE_LINE, e.g. GLES); leave it out")]
+    #[error(
+        "--wireframe: {devices} cannot draw lines (no POLYGON_MODE_LINE, e.g. GLES); leave it out"
+    )]
     NoWireframe { devices: String },
     #[error("the scripted run ended before frame {wanted} (rendered {rendered})")]
     TooFewFrames { wanted: u64, rendered: u64 },

@@ -108,7 +108,10 @@ fn usable_adapter_with(hide: fn(&mut Command) -> &mut Command, what: &str) -> bo
         "GIGAWALK_REQUIRE_ADAPTER is set but {what} has no usable adapter: {}",
         v["error"]
     );
-    eprintln!("\n!!! SKIPPING {what}: no usable adapter ({}) !!!\n", v["error"]);
+    eprintln!(
+        "\n!!! SKIPPING {what}: no usable adapter ({}) !!!\n",
+        v["error"]
+    );
     false
 }
 

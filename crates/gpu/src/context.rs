@@ -186,7 +186,7 @@ pub(crate) fn candidates(
     let mut usable_names = Vec::new();
     let mut tried = Vec::new();
     for backends in tries {
-        tried.push(format!("{backends:?}"));
+        tried.push(backend_names(backends));
         let instance = instance_for(backends);
         let all = adapters(&instance);
         let mut usable = Vec::new();
@@ -225,6 +225,25 @@ pub(crate) fn candidates(
     Err(GpuError::NoAdapter {
         seen: seen.join("; "),
     })
+}
+
+/// "Vulkan, Metal, DX12": the native backends in `b`, for messages.
+fn backend_names(b: wgpu::Backends) -> String {
+    let names: Vec<&str> = [
+        (wgpu::Backends::VULKAN, "Vulkan"),
+        (wgpu::Backends::METAL, "Metal"),
+        (wgpu::Backends::DX12, "DX12"),
+        (wgpu::Backends::GL, "GL"),
+    ]
+    .iter()
+    .filter(|(flag, _)| b.contains(*flag))
+    .map(|(_, name)| *name)
+    .collect();
+    if names.is_empty() {
+        format!("{b:?}")
+    } else {
+        names.join(", ")
+    }
 }
 
 /// Whether an adapter called `name` is the one `--adapter want` asks for.

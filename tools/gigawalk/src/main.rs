@@ -145,12 +145,18 @@ fn quiet_headless_vulkan_device_select() {
 /// also every span to a Chrome trace file.
 fn init_tracing(trace: Option<&std::path::Path>) -> Option<tracing_chrome::FlushGuard> {
     use tracing_subscriber::prelude::*;
-    // EGL logs an error for each platform it tries before the one that
+    // Probing backends makes their loaders log errors that are not
+    // failures: EGL one for each platform it tries before the one that
     // works (on a headless machine with Mesa: "DRI2: failed to load
-    // driver", then llvmpipe runs fine); an adapter that cannot be used is
-    // reported by gigawalk itself. RUST_LOG shows them again.
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,wgpu_hal::gles::egl=off"));
+    // driver", then llvmpipe runs fine), the Vulkan loader "Found no
+    // drivers!" where there is a loader and no driver. gigawalk itself
+    // reports an adapter it cannot use and a machine with none. RUST_LOG
+    // shows them again.
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+        tracing_subscriber::EnvFilter::new(
+            "warn,wgpu_hal::gles::egl=off,wgpu_hal::vulkan::instance=off",
+        )
+    });
     let fmt = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
         .with_filter(filter);

@@ -134,3 +134,26 @@ fn the_demo_runs_on_gl_with_the_vulkan_driver_hidden() {
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(summary.contains("Gl"), "the report does not name GL");
 }
+
+/// `--adapter` that matches no usable adapter fails at once, listing the
+/// usable ones, before anything is generated.
+#[test]
+fn an_adapter_name_that_matches_nothing_fails_at_once_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cache, out) = (dir.path().join("cache"), dir.path().join("out"));
+    let run = demo_command(&cache, &out)
+        .args(["--adapter", "no-such-gpu-xyz"])
+        .env_remove("RUST_LOG")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{stderr}");
+    // With a usable adapter: the name matched nothing; without one at
+    // all: the machine cannot render.
+    assert!(
+        stderr.contains("no usable GPU adapter's name contains \"no-such-gpu-xyz\"")
+            || stderr.contains("no GPU adapter gigawalk can use"),
+        "{stderr}"
+    );
+    assert!(!cache.exists() && !out.exists(), "the demo wrote files");
+}

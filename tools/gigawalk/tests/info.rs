@@ -268,3 +268,41 @@ fn succeeds_with_stdout_closed(args: &[&str]) {
     assert!(!err.contains("panicked"), "{args:?}: {err}");
     assert!(out.status.success(), "{args:?}: {:?}: {err}", out.status);
 }
+
+/// `info --adapters` lists what wgpu sees, each adapter usable or with what
+/// it lacks, and which one a run would use; JSON says the same. Works (and
+/// exits 0) with no adapter at all: it is how a user finds out why.
+#[test]
+fn adapters_are_listed_with_whether_gigawalk_can_use_them() {
+    let (ok, text, err) = gigawalk(&["info", "--adapters"]);
+    assert!(ok, "{err}");
+    assert!(text.contains("would use"), "{text}");
+    let (ok, json, err) = gigawalk(&["info", "--adapters", "--json"]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let adapters = v["adapters"].as_array().unwrap();
+    for a in adapters {
+        let name = a["name"].as_str().unwrap();
+        assert!(text.contains(name), "{name} missing from the text");
+        // A usable adapter lacks nothing; an unusable one says what.
+        assert_eq!(
+            a["usable"].as_bool().unwrap(),
+            a["missing"].as_array().unwrap().is_empty(),
+            "{a}"
+        );
+    }
+    let used = adapters.iter().filter(|a| a["would_use"] == true).count();
+    if v["error"].is_null() {
+        assert_eq!(used, 1, "{json}");
+    } else {
+        assert_eq!(used, 0, "{json}");
+        assert!(text.contains("would use   none:"), "{text}");
+    }
+    // --adapter picks by name; one that matches nothing says so.
+    let (ok, text, _) = gigawalk(&["info", "--adapters", "--adapter", "no-such-gpu-xyz"]);
+    assert!(ok);
+    assert!(text.contains("would use   none:"), "{text}");
+    // --adapter alone is not a scene.
+    let (ok, _, err) = gigawalk(&["info", "--adapter", "x"]);
+    assert!(!ok, "{err}");
+}

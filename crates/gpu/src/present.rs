@@ -6,7 +6,7 @@
 
 use crate::context::{candidates, device_name, open, rank, second_adapter};
 use crate::overlay::{OverlayFrame, OverlayRenderer};
-use crate::passes::ReadBack;
+use crate::passes::{fullscreen_pipeline, ReadBack};
 use crate::{GpuContext, GpuError, VisiblePass, COLOUR_FORMAT};
 
 pub const BLIT_WGSL: &str = include_str!("../../../shaders/blit.wgsl");
@@ -388,41 +388,7 @@ fn blit_pipeline(
     layout: &wgpu::BindGroupLayout,
     format: wgpu::TextureFormat,
 ) -> wgpu::RenderPipeline {
-    let d = &ctx.device;
-    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("blit"),
-        source: wgpu::ShaderSource::Wgsl(BLIT_WGSL.into()),
-    });
-    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("blit"),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("blit"),
-        layout: Some(&pl),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: Default::default(),
-        depth_stencil: None,
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+    fullscreen_pipeline(ctx, "blit", BLIT_WGSL, layout, format)
 }
 
 /// Reads an RGBA8 texture back, rows tightly packed, row 0 at the top.

@@ -150,10 +150,13 @@ fn depth_and_colour_follow_the_conventions() {
     assert!(bg[0] < 60 && bg[1] < 60 && bg[2] < 70, "background {bg:?}");
 }
 
+/// OR's depth, RVG's colour, RVG's depth.
+type Rendered = (Vec<f32>, Vec<u8>, Vec<f32>);
+
 /// OR's depth and RVG's colour and depth with the camera below the boxes
 /// (so they show in the image's upper half), read back as the adapter
 /// does it, and then through the depth copy pass.
-fn render_both_depth_paths() -> Option<[(Vec<f32>, Vec<u8>, Vec<f32>); 2]> {
+fn render_both_depth_paths() -> Option<[Rendered; 2]> {
     let mut ctx = devices_or_skip(1, "depth copy pass").map(|mut d| d.remove(0))?;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");

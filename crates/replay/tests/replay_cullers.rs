@@ -223,8 +223,7 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
             &opts,
             &mut NoProgress,
         )
-        .err()
-        .expect("adaptive culling refused without sample counts");
+        .expect_err("adaptive culling refused without sample counts");
         assert!(e.to_string().contains("sample counts"), "{e}");
         return;
     }

@@ -8,7 +8,8 @@ struct FrameUniforms {
     view_proj: mat4x4<f32>,
     // Direction the head light shines (the view direction), world axes.
     light_dir: vec4<f32>,
-    // x: ambient term, y: 1 to draw the unlit object colour (wireframe), zw: unused.
+    // x: ambient term, y: 1 to draw the unlit object colour (wireframe),
+    // z: depth bias toward the eye (query boxes), w: unused.
     params: vec4<f32>,
 };
 

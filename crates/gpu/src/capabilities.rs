@@ -8,10 +8,10 @@
 //! requests), and the texture formats in [`REQUIRED_FORMATS`].
 //! Optional, each with what happens without it ([`Optional`]): depth
 //! texture copies (without them depth is read back through a small pass
-//! that copies it into a colour target, `DepthReader`), occlusion
-//! queries with sample counts (only `oq`'s adaptive culling needs them) and
-//! line polygon mode (wireframe), and index values beyond 2^24 (larger
-//! LODs).
+//! that draws it into a colour target, `DepthCopy` in passes.rs), line
+//! polygon mode (wireframe) and index values beyond 2^24 (larger LODs).
+//! Whether occlusion queries count samples (only `oq`'s adaptive culling
+//! needs it) takes a device to find out: [`crate::query_counts`].
 
 use wgpu::{DownlevelFlags, TextureFormat, TextureUsages};
 

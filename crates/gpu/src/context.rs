@@ -124,11 +124,13 @@ impl GpuContext {
 /// The absolute depth error of wgpu's GL backend: its shaders map clip z
 /// from [0, 1] to GL's [-1, 1] (`z * 2 - w`) and GL maps it back, so a
 /// depth near 0 (far away, reversed-Z) is rounded near -1, where an f32
-/// step is 2^-24 absolute, not relative (measured: 1.8e-8 off at depth
-/// 1.3e-4 on llvmpipe). Four such steps, for the rounding in the vertex
-/// shader and in interpolation; occlusion tests against GL depth (the HZB
-/// from OR's, the grid's software depth against RVG's) leave this much
-/// room.
+/// step is 2^-24 in NDC and 2^-25 in stored depth, absolute, not relative
+/// (measured: 1.8e-8 off at depth 1.3e-4 on llvmpipe). 2^-22 is eight
+/// stored-depth steps: a bound on the gap between any two depths GL
+/// stores for one surface (drawn by different shaders, OR's and RVG's),
+/// and between either and the exact depth, so occlusion tests against GL
+/// depth (the HZB from OR's, the grid's software depth against RVG's)
+/// lower the occluder by it once.
 pub const GL_DEPTH_ERROR: f32 = 1.0 / (1 << 22) as f32;
 
 /// The devices' names in messages: OR's device first, RVG's second.
@@ -178,12 +180,28 @@ pub(crate) fn candidates(
     adapter: Option<&str>,
     instance_for: &mut dyn FnMut(wgpu::Backends) -> wgpu::Instance,
 ) -> Result<Candidates, GpuError> {
+    // Only backends this build has (no Metal or DX12 on Linux).
+    let built = wgpu::Instance::enabled_backend_features();
     let tries = match wgpu::Backends::from_env() {
-        Some(b) => vec![b],
-        None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::SECONDARY],
+        Some(b) if (b & built).is_empty() => {
+            let value = std::env::var("WGPU_BACKEND").unwrap_or_default();
+            return Err(GpuError::NoAdapter {
+                seen: format!(
+                    "WGPU_BACKEND={value:?} names no backend this build has ({})",
+                    backend_names(built)
+                ),
+            });
+        }
+        Some(b) => vec![b & built],
+        None => [wgpu::Backends::PRIMARY, wgpu::Backends::SECONDARY]
+            .into_iter()
+            .map(|b| b & built)
+            .filter(|b| !b.is_empty())
+            .collect(),
     };
     let mut seen = Vec::new();
     let mut usable_names = Vec::new();
+    let mut unusable_matches = Vec::new();
     let mut tried = Vec::new();
     for backends in tries {
         tried.push(backend_names(backends));
@@ -193,12 +211,15 @@ pub(crate) fn candidates(
         for a in all {
             let report = crate::capabilities::AdapterReport::of(&a);
             if !report.qualifies() {
+                if let Some(want) = adapter.filter(|w| name_matches(&report.name(), w)) {
+                    unusable_matches.push(format!("{want:?} matches {}", report.line()));
+                }
                 tracing::warn!("skipping GPU adapter {}", report.line());
                 seen.push(report.line());
                 continue;
             }
             usable_names.push(report.name());
-            if adapter.is_none_or(|want| name_matches(&report.info.name, want)) {
+            if adapter.is_none_or(|want| name_matches(&report.name(), want)) {
                 usable.push(a);
             }
         }
@@ -211,9 +232,14 @@ pub(crate) fn candidates(
         }
     }
     if let (Some(wanted), false) = (adapter, usable_names.is_empty()) {
+        let mut usable = usable_names.join(", ");
+        for m in unusable_matches {
+            usable.push_str("; ");
+            usable.push_str(&m);
+        }
         return Err(GpuError::NoMatchingAdapter {
             wanted: wanted.to_string(),
-            usable: usable_names.join(", "),
+            usable,
         });
     }
     if seen.is_empty() {
@@ -329,7 +355,15 @@ pub(crate) fn second_adapter(
     adapters(instance)
         .into_iter()
         .find(|a| a.get_info() == info)
-        .unwrap_or_else(|| best.clone())
+        .unwrap_or_else(|| {
+            if info.backend == wgpu::Backend::Gl {
+                tracing::warn!(
+                    "a new GL instance does not list {}: both devices share one EGL context",
+                    info.name
+                );
+            }
+            best.clone()
+        })
 }
 
 pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, GpuError> {

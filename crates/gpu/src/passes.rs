@@ -64,6 +64,9 @@ pub(crate) struct Drawer {
     instances: wgpu::Buffer,
     /// Instances already used this frame (chunks append).
     used: u64,
+    /// Written to `FrameUniforms::params.z` (what shaders that read it
+    /// move toward the eye in depth).
+    pub(crate) depth_bias: f32,
 }
 
 impl Drawer {
@@ -107,6 +110,7 @@ impl Drawer {
             layout,
             instances: instance_buffer(ctx, 1024),
             used: 0,
+            depth_bias: 0.0,
         }
     }
 
@@ -119,7 +123,7 @@ impl Drawer {
                 .normalize_or(Vec3::NEG_Z)
                 .extend(0.0)
                 .to_array(),
-            params: [0.25, if unlit { 1.0 } else { 0.0 }, 0.0, 0.0],
+            params: [0.25, if unlit { 1.0 } else { 0.0 }, self.depth_bias, 0.0],
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));

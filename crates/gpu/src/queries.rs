@@ -94,7 +94,10 @@ fn query_buffers(
 
 impl QueryPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> QueryPass {
-        let drawer = Drawer::new(ctx, "query depth");
+        let mut drawer = Drawer::new(ctx, "query depth");
+        // Boxes are drawn nearer by twice the device's depth error (GL's):
+        // box and node are rounded independently.
+        drawer.depth_bias = 2.0 * ctx.depth_error();
         let depth_pipeline = pipeline(
             ctx,
             &drawer,

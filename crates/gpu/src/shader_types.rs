@@ -12,7 +12,9 @@ pub struct FrameUniforms {
     pub view_proj: [[f32; 4]; 4],
     /// The head light's direction (= view direction), w unused.
     pub light_dir: [f32; 4],
-    /// x: ambient term; y: 1 for the unlit object colour (wireframe); z, w: unused.
+    /// x: ambient term; y: 1 for the unlit object colour (wireframe); z:
+    /// depth bias toward the eye (query boxes: twice the device's depth
+    /// error, 0 elsewhere); w: unused.
     pub params: [f32; 4],
 }
 

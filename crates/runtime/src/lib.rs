@@ -576,8 +576,11 @@ fn check_device_count(count: usize) -> Result<(), RuntimeError> {
 }
 
 /// Every LOD's indices stay within each device's index range (some GL
-/// drivers index at most 2^24 vertices): an error naming the first LOD
-/// that does not, before anything is loaded.
+/// drivers index at most 2^24 vertices): an error naming the largest LOD
+/// when it does not, before anything is loaded. Indices are local to a
+/// LOD; should a driver bound `base_vertex + index` instead, the geometry
+/// buffers' 256 MiB cap ([`buffer_limit`]: at most 13.4M 20-byte vertices
+/// a buffer) keeps that within 2^24 too.
 fn check_index_range(skeleton: &Skeleton, devices: &[GpuContext]) -> Result<(), RuntimeError> {
     let Some((lod, most)) = (0..)
         .zip(&skeleton.lods)

@@ -205,7 +205,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     let mut settings = args.settings.clone();
     if settings.wireframe && !wireframe_supported {
         // Asked for on the command line: refuse rather than draw something
-        // else (T in the window says the same on the HUD).
+        // else (T in the window only shows that it draws shaded).
         return Err(ViewError::NoWireframe {
             devices: device_names,
         });

@@ -93,7 +93,7 @@ fn print_one(r: &AdapterReport, chosen: bool) -> anyhow::Result<()> {
 fn consequence(o: Optional) -> &'static str {
     match o {
         Optional::DepthCopies => " (same images, one extra pass a read-back)",
-        Optional::Wireframe => " (the viewer's T and --wireframe draw shaded)",
+        Optional::Wireframe => " (the viewer's --wireframe refuses, T draws shaded)",
         Optional::IndexRange => " (a scene with a larger LOD is refused when loaded)",
     }
 }

@@ -14,7 +14,7 @@ pub struct Args {
     /// List every GPU adapter on every backend instead: type, backend,
     /// driver, whether gigawalk can use it and why not, and which one a run
     /// would use (with --adapter NAME: which one that picks)
-    #[arg(long, conflicts_with = "verify")]
+    #[arg(long, conflicts_with_all = ["verify", "scene"])]
     adapters: bool,
     /// With --adapters: the name a run's --adapter would be given
     #[arg(long, value_name = "NAME", requires = "adapters")]

@@ -63,12 +63,12 @@ pub struct RuntimeArgs {
     /// Viewport width
     #[arg(long, default_value_t = 640)]
     pub width: u32,
-    /// Use the GPU adapter whose name contains this (case-insensitive; `gigawalk info --adapters` lists them); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend [default: the best adapter that qualifies, hardware first]
-    #[arg(long, value_name = "NAME")]
-    pub adapter: Option<String>,
     /// Viewport height
     #[arg(long, default_value_t = 360)]
     pub height: u32,
+    /// Use the GPU adapter whose name contains this (case-insensitive; the name as `gigawalk info --adapters` lists it, backend included: `--adapter gl` picks GL); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend [default: the best adapter that qualifies, hardware first]
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Option<String>,
     /// Occluders of frame i are the visible set of frame i - lag (1 or 2; paper: 2)
     #[arg(long, default_value_t = 2)]
     occluder_lag: u32,

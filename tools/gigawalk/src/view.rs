@@ -43,7 +43,7 @@ pub struct Args {
     /// wgpu devices for the pipeline: 2 = OR and RVG on their own devices (paper), 1 = shared
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=2))]
     devices: u64,
-    /// Use the GPU adapter whose name contains this (case-insensitive; `gigawalk info --adapters` lists them); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend [default: the best adapter that qualifies and can present to the window]
+    /// Use the GPU adapter whose name contains this (case-insensitive; the name as `gigawalk info --adapters` lists it, backend included: `--adapter gl` picks GL); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend [default: the best adapter that qualifies and can present to the window]
     #[arg(long, value_name = "NAME")]
     adapter: Option<String>,
     /// Start without occlusion culling

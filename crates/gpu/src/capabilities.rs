@@ -172,14 +172,10 @@ pub const HOW_TO_GET_ONE: &str = "on Linux without a GPU install Mesa's software
 /// backends as everywhere. For `gigawalk info --adapters`: it probes GL
 /// even when another backend has adapters, which opening devices does not.
 pub fn list_adapters() -> Vec<AdapterReport> {
-    let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
+    let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all())
+        & wgpu::Instance::enabled_backend_features();
     let mut out = Vec::new();
-    for backend in [
-        wgpu::Backends::VULKAN,
-        wgpu::Backends::METAL,
-        wgpu::Backends::DX12,
-        wgpu::Backends::GL,
-    ] {
+    for (backend, _) in crate::context::BACKENDS {
         if !backends.contains(backend) {
             continue;
         }

@@ -95,13 +95,6 @@ impl GpuContext {
         }
     }
 
-    /// Whether depth is read back through a copy into a colour target
-    /// (adapters without depth-texture copies, e.g. GL) rather than copied
-    /// directly.
-    pub fn reads_depth_through_a_pass(&self) -> bool {
-        self.depth_via_pass
-    }
-
     /// Reads depth back through the copy pass even where direct copies
     /// work, so tests compare the two paths on one adapter.
     #[cfg(feature = "testing")]
@@ -253,18 +246,22 @@ pub(crate) fn candidates(
     })
 }
 
-/// "Vulkan, Metal, DX12": the native backends in `b`, for messages.
+/// The backends gigawalk runs on, in the order they are preferred, with
+/// their names for messages.
+pub(crate) const BACKENDS: [(wgpu::Backends, &str); 4] = [
+    (wgpu::Backends::VULKAN, "Vulkan"),
+    (wgpu::Backends::METAL, "Metal"),
+    (wgpu::Backends::DX12, "DX12"),
+    (wgpu::Backends::GL, "GL"),
+];
+
+/// "Vulkan, Metal, DX12": the backends of [`BACKENDS`] in `b`, for messages.
 fn backend_names(b: wgpu::Backends) -> String {
-    let names: Vec<&str> = [
-        (wgpu::Backends::VULKAN, "Vulkan"),
-        (wgpu::Backends::METAL, "Metal"),
-        (wgpu::Backends::DX12, "DX12"),
-        (wgpu::Backends::GL, "GL"),
-    ]
-    .iter()
-    .filter(|(flag, _)| b.contains(*flag))
-    .map(|(_, name)| *name)
-    .collect();
+    let names: Vec<&str> = BACKENDS
+        .iter()
+        .filter(|(flag, _)| b.contains(*flag))
+        .map(|(_, name)| *name)
+        .collect();
     if names.is_empty() {
         format!("{b:?}")
     } else {

@@ -4,8 +4,8 @@
 
 use gigawalk_cull::Camera;
 use gigawalk_gpu::{
-    devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, HostGeometry, View,
-    VisiblePass,
+    devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, HostGeometry,
+    ResidentGeometry, View, VisiblePass,
 };
 use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use glam::{DVec3, Vec3};
@@ -46,6 +46,18 @@ fn write_scene(path: &std::path::Path, shift: DVec3) {
         });
     }
     w.finish(nodes, Provenance::default()).unwrap();
+}
+
+/// The two boxes of [`write_scene`], shifted by `shift`, resident on `ctx`.
+fn upload_scene(ctx: &GpuContext, shift: DVec3) -> ResidentGeometry {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    write_scene(&path, shift);
+    let scene = SceneReader::open(&path).unwrap();
+    HostGeometry::load(&scene, 1 << 20)
+        .unwrap()
+        .upload(ctx)
+        .unwrap()
 }
 
 fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {
@@ -99,14 +111,7 @@ fn render_styled(
     (w, h): (u32, u32),
 ) -> Option<((Vec<f32>, Vec<u8>, Vec<f32>), bool)> {
     let ctx = devices_or_skip(1, "gpu render").map(|mut d| d.remove(0))?;
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("s.gwk");
-    write_scene(&path, shift);
-    let scene = SceneReader::open(&path).unwrap();
-    let geometry = HostGeometry::load(&scene, 1 << 20)
-        .unwrap()
-        .upload(&ctx)
-        .unwrap();
+    let geometry = upload_scene(&ctx, shift);
     let v = view(shift, w, h);
     let mut or = DepthPass::new(&ctx, w, h);
     let depth = or.render(&ctx, &geometry, &v, &[0, 1]).unwrap();
@@ -158,15 +163,8 @@ type Rendered = (Vec<f32>, Vec<u8>, Vec<f32>);
 /// does it, and then through the depth copy pass.
 fn render_both_depth_paths() -> Option<[Rendered; 2]> {
     let mut ctx = devices_or_skip(1, "depth copy pass").map(|mut d| d.remove(0))?;
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("s.gwk");
     let shift = DVec3::new(-3e5, 7e4, 1e6);
-    write_scene(&path, shift);
-    let scene = SceneReader::open(&path).unwrap();
-    let geometry = HostGeometry::load(&scene, 1 << 20)
-        .unwrap()
-        .upload(&ctx)
-        .unwrap();
+    let geometry = upload_scene(&ctx, shift);
     let (w, h) = (80, 50);
     let v = view(shift + DVec3::new(0.0, -1.5, 0.0), w, h);
     let mut out = Vec::new();
@@ -294,15 +292,8 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
             ctx.name
         );
     }
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("s.gwk");
     let shift = DVec3::new(1e6, -2e5, 3e6);
-    write_scene(&path, shift);
-    let scene = SceneReader::open(&path).unwrap();
-    let geometry = HostGeometry::load(&scene, 1 << 20)
-        .unwrap()
-        .upload(&ctx)
-        .unwrap();
+    let geometry = upload_scene(&ctx, shift);
     let (w, h) = (64, 48);
     let v = view(shift, w, h);
     let mut q = gigawalk_gpu::QueryPass::new(&ctx, w, h);

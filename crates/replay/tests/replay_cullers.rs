@@ -158,11 +158,11 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
         return;
     };
     let rt = Runtime::with_devices(&scene, d).unwrap();
-    let replay = |f: &dyn Fn(&mut RuntimeOptions)| {
+    let try_replay = |f: &dyn Fn(&mut RuntimeOptions)| {
         let mut opts = options(&[CullMethod::Oq], Schedule::Pipelined, 20);
         opts.modes = vec![Mode::Occ];
         f(&mut opts.runtime);
-        let r = replay_on(
+        replay_on(
             &rt,
             "c.gwk",
             &g.path.poses,
@@ -170,7 +170,9 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
             &opts,
             &mut NoProgress,
         )
-        .unwrap();
+    };
+    let replay = |f: &dyn Fn(&mut RuntimeOptions)| {
+        let r = try_replay(f).unwrap();
         let s = r.summary();
         (r.runs.into_iter().next().unwrap(), s.modes[0].clone())
     };
@@ -212,18 +214,8 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
     // what it costs is in the accuracy figures). It needs queries that
     // count samples (GL's say only zero or not, and the runtime refuses).
     if gigawalk_gpu::query_counts(rt.device(1)).unwrap() != gigawalk_gpu::QueryCounts::Exact {
-        let mut opts = options(&[CullMethod::Oq], Schedule::Pipelined, 20);
-        opts.modes = vec![Mode::Occ];
-        opts.runtime.oq.adaptive = 400;
-        let e = replay_on(
-            &rt,
-            "c.gwk",
-            &g.path.poses,
-            "c.path",
-            &opts,
-            &mut NoProgress,
-        )
-        .expect_err("adaptive culling refused without sample counts");
+        let e = try_replay(&|o| o.oq.adaptive = 400)
+            .expect_err("adaptive culling refused without sample counts");
         assert!(e.to_string().contains("sample counts"), "{e}");
         return;
     }

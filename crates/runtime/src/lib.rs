@@ -269,7 +269,7 @@ impl<'s> Runtime<'s> {
         scene: &'s SceneReader<R>,
         devices: usize,
     ) -> Result<Self, RuntimeError> {
-        Self::with_devices(scene, open_devices(devices)?)
+        Self::with_devices(scene, open_devices(devices, None)?)
     }
 
     /// Like [`Runtime::new`] with devices the caller opened (1 or 2).
@@ -385,9 +385,7 @@ impl<'s> Runtime<'s> {
         budget: MemoryBudget,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
-        check_device_count(devices)?;
-        let devices = gigawalk_gpu::open_devices_on(devices, adapter).map_err(setup)?;
-        Self::with_budget(scene, devices, budget, progress)
+        Self::with_budget(scene, open_devices(devices, adapter)?, budget, progress)
     }
 
     /// Loads the scene whole onto `devices` ([`Runtime::with_devices`]) or
@@ -613,8 +611,7 @@ pub fn probe_devices(
     width: u32,
     height: u32,
 ) -> Result<Vec<String>, RuntimeError> {
-    check_device_count(count)?;
-    let devices = gigawalk_gpu::open_devices_on(count, adapter).map_err(setup)?;
+    let devices = open_devices(count, adapter)?;
     for d in &devices {
         let max = d.device.limits().max_texture_dimension_2d;
         if width > max || height > max {
@@ -629,10 +626,11 @@ pub fn probe_devices(
     Ok(devices.into_iter().map(|d| d.name).collect())
 }
 
-/// Opens `count` (1 or 2) wgpu devices.
-fn open_devices(count: usize) -> Result<Vec<GpuContext>, RuntimeError> {
+/// Opens `count` (1 or 2) wgpu devices, on an adapter whose name contains
+/// `adapter` if given.
+fn open_devices(count: usize, adapter: Option<&str>) -> Result<Vec<GpuContext>, RuntimeError> {
     check_device_count(count)?;
-    gigawalk_gpu::open_devices(count).map_err(setup)
+    gigawalk_gpu::open_devices_on(count, adapter).map_err(setup)
 }
 
 /// The largest geometry buffer every device takes (at most 256 MiB).

@@ -1,20 +1,30 @@
 //! LODs and HLODs (GigaWalk Section 4.3), simplified with meshoptimizer,
 //! with measured errors.
 //!
-//! A leaf gets a chain of static LODs of its own geometry: edge collapse
-//! for the first levels, then sloppy vertex clustering, halving down to a
-//! floor. An inner node gets a chain of HLODs at every scale: its finest
-//! is its children's levels cut at a matching error, merged and simplified
-//! to a per-node triangle budget (sloppy clustering joins disjoint objects
-//! as the paper's GAPS does), then halved down to the floor. So switching
-//! from a node to its children at most multiplies the triangles drawn by
-//! about 1 / ratio, and a node is drawable as soon as its budget suffices,
-//! not only once it is a few pixels wide.
+//! A leaf gets a chain of static LODs of its own geometry; an inner node
+//! a chain of HLODs made from the union of its children's levels, cut at
+//! a matching error so the union holds about twice the node's triangle
+//! budget. Both chains are made the same way ([`extend_chain`]): each
+//! level is the first simplification of the previous one, at doubling
+//! error limits, that keeps at most 65% of its triangles, and never far
+//! below the level's target. Edge collapse (which prunes small pieces)
+//! and vertex clustering (which joins disjoint pieces, as the paper's
+//! GAPS does) are both tried where the pieces are many, and the lower
+//! error per triangle kept; pieces that vanished where nothing is left
+//! near them are stood for by about a triangle per cell of the error.
+//! So a machine's thousands of bolts, covers and hoses aggregate into
+//! blobs, a node's finest HLOD stands for its children near the error
+//! where they would be drawn, and switching from a node to its children
+//! multiplies the triangles drawn by a small factor (`gigawalk info`
+//! reports the distribution).
 //!
 //! Every level's error is measured ([`crate::hausdorff`]): an upper bound
 //! on the two-sided Hausdorff distance to the full-detail surface it
 //! stands for, non-decreasing along a chain and never below the errors of
-//! the child levels an HLOD was built from.
+//! the child levels an HLOD was built from. Below a node of at most
+//! 65,536 triangles that surface itself is the reference; above, the
+//! union of the children's levels, plus their errors (the triangle
+//! inequality), which compounds with every level of the tree.
 
 use gigawalk_import::{Model, Object};
 use gigawalk_scene::{Colours, LodMesh};
@@ -168,8 +178,10 @@ pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
         base: 0.0,
         sampling: p.sampling(diagonal),
         diagonal: diagonal as f32,
+        first_budget: usize::MAX,
+        keep_pieces: true,
     };
-    extend_chain(&mut lods, reference, p, 0);
+    extend_chain(&mut lods, reference, p);
     lods
 }
 
@@ -179,69 +191,62 @@ pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
 /// any parent). Each child contributes the coarsest of its levels whose
 /// error is within a threshold common to all children, the smallest
 /// threshold whose merged triangles fit [`ChainParams::merge_budget`], so
-/// the children are cut at a matching error. The merge is simplified to
-/// [`ChainParams::node_budget`] triangles and then halved down to the
-/// floor. Every level's error is the largest error of the picked child
-/// levels plus the measured distance between the merge and the level (by
-/// the triangle inequality, a bound on its distance to the original), so
-/// it is never below any picked child's.
-pub fn inner_lods(children: &[&[Lod]], origin: DVec3, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
+/// the children are cut at a matching error. The union is the chain's
+/// level 0 (stored only within [`ChainParams::node_budget`]); the levels
+/// below it are made as a leaf's are, the first within the budget. Each
+/// level's error is its measured distance to `original` (the full detail
+/// below the node) when given, else the largest error of the picked child
+/// levels plus its measured distance to the union (by the triangle
+/// inequality, a bound on its distance to the original); never below any
+/// picked child's.
+pub fn inner_lods(
+    children: &[&[Lod]],
+    original: Option<&WorkMesh>,
+    origin: DVec3,
+    diagonal: f64,
+    p: &ChainParams,
+) -> Vec<Lod> {
     let picked = pick_levels(children, p.merge_budget());
-    let parts: Vec<&Lod> = children
+    let parts: Vec<&WorkMesh> = children
         .iter()
         .zip(&picked)
-        .filter_map(|(c, &k)| c.get(k))
+        .filter_map(|(c, &k)| c.get(k).map(|l| &l.mesh))
         .collect();
     let merged = merge(&parts, origin);
-    let base = parts.iter().map(|l| l.error).fold(0.0f32, f32::max);
-    let mut lods = Vec::new();
-    if merged.triangles() > p.node_budget {
-        // Edge collapse keeps every piece (a thin pipe thins to a sliver
-        // rather than vanishing, which would cost its distance to the
-        // rest); sloppy clustering when collapse is off or stalls.
-        let s = Simplifier::new(&merged, false);
-        let first = (p.collapse_levels > 0)
-            .then(|| s.step(p.node_budget, f32::MAX, false))
-            .flatten()
-            .filter(|m| shrinks(m, merged.triangles()))
-            .or_else(|| s.step(p.node_budget, f32::MAX, true));
-        if let Some(mesh) = first {
-            lods.push(Lod { mesh, error: 0.0 });
-        }
-    }
-    let mut queries = Nearest::new(merged.surface());
-    let sampling = p.sampling(diagonal);
-    match lods.first_mut() {
-        Some(first) => {
-            first.error = base
-                + hausdorff::symmetric(
-                    merged.surface(),
-                    &mut queries,
-                    first.mesh.surface(),
-                    &sampling,
-                );
-        }
-        // Already within the budget (or the simplifier stalled): the
-        // union itself is the finest HLOD.
-        None => lods.push(Lod {
-            mesh: merged.clone(),
-            error: base,
-        }),
-    }
-    if !lods[0].error.is_finite() {
-        lods[0] = Lod {
-            mesh: merged.clone(),
-            error: base,
-        };
-    }
-    let reference = Reference {
-        mesh: &merged,
-        queries: &mut queries,
-        base,
-        sampling,
-        diagonal: diagonal as f32,
+    let base = children
+        .iter()
+        .zip(&picked)
+        .filter_map(|(c, &k)| c.get(k).map(|l| l.error))
+        .fold(0.0f32, f32::max);
+    // Measured against the full detail where the node keeps it: the
+    // bound is then the distance itself, not the picked levels' errors
+    // plus the distance to them, which compounds up the tree (each
+    // level's own distance added onto its children's).
+    let (reference_mesh, reference_base) = match original {
+        Some(o) => (o, 0.0),
+        None => (&merged, base),
     };
-    extend_chain(&mut lods, reference, p, 1);
+    let mut queries = Nearest::new(reference_mesh.surface());
+    // The union itself is level 0 of the chain the levels are made from;
+    // it is kept only when it is within the budget, or when nothing
+    // coarser could be made.
+    let mut lods = vec![Lod {
+        mesh: merged.clone(),
+        error: base,
+    }];
+    let reference = Reference {
+        mesh: reference_mesh,
+        queries: &mut queries,
+        base: reference_base,
+        sampling: p.sampling(diagonal),
+        diagonal: diagonal as f32,
+        first_budget: p.node_budget,
+        keep_pieces: false,
+    };
+    extend_chain(&mut lods, reference, p);
+    if lods.len() > 1 && lods[0].mesh.triangles() > p.node_budget {
+        lods.remove(0);
+    }
     lods
 }
 
@@ -303,6 +308,11 @@ struct Reference<'a> {
     sampling: Sampling,
     /// The node box's diagonal: the largest error limit tried before any.
     diagonal: f32,
+    /// Most triangles of the first level made (an inner node's budget).
+    first_budget: usize,
+    /// Whether every piece keeps a triangle (a leaf's few pieces), rather
+    /// than vanished pieces being covered where nothing is left near them.
+    keep_pieces: bool,
 }
 
 fn target_triangles(n: usize, p: &ChainParams) -> usize {
@@ -318,12 +328,13 @@ fn target_triangles(n: usize, p: &ChainParams) -> usize {
 /// a third of the node). Its error is `base` plus its measured distance to
 /// the reference, and never below the previous level's. Edge collapse is
 /// tried first for the chain's simplified levels 1..=collapse_levels
-/// (level `lods.len() + offset` is made next: a leaf's level 0 is its own
-/// mesh, an inner node's is already simplified), sloppy clustering
+/// (level 0 is a leaf's own mesh, or an inner node's union of its
+/// children's levels; the first level made keeps at most
+/// `first_budget` triangles), sloppy clustering
 /// otherwise or when collapse stalls even at the node's diagonal, and
 /// instead of a collapsed level measured more than [`SUSPECT_OVER_LIMIT`]
 /// times its limit off when clustering measures nearer.
-fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, offset: usize) {
+fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
     // Finite, so the doubling below ends (a diagonal beyond f32's range
     // would make it infinite).
     let cap = if r.diagonal.is_finite() {
@@ -337,18 +348,47 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, offs
         if n <= p.floor {
             break;
         }
-        let target = target_triangles(n, p);
+        let mut target = target_triangles(n, p);
+        if lods.len() == 1 {
+            target = target.min(r.first_budget);
+        }
         let shrunk = |m: &WorkMesh| shrinks(m, n);
         // Welded and split into pieces once for every attempt below.
-        let s = Simplifier::new(&last.mesh, offset == 0);
-        let collapse = lods.len() + offset <= p.collapse_levels;
+        let s = Simplifier::new(&last.mesh, r.keep_pieces);
+        let collapse = lods.len() <= p.collapse_levels;
+        // A level far below the target is a jump, not a step: the limits
+        // are bisected towards the target before one is taken.
+        let lower = (target as f64 * MAX_UNDERSHOOT).ceil() as usize;
         // The first shrinking simplification at doubling limits from
         // `limit_error`, and the limit that made it.
         let find = |sloppy: bool| -> Option<(WorkMesh, f32)> {
             let mut e = limit_error;
             while e <= cap {
                 if let Some(m) = s.step(target, e, sloppy).filter(shrunk) {
-                    return Some((m, e));
+                    if m.triangles() >= lower {
+                        return Some((m, e));
+                    }
+                    // Edge collapse at twice a limit that stalled may
+                    // prune every piece (395 triangles of an engine's
+                    // bolts and covers became 1): the largest limit
+                    // between that still shrinks, by bisection.
+                    let (mut lo, mut hi) = (e * 0.5, e);
+                    let mut best = (m, e);
+                    for _ in 0..BISECTIONS {
+                        let mid = 0.5 * (lo + hi);
+                        match s.step(target, mid, sloppy).filter(shrunk) {
+                            Some(m) => {
+                                hi = mid;
+                                let enough = m.triangles() >= lower;
+                                best = (m, mid);
+                                if enough {
+                                    break;
+                                }
+                            }
+                            None => lo = mid,
+                        }
+                    }
+                    return Some(best);
                 }
                 e *= 2.0;
             }
@@ -377,10 +417,26 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, offs
         // may be compared more often than needed: time, not a wrong choice.
         // NaN-safe: a NaN or infinite measurement is suspect too.
         let plausible = measured.is_finite() && measured <= SUSPECT_OVER_LIMIT * e;
-        if was_collapse && !plausible {
+        // An inner node's pieces are many and disjoint (a machine's bolts,
+        // covers and hoses): whether pruning them (collapse) or joining
+        // them (clustering) costs less differs level by level, so both
+        // are measured and the lower error per triangle kept.
+        // A level below `lower` (collapse pruned nearly everything) gives
+        // way to one within it.
+        let undershoots = |m: &WorkMesh| m.triangles() < lower;
+        if was_collapse && (!plausible || !r.keep_pieces || undershoots(&mesh)) {
             if let Some((alt, e_alt)) = find(true) {
                 let alt_measured = measure(&mut r, &alt);
-                if alt_measured < measured || !measured.is_finite() {
+                let score = |e: f32, m: &WorkMesh| {
+                    let per_triangle = if r.keep_pieces {
+                        e as f64
+                    } else {
+                        e as f64 * (m.triangles() as f64).sqrt()
+                    };
+                    (undershoots(m), per_triangle)
+                };
+                let better = score(alt_measured, &alt) < score(measured, &mesh);
+                if better || !measured.is_finite() {
                     (mesh, e, measured) = (alt, e_alt, alt_measured);
                 }
             }
@@ -397,6 +453,11 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, offs
 /// A collapsed level measured farther from its reference than this many
 /// times the simplifier's error limit is compared with clustering.
 const SUSPECT_OVER_LIMIT: f32 = 4.0;
+
+/// A level with fewer than this fraction of its target's triangles is
+/// searched for at a finer limit ([`BISECTIONS`] tries).
+const MAX_UNDERSHOOT: f64 = 0.25;
+const BISECTIONS: usize = 8;
 
 /// Whether `m` is a level worth making from one of `n` triangles: not
 /// empty, and at most MIN_SHRINK of them.
@@ -497,10 +558,15 @@ impl<'a> Simplifier<'a> {
             self.keep_every_piece(indices)
         } else {
             // The simplifier's own error, else the limit: the cell size.
-            let cell = if result_error.is_finite() && result_error > 0.0 {
-                result_error
-            } else if max_error < f32::MAX {
+            // The limit: what the level may move surfaces by. Vanished
+            // pieces are stood for by about a triangle per cell of it, so
+            // a thousand bolts that each collapsed to nothing become a
+            // sheet of cells rather than a thousand triangles at every
+            // limit. Without a limit, the simplifier's own error.
+            let cell = if max_error < f32::MAX {
                 max_error
+            } else if result_error.is_finite() && result_error > 0.0 {
+                result_error
             } else {
                 f32::MIN_POSITIVE.sqrt()
             };
@@ -621,22 +687,23 @@ fn compact(mesh: &WorkMesh, indices: &[u32]) -> WorkMesh {
     out
 }
 
-fn merge(children: &[&Lod], origin: DVec3) -> WorkMesh {
+/// The union of `meshes`, relative to `origin`.
+pub fn merge(meshes: &[&WorkMesh], origin: DVec3) -> WorkMesh {
     let mut m = WorkMesh {
         origin,
         ..Default::default()
     };
-    for c in children {
+    for c in meshes {
         let base = m.positions.len() as u32;
-        let shift = c.mesh.origin - origin;
-        m.positions.extend(c.mesh.positions.iter().map(|p| {
+        let shift = c.origin - origin;
+        m.positions.extend(c.positions.iter().map(|p| {
             (shift + glam::Vec3::from_array(*p).as_dvec3())
                 .as_vec3()
                 .to_array()
         }));
-        m.normals.extend_from_slice(&c.mesh.normals);
-        m.colours.extend_from_slice(&c.mesh.colours);
-        m.indices.extend(c.mesh.indices.iter().map(|&i| base + i));
+        m.normals.extend_from_slice(&c.normals);
+        m.colours.extend_from_slice(&c.colours);
+        m.indices.extend(c.indices.iter().map(|&i| base + i));
     }
     m
 }
@@ -876,7 +943,7 @@ mod tests {
         let children = [a.as_slice(), b.as_slice()];
         let origin = DVec3::new(11.0, 0.0, 5.0);
         let picked = pick_levels(&children, P.merge_budget());
-        let lods = inner_lods(&children, origin, 30.0, &P);
+        let lods = inner_lods(&children, None, origin, 30.0, &P);
         assert!(!lods.is_empty());
         assert!(lods[0].mesh.triangles() <= P.node_budget);
         for l in &lods {

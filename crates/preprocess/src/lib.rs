@@ -43,8 +43,12 @@ pub mod verify;
 /// their view cells (OCVC); 6: errors measured a cluster at a time (as
 /// sound, slightly different bounds); 7: a collapsed level measured far
 /// beyond its simplifier's limit gives way to clustering when that is
-/// nearer.
-pub const REVISION: u32 = 7;
+/// nearer; 8: inner nodes' levels made by the same error-driven chain as
+/// leaves' (collapse and clustering both measured, the lower error per
+/// triangle kept; no jump far below a level's target), measured against
+/// the full detail below a node of at most 65,536 triangles, vanished
+/// pieces covered at the level's error limit.
+pub const REVISION: u32 = 8;
 
 use std::path::Path;
 use std::time::Instant;
@@ -302,6 +306,10 @@ pub fn build<S: LodSink>(
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
     // Each done node's levels a parent may still merge, until the parent is done.
     let mut kept: Vec<Option<Vec<Lod>>> = vec![None; tree.len()];
+    // Each done node's full-detail surface while it has at most
+    // EXACT_REFERENCE triangles, for its parent's levels to be measured
+    // against, until the parent is done.
+    let mut originals: Vec<Option<hlod::WorkMesh>> = vec![None; tree.len()];
     // Per done node: its finest stored error, or (without stored levels)
     // the largest such error below it.
     let mut lowest = vec![0.0f32; tree.len()];
@@ -336,12 +344,16 @@ pub fn build<S: LodSink>(
                     .expect("the leaves were chosen by having an object");
                 let part = &parts[object as usize];
                 let mesh = hlod::leaf_mesh(model, part, node.bounds.center());
-                finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), &chain), keep)
+                let original = (mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
+                let (out, kept) =
+                    finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), &chain), keep);
+                (out, kept, original)
             })
             .collect();
-        for (&ni, (lods, c)) in batch.iter().zip(made) {
+        for (&ni, (lods, c, original)) in batch.iter().zip(made) {
             emit(ni, lods, &mut stats.leaf_lod_triangles)?;
             kept[ni] = Some(c);
+            originals[ni] = original;
         }
         progress.advance(batch.len() as u64);
     }
@@ -368,8 +380,18 @@ pub fn build<S: LodSink>(
                         ..node.first_child + node.child_count)
                         .filter_map(|c| kept[c as usize].as_deref())
                         .collect();
+                    let below: Option<Vec<&hlod::WorkMesh>> = (node.first_child
+                        ..node.first_child + node.child_count)
+                        .map(|c| originals[c as usize].as_ref())
+                        .collect();
+                    let original = below
+                        .filter(|b| {
+                            b.iter().map(|m| m.triangles()).sum::<usize>() <= EXACT_REFERENCE
+                        })
+                        .map(|b| hlod::merge(&b, node.bounds.center()));
                     let mut lods = hlod::inner_lods(
                         &children,
+                        original.as_ref(),
                         node.bounds.center(),
                         node.bounds.diagonal(),
                         &chain,
@@ -383,10 +405,10 @@ pub fn build<S: LodSink>(
                     }
                     let stored = hlod::worth_drawing(&lods, &children);
                     let (out, kept) = finish_chain(lods, keep);
-                    (out.into_iter().skip(stored.start).collect(), kept)
+                    (out.into_iter().skip(stored.start).collect(), kept, original)
                 })
                 .collect();
-            for (&ni, (lods, c)) in batch.iter().zip(made) {
+            for (&ni, (lods, c, original)) in batch.iter().zip(made) {
                 let node = &tree[ni];
                 lowest[ni] = match lods.first() {
                     Some(l) => l.1,
@@ -395,8 +417,10 @@ pub fn build<S: LodSink>(
                 emit(ni, lods, &mut stats.inner_lod_triangles)?;
                 for ch in node.first_child..node.first_child + node.child_count {
                     kept[ch as usize] = None;
+                    originals[ch as usize] = None;
                 }
                 kept[ni] = Some(c);
+                originals[ni] = original;
             }
             progress.advance(batch.len() as u64);
         }
@@ -421,8 +445,15 @@ pub fn build<S: LodSink>(
     Ok(Built { nodes, stats })
 }
 
-/// A node's levels in the scene file's form, and those kept for its parent.
-type Finished = (Vec<(LodMesh, f32)>, Vec<Lod>);
+/// A node's levels in the scene file's form, those kept for its parent,
+/// and its full-detail surface when it is small enough to keep.
+type Finished = (Vec<(LodMesh, f32)>, Vec<Lod>, Option<hlod::WorkMesh>);
+
+/// An inner node whose leaves hold at most this many triangles has its
+/// levels measured against them, not against its children's levels: the
+/// stored error is then the measured distance itself rather than a sum
+/// that compounds with every level of the tree.
+const EXACT_REFERENCE: usize = 1 << 16;
 
 /// The largest of `node`'s children's `lowest` errors: what the node may
 /// never claim less than (the scene file's rule that errors do not
@@ -435,7 +466,7 @@ fn lowest_below(lowest: &[f32], node: &hierarchy::HNode) -> f32 {
 
 /// The scene-file form of every level, and the levels kept for the
 /// parent's HLODs.
-fn finish_chain(mut lods: Vec<Lod>, keep: usize) -> Finished {
+fn finish_chain(mut lods: Vec<Lod>, keep: usize) -> (Vec<(LodMesh, f32)>, Vec<Lod>) {
     let out = lods
         .iter()
         .map(|l| (l.mesh.to_lod_mesh(), l.error))

@@ -86,3 +86,63 @@ pub fn box_object(min: DVec3, max: DVec3) -> Object {
     ];
     object("box", p, n, idx)
 }
+
+/// A closed prism along +Y from `base`: an `around`-gon of `radius`,
+/// `height` tall, capped (fans from the centre): 4 x around triangles.
+pub fn prism_object(base: DVec3, radius: f64, height: f64, around: u32) -> Object {
+    let (mut p, mut n, mut idx) = (Vec::new(), Vec::new(), Vec::new());
+    for y in [0.0, height] {
+        for j in 0..around {
+            let a = TAU * j as f64 / around as f64;
+            let dir = DVec3::new(a.cos(), 0.0, a.sin());
+            p.push(base + DVec3::new(0.0, y, 0.0) + radius * dir);
+            n.push(dir.as_vec3());
+        }
+    }
+    let (bottom, top) = (p.len() as u32, p.len() as u32 + 1);
+    p.push(base);
+    n.push(-Vec3::Y);
+    p.push(base + DVec3::new(0.0, height, 0.0));
+    n.push(Vec3::Y);
+    for j in 0..around {
+        let (a, b) = (j, (j + 1) % around);
+        let (c, d) = (a + around, b + around);
+        idx.extend_from_slice(&[a, c, d, a, d, b, bottom, b, a, top, c, d]);
+    }
+    object("prism", p, n, idx)
+}
+
+/// A torus in the XY plane around `centre`: `major` radius of the ring,
+/// `minor` of its tube, `along` x `around` quads.
+pub fn ring_object(centre: DVec3, major: f64, minor: f64, along: u32, around: u32) -> Object {
+    let (mut p, mut n, mut idx) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..along {
+        let u = TAU * i as f64 / along as f64;
+        let axis = DVec3::new(u.cos(), u.sin(), 0.0);
+        for j in 0..around {
+            let v = TAU * j as f64 / around as f64;
+            let dir = axis * v.cos() + DVec3::Z * v.sin();
+            p.push(centre + major * axis + minor * dir);
+            n.push(dir.as_vec3());
+        }
+    }
+    for i in 0..along {
+        for j in 0..around {
+            let a = i * around + j;
+            let b = i * around + (j + 1) % around;
+            let c = ((i + 1) % along) * around + j;
+            let d = ((i + 1) % along) * around + (j + 1) % around;
+            idx.extend_from_slice(&[a, b, d, a, d, c]);
+        }
+    }
+    object("ring", p, n, idx)
+}
+
+/// A bolt standing on `base`: a hexagonal head on a square shank, two
+/// disjoint closed pieces as CAD often leaves them: 40 triangles.
+pub fn bolt_objects(base: DVec3, size: f64) -> [Object; 2] {
+    [
+        prism_object(base, 0.35 * size, 2.0 * size, 4),
+        prism_object(base + DVec3::new(0.0, 2.0 * size, 0.0), size, 0.7 * size, 6),
+    ]
+}

@@ -8,7 +8,7 @@ use gigawalk_scene::{LodMesh, SceneReader};
 use glam::DVec3;
 
 use crate::partition::{SplitAt, SplitRule};
-use crate::test_models::{box_object, grid_object, pipe_object};
+use crate::test_models::{bolt_objects, box_object, grid_object, pipe_object, ring_object};
 use crate::verify::verify;
 use crate::{build, preprocess, Built, LodSink, NoProgress, Params, PreprocessError};
 
@@ -293,4 +293,169 @@ fn small_plant_errors_are_bounds() {
     let check = bounds_hold(model.objects, &small_params());
     // How tight: some sample comes close to its bound.
     assert!(check.worst_ratio > 0.3, "{check:?}");
+}
+
+/// Triangles the subtree of `node` draws at `error`: each node its
+/// coarsest level within it, else its children's; a leaf with none its
+/// finest (as traversal and `gigawalk info` count it).
+fn drawn_at(built: &Built, sink: &MemorySink, node: u32, error: f32) -> u64 {
+    let n = &built.nodes[node as usize];
+    let level = n.lods().rev().find(|&l| sink.0[l].1 <= error);
+    match level {
+        Some(l) => sink.0[l].0.triangle_count() as u64,
+        None if n.is_leaf() => n
+            .lods()
+            .next()
+            .map_or(0, |l| sink.0[l].0.triangle_count() as u64),
+        None => n.children().map(|c| drawn_at(built, sink, c, error)).sum(),
+    }
+}
+
+/// Per inner node with levels: the triangles its children draw at its
+/// finest level's error over that level's triangles.
+fn switch_factors(built: &Built, sink: &MemorySink) -> Vec<(u32, f64)> {
+    (0..built.nodes.len() as u32)
+        .filter_map(|i| {
+            let n = &built.nodes[i as usize];
+            let l = n.lods().next().filter(|_| !n.is_leaf())?;
+            let (mesh, error) = &sink.0[l];
+            let below: u64 = n.children().map(|c| drawn_at(built, sink, c, *error)).sum();
+            Some((i, below as f64 / mesh.triangle_count().max(1) as f64))
+        })
+        .collect()
+}
+
+/// Builds a model of many small disjoint parts and checks what the
+/// hierarchy makes of it: drawn at an error of `max_error` (a fraction of
+/// the root's box diagonal), it costs at most an eighth of its
+/// triangles, through HLODs whose errors brute-force sampling confirms,
+/// and no node's switch to its children multiplies triangles by more
+/// than 8.
+fn disjoint_parts_aggregate(name: &str, objects: Vec<Object>, max_error: f64) {
+    let model = Model {
+        objects,
+        ..Default::default()
+    };
+    let (built, sink) = build_in_memory(&model, &Params::default());
+    let full = built.stats.triangles;
+    let diagonal = built.nodes[0].bounds.diagonal();
+    let drawn = drawn_at(&built, &sink, 0, (max_error * diagonal) as f32);
+    assert!(
+        8 * drawn <= full,
+        "{name}: {drawn} of {full} triangles at {:.1}% of the diagonal",
+        100.0 * max_error
+    );
+    // The nodes drawn at that error, brute-force checked.
+    let mut top = Vec::new();
+    let mut stack = vec![0u32];
+    let e = (max_error * diagonal) as f32;
+    while let Some(n) = stack.pop() {
+        let node = &built.nodes[n as usize];
+        if node.lods().any(|l| sink.0[l].1 <= e) {
+            top.push(n);
+        } else {
+            stack.extend(node.children());
+        }
+    }
+    let errors: Vec<f32> = sink.0.iter().map(|l| l.1).collect();
+    let check = crate::verify::check_error_bounds(
+        &built.nodes,
+        &errors,
+        &mut |i| sink.0[i as usize].0.clone(),
+        Some(&top),
+        4000,
+        11,
+    )
+    .unwrap();
+    assert!(check.worst_ratio <= 1.0, "{name}: {check:?}");
+    let switches = switch_factors(&built, &sink);
+    let worst = switches
+        .iter()
+        .copied()
+        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    assert!(
+        worst.1 <= 8.0,
+        "{name}: node {} switches by {:.1}x",
+        worst.0,
+        worst.1
+    );
+}
+
+#[test]
+fn a_grid_of_1000_bolts_aggregates() {
+    // 40 x 25 bolts on a 5 cm pitch: 2,000 disjoint closed pieces.
+    let mut objects = Vec::new();
+    for i in 0..1000 {
+        let base = DVec3::new(0.05 * (i % 40) as f64, 0.0, 0.05 * (i / 40) as f64);
+        objects.extend(bolt_objects(base, 0.01));
+    }
+    disjoint_parts_aggregate("1000 bolts", objects, 0.02);
+}
+
+#[test]
+fn a_plate_with_200_rivets_aggregates() {
+    // A 2 x 1 m plate, 5 mm thick, finely gridded on top, with 200 rivet
+    // heads in rows (closed octagonal studs, 1 cm across).
+    let mut objects = vec![
+        box_object(DVec3::ZERO, DVec3::new(2.0, 0.005, 1.0)),
+        grid_object(DVec3::new(0.0, 0.005, 0.0), 1.0, 30, 0.0),
+        grid_object(DVec3::new(1.0, 0.005, 0.0), 1.0, 30, 0.0),
+    ];
+    for i in 0..200 {
+        let base = DVec3::new(
+            0.05 + 0.095 * (i % 20) as f64,
+            0.005,
+            0.05 + 0.1 * (i / 20) as f64,
+        );
+        objects.push(crate::test_models::prism_object(base, 0.005, 0.004, 8));
+    }
+    disjoint_parts_aggregate("plate with 200 rivets", objects, 0.01);
+}
+
+#[test]
+fn a_hose_of_300_rings_aggregates() {
+    // A hose 6 m long along a gentle arc, made of 300 separate rings
+    // (tori of 96 triangles), as CAD exports a corrugated hose.
+    let mut objects = Vec::new();
+    for i in 0..300 {
+        let t = i as f64 / 300.0;
+        let centre = DVec3::new(6.0 * t, 0.8 * (3.0 * t).sin(), 0.0);
+        let mut ring = ring_object(DVec3::ZERO, 0.04, 0.008, 16, 6);
+        // Each ring faces along the hose (+X): swap X and Z.
+        for p in &mut ring.positions {
+            *p = centre + DVec3::new(p.z, p.y, p.x);
+        }
+        for n in &mut ring.normals {
+            *n = glam::Vec3::new(n.z, n.y, n.x);
+        }
+        objects.push(ring);
+    }
+    disjoint_parts_aggregate("hose of 300 rings", objects, 0.02);
+}
+
+/// The switch factors of a generated scene of about `triangles`.
+fn generated_switches(kind: gigawalk_procgen::Kind, triangles: u64) -> Vec<f64> {
+    let g = gigawalk_procgen::generate(kind, triangles, 3, 2);
+    let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), kind.name()).unwrap();
+    let (built, sink) = build_in_memory(&model, &Params::default());
+    let mut f: Vec<f64> = switch_factors(&built, &sink).iter().map(|s| s.1).collect();
+    f.sort_by(f64::total_cmp);
+    f
+}
+
+#[test]
+fn switch_factors_are_bounded_on_generated_scenes() {
+    use gigawalk_procgen::Kind;
+    for kind in [Kind::Plant, Kind::City, Kind::Forest, Kind::Machine] {
+        let f = generated_switches(kind, 80_000);
+        let median = f[f.len() / 2];
+        let max = f.last().copied().unwrap_or(0.0);
+        eprintln!(
+            "{}: {} inner nodes, switch median {median:.2}, max {max:.2}",
+            kind.name(),
+            f.len()
+        );
+        assert!(median <= 2.0, "{}: median switch {median}", kind.name());
+        assert!(max <= 8.0, "{}: largest switch {max}", kind.name());
+    }
 }

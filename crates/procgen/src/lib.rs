@@ -1,5 +1,6 @@
 //! Deterministic procedural test scenes as glTF 2.0 binaries: an industrial
-//! plant, a city and a forest, each with a camera path walking through it.
+//! plant, a city, a forest and a machine hall, each with a camera path
+//! walking through it.
 //!
 //! Main types: [`Kind`], [`Generated`] (from [`generate`]) with its
 //! [`Report`] of triangles, objects and bounds, which an import of the
@@ -9,6 +10,7 @@
 mod city;
 mod forest;
 mod glb;
+mod machine;
 mod plant;
 pub mod rng;
 pub mod shapes;
@@ -33,6 +35,11 @@ pub enum Kind {
     /// Many small occluders and deep visibility (the hard case for HZB
     /// culling; Hey et al., Bartz et al.).
     Forest,
+    /// A factory floor of CAD-like machines in rows between aisles, no
+    /// building shell: each machine hundreds of small disjoint parts (shells,
+    /// fasteners, gears, segmented hoses and cables), the case where
+    /// simplification must merge many separate pieces.
+    Machine,
 }
 
 impl Kind {
@@ -41,6 +48,7 @@ impl Kind {
             Kind::Plant => "plant",
             Kind::City => "city",
             Kind::Forest => "forest",
+            Kind::Machine => "machine",
         }
     }
 }
@@ -52,8 +60,9 @@ impl std::str::FromStr for Kind {
             "plant" => Ok(Kind::Plant),
             "city" => Ok(Kind::City),
             "forest" => Ok(Kind::Forest),
+            "machine" => Ok(Kind::Machine),
             _ => Err(format!(
-                "unknown scene kind {s:?} (expected plant, city or forest)"
+                "unknown scene kind {s:?} (expected plant, city, forest or machine)"
             )),
         }
     }
@@ -107,6 +116,7 @@ pub fn generate(kind: Kind, triangles: u64, seed: u64, poses: usize) -> Generate
         Kind::Plant => plant::build(generator, triangles, &mut rng),
         Kind::City => city::build(generator, triangles, &mut rng),
         Kind::Forest => forest::build(generator, triangles, &mut rng),
+        Kind::Machine => machine::build(generator, triangles, &mut rng),
     };
     let path = walk::walk(&grid, &mut rng.fork(), poses);
     let report = Report {

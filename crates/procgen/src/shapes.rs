@@ -1,9 +1,9 @@
-//! Triangle-mesh building blocks (boxes, tubes, spheres, tori) in f32 local
-//! coordinates, counter-clockwise front faces, with normals. None of them
-//! emits a zero-area triangle, so an importer keeps every one and the
+//! Triangle-mesh building blocks (boxes, tubes, spheres, tori, lofts) in f32
+//! local coordinates, counter-clockwise front faces, with normals. None of
+//! them emits a zero-area triangle, so an importer keeps every one and the
 //! generator's triangle count is exact.
 
-use glam::Vec3;
+use glam::{DVec3, Vec2, Vec3};
 use std::f32::consts::TAU;
 
 #[derive(Clone, Debug, Default)]
@@ -275,6 +275,250 @@ impl Mesh {
     }
 }
 
+/// Cosine of the largest angle between neighbouring faces of a loft ring
+/// that is shaded smooth: 50 degrees, so an 8-sided tube looks round while
+/// a hexagon keeps its edges.
+const SMOOTH_COS: f32 = 0.643;
+
+/// Local axes for [`Mesh::loft`]: outlines lie in the (u, v) plane and rings
+/// stack along w = u x v.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    pub origin: Vec3,
+    pub u: Vec3,
+    pub v: Vec3,
+    pub w: Vec3,
+}
+
+impl Frame {
+    /// Axes `u` and `v` must be unit and orthogonal.
+    pub fn new(origin: Vec3, u: Vec3, v: Vec3) -> Frame {
+        Frame {
+            origin,
+            u,
+            v,
+            w: u.cross(v),
+        }
+    }
+
+    /// Rings stacked along `axis` (any non-zero length), the outline's
+    /// orientation about it left to [`frame`].
+    pub fn along(origin: Vec3, axis: Vec3) -> Frame {
+        let w = axis.normalize();
+        let (u, v) = frame(w);
+        Frame { origin, u, v, w }
+    }
+
+    pub fn at(&self, p: Vec2, z: f32) -> Vec3 {
+        self.origin + self.u * p.x + self.v * p.y + self.w * z
+    }
+}
+
+/// One cross-section of a [`Mesh::loft`]: an outline at height `z` along
+/// the frame's w, or, with a single point, an apex closing the loft.
+#[derive(Clone, Debug)]
+pub struct Ring {
+    pub z: f32,
+    pub points: Vec<Vec2>,
+}
+
+impl Ring {
+    pub fn new(z: f32, points: Vec<Vec2>) -> Ring {
+        Ring { z, points }
+    }
+
+    /// The axis point at height `z`.
+    pub fn apex(z: f32) -> Ring {
+        Ring {
+            z,
+            points: vec![Vec2::ZERO],
+        }
+    }
+}
+
+/// `n` points on a circle of radius `r`, counter-clockwise from +u.
+pub fn circle(r: f32, n: u32) -> Vec<Vec2> {
+    (0..n)
+        .map(|k| {
+            let a = TAU * k as f32 / n as f32;
+            Vec2::new(r * a.cos(), r * a.sin())
+        })
+        .collect()
+}
+
+/// A rectangle of half sizes `hx`, `hy` with corners rounded to radius `r`
+/// (`0 < r <= min(hx, hy)`), `per_corner` points on each corner's arc (1: a
+/// sharp corner, `r` unused); counter-clockwise, `4 * per_corner` points.
+pub fn rounded_rect(hx: f32, hy: f32, r: f32, per_corner: u32) -> Vec<Vec2> {
+    let mut out = Vec::with_capacity(4 * per_corner as usize);
+    for (q, sx, sy) in [
+        (0, 1.0, 1.0),
+        (1, -1.0, 1.0),
+        (2, -1.0, -1.0),
+        (3, 1.0, -1.0),
+    ] {
+        if per_corner == 1 {
+            out.push(Vec2::new(sx * hx, sy * hy));
+            continue;
+        }
+        let c = Vec2::new(sx * (hx - r), sy * (hy - r));
+        for k in 0..per_corner {
+            let a = (q as f32 + k as f32 / (per_corner - 1) as f32) * std::f32::consts::FRAC_PI_2;
+            out.push(c + Vec2::new(a.cos(), a.sin()) * r);
+        }
+    }
+    out
+}
+
+/// A hexagon `across_flats` wide, flats facing +-v: corners only (6
+/// points) or corners and flat midpoints (`split`, 12 points, so it can
+/// share a loft with a 12-point circle).
+pub fn hexagon(across_flats: f32, split: bool) -> Vec<Vec2> {
+    let corner = across_flats / 3f32.sqrt();
+    let mut out = Vec::with_capacity(12);
+    for k in 0..6 {
+        let a = std::f32::consts::FRAC_PI_3 * k as f32;
+        out.push(Vec2::new(a.cos(), a.sin()) * corner);
+        if split {
+            let m = a + std::f32::consts::FRAC_PI_6;
+            out.push(Vec2::new(m.cos(), m.sin()) * (0.5 * across_flats));
+        }
+    }
+    out
+}
+
+/// A spur gear's outline: `teeth` trapezoidal teeth between radii `root`
+/// and `tip`, 4 points a tooth, counter-clockwise.
+pub fn gear_outline(root: f32, tip: f32, teeth: u32) -> Vec<Vec2> {
+    let pitch = TAU / teeth as f32;
+    let mut out = Vec::with_capacity(4 * teeth as usize);
+    for t in 0..teeth {
+        let a = t as f32 * pitch;
+        for (f, r) in [(0.0, root), (0.2, tip), (0.45, tip), (0.65, root)] {
+            let b = a + f * pitch;
+            out.push(Vec2::new(b.cos(), b.sin()) * r);
+        }
+    }
+    out
+}
+
+/// `outline`'s points moved along their directions from the origin to
+/// radius `r`: the bore of a nut or gear with as many points as its rim.
+pub fn at_radius(outline: &[Vec2], r: f32) -> Vec<Vec2> {
+    outline.iter().map(|p| p.normalize() * r).collect()
+}
+
+/// Whether the triangle has non-zero area in f64, as an importer measures it.
+fn has_area(a: Vec3, b: Vec3, c: Vec3) -> bool {
+    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+    (b - a).cross(c - a) != DVec3::ZERO
+}
+
+impl Mesh {
+    pub fn clear(&mut self) {
+        self.positions.clear();
+        self.normals.clear();
+        self.indices.clear();
+    }
+
+    /// Appends `other`, re-indexed.
+    pub fn append(&mut self, other: &Mesh) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.indices.extend(other.indices.iter().map(|i| i + base));
+    }
+
+    /// A surface through `rings` in order (and back to the first when
+    /// `closed`): between two outlines of `n` points `2n` triangles,
+    /// between an outline and an apex `n`. Every point of every ring is
+    /// computed once, so the faces meeting there share its exact position
+    /// and the loft is one connected piece once positions are welded (what
+    /// a simplifier does), while its faces keep their own normals: flat
+    /// between rings, smooth around a ring where neighbours differ by less
+    /// than 50 degrees.
+    ///
+    /// Outlines are counter-clockwise about w; the surface faces outward
+    /// when the rings run up the outside (bottom to top), out along a
+    /// bottom face and in along a top one: a bolt is apex, shank, shank,
+    /// head, head, apex; a washer's closed section is inner bottom, outer
+    /// bottom, outer top, inner top. Outlines meeting an apex must be
+    /// star-shaped about the axis. Zero-area triangles are left out (none
+    /// when consecutive rings differ everywhere).
+    pub fn loft(&mut self, f: &Frame, rings: &[Ring], closed: bool) {
+        debug_assert!(rings.len() >= 2);
+        let n = rings.iter().map(|r| r.points.len()).max().unwrap_or(0);
+        debug_assert!(rings
+            .iter()
+            .all(|r| r.points.len() == n || r.points.len() == 1));
+        let pos: Vec<Vec<Vec3>> = rings
+            .iter()
+            .map(|r| r.points.iter().map(|&p| f.at(p, r.z)).collect())
+            .collect();
+        let strips = if closed { rings.len() } else { rings.len() - 1 };
+        let mut quads = Vec::with_capacity(n);
+        let mut normals = Vec::with_capacity(n);
+        for s in 0..strips {
+            let (lo, hi) = (&pos[s], &pos[(s + 1) % rings.len()]);
+            if lo.len() == 1 && hi.len() == 1 {
+                continue;
+            }
+            let p = |ring: &Vec<Vec3>, k: usize| ring[if ring.len() == 1 { 0 } else { k % n }];
+            quads.clear();
+            normals.clear();
+            for k in 0..n {
+                let q = [p(lo, k), p(lo, k + 1), p(hi, k + 1), p(hi, k)];
+                let nq = (q[1] - q[0]).cross(q[2] - q[0]) + (q[2] - q[0]).cross(q[3] - q[0]);
+                quads.push(q);
+                normals.push(nq.normalize_or_zero());
+            }
+            // Ring point k is the edge between quads k - 1 and k; where they
+            // meet smoothly they share its vertices (one normal), otherwise
+            // each side has its own.
+            let smooth: Vec<bool> = (0..n)
+                .map(|k| normals[k].dot(normals[(k + n - 1) % n]) > SMOOTH_COS)
+                .collect();
+            let mut left = vec![[u32::MAX; 2]; n];
+            let mut right = vec![[u32::MAX; 2]; n];
+            for k in 0..n {
+                let q = quads[k];
+                for t in [[0, 1, 2], [0, 2, 3]] {
+                    let [a, b, c] = t;
+                    // An apex strip's quads have two corners at the apex:
+                    // one of their triangles has no area.
+                    if !has_area(q[a], q[b], q[c]) {
+                        continue;
+                    }
+                    for i in t {
+                        // Corners 0 and 3 lie on edge k, 1 and 2 on edge k + 1.
+                        let (edge, level, is_left) = match i {
+                            0 => (k, 0, true),
+                            3 => (k, 1, true),
+                            1 => ((k + 1) % n, 0, false),
+                            _ => ((k + 1) % n, 1, false),
+                        };
+                        let shared = smooth[edge];
+                        let slot = if shared || is_left {
+                            &mut left[edge][level]
+                        } else {
+                            &mut right[edge][level]
+                        };
+                        if *slot == u32::MAX {
+                            let normal = if shared {
+                                (normals[edge] + normals[(edge + n - 1) % n]).normalize()
+                            } else {
+                                normals[k]
+                            };
+                            *slot = self.vertex(q[i], normal);
+                        }
+                        self.indices.push(*slot);
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -327,5 +571,130 @@ mod tests {
         m.ground(Vec3::ZERO, 4.0, 2.0, 4, 2);
         assert_eq!(m.triangles(), 16);
         check_outward(&m);
+    }
+
+    /// Connected pieces once equal positions are welded.
+    fn pieces(m: &Mesh) -> usize {
+        let key = |p: Vec3| p.to_array().map(f32::to_bits);
+        let mut order: Vec<u32> = (0..m.positions.len() as u32).collect();
+        order.sort_by_key(|&i| key(m.positions[i as usize]));
+        let mut weld = vec![0u32; m.positions.len()];
+        for w in 0..order.len() {
+            let i = order[w] as usize;
+            weld[i] = if w > 0 && key(m.positions[order[w - 1] as usize]) == key(m.positions[i]) {
+                weld[order[w - 1] as usize]
+            } else {
+                i as u32
+            };
+        }
+        let mut parent: Vec<u32> = (0..m.positions.len() as u32).collect();
+        fn root(p: &mut [u32], mut i: u32) -> u32 {
+            while p[i as usize] != i {
+                p[i as usize] = p[p[i as usize] as usize];
+                i = p[i as usize];
+            }
+            i
+        }
+        for t in m.indices.chunks_exact(3) {
+            let r0 = root(&mut parent, weld[t[0] as usize]);
+            for &v in &t[1..] {
+                let r = root(&mut parent, weld[v as usize]);
+                parent[r as usize] = r0;
+            }
+        }
+        let mut roots: Vec<u32> = m
+            .indices
+            .iter()
+            .map(|&v| root(&mut parent, weld[v as usize]))
+            .collect();
+        roots.sort_unstable();
+        roots.dedup();
+        roots.len()
+    }
+
+    #[test]
+    fn lofts_face_outward_in_one_piece_with_documented_counts() {
+        let f = Frame::along(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.3, 1.0, -0.2));
+        // A bolt: hex head on a round shank, 12 points a ring.
+        let (shank, head) = (circle(0.005, 12), hexagon(0.016, true));
+        let mut m = Mesh::default();
+        m.loft(
+            &f,
+            &[
+                Ring::apex(-0.04),
+                Ring::new(-0.04, shank.clone()),
+                Ring::new(0.0, shank),
+                Ring::new(0.0, head.clone()),
+                Ring::new(0.0065, head),
+                Ring::apex(0.0065),
+            ],
+            false,
+        );
+        assert_eq!(m.triangles(), 12 + 24 + 24 + 24 + 12);
+        check_outward(&m);
+        assert_eq!(pieces(&m), 1);
+        // A washer's closed section; a gear with its bore.
+        for outer in [circle(0.01, 10), gear_outline(0.1, 0.12, 9)] {
+            let inner = at_radius(&outer, 0.04);
+            let mut m = Mesh::default();
+            m.loft(
+                &f,
+                &[
+                    Ring::new(0.0, inner.clone()),
+                    Ring::new(0.0, outer.clone()),
+                    Ring::new(0.02, outer.clone()),
+                    Ring::new(0.02, inner),
+                ],
+                true,
+            );
+            assert_eq!(m.triangles(), 8 * outer.len());
+            check_outward(&m);
+            assert_eq!(pieces(&m), 1);
+        }
+        // A sheet-metal cover: open bottom, both faces, rim between them.
+        let outer = rounded_rect(0.5, 0.3, 0.05, 4);
+        let inner = rounded_rect(0.49, 0.29, 0.04, 4);
+        let mut m = Mesh::default();
+        m.loft(
+            &Frame::new(Vec3::ZERO, Vec3::Z, Vec3::X),
+            &[
+                Ring::apex(0.39),
+                Ring::new(0.39, inner.clone()),
+                Ring::new(0.0, inner),
+                Ring::new(0.0, outer.clone()),
+                Ring::new(0.4, outer),
+                Ring::apex(0.4),
+            ],
+            false,
+        );
+        assert_eq!(m.triangles(), 16 * 8);
+        check_outward(&m);
+        assert_eq!(pieces(&m), 1);
+        // Boxes, spheres and tori are one piece too; two lofts are two.
+        let mut m = Mesh::default();
+        m.oriented_box(
+            Vec3::ONE,
+            [Vec3::Z, Vec3::Y, -Vec3::X],
+            Vec3::new(1.0, 0.5, 0.2),
+        );
+        assert_eq!(pieces(&m), 1);
+        m.sphere(Vec3::new(5.0, 0.0, 0.0), 1.0, Vec3::ONE, 4, 6);
+        m.torus(Vec3::new(-5.0, 0.0, 0.0), Vec3::X, 1.0, 0.1, 8, 6);
+        assert_eq!(pieces(&m), 3);
+        let mut other = Mesh::default();
+        other.loft(
+            &Frame::along(Vec3::ZERO, Vec3::Y),
+            &[
+                Ring::apex(0.0),
+                Ring::new(0.0, circle(0.1, 6)),
+                Ring::new(0.1, circle(0.1, 6)),
+                Ring::apex(0.1),
+            ],
+            false,
+        );
+        assert_eq!(other.triangles(), 24);
+        check_outward(&other);
+        m.append(&other);
+        assert_eq!(pieces(&m), 4);
     }
 }

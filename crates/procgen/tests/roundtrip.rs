@@ -5,7 +5,7 @@ use gigawalk_import::import_glb_bytes;
 use gigawalk_procgen::{generate, Kind, EYE_HEIGHT};
 use gigawalk_scene::Aabb;
 
-const KINDS: [Kind; 3] = [Kind::Plant, Kind::City, Kind::Forest];
+const KINDS: [Kind; 4] = [Kind::Plant, Kind::City, Kind::Forest, Kind::Machine];
 
 fn check_round_trip(kind: Kind, triangles: u64) {
     let g = generate(kind, triangles, 7, 200);

@@ -77,6 +77,11 @@ pub struct ModeSummary {
     pub median_frame_ms: f64,
     pub p95_frame_ms: f64,
     pub mean_triangles: f64,
+    /// `mean_triangles` / (`width` x `height`): triangles drawn a frame per
+    /// viewport pixel. Above about 1 most drawn triangles cover less than
+    /// a pixel, detail the image cannot show; null without measured frames.
+    #[serde(default)]
+    pub triangles_per_pixel: Option<f64>,
     pub mean_drawn_nodes: f64,
     pub mean_visited: f64,
     pub mean_occlusion_culled: f64,
@@ -270,14 +275,17 @@ pub fn measured(frames: &[FrameRecord]) -> Vec<&FrameRecord> {
     }
 }
 
+/// One run's figures; `viewport_pixels` is width x height.
 fn summarise(
     run: &RunRecord,
     tile_opts: Option<(gigawalk_runtime::TileGrid, gigawalk_runtime::TileMethod)>,
     target_ms: Option<f64>,
+    viewport_pixels: u64,
 ) -> ModeSummary {
     let m = measured(&run.frames);
     let ms: Vec<f64> = m.iter().filter_map(|f| f.frame_ms).collect();
     let mean_ms = mean(ms.iter().copied());
+    let mean_triangles = mean(m.iter().map(|f| f.drawn_triangles as f64));
     let mut acc = Accuracy::default();
     let mut accuracy_frames = 0;
     for a in run.frames.iter().filter_map(|f| f.accuracy.as_ref()) {
@@ -350,7 +358,8 @@ fn summarise(
         mean_fps: 1e3 / mean_ms,
         median_frame_ms: median(&ms),
         p95_frame_ms: percentile(&ms, 95.0),
-        mean_triangles: mean(m.iter().map(|f| f.drawn_triangles as f64)),
+        mean_triangles,
+        triangles_per_pixel: finite(mean_triangles / viewport_pixels as f64),
         mean_drawn_nodes: mean(m.iter().map(|f| f.drawn_nodes as f64)),
         mean_visited: mean(m.iter().map(|f| f.visited as f64)),
         mean_occlusion_culled: mean(m.iter().map(|f| f.occlusion_culled as f64)),
@@ -399,10 +408,11 @@ impl Replay {
     pub fn summary(&self) -> Summary {
         let rt = &self.options.runtime;
         let tile_opts = rt.tiles.map(|g| (g, rt.tile_culling));
+        let pixels = u64::from(rt.width) * u64::from(rt.height);
         let mut modes: Vec<ModeSummary> = self
             .runs
             .iter()
-            .map(|r| summarise(r, tile_opts, self.options.target.map(|t| t.ms)))
+            .map(|r| summarise(r, tile_opts, self.options.target.map(|t| t.ms), pixels))
             .collect();
         let vfc = modes
             .iter()
@@ -461,18 +471,19 @@ impl Summary {
     /// `gigawalk demo` print.
     pub fn table(&self) -> String {
         let mut s = String::from(
-            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | beyond the bound px | PSNR dB |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | triangles / px | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | beyond the bound px | PSNR dB |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         );
         for m in &self.modes {
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 self.mode_cell(m),
                 m.pixel_error,
                 num(m.mean_fps, 2),
                 num(m.median_frame_ms, 1),
                 num(m.p95_frame_ms, 1),
                 thousands(m.mean_triangles),
+                m.triangles_per_pixel.map_or("-".into(), |x| num(x, 3)),
                 m.speedup_vs_vfc.map_or("-".into(), |x| format!("{x:.2}x")),
                 num(m.mean_latency_ms, 1),
                 m.wrongly_culled_pixels
@@ -718,6 +729,120 @@ mod tests {
         assert_eq!(percentile(&[0.0, 10.0], 95.0), 9.5);
         let v: Vec<f64> = (1..=100).map(f64::from).collect();
         assert!((percentile(&v, 95.0) - 95.05).abs() < 1e-9);
+    }
+
+    /// A frame of `triangles` drawn in 10 ms; nothing else measured.
+    fn frame(frame: u64, triangles: u64, warmup: bool) -> FrameRecord {
+        FrameRecord {
+            frame,
+            pose_time_s: frame as f64,
+            frame_ms: (frame > 0).then_some(10.0),
+            latency_ms: 20.0,
+            or_ms: 1.0,
+            hzb_ms: 0.1,
+            stc_ms: 1.0,
+            rvg_ms: 5.0,
+            visited: 10,
+            frustum_culled: 0,
+            occlusion_culled: 0,
+            drawn_nodes: 5,
+            drawn_triangles: triangles,
+            occlusion_used: false,
+            pixel_error_used: 0.0,
+            controller_us: None,
+            speculative_before: 0,
+            rvg_wait_ms: 0.0,
+            grid: None,
+            oq: None,
+            ct: None,
+            tiles: None,
+            resident_bytes: 0,
+            loaded_bytes: 0,
+            requests: 0,
+            substituted_draws: 0,
+            missing_draws: 0,
+            warmup,
+            popping: None,
+            accuracy: None,
+        }
+    }
+
+    /// A replay at `width` x `height` of one vfc run with these frames.
+    fn replay(width: u32, height: u32, frames: Vec<FrameRecord>) -> Replay {
+        let mut options = crate::ReplayOptions {
+            warmup: 1,
+            ..Default::default()
+        };
+        options.runtime.width = width;
+        options.runtime.height = height;
+        Replay {
+            scene: "s.gwk".into(),
+            path: "p.path".into(),
+            frames: frames.len(),
+            near: 0.1,
+            options,
+            occluder_budget: None,
+            devices: vec!["test".into()],
+            runs: vec![RunRecord {
+                mode: Mode::Vfc,
+                pixel_error: 0.0,
+                culler: None,
+                target: false,
+                frames,
+            }],
+            complete: true,
+            reference_frames: 0,
+            memory_budget: None,
+            unsettled_reference_frames: 0,
+            seconds: 1.0,
+        }
+    }
+
+    /// The first row's cell under `column` of a markdown table.
+    fn cell(table: &str, column: &str) -> String {
+        let cells = |i: usize| -> Vec<String> {
+            let line = table.lines().nth(i).unwrap();
+            line.split('|').map(|c| c.trim().to_string()).collect()
+        };
+        let (header, row) = (cells(0), cells(2));
+        assert_eq!(header.len(), row.len(), "{table}");
+        let i = header.iter().position(|h| h == column).unwrap();
+        row[i].clone()
+    }
+
+    #[test]
+    fn triangles_per_pixel_is_the_mean_over_the_viewport() {
+        // The warm-up frame's 999 999 triangles are left out: mean 2000
+        // over 16 x 10 pixels.
+        let r = replay(
+            16,
+            10,
+            vec![
+                frame(0, 999_999, true),
+                frame(1, 1000, false),
+                frame(2, 2000, false),
+                frame(3, 3000, false),
+            ],
+        );
+        let s = r.summary();
+        assert_eq!(s.modes[0].mean_triangles, 2000.0);
+        assert_eq!(s.modes[0].triangles_per_pixel, Some(12.5));
+        assert_eq!(cell(&s.table(), "triangles / px"), "12.500");
+        let json = serde_json::to_value(&s).unwrap();
+        assert_eq!(json["modes"][0]["triangles_per_pixel"], 12.5);
+        // An older summary.json without the field still reads.
+        let mut old = json.clone();
+        old["modes"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("triangles_per_pixel");
+        let back: Summary = serde_json::from_value(old).unwrap();
+        assert_eq!(back.modes[0].triangles_per_pixel, None);
+
+        // No measured frame: no figure, a dash in the table.
+        let s = replay(16, 10, vec![frame(0, 5, true)]).summary();
+        assert_eq!(s.modes[0].triangles_per_pixel, None);
+        assert_eq!(cell(&s.table(), "triangles / px"), "-");
     }
 
     #[test]

@@ -170,6 +170,10 @@ fn sweep_writes_every_report_file_and_counts_every_frame() {
             assert!(m["mean_fps"].as_f64().unwrap() > 0.0);
             assert_eq!(m["frames"], frames);
             assert_eq!(m["measured_frames"], frames - 3);
+            // Triangles drawn a frame per viewport pixel.
+            let per_pixel = m["mean_triangles"].as_f64().unwrap() / f64::from(W * H);
+            let got = m["triangles_per_pixel"].as_f64().unwrap();
+            assert!((got - per_pixel).abs() <= 1e-12 * per_pixel, "{m}");
         }
         assert_eq!(modes[0]["speedup_vs_vfc"].as_f64(), Some(1.0));
         // vfc against its own reference (the same render in another

@@ -20,11 +20,19 @@ pub struct SceneStats {
     /// fewer levels counts its coarsest): the scene drawn from leaves only
     /// at level k.
     pub leaf_triangles_per_level: Vec<u64>,
+    /// The leaf floor: sum over leaves of their coarsest LOD's triangles,
+    /// the fewest triangles the scene can be drawn with from leaves alone
+    /// (the last entry of `leaf_triangles_per_level`). A far view draws
+    /// less only through HLODs.
+    pub leaf_floor_triangles: u64,
     /// Sum over nodes at tree depth d (root = 0) of their finest LOD's
     /// triangles: the scene drawn as a cut through the tree at depth d.
     pub hlod_triangles_per_depth: Vec<u64>,
     /// The HLOD chains of the inner nodes at each tree depth (root = 0).
     pub hlod_levels_per_depth: Vec<DepthLevels>,
+    /// The switch factors of every inner node with LODs, whatever its
+    /// depth (per depth: `hlod_levels_per_depth`).
+    pub switch_factors: SwitchFactors,
     /// The whole scene drawn at one error, frustum and occlusion aside:
     /// `(error, triangles)` at errors of the scene box's diagonal / 2^k,
     /// k = 1..=16, each node drawn from its coarsest level within the
@@ -66,19 +74,161 @@ pub struct DepthLevels {
     pub switch_factor_max: f64,
 }
 
+/// The distribution of switch factors (see
+/// [`DepthLevels::switch_factor_median`]) over every inner node with at
+/// least one LOD. A factor of 1 to 1 / lod-ratio is a smooth switch; a large
+/// one means crossing that node's switching distance multiplies what its
+/// subtree draws, a jump in frame time and a visible pop.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SwitchFactors {
+    /// Inner nodes with LODs: the nodes counted below.
+    pub count: usize,
+    /// Quantiles: the value at index floor(q count) of the sorted factors
+    /// (the last for q count >= count), so the median is the upper one of
+    /// an even count, as in [`DepthLevels`]. 0 when `count` is 0.
+    pub median: f64,
+    pub p90: f64,
+    pub p99: f64,
+    pub max: f64,
+    /// Nodes whose factor is above 2, 4 and 8.
+    pub over_2: usize,
+    pub over_4: usize,
+    pub over_8: usize,
+    /// The node with the largest factor (the first in node order on a
+    /// tie); `None` when `count` is 0.
+    pub worst: Option<NodeSwitch>,
+}
+
+/// One node's switch: its finest LOD against what its children draw at
+/// that LOD's error.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NodeSwitch {
+    /// Node index in the scene file.
+    pub node: u32,
+    /// Tree depth, root = 0.
+    pub depth: usize,
+    /// `children_triangles / triangles`.
+    pub factor: f64,
+    /// The finest LOD's triangles and error (model units).
+    pub triangles: u64,
+    pub error: f64,
+    /// The node's box diagonal (model units).
+    pub diagonal: f64,
+    /// Triangles the children's subtrees draw at `error`.
+    pub children_triangles: u64,
+}
+
+impl SwitchFactors {
+    /// The distribution over `s`'s inner nodes (every node's depth is
+    /// computed here; [`SceneStats::of`] shares one pass with the per-depth
+    /// figures).
+    pub fn of(s: &crate::Skeleton) -> SwitchFactors {
+        summarise_switches(&node_switches(s, &node_depths(s)))
+    }
+}
+
+/// Every node's tree depth, root = 0. Children have larger indices than
+/// their parent (validated), so one forward pass does.
+fn node_depths(s: &crate::Skeleton) -> Vec<usize> {
+    let mut depth = vec![0usize; s.nodes.len()];
+    for (i, n) in s.nodes.iter().enumerate() {
+        if n.parent != NO_NODE {
+            depth[i] = depth[n.parent as usize] + 1;
+        }
+    }
+    depth
+}
+
+/// The switch of every inner node with LODs, by node index (`None` for
+/// leaves and nodes without LODs). Each node's children are walked once,
+/// down to the cut at its error: on a tree whose errors grow towards the
+/// root that is its children, so the whole pass is linear in the nodes.
+fn node_switches(s: &crate::Skeleton, depth: &[usize]) -> Vec<Option<NodeSwitch>> {
+    let mut stack = Vec::new();
+    (0..s.nodes.len())
+        .map(|i| {
+            let n = &s.nodes[i];
+            if n.is_leaf() {
+                return None;
+            }
+            let l = s.node_lods(i as u32).first()?;
+            let below = triangles_within(s, n.children(), l.error, &mut stack);
+            Some(NodeSwitch {
+                node: i as u32,
+                depth: depth[i],
+                factor: below as f64 / f64::from(l.triangles.max(1)),
+                triangles: u64::from(l.triangles),
+                error: f64::from(l.error),
+                diagonal: n.bounds.diagonal(),
+                children_triangles: below,
+            })
+        })
+        .collect()
+}
+
+/// Sum over leaves of their coarsest LOD's triangles (0 for a leaf
+/// without any).
+fn leaf_floor(s: &crate::Skeleton) -> u64 {
+    s.leaves()
+        .filter_map(|i| s.node_lods(i).last())
+        .map(|l| u64::from(l.triangles))
+        .sum()
+}
+
+/// The value at index floor(q len) of `sorted` (clamped to the last);
+/// 0 when empty.
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let i = ((q * sorted.len() as f64) as usize).min(sorted.len() - 1);
+    sorted[i]
+}
+
+fn summarise_switches(switches: &[Option<NodeSwitch>]) -> SwitchFactors {
+    let mut factors: Vec<f64> = switches.iter().flatten().map(|w| w.factor).collect();
+    factors.sort_by(f64::total_cmp);
+    let over = |t: f64| factors.iter().filter(|&&f| f > t).count();
+    let worst = switches
+        .iter()
+        .flatten()
+        .fold(None::<&NodeSwitch>, |best, w| match best {
+            Some(b) if b.factor >= w.factor => Some(b),
+            _ => Some(w),
+        })
+        .cloned();
+    SwitchFactors {
+        count: factors.len(),
+        median: quantile(&factors, 0.5),
+        p90: quantile(&factors, 0.9),
+        p99: quantile(&factors, 0.99),
+        max: factors.last().copied().unwrap_or(0.0),
+        over_2: over(2.0),
+        over_4: over(4.0),
+        over_8: over(8.0),
+        worst,
+    }
+}
+
 /// The median of `v` (sorted in place); the upper one of an even count.
 fn median<T: Copy + PartialOrd + Default>(v: &mut [T]) -> T {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     v.get(v.len() / 2).copied().unwrap_or_default()
 }
 
-/// Triangles the subtree of `node` draws at `error`: each node its
+/// Triangles the subtrees of `nodes` draw at `error`: each node its
 /// coarsest level within it, else its children's; a leaf with no level
-/// within it draws its finest (as traversal does). Iterative: a
-/// validated scene may still be one long chain of nodes.
-fn triangles_within(s: &crate::Skeleton, node: u32, error: f32) -> u64 {
+/// within it draws its finest (as traversal does). Iterative, `stack` a
+/// reused buffer: a validated scene may still be one long chain of nodes.
+fn triangles_within(
+    s: &crate::Skeleton,
+    nodes: impl IntoIterator<Item = u32>,
+    error: f32,
+    stack: &mut Vec<u32>,
+) -> u64 {
     let mut total = 0;
-    let mut stack = vec![node];
+    stack.clear();
+    stack.extend(nodes);
     while let Some(n) = stack.pop() {
         let lods = s.node_lods(n);
         match lods.iter().rev().find(|l| l.error <= error) {
@@ -110,24 +260,21 @@ impl SceneStats {
                 }
             }
         }
-        let mut depth = vec![0usize; s.nodes.len()];
-        let mut per_depth: Vec<u64> = Vec::new();
-        for (i, n) in s.nodes.iter().enumerate() {
-            if n.parent != NO_NODE {
-                depth[i] = depth[n.parent as usize] + 1;
-            }
-            if per_depth.len() <= depth[i] {
-                per_depth.resize(depth[i] + 1, 0);
-            }
+        let depth = node_depths(s);
+        let depths = depth.iter().copied().max().map_or(0, |d| d + 1);
+        let mut per_depth = vec![0u64; depths];
+        let mut at_depth: Vec<Vec<usize>> = vec![Vec::new(); depths];
+        for (i, &d) in depth.iter().enumerate() {
             // A node without LODs is drawn through its children.
-            per_depth[depth[i]] += s
+            per_depth[d] += s
                 .node_lods(i as u32)
                 .first()
                 .map_or(0, |l| l.triangles as u64);
+            at_depth[d].push(i);
         }
-        let mut levels_per_depth = Vec::new();
-        for d in 0..per_depth.len() {
-            let at: Vec<usize> = (0..s.nodes.len()).filter(|&i| depth[i] == d).collect();
+        let switches = node_switches(s, &depth);
+        let mut levels_per_depth = Vec::with_capacity(depths);
+        for (d, at) in at_depth.iter().enumerate() {
             let inner: Vec<usize> = at
                 .iter()
                 .copied()
@@ -143,14 +290,7 @@ impl SceneStats {
                 .collect();
             let mut switch: Vec<f64> = inner
                 .iter()
-                .filter_map(|&i| {
-                    let l = s.node_lods(i as u32).first()?;
-                    let below: u64 = s.nodes[i]
-                        .children()
-                        .map(|c| triangles_within(s, c, l.error))
-                        .sum();
-                    Some(below as f64 / f64::from(l.triangles.max(1)))
-                })
+                .filter_map(|&i| switches[i].as_ref().map(|w| w.factor))
                 .collect();
             let mut errs: Vec<f64> = inner
                 .iter()
@@ -173,13 +313,15 @@ impl SceneStats {
                 switch_factor_median: median(&mut switch),
             });
         }
+        let switch_factors = summarise_switches(&switches);
         let triangles = s.finest_triangles();
         let diagonal = s.bounds.diagonal();
+        let mut stack = Vec::new();
         let triangles_at_error = (1..=16)
             .map(|k| {
                 let e = diagonal / f64::from(1u32 << k);
                 // A validated scene has one root, node 0.
-                (e, triangles_within(s, 0, e as f32))
+                (e, triangles_within(s, [0], e as f32, &mut stack))
             })
             .collect();
         let (major, minor) = r.version();
@@ -191,9 +333,11 @@ impl SceneStats {
             depth: s.depth(),
             max_lods_per_node: max_lods,
             triangles,
+            leaf_floor_triangles: leaf_floor(s),
             leaf_triangles_per_level: per_level,
             hlod_triangles_per_depth: per_depth,
             hlod_levels_per_depth: levels_per_depth,
+            switch_factors,
             triangles_at_error,
             bounds_min: s.bounds.min.to_array(),
             bounds_max: s.bounds.max.to_array(),
@@ -206,5 +350,196 @@ impl SceneStats {
             bytes_per_triangle: r.file_len() as f64 / triangles.max(1) as f64,
             provenance: s.provenance.clone(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::{Aabb, IndexFormat, LodInfo, Node, Skeleton};
+
+    /// One node: parent, box min x, LODs as (triangles, error).
+    type NodeSpec<'a> = (u32, f64, &'a [(u32, f32)]);
+
+    /// A skeleton from one [`NodeSpec`] per node, parents first and
+    /// siblings consecutive; each box is 1 x 1 x 1 from its min x, inner
+    /// boxes the union of their children's.
+    fn skeleton(spec: &[NodeSpec]) -> Skeleton {
+        // Siblings are consecutive: a parent's first child is the first
+        // node naming it.
+        let mut children = vec![(0u32, 0u32); spec.len()];
+        for (c, &(parent, _, _)) in spec.iter().enumerate().skip(1) {
+            let slot = &mut children[parent as usize];
+            if slot.1 == 0 {
+                slot.0 = c as u32;
+            }
+            slot.1 += 1;
+        }
+        let mut nodes: Vec<Node> = Vec::new();
+        let mut lods = Vec::new();
+        for (i, &(parent, x, levels)) in spec.iter().enumerate() {
+            nodes.push(Node {
+                bounds: Aabb::new(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 1.0, 1.0, 1.0)),
+                parent,
+                first_child: children[i].0,
+                child_count: children[i].1,
+                first_lod: lods.len() as u32,
+                lod_count: levels.len() as u32,
+            });
+            lods.extend(levels.iter().map(|&(triangles, error)| LodInfo {
+                error,
+                triangles,
+                vertices: 3 * triangles,
+                origin: DVec3::ZERO,
+                index_format: IndexFormat::U16,
+                uniform_colour: None,
+                offset: 0,
+                len: 0,
+                checksum: 0,
+            }));
+        }
+        for i in (1..nodes.len()).rev() {
+            let p = nodes[i].parent as usize;
+            nodes[p].bounds = nodes[p].bounds.union(&nodes[i].bounds);
+        }
+        Skeleton {
+            origin: DVec3::ZERO,
+            bounds: nodes[0].bounds,
+            nodes,
+            lods,
+            provenance: Default::default(),
+        }
+    }
+
+    /// Root (100 triangles at error 4) over an inner node with two levels,
+    /// an inner node without LODs and an inner node whose one HLOD is far
+    /// coarser in triangles than its leaf at that error.
+    fn hand_made() -> Skeleton {
+        skeleton(&[
+            (NO_NODE, 0.0, &[(100, 4.0)]),
+            (0, 0.0, &[(10, 2.0), (5, 3.0)]),
+            (0, 2.0, &[]),
+            (0, 4.0, &[(1, 0.5)]),
+            (1, 0.0, &[(8, 0.0), (4, 1.0), (2, 2.5)]),
+            (1, 1.0, &[(8, 0.0), (4, 1.0)]),
+            (2, 2.0, &[(6, 0.0)]),
+            (2, 3.0, &[(6, 0.0), (3, 5.0)]),
+            // No level within its parent's 0.5: draws its finest.
+            (3, 4.0, &[(20, 0.7), (10, 1.0)]),
+        ])
+    }
+
+    #[test]
+    fn switch_factors_of_a_hand_made_tree() {
+        let s = hand_made();
+        let switches = node_switches(&s, &node_depths(&s));
+        // Root at error 4: node 1 its 5-triangle level, node 2 through its
+        // leaves (6 + 6: 3 at error 5 is too coarse), node 3 its 1.
+        let factor = |i: usize| switches[i].as_ref().map(|w| w.factor);
+        assert_eq!(factor(0), Some(18.0 / 100.0));
+        // Node 1 at error 2: each leaf its 4-triangle level.
+        assert_eq!(factor(1), Some(8.0 / 10.0));
+        assert_eq!(factor(2), None, "no LODs: not counted");
+        assert_eq!(factor(3), Some(20.0));
+        assert!((4..9).all(|i| factor(i).is_none()), "leaves");
+
+        let f = summarise_switches(&switches);
+        let diagonal = 3f64.sqrt();
+        assert_eq!(
+            f,
+            SwitchFactors {
+                count: 3,
+                median: 0.8,
+                p90: 20.0,
+                p99: 20.0,
+                max: 20.0,
+                over_2: 1,
+                over_4: 1,
+                over_8: 1,
+                worst: Some(NodeSwitch {
+                    node: 3,
+                    depth: 1,
+                    factor: 20.0,
+                    triangles: 1,
+                    error: 0.5,
+                    diagonal,
+                    children_triangles: 20,
+                }),
+            }
+        );
+        assert_eq!(SwitchFactors::of(&s), f);
+        // Leaves' coarsest levels: 2 + 4 + 6 + 3 + 10.
+        assert_eq!(leaf_floor(&s), 25);
+    }
+
+    #[test]
+    fn switch_factors_of_a_lone_root_are_empty() {
+        let s = skeleton(&[(NO_NODE, 0.0, &[(12, 0.0), (6, 1.0)])]);
+        let f = SwitchFactors::of(&s);
+        assert_eq!(f, SwitchFactors::default());
+        assert_eq!(leaf_floor(&s), 6);
+    }
+
+    #[test]
+    fn switch_ties_name_the_first_node_and_thresholds_are_strict() {
+        // Three inner nodes over one leaf each: factors 8, 8 and 2.
+        let s = skeleton(&[
+            (NO_NODE, 0.0, &[]),
+            (0, 0.0, &[(1, 1.0)]),
+            (0, 1.0, &[(1, 1.0)]),
+            (0, 2.0, &[(4, 1.0)]),
+            (1, 0.0, &[(8, 0.0)]),
+            (2, 1.0, &[(8, 0.0)]),
+            (3, 2.0, &[(8, 0.0)]),
+        ]);
+        let f = SwitchFactors::of(&s);
+        assert_eq!((f.count, f.median, f.max), (3, 8.0, 8.0));
+        assert_eq!((f.over_2, f.over_4, f.over_8), (2, 2, 0));
+        let w = f.worst.unwrap();
+        assert_eq!((w.node, w.depth, w.children_triangles), (1, 1, 8));
+    }
+
+    #[test]
+    fn quantiles_index_floor_q_n() {
+        let v: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(quantile(&v, 0.5), 11.0);
+        assert_eq!(quantile(&v, 0.9), 19.0);
+        assert_eq!(quantile(&v, 0.99), 20.0);
+        assert_eq!(quantile(&[3.0], 0.99), 3.0);
+        assert_eq!(quantile(&[], 0.5), 0.0);
+    }
+
+    #[test]
+    fn a_deep_chain_is_one_pass() {
+        // 100k nodes in a chain, errors growing towards the root: each
+        // node's walk stops at its child (a walk to the leaf from every
+        // node would be 5e9 steps), and nothing recurses.
+        let n = 100_000usize;
+        let lods: Vec<[(u32, f32); 1]> = (0..n)
+            .map(|i| {
+                if i + 1 == n {
+                    [(64, 0.0)]
+                } else {
+                    [(1, 1.0 / (1.0 + i as f32))]
+                }
+            })
+            .collect();
+        let borrowed: Vec<NodeSpec> = lods
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let parent = if i == 0 { NO_NODE } else { i as u32 - 1 };
+                (parent, 0.0, l.as_slice())
+            })
+            .collect();
+        let s = skeleton(&borrowed);
+        let f = SwitchFactors::of(&s);
+        assert_eq!(f.count, n - 1);
+        // Each node's error is coarser than its child's: the child draws
+        // its 1 triangle (the last inner node: the leaf's 64).
+        assert_eq!((f.median, f.max, f.over_8), (1.0, 64.0, 1));
+        assert_eq!(f.worst.unwrap().node, n as u32 - 2);
     }
 }

@@ -11,8 +11,9 @@ use gigawalk_procgen::{generate, Kind, DEFAULT_POSES};
 #[derive(clap::Args)]
 pub struct Args {
     /// Scene kind: plant (industrial plant, the paper's Power Plant), city
-    /// (blocks of tall buildings, street furniture) or forest (many small
-    /// occluders, deep visibility)
+    /// (blocks of tall buildings, street furniture), forest (many small
+    /// occluders, deep visibility) or machine (a factory floor of CAD-like
+    /// machines, each hundreds of small disjoint parts, no building shell)
     #[arg(value_parser = parse_kind)]
     kind: Kind,
     /// Triangles to generate, approximately (the summary says exactly how

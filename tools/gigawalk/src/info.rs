@@ -99,6 +99,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             l.switch_factor_max
         )?;
     }
+    print_lod_health(&s)?;
     out!("whole-scene triangles at one error (each node its coarsest level within it):")?;
     for (e, t) in &s.triangles_at_error {
         out!("  error {e:<12.4e} {t:>14}")?;
@@ -113,6 +114,46 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for (k, v) in &s.provenance.parameters {
         out!("  {k:<24} {v}")?;
     }
+    Ok(())
+}
+
+/// The leaf floor and the switch factors over every inner node: whether
+/// the hierarchy can draw a far view cheaply, and how much a switch costs.
+fn print_lod_health(s: &SceneStats) -> anyhow::Result<()> {
+    let f = &s.switch_factors;
+    out!("LOD health (switch: triangles the children draw at an inner node's finest HLOD error / the HLOD's):")?;
+    out!(
+        "  leaf floor     {} triangles (every leaf at its coarsest LOD)",
+        s.leaf_floor_triangles
+    )?;
+    let Some(w) = &f.worst else {
+        out!("  switch         no inner node has LODs")?;
+        return Ok(());
+    };
+    out!(
+        "  switch         median {:.2}  p90 {:.2}  p99 {:.2}  max {:.2}  ({} inner nodes with LODs)",
+        f.median,
+        f.p90,
+        f.p99,
+        f.max,
+        f.count
+    )?;
+    out!(
+        "  switch above   2: {}  4: {}  8: {}",
+        f.over_2,
+        f.over_4,
+        f.over_8
+    )?;
+    out!(
+        "  worst switch   node {} (depth {}): {} triangles at error {:.4e} (box diagonal {:.4e}); children {} ({:.2}x)",
+        w.node,
+        w.depth,
+        w.triangles,
+        w.error,
+        w.diagonal,
+        w.children_triangles,
+        w.factor
+    )?;
     Ok(())
 }
 

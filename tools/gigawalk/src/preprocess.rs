@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use gigawalk_preprocess::{preprocess, Params, Phase, Progress};
+use gigawalk_scene::{SceneReader, SceneStats};
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args)]
@@ -140,14 +141,57 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     stats.input_triangles += import_dropped;
     stats.finish();
 
+    // The LOD structure's health, from the file as a reader sees it. The
+    // scene is written either way: a failure to read it back is said, not
+    // fatal.
+    let scene = match SceneReader::open(&args.output) {
+        Ok(r) => Some(SceneStats::of(&r)),
+        Err(e) => {
+            eprintln!("warning: cannot read back the scene to check its LODs: {e}");
+            None
+        }
+    };
+
     // Files first: a reader that closes standard output early must not
     // cost the stats file.
     if let Some(path) = &args.stats {
-        let json = serde_json::to_string_pretty(&stats).context("cannot encode the stats")?;
+        // The run's statistics and, read back from the scene file, its
+        // leaf floor and switch factors (as `gigawalk info` has them; null
+        // when the scene could not be read back). Through a JSON value, so
+        // the keys come out sorted.
+        let mut file = serde_json::to_value(&stats).context("cannot encode the stats")?;
+        if let Some(o) = file.as_object_mut() {
+            let health = scene.as_ref();
+            o.insert(
+                "leaf_floor_triangles".into(),
+                health.map(|s| s.leaf_floor_triangles).into(),
+            );
+            o.insert(
+                "switch_factors".into(),
+                serde_json::to_value(health.map(|s| &s.switch_factors))
+                    .context("cannot encode the switch factors")?,
+            );
+        }
+        let json = serde_json::to_string_pretty(&file).context("cannot encode the stats")?;
         gigawalk_scene::write_atomic(path, (json + "\n").as_bytes())
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
     crate::write_stdout(format_args!("{}", stats.table()), false)?;
+    if let Some(s) = &scene {
+        out!(
+            "leaf floor        {} triangles (every leaf at its coarsest LOD)",
+            s.leaf_floor_triangles
+        )?;
+        let f = &s.switch_factors;
+        out!(
+            "switch factors    median {:.2}, p90 {:.2}, max {:.2}; {} of {} inner nodes above 8 (gigawalk info: the worst)",
+            f.median,
+            f.p90,
+            f.max,
+            f.over_8,
+            f.count
+        )?;
+    }
     if stats.input_file_bytes > 0 {
         out!(
             "input file        {:.1} MiB; scene / input file = {:.2}x",

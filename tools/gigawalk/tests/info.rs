@@ -93,6 +93,23 @@ fn info_text_and_json() {
     assert!(out.contains("source    hand.glb"), "{out}");
     assert!(out.contains("HLOD levels per tree depth"), "{out}");
     assert!(out.contains("whole-scene triangles at one error"), "{out}");
+    // Each leaf's coarsest level is 1 triangle; the root's 1-triangle
+    // HLOD at error 3 switches to the leaves' 1 + 1.
+    assert!(
+        out.contains("  leaf floor     2 triangles (every leaf at its coarsest LOD)\n"),
+        "{out}"
+    );
+    assert!(
+        out.contains(
+            "  switch         median 2.00  p90 2.00  p99 2.00  max 2.00  (1 inner nodes with LODs)\n"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("  switch above   2: 0  4: 0  8: 0\n"), "{out}");
+    assert!(
+        out.contains("  worst switch   node 0 (depth 0): 1 triangles at error 3.0000e0 (box diagonal 1.3038e1); children 2 (2.00x)\n"),
+        "{out}"
+    );
 
     let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--json"]);
     assert!(ok, "{err}");
@@ -127,9 +144,114 @@ fn info_text_and_json() {
         (d[1]["inner_nodes"].clone(), d[1]["leaves"].clone()),
         (0.into(), 2.into())
     );
+    assert_eq!(v["leaf_floor_triangles"], 2);
+    let f = &v["switch_factors"];
+    assert_eq!(
+        (f["count"].clone(), f["median"].clone(), f["max"].clone()),
+        (1.into(), 2.0.into(), 2.0.into())
+    );
+    assert_eq!(
+        (f["over_2"].clone(), f["over_8"].clone()),
+        (0.into(), 0.into())
+    );
+    let w = &f["worst"];
+    assert_eq!(
+        (w["node"].clone(), w["depth"].clone()),
+        (0.into(), 0.into())
+    );
+    assert_eq!(
+        (w["triangles"].clone(), w["children_triangles"].clone()),
+        (1.into(), 2.into())
+    );
+    assert_eq!(w["error"], 3.0);
+    assert!(
+        (w["diagonal"].as_f64().unwrap() - 170f64.sqrt()).abs() < 1e-9,
+        "{w}"
+    );
     assert_eq!(v["provenance"]["parameters"]["t1"], 1000);
     let bpt = v["bytes_per_triangle"].as_f64().unwrap();
     assert_eq!(bpt, std::fs::metadata(&path).unwrap().len() as f64 / 4.0);
+}
+
+/// A generated and preprocessed scene: `info` and `preprocess` (its table
+/// and `--stats` JSON) report the same leaf floor and switch factors.
+#[test]
+fn lod_health_in_info_and_preprocess_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (glb, gwk, stats) = (
+        s(&dir.path().join("p.glb")),
+        s(&dir.path().join("p.gwk")),
+        s(&dir.path().join("s.json")),
+    );
+    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "5k", "-o", &glb]);
+    assert!(ok, "{err}");
+    let (ok, pre, err) = gigawalk(&["preprocess", &glb, "-o", &gwk, "--stats", &stats]);
+    assert!(ok, "{err}");
+
+    let (ok, text, err) = gigawalk(&["info", &gwk]);
+    assert!(ok, "{err}");
+    for line in [
+        "LOD health",
+        "  leaf floor ",
+        "  switch         median ",
+        "  switch above   2: ",
+        "  worst switch   node ",
+    ] {
+        assert!(text.contains(line), "{line:?} missing from\n{text}");
+    }
+    let (ok, json, err) = gigawalk(&["info", &gwk, "--json"]);
+    assert!(ok, "{err}");
+    let info: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let floor = info["leaf_floor_triangles"].as_u64().unwrap();
+    let levels = info["leaf_triangles_per_level"].as_array().unwrap();
+    assert_eq!(levels.last().unwrap().as_u64(), Some(floor));
+    assert!(floor > 0 && floor < info["triangles"].as_u64().unwrap());
+    let f = &info["switch_factors"];
+    let count = f["count"].as_u64().unwrap();
+    assert!(count > 0, "{f}");
+    let (median, p90, p99, max) = (
+        f["median"].as_f64().unwrap(),
+        f["p90"].as_f64().unwrap(),
+        f["p99"].as_f64().unwrap(),
+        f["max"].as_f64().unwrap(),
+    );
+    assert!(
+        0.0 < median && median <= p90 && p90 <= p99 && p99 <= max,
+        "{f}"
+    );
+    let over = |k: &str| f[k].as_u64().unwrap();
+    assert!(over("over_8") <= over("over_4") && over("over_4") <= over("over_2"));
+    assert!(over("over_2") <= count);
+    assert_eq!(f["worst"]["factor"].as_f64(), Some(max), "{f}");
+    let depth_max = info["hlod_levels_per_depth"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["switch_factor_max"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert_eq!(depth_max, max);
+
+    // The preprocess table says the same, and the stats JSON has the same
+    // figures beside its own.
+    assert!(
+        pre.contains(&format!("leaf floor        {floor} triangles")),
+        "{pre}"
+    );
+    assert!(
+        pre.contains(&format!(
+            "switch factors    median {median:.2}, p90 {p90:.2}, max {max:.2}; {} of {count} inner nodes above 8",
+            over("over_8")
+        )),
+        "{pre}"
+    );
+    let st: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(st["leaf_floor_triangles"].as_u64(), Some(floor));
+    assert_eq!(st["switch_factors"], *f);
+    assert_eq!(st["nodes"], info["nodes"]);
+    assert_eq!(st["triangles"], info["triangles"]);
+    assert!(st["phase_seconds"].is_array() && st["output_bytes"].as_u64() > Some(0));
 }
 
 /// One occluder over the first leaf and one view cell listing it, as OCCL

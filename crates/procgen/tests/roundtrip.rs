@@ -77,7 +77,10 @@ fn same_seed_same_bytes_other_seed_other_scene() {
 
 #[test]
 fn scenes_have_many_objects_over_orders_of_magnitude() {
-    for kind in KINDS {
+    // A machine's objects are whole subassemblies (one mesh per
+    // subassembly and material); its parts' sizes are checked over its
+    // connected pieces in tests/machine.rs.
+    for kind in [Kind::Plant, Kind::City, Kind::Forest] {
         let g = generate(kind, 100_000, 1, 10);
         let model = import_glb_bytes(&g.glb_bytes(), kind.name()).unwrap();
         let diag =

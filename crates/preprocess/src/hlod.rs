@@ -207,17 +207,14 @@ pub fn inner_lods(
     p: &ChainParams,
 ) -> Vec<Lod> {
     let picked = pick_levels(children, p.merge_budget());
-    let parts: Vec<&WorkMesh> = children
+    let parts: Vec<&Lod> = children
         .iter()
         .zip(&picked)
-        .filter_map(|(c, &k)| c.get(k).map(|l| &l.mesh))
+        .filter_map(|(c, &k)| c.get(k))
         .collect();
-    let merged = merge(&parts, origin);
-    let base = children
-        .iter()
-        .zip(&picked)
-        .filter_map(|(c, &k)| c.get(k).map(|l| l.error))
-        .fold(0.0f32, f32::max);
+    let meshes: Vec<&WorkMesh> = parts.iter().map(|l| &l.mesh).collect();
+    let merged = merge(&meshes, origin);
+    let base = parts.iter().map(|l| l.error).fold(0.0f32, f32::max);
     // Measured against the full detail where the node keeps it: the
     // bound is then the distance itself, not the picked levels' errors
     // plus the distance to them, which compounds up the tree (each
@@ -370,8 +367,9 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
                     }
                     // Edge collapse at twice a limit that stalled may
                     // prune every piece (395 triangles of an engine's
-                    // bolts and covers became 1): the largest limit
-                    // between that still shrinks, by bisection.
+                    // bolts and covers became 1): a limit between the two
+                    // that shrinks to at least `lower`, by bisection, else
+                    // the smallest limit found that shrinks.
                     let (mut lo, mut hi) = (e * 0.5, e);
                     let mut best = (m, e);
                     for _ in 0..BISECTIONS {
@@ -412,8 +410,8 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
         // of 0.27. When the measured distance is far above the limit,
         // clustering at the same limits is measured too and the nearer
         // level kept.
-        // `measured` includes what earlier levels moved, so an inner
-        // node's later levels (after a first level made without a limit)
+        // `measured` includes what earlier levels moved (it is measured
+        // against the reference, not the previous level), so later levels
         // may be compared more often than needed: time, not a wrong choice.
         // NaN-safe: a NaN or infinite measurement is suspect too.
         let plausible = measured.is_finite() && measured <= SUSPECT_OVER_LIMIT * e;
@@ -557,12 +555,12 @@ impl<'a> Simplifier<'a> {
         let indices = if self.keep_pieces {
             self.keep_every_piece(indices)
         } else {
-            // The simplifier's own error, else the limit: the cell size.
-            // The limit: what the level may move surfaces by. Vanished
-            // pieces are stood for by about a triangle per cell of it, so
-            // a thousand bolts that each collapsed to nothing become a
-            // sheet of cells rather than a thousand triangles at every
-            // limit. Without a limit, the simplifier's own error.
+            // The cell size is the limit: what the level may move
+            // surfaces by. Vanished pieces are stood for by about a
+            // triangle per cell of it, so a thousand bolts that each
+            // collapsed to nothing become a sheet of cells rather than a
+            // thousand triangles at every limit. Without a limit, the
+            // simplifier's own error.
             let cell = if max_error < f32::MAX {
                 max_error
             } else if result_error.is_finite() && result_error > 0.0 {

@@ -304,12 +304,8 @@ pub fn build<S: LodSink>(
     };
     let keep = chain.merge_budget();
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
-    // Each done node's levels a parent may still merge, until the parent is done.
-    let mut kept: Vec<Option<Vec<Lod>>> = vec![None; tree.len()];
-    // Each done node's full-detail surface while it has at most
-    // EXACT_REFERENCE triangles, for its parent's levels to be measured
-    // against, until the parent is done.
-    let mut originals: Vec<Option<hlod::WorkMesh>> = vec![None; tree.len()];
+    // What each done node leaves for its parent, until the parent is done.
+    let mut done: Vec<Option<Done>> = vec![None; tree.len()];
     // Per done node: its finest stored error, or (without stored levels)
     // the largest such error below it.
     let mut lowest = vec![0.0f32; tree.len()];
@@ -344,16 +340,15 @@ pub fn build<S: LodSink>(
                     .expect("the leaves were chosen by having an object");
                 let part = &parts[object as usize];
                 let mesh = hlod::leaf_mesh(model, part, node.bounds.center());
-                let original = (mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
-                let (out, kept) =
+                let full = (mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
+                let (out, levels) =
                     finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), &chain), keep);
-                (out, kept, original)
+                (out, Done { levels, full })
             })
             .collect();
-        for (&ni, (lods, c, original)) in batch.iter().zip(made) {
+        for (&ni, (lods, d)) in batch.iter().zip(made) {
             emit(ni, lods, &mut stats.leaf_lod_triangles)?;
-            kept[ni] = Some(c);
-            originals[ni] = original;
+            done[ni] = Some(d);
         }
         progress.advance(batch.len() as u64);
     }
@@ -376,22 +371,23 @@ pub fn build<S: LodSink>(
                 .par_iter()
                 .map(|&ni| {
                     let node = &tree[ni];
-                    let children: Vec<&[Lod]> = (node.first_child
-                        ..node.first_child + node.child_count)
-                        .filter_map(|c| kept[c as usize].as_deref())
+                    let below: Vec<&Done> = (node.first_child..node.first_child + node.child_count)
+                        .filter_map(|c| done[c as usize].as_ref())
                         .collect();
-                    let below: Option<Vec<&hlod::WorkMesh>> = (node.first_child
-                        ..node.first_child + node.child_count)
-                        .map(|c| originals[c as usize].as_ref())
-                        .collect();
-                    let original = below
+                    let children: Vec<&[Lod]> = below.iter().map(|d| d.levels.as_slice()).collect();
+                    // Every child's full detail, or none: a reference
+                    // missing a child would not bound the node.
+                    let full: Option<Vec<&hlod::WorkMesh>> =
+                        below.iter().map(|d| d.full.as_ref()).collect();
+                    let full = full
+                        .filter(|b| b.len() == node.child_count as usize)
                         .filter(|b| {
                             b.iter().map(|m| m.triangles()).sum::<usize>() <= EXACT_REFERENCE
                         })
                         .map(|b| hlod::merge(&b, node.bounds.center()));
                     let mut lods = hlod::inner_lods(
                         &children,
-                        original.as_ref(),
+                        full.as_ref(),
                         node.bounds.center(),
                         node.bounds.diagonal(),
                         &chain,
@@ -404,11 +400,14 @@ pub fn build<S: LodSink>(
                         l.error = l.error.max(below);
                     }
                     let stored = hlod::worth_drawing(&lods, &children);
-                    let (out, kept) = finish_chain(lods, keep);
-                    (out.into_iter().skip(stored.start).collect(), kept, original)
+                    let (out, levels) = finish_chain(lods, keep);
+                    (
+                        out.into_iter().skip(stored.start).collect(),
+                        Done { levels, full },
+                    )
                 })
                 .collect();
-            for (&ni, (lods, c, original)) in batch.iter().zip(made) {
+            for (&ni, (lods, d)) in batch.iter().zip(made) {
                 let node = &tree[ni];
                 lowest[ni] = match lods.first() {
                     Some(l) => l.1,
@@ -416,11 +415,9 @@ pub fn build<S: LodSink>(
                 };
                 emit(ni, lods, &mut stats.inner_lod_triangles)?;
                 for ch in node.first_child..node.first_child + node.child_count {
-                    kept[ch as usize] = None;
-                    originals[ch as usize] = None;
+                    done[ch as usize] = None;
                 }
-                kept[ni] = Some(c);
-                originals[ni] = original;
+                done[ni] = Some(d);
             }
             progress.advance(batch.len() as u64);
         }
@@ -445,9 +442,19 @@ pub fn build<S: LodSink>(
     Ok(Built { nodes, stats })
 }
 
-/// A node's levels in the scene file's form, those kept for its parent,
-/// and its full-detail surface when it is small enough to keep.
-type Finished = (Vec<(LodMesh, f32)>, Vec<Lod>, Option<hlod::WorkMesh>);
+/// A node's levels in the scene file's form, and what it leaves for its
+/// parent.
+type Finished = (Vec<(LodMesh, f32)>, Done);
+
+/// What a done node leaves for its parent's HLODs.
+#[derive(Clone)]
+struct Done {
+    /// The levels its parent may merge.
+    levels: Vec<Lod>,
+    /// Its full-detail surface, while that has at most [`EXACT_REFERENCE`]
+    /// triangles, for its parent's levels to be measured against.
+    full: Option<hlod::WorkMesh>,
+}
 
 /// An inner node whose leaves hold at most this many triangles has its
 /// levels measured against them, not against its children's levels: the

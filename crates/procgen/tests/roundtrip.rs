@@ -56,6 +56,11 @@ fn forest_round_trips() {
 }
 
 #[test]
+fn machine_round_trips() {
+    check_round_trip(Kind::Machine, 120_000);
+}
+
+#[test]
 fn tiny_budgets_still_round_trip() {
     for kind in KINDS {
         check_round_trip(kind, 10_000);

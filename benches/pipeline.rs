@@ -88,10 +88,10 @@ fn main() {
         })
         .collect();
     println!(
-        "plant {} triangles, {} frames at {w}x{h}, och pixel error {pixel_error}, occluder budget {occluder_budget} ({:?} triangles), devices {:?}",
+        "plant {} triangles, {} frames at {w}x{h}, och pixel error {pixel_error}, occluder budget {occluder_budget} ({}), devices {:?}",
         scene.skeleton().finest_triangles(),
         cameras.len(),
-        rt.occluder_budget(occluder_budget),
+        rt.occluder_selection(occluder_budget),
         rt.device_names()
     );
     println!("| schedule | median frame ms | fps | OR ms | STC ms (HZB) | RVG ms | latency ms | triangles/frame |");

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use gigawalk_cull::{Camera, TraversalOptions};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_runtime::{
-    CameraError, CameraList, CameraRequest, DrawStyle, FrameReport, OccluderBudget, Runtime,
-    RuntimeError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
+    CameraError, CameraList, CameraRequest, DrawStyle, FrameReport, OccluderBudget,
+    OccluderSelection, Runtime, RuntimeError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
 };
 use gigawalk_scene::SceneReader;
 use gigawalk_suite::scenes::{street, write_boxes_scene};
@@ -451,11 +451,32 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
             OccluderBudget::Triangles(2_000),
             OccluderBudget::Triangles(200),
             OccluderBudget::Triangles(0),
+            OccluderBudget::Adaptive,
         ] {
             let mut o = options(Schedule::Pipelined, true, false, 0.0);
             o.occluder_budget = budget;
             let occ = run(rt, &o, walk(frames, DVec3::ZERO, true)).unwrap();
             assert_eq!(occ.len(), frames);
+            // Every frame reports the budget it drew with, and keeps to it.
+            for r in &occ {
+                assert!(r.occluder_triangles <= r.occluder_candidates, "{budget:?}");
+                if let Some(limit) = r.occluder_limit {
+                    assert!(r.occluder_triangles <= limit, "{budget:?}: {limit}");
+                }
+                match budget {
+                    OccluderBudget::Triangles(t) if r.occluder_candidates > 0 => {
+                        assert_eq!(r.occluder_limit, Some(t))
+                    }
+                    OccluderBudget::All => assert_eq!(r.occluder_limit, None),
+                    _ => {}
+                }
+            }
+            if budget == OccluderBudget::Adaptive {
+                // It probed: some frames drew with a budget, the first ones
+                // with all occluders.
+                assert!(occ.iter().any(|r| r.occluder_limit.is_some()));
+                assert!(occ[..4].iter().all(|r| r.occluder_limit.is_none()));
+            }
             let mut culled = 0;
             for (r, v) in occ.iter().zip(&vfc) {
                 let (rd, vd) = (depth(r), depth(v));
@@ -480,10 +501,17 @@ fn an_occluder_budget_culls_less_but_never_wrongly() {
         // Auto: the CPU budget on a CPU rasterizer (lavapipe in CI), else all.
         let cpu = rt.device(0).is_cpu() || rt.device(1).is_cpu();
         assert_eq!(
-            rt.occluder_budget(OccluderBudget::Auto),
-            cpu.then_some(CPU_OCCLUDER_BUDGET)
+            rt.occluder_selection(OccluderBudget::Auto),
+            if cpu {
+                OccluderSelection::Triangles(CPU_OCCLUDER_BUDGET)
+            } else {
+                OccluderSelection::All
+            }
         );
-        assert_eq!(rt.occluder_budget(OccluderBudget::All), None);
+        assert_eq!(
+            rt.occluder_selection(OccluderBudget::All),
+            OccluderSelection::All
+        );
     });
 }
 

@@ -137,6 +137,10 @@ pub struct FrameRecord {
     pub hzb_ms: f64,
     pub stc_ms: f64,
     pub rvg_ms: f64,
+    /// Occluder triangles OR drew, and the budget it drew them with
+    /// (`None`: all; the adaptive controller's choice with `adaptive`).
+    pub occluder_triangles: u64,
+    pub occluder_limit: Option<u64>,
     pub visited: u64,
     pub frustum_culled: u64,
     pub occlusion_culled: u64,
@@ -236,9 +240,9 @@ pub struct Replay {
     /// resolved against the scene).
     pub near: f64,
     pub options: ReplayOptions,
-    /// The occluder budget the runs used on these devices, in triangles
-    /// (`None`: all occluders); `options.runtime.occluder_budget` resolved.
-    pub occluder_budget: Option<u64>,
+    /// The occluder budget the runs used on these devices
+    /// (`options.runtime.occluder_budget` resolved).
+    pub occluder_selection: gigawalk_runtime::OccluderSelection,
     pub devices: Vec<String>,
     pub runs: Vec<RunRecord>,
     /// False when the replay was stopped early ([`Progress::keep_going`]).
@@ -396,7 +400,7 @@ pub fn replay_on(
         frames: n,
         near,
         options: opts.clone(),
-        occluder_budget: rt.occluder_budget(opts.runtime.occluder_budget),
+        occluder_selection: rt.occluder_selection(opts.runtime.occluder_budget),
         devices: rt.device_names(),
         runs: Vec::new(),
         complete: true,
@@ -541,6 +545,8 @@ pub fn replay_on(
                 hzb_ms: r.hzb_ms,
                 stc_ms: r.stc_ms,
                 rvg_ms: r.rvg_ms,
+                occluder_triangles: r.occluder_triangles,
+                occluder_limit: r.occluder_limit,
                 visited: r.stats.visited,
                 frustum_culled: r.stats.frustum_culled,
                 occlusion_culled: r.stats.occlusion_culled,

@@ -87,7 +87,7 @@ impl Replay {
              missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
              oq_queries,oq_round_trips,oq_ms,oq_untested,tile_ms_adaptive,tile_ms_naive,tile_tests,\
              max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms,\
-             bound_exceeding_pixels,bound_exceeding_fraction\n",
+             bound_exceeding_pixels,bound_exceeding_fraction,occluder_triangles,occluder_limit\n",
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -96,7 +96,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{:.3},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{:.3},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -149,6 +149,8 @@ impl Replay {
                     f.rvg_wait_ms,
                     a.map_or(String::new(), |a| a.bound_exceeding_pixels.to_string()),
                     opt(a.map(|a| a.bound_exceeding_fraction()), 6),
+                    f.occluder_triangles,
+                    f.occluder_limit.map_or(String::new(), |l| l.to_string()),
                 );
             }
         }
@@ -169,9 +171,10 @@ pub fn markdown(s: &Summary) -> String {
         s.schedule,
         s.devices.join(" + "),
         s.occluder_lag,
-        match s.occluder_budget {
-            None => "all of them".to_string(),
-            Some(b) => format!("at most {b} triangles"),
+        match (s.occluder_budget, s.occluder_selection.as_str()) {
+            (Some(b), _) => format!("at most {b} triangles"),
+            (None, "adaptive") => "an adaptive budget".to_string(),
+            (None, _) => "all of them".to_string(),
         },
         s.occluder_scale,
         s.hzb_reduction

@@ -26,9 +26,13 @@ pub struct Summary {
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
-    /// Most occluder triangles OR draws a frame; null: no budget (all of
-    /// frame i - lag's visible set).
+    /// Most occluder triangles OR draws a frame; null: no fixed budget
+    /// (all of frame i - lag's visible set, or adaptive).
     pub occluder_budget: Option<u64>,
+    /// "all", "budget" (at most `occluder_budget` triangles) or "adaptive"
+    /// (chosen frame by frame; each frame's choice is in frames.csv).
+    #[serde(default)]
+    pub occluder_selection: String,
     pub hzb_reduction: String,
     /// Streaming: device bytes a device may hold; null when the whole
     /// scene is resident (no `--memory-budget`, or the scene fits it).
@@ -91,6 +95,9 @@ pub struct ModeSummary {
     pub median_speedup_vs_vfc: Option<f64>,
     pub mean_latency_ms: f64,
     pub median_or_ms: f64,
+    /// Median occluder triangles OR drew a frame.
+    #[serde(default)]
+    pub median_occluder_triangles: f64,
     pub median_hzb_ms: f64,
     pub median_stc_ms: f64,
     pub median_rvg_ms: f64,
@@ -367,6 +374,7 @@ fn summarise(
         median_speedup_vs_vfc: None,
         mean_latency_ms: mean(m.iter().map(|f| f.latency_ms)),
         median_or_ms: med(|f| f.or_ms),
+        median_occluder_triangles: med(|f| f.occluder_triangles as f64),
         median_hzb_ms: med(|f| f.hzb_ms),
         median_stc_ms: med(|f| f.stc_ms),
         median_rvg_ms: med(|f| f.rvg_ms),
@@ -446,7 +454,16 @@ impl Replay {
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,
-            occluder_budget: self.occluder_budget,
+            occluder_budget: match self.occluder_selection {
+                gigawalk_runtime::OccluderSelection::Triangles(t) => Some(t),
+                _ => None,
+            },
+            occluder_selection: match self.occluder_selection {
+                gigawalk_runtime::OccluderSelection::All => "all",
+                gigawalk_runtime::OccluderSelection::Triangles(_) => "budget",
+                gigawalk_runtime::OccluderSelection::Adaptive => "adaptive",
+            }
+            .into(),
             hzb_reduction: match r.hzb_reduction {
                 gigawalk_cull::Reduction::Farthest => "farthest".into(),
                 gigawalk_cull::Reduction::NthFarthest(n) => format!("{n}-th farthest"),
@@ -508,15 +525,16 @@ impl Summary {
     /// Stage times and node counts per run.
     pub fn stage_table(&self) -> String {
         let mut s = String::from(
-            "| mode | pixel error | OR ms | HZB ms | STC ms (HZB incl.) | RVG ms | nodes visited | occlusion-culled | drawn nodes | median speed-up vs vfc |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            "| mode | pixel error | OR ms | OR triangles | HZB ms | STC ms (HZB incl.) | RVG ms | nodes visited | occlusion-culled | drawn nodes | median speed-up vs vfc |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         );
         for m in &self.modes {
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                 self.mode_cell(m),
                 m.pixel_error,
                 num(m.median_or_ms, 2),
+                thousands(m.median_occluder_triangles),
                 num(m.median_hzb_ms, 2),
                 num(m.median_stc_ms, 2),
                 num(m.median_rvg_ms, 2),
@@ -739,6 +757,8 @@ mod tests {
             frame_ms: (frame > 0).then_some(10.0),
             latency_ms: 20.0,
             or_ms: 1.0,
+            occluder_triangles: 0,
+            occluder_limit: None,
             hzb_ms: 0.1,
             stc_ms: 1.0,
             rvg_ms: 5.0,
@@ -781,7 +801,7 @@ mod tests {
             frames: frames.len(),
             near: 0.1,
             options,
-            occluder_budget: None,
+            occluder_selection: gigawalk_runtime::OccluderSelection::All,
             devices: vec!["test".into()],
             runs: vec![RunRecord {
                 mode: Mode::Vfc,

@@ -15,6 +15,7 @@
 //! error closes its queues, every other stage sees that and stops, and the
 //! run returns the first error.
 
+mod occluders;
 mod options;
 mod pipeline;
 mod queries;
@@ -35,8 +36,9 @@ pub use gigawalk_gpu::{
     Optional, QueryCounts, VisiblePass,
 };
 pub use options::{
-    CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OptionsError, OqOptions,
-    Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
+    CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OccluderSelection,
+    OptionsError, OqOptions, Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE,
+    CPU_OCCLUDER_BUDGET,
 };
 
 pub use queries::OqStats;
@@ -204,6 +206,13 @@ pub struct FrameReport {
     /// Whether STC culled against an HZB (false in the startup bypass).
     pub occlusion_used: bool,
     pub occluder_items: usize,
+    /// Occluder triangles OR drew, and those it had before the budget
+    /// (frame i - lag's visible set with LODs re-selected for camera i).
+    pub occluder_triangles: u64,
+    pub occluder_candidates: u64,
+    /// The budget OR drew with (`None`: all occluders), the adaptive
+    /// controller's choice with `--occluder-budget adaptive`.
+    pub occluder_limit: Option<u64>,
     pub or_ms: f64,
     pub hzb_ms: f64,
     /// The lazy occlusion grid's work this frame (grid culler only).
@@ -246,6 +255,23 @@ impl FrameReport {
     /// Camera sampled -> frame finished.
     pub fn latency_ms(&self) -> f64 {
         (self.finished_at - self.sampled_at).as_secs_f64() * 1e3
+    }
+
+    /// What the adaptive occluder budget learns from the frame: nothing
+    /// from a frame that drew another frame's set (speculative, held,
+    /// asynchronous) or had no occluders to choose from.
+    fn observation(&self) -> Option<occluders::Observation> {
+        (!self.speculative && !self.reused_visible_set && self.occluder_candidates > 0).then_some(
+            occluders::Observation {
+                frame: self.frame,
+                limit: self.occluder_limit,
+                occluder_triangles: self.occluder_triangles,
+                candidate_triangles: self.occluder_candidates,
+                or_ms: self.or_ms,
+                drawn_triangles: self.stats.drawn_triangles,
+                rvg_ms: self.rvg_ms,
+            },
+        )
     }
 }
 
@@ -491,13 +517,20 @@ impl<'s> Runtime<'s> {
         presenter: &mut dyn Presenter,
     ) -> Result<u64, RuntimeError> {
         opts.validate()?;
-        let budget = self.occluder_budget(opts.occluder_budget);
-        schedule(Target::gpu(self), opts, budget, source, on_frame, presenter)
+        let selection = self.occluder_selection(opts.occluder_budget);
+        schedule(
+            Target::gpu(self),
+            opts,
+            selection,
+            source,
+            on_frame,
+            presenter,
+        )
     }
 
-    /// The occluder budget `budget` means on these devices, in triangles
-    /// (`None`: all occluders); resolves [`OccluderBudget::Auto`].
-    pub fn occluder_budget(&self, budget: OccluderBudget) -> Option<u64> {
+    /// What the occluder budget `budget` means on these devices (resolves
+    /// [`OccluderBudget::Auto`]).
+    pub fn occluder_selection(&self, budget: OccluderBudget) -> OccluderSelection {
         budget.resolve(self.devices.iter().any(GpuContext::is_cpu))
     }
 
@@ -508,21 +541,28 @@ impl<'s> Runtime<'s> {
     }
 }
 
-/// Runs `opts`'s schedule on `target` with the occluder budget resolved.
+/// Runs `opts`'s schedule on `target` with the occluder budget resolved;
+/// an adaptive budget hears of every finished frame before `on_frame`.
 fn schedule(
     target: Target,
     opts: &RuntimeOptions,
-    occluder_budget: Option<u64>,
+    selection: OccluderSelection,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
-    let opts = &RuntimeOptions {
-        occluder_budget: match occluder_budget {
-            Some(t) => OccluderBudget::Triangles(t),
-            None => OccluderBudget::All,
-        },
-        ..opts.clone()
+    let control = Mutex::new(occluders::AdaptiveBudget::new(target.or_shares_rvg(opts)));
+    let target = target.with_occluders(match selection {
+        OccluderSelection::All => stages::OrBudget::All,
+        OccluderSelection::Triangles(t) => stages::OrBudget::Triangles(t),
+        OccluderSelection::Adaptive => stages::OrBudget::Adaptive(&control),
+    });
+    let adaptive = selection == OccluderSelection::Adaptive;
+    let on_frame = &mut |r: FrameReport| {
+        if let Some(o) = adaptive.then(|| r.observation()).flatten() {
+            occluders::lock(&control).observe(o);
+        }
+        on_frame(r)
     };
     match (opts.schedule, opts.async_rvg) {
         (Schedule::Sequential, _) => {
@@ -553,11 +593,11 @@ pub fn run_on_cpu(
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
 ) -> Result<u64, RuntimeError> {
     opts.validate()?;
-    let budget = opts.occluder_budget.resolve(true);
+    let selection = opts.occluder_budget.resolve(true);
     schedule(
         Target::cpu(skeleton, source),
         opts,
-        budget,
+        selection,
         cameras,
         on_frame,
         &mut NoPresenter,

@@ -59,6 +59,10 @@ pub enum OccluderBudget {
     /// The default until the visible sets shrank (it made `och` 1.29x
     /// faster on the 4M plant when och drew 335k triangles a frame).
     Auto,
+    /// Chosen frame by frame from what OR costs against what its occluders
+    /// save RVG (the runtime's `occluders` module): starts with all, probes
+    /// smaller and larger budgets along the walk and keeps the cheaper.
+    Adaptive,
 }
 
 /// The budget `OccluderBudget::Auto` uses on CPU rasterizers: on the 4M
@@ -67,14 +71,39 @@ pub enum OccluderBudget {
 /// occluders (docs/PERFORMANCE.md, "Occluder budget").
 pub const CPU_OCCLUDER_BUDGET: u64 = 30_000;
 
-impl OccluderBudget {
-    /// The budget in triangles, `None` for all, given whether any device
-    /// rasterizes on the CPU.
-    pub fn resolve(self, cpu_device: bool) -> Option<u64> {
+/// An [`OccluderBudget`] as a run on given devices uses it (`Auto`
+/// resolved).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OccluderSelection {
+    /// All of frame i - lag's visible set.
+    #[default]
+    All,
+    /// At most this many triangles, those hiding most per triangle first.
+    Triangles(u64),
+    /// Chosen frame by frame ([`OccluderBudget::Adaptive`]).
+    Adaptive,
+}
+
+impl std::fmt::Display for OccluderSelection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            OccluderBudget::All => None,
-            OccluderBudget::Triangles(t) => Some(t),
-            OccluderBudget::Auto => cpu_device.then_some(CPU_OCCLUDER_BUDGET),
+            OccluderSelection::All => f.write_str("all"),
+            OccluderSelection::Triangles(t) => write!(f, "at most {t} triangles"),
+            OccluderSelection::Adaptive => f.write_str("adaptive"),
+        }
+    }
+}
+
+impl OccluderBudget {
+    /// What the budget means given whether any device rasterizes on the
+    /// CPU.
+    pub fn resolve(self, cpu_device: bool) -> OccluderSelection {
+        match self {
+            OccluderBudget::All => OccluderSelection::All,
+            OccluderBudget::Triangles(t) => OccluderSelection::Triangles(t),
+            OccluderBudget::Auto if cpu_device => OccluderSelection::Triangles(CPU_OCCLUDER_BUDGET),
+            OccluderBudget::Auto => OccluderSelection::All,
+            OccluderBudget::Adaptive => OccluderSelection::Adaptive,
         }
     }
 }
@@ -85,21 +114,23 @@ impl std::fmt::Display for OccluderBudget {
             OccluderBudget::All => f.write_str("all"),
             OccluderBudget::Triangles(t) => write!(f, "{t}"),
             OccluderBudget::Auto => f.write_str("auto"),
+            OccluderBudget::Adaptive => f.write_str("adaptive"),
         }
     }
 }
 
 impl std::str::FromStr for OccluderBudget {
     type Err = String;
-    /// `all`, `auto`, or a triangle count (`30000`, `30k`, `2M`).
+    /// `all`, `auto`, `adaptive`, or a triangle count (`30000`, `30k`, `2M`).
     fn from_str(s: &str) -> Result<Self, String> {
         match s {
             "all" => return Ok(OccluderBudget::All),
             "auto" => return Ok(OccluderBudget::Auto),
+            "adaptive" => return Ok(OccluderBudget::Adaptive),
             _ => {}
         }
         let (v, mul) = scaled(s, &[(b'k', 1e3), (b'm', 1e6)]).ok_or_else(|| {
-            format!("occluder budget {s:?} is not all, auto or a triangle count (e.g. 30000, 30k)")
+            format!("occluder budget {s:?} is not all, auto, adaptive or a triangle count (e.g. 30000, 30k)")
         })?;
         // Below 2^63: every count that fits prints and parses back.
         if !(v.is_finite() && v >= 0.0) || v * mul >= 9.2e18 {
@@ -615,6 +646,7 @@ mod tests {
         let p = |s: &str| s.parse::<OccluderBudget>();
         assert_eq!(p("all"), Ok(OccluderBudget::All));
         assert_eq!(p("auto"), Ok(OccluderBudget::Auto));
+        assert_eq!(p("adaptive"), Ok(OccluderBudget::Adaptive));
         assert_eq!(p("30000"), Ok(OccluderBudget::Triangles(30_000)));
         assert_eq!(p("30k"), Ok(OccluderBudget::Triangles(30_000)));
         assert_eq!(p("1.5M"), Ok(OccluderBudget::Triangles(1_500_000)));
@@ -626,18 +658,22 @@ mod tests {
         for b in [
             OccluderBudget::All,
             OccluderBudget::Auto,
+            OccluderBudget::Adaptive,
             OccluderBudget::Triangles(7),
             OccluderBudget::Triangles(1 << 62),
         ] {
             assert_eq!(p(&b.to_string()), Ok(b));
         }
+        use OccluderSelection as S;
         assert_eq!(
             OccluderBudget::Auto.resolve(true),
-            Some(CPU_OCCLUDER_BUDGET)
+            S::Triangles(CPU_OCCLUDER_BUDGET)
         );
-        assert_eq!(OccluderBudget::Auto.resolve(false), None);
-        assert_eq!(OccluderBudget::All.resolve(true), None);
-        assert_eq!(OccluderBudget::Triangles(5).resolve(false), Some(5));
+        assert_eq!(OccluderBudget::Auto.resolve(false), S::All);
+        assert_eq!(OccluderBudget::All.resolve(true), S::All);
+        assert_eq!(OccluderBudget::Adaptive.resolve(true), S::Adaptive);
+        assert_eq!(OccluderBudget::Adaptive.resolve(false), S::Adaptive);
+        assert_eq!(OccluderBudget::Triangles(5).resolve(false), S::Triangles(5));
         assert_eq!(
             RuntimeOptions::default().occluder_budget,
             OccluderBudget::All

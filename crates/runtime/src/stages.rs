@@ -1,7 +1,7 @@
 //! The work of each stage for one frame, shared by the pipelined and the
 //! sequential schedule (so both run the same algorithms).
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use gigawalk_cull::tiles::{self, TileFrustums, TileGrid, TileMethod};
@@ -15,10 +15,11 @@ use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, Vie
 use gigawalk_scene::occluder_cells::OccluderCells;
 use gigawalk_scene::Skeleton;
 
+use crate::occluders::AdaptiveBudget;
 use crate::queries::{OqCuller, OqState, OqStats};
 use crate::streaming::{Geometry, Link, LodSource, Plan, Request, StreamStats, Use, PREFETCH_BAND};
 use crate::triangles::TriangleCache;
-use crate::{CullMethod, OccluderBudget, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::{CullMethod, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
 
 /// A stage's device, its geometry there, and (streaming) its end of the
 /// run's loader queues.
@@ -123,6 +124,16 @@ pub(crate) struct Target<'a> {
     pub source: &'a dyn LodSource,
     pub plan: Option<&'a Plan>,
     gpu: Option<&'a Runtime<'a>>,
+    /// How many occluders OR draws (set by the schedule).
+    pub occluders: OrBudget<'a>,
+}
+
+/// The occluder budget as OR applies it.
+#[derive(Clone, Copy)]
+pub(crate) enum OrBudget<'a> {
+    All,
+    Triangles(u64),
+    Adaptive(&'a Mutex<AdaptiveBudget>),
 }
 
 impl<'a> Target<'a> {
@@ -132,6 +143,7 @@ impl<'a> Target<'a> {
             source: rt.source,
             plan: rt.plan.as_ref(),
             gpu: Some(rt),
+            occluders: OrBudget::All,
         }
     }
 
@@ -143,6 +155,28 @@ impl<'a> Target<'a> {
             source,
             plan: None,
             gpu: None,
+            occluders: OrBudget::All,
+        }
+    }
+
+    /// The same target, OR drawing occluders by `occluders`.
+    pub fn with_occluders<'b>(self, occluders: OrBudget<'b>) -> Target<'b>
+    where
+        'a: 'b,
+    {
+        Target { occluders, ..self }
+    }
+
+    /// Whether OR's time comes out of RVG's: one device, a CPU rasterizer
+    /// (its cores are RVG's), or the sequential schedule.
+    pub fn or_shares_rvg(&self, opts: &RuntimeOptions) -> bool {
+        match self.gpu {
+            None => true,
+            Some(rt) => {
+                opts.schedule == crate::Schedule::Sequential
+                    || self.rvg_device(opts) == 0
+                    || rt.devices.iter().any(GpuContext::is_cpu)
+            }
         }
     }
 
@@ -239,6 +273,7 @@ impl<'a> Target<'a> {
         OrStage {
             skeleton: self.skeleton,
             opts,
+            budget: self.occluders,
             render,
         }
     }
@@ -335,12 +370,24 @@ enum OrRender<'a> {
 pub(crate) struct OrStage<'a> {
     skeleton: &'a Skeleton,
     opts: &'a RuntimeOptions,
+    budget: OrBudget<'a>,
     render: OrRender<'a>,
 }
 
 pub(crate) struct OrOutput {
     pub depth: Option<DepthImage>,
-    pub occluder_items: usize,
+    pub figures: OrFigures,
+}
+
+/// What OR did for a frame, as the frame's report carries it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct OrFigures {
+    pub items: usize,
+    /// Occluder triangles drawn, and those before the budget.
+    pub triangles: u64,
+    pub candidates: u64,
+    /// The budget applied (`None`: all).
+    pub limit: Option<u64>,
     pub ms: f64,
 }
 
@@ -357,12 +404,15 @@ impl<'a> OrStage<'a> {
         let _span = tracing::info_span!("OR", frame).entered();
         let t = Instant::now();
         check_injected(self.opts, Stage::Or, frame)?;
-        let Some(occluders) = occluders else {
-            return Ok(OrOutput {
-                depth: None,
-                occluder_items: 0,
+        let none = |t: Instant, figures: OrFigures| OrOutput {
+            depth: None,
+            figures: OrFigures {
                 ms: ms_since(t),
-            });
+                ..figures
+            },
+        };
+        let Some(occluders) = occluders else {
+            return Ok(none(t, OrFigures::default()));
         };
         // The same LOD choice STC makes for this camera (conservative mode).
         let mut items = Vec::with_capacity(occluders.len());
@@ -373,27 +423,32 @@ impl<'a> OrStage<'a> {
         reselect_lods(self.skeleton, view, &traversal, occluders, &mut |i| {
             items.push(i)
         });
-        // `run_presenting` resolved `Auto` for these devices. Streaming, all
-        // of them best first too: the pool keeps those that fit it first.
+        let candidates = item_triangles(self.skeleton, &items);
+        let limit = match self.budget {
+            OrBudget::All => None,
+            OrBudget::Triangles(t) => Some(t),
+            OrBudget::Adaptive(c) => crate::occluders::lock(c).limit_for(frame),
+        };
+        // Streaming, all of them best first too: the pool keeps those that
+        // fit it first.
         let streaming =
             matches!(&self.render, OrRender::Gpu { device, .. } if device.plan.is_some());
-        match self.opts.occluder_budget {
-            OccluderBudget::Triangles(budget) => {
-                select_occluders(self.skeleton, view, &mut items, budget);
-            }
-            _ if streaming => {
-                select_occluders(self.skeleton, view, &mut items, u64::MAX);
-            }
-            _ => {}
-        }
+        let triangles = match limit {
+            Some(budget) => select_occluders(self.skeleton, view, &mut items, budget),
+            None if streaming => select_occluders(self.skeleton, view, &mut items, u64::MAX),
+            None => candidates,
+        };
+        let figures = OrFigures {
+            items: items.len(),
+            triangles,
+            candidates,
+            limit,
+            ms: 0.0,
+        };
         if items.is_empty() {
             // No occluder (a budget of 0, or nothing in view): an all-far
             // HZB would cull nothing, so STC skips occlusion for this frame.
-            return Ok(OrOutput {
-                depth: None,
-                occluder_items: 0,
-                ms: ms_since(t),
-            });
+            return Ok(none(t, figures));
         }
         let lods = lod_ids(self.skeleton, &items);
         let depth = match &mut self.render {
@@ -418,10 +473,25 @@ impl<'a> OrStage<'a> {
         };
         Ok(OrOutput {
             depth: Some(depth),
-            occluder_items: items.len(),
-            ms: ms_since(t),
+            figures: OrFigures {
+                ms: ms_since(t),
+                ..figures
+            },
         })
     }
+}
+
+/// Triangles of `items`' LODs (those the skeleton has).
+fn item_triangles(skeleton: &Skeleton, items: &[DrawItem]) -> u64 {
+    items
+        .iter()
+        .filter_map(|i| {
+            let n = skeleton.nodes.get(i.node as usize)?;
+            (i.lod < n.lod_count).then_some(())?;
+            skeleton.lods.get((n.first_lod + i.lod) as usize)
+        })
+        .map(|l| u64::from(l.triangles))
+        .sum()
 }
 
 /// The object-space culler's occluders and cache, kept across frames.

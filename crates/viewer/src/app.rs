@@ -23,7 +23,7 @@ use gigawalk_gpu::{
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{
     CameraError, CameraRequest, CameraSource, CullMethod, CullReason, DrawStyle, FrameReport,
-    OccluderBudget, Presenter, Runtime, RuntimeError, RuntimeOptions,
+    OccluderBudget, OccluderSelection, Presenter, Runtime, RuntimeError, RuntimeOptions,
 };
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
 use gigawalk_scene::{SceneReader, Skeleton};
@@ -269,7 +269,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         last_update: Instant::now(),
         message: start_message,
         devices: device_names,
-        occluder_budget: runtime.occluder_budget(args.occluder_budget),
+        occluder_budget: runtime.occluder_selection(args.occluder_budget),
         out_dir: args.out_dir.clone(),
         near,
         rendered: 0,
@@ -510,7 +510,7 @@ struct LoopState {
     last_update: Instant,
     message: Option<(String, Instant)>,
     devices: String,
-    occluder_budget: Option<u64>,
+    occluder_budget: OccluderSelection,
     out_dir: PathBuf,
     near: f64,
     rendered: u64,
@@ -766,6 +766,7 @@ impl Presenter for ViewerPresenter<'_> {
             rvg_ms: report.rvg_ms,
             latency_ms: report.latency_ms(),
             occlusion_used: report.occlusion_used,
+            occluder_triangles: report.occluder_triangles,
             stats: report.stats,
             streaming: report.streaming,
             tiles: report.tiles.as_ref().map(|t| {

@@ -51,6 +51,8 @@ pub struct FrameNumbers {
     pub rvg_ms: f64,
     pub latency_ms: f64,
     pub occlusion_used: bool,
+    /// Occluder triangles OR drew.
+    pub occluder_triangles: u64,
     pub stats: TraversalStats,
     /// Streaming figures (zeros when the scene is resident).
     pub streaming: gigawalk_runtime::StreamStats,
@@ -70,8 +72,8 @@ pub struct ViewerState {
     pub devices: String,
     /// A short-lived message (screenshot written, path saved, error).
     pub message: Option<String>,
-    /// Most occluder triangles OR draws a frame; `None`: all.
-    pub occluder_budget: Option<u64>,
+    /// How many occluder triangles OR draws a frame.
+    pub occluder_budget: gigawalk_runtime::OccluderSelection,
 }
 
 pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> Vec<String> {
@@ -105,7 +107,14 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
             s.occlusion && s.culler.needs_occluder_depth(),
             v.occluder_budget,
         ) {
-            (true, Some(t)) => format!("mode: {}, occluders <= {} tris", s.mode(), group(t)),
+            (true, gigawalk_runtime::OccluderSelection::Triangles(t)) => {
+                format!("mode: {}, occluders <= {} tris", s.mode(), group(t))
+            }
+            (true, gigawalk_runtime::OccluderSelection::Adaptive) => format!(
+                "mode: {}, occluders {} tris (adaptive)",
+                s.mode(),
+                group(n.occluder_triangles)
+            ),
             _ => format!("mode: {}", s.mode()),
         },
     ];
@@ -233,7 +242,7 @@ mod tests {
         };
         let v = ViewerState {
             recording: Some(3),
-            occluder_budget: Some(30_000),
+            occluder_budget: gigawalk_runtime::OccluderSelection::Triangles(30_000),
             ..Default::default()
         };
         let text = hud_lines(60.0, &n, &s, &v).join("\n");

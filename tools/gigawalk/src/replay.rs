@@ -75,8 +75,12 @@ pub struct RuntimeArgs {
     /// Occluder depth resolution as a fraction of the viewport (1 = conservative)
     #[arg(long, default_value_t = 1.0)]
     occluder_scale: f64,
-    /// Occluder triangles OR draws a frame, those hiding most per triangle first (conservative): all (the paper; measured fastest with revision-3 HLODs, even on lavapipe), a count (30000, 30k), or auto = 30k on CPU rasterizers such as lavapipe, all on GPUs
-    #[arg(long, value_name = "all|TRIANGLES|auto", default_value = "all")]
+    /// Occluder triangles OR draws a frame, those hiding most per triangle first (conservative at any budget): adaptive = chosen frame by frame from what OR costs against what its occluders save RVG, starting from all (each frame's choice is frames.csv's occluder_limit; measured faster than all on the 4M plant and the real-CAD floor), all (the paper; the same triangles every run), a count (30000, 30k), or auto = 30k on CPU rasterizers such as lavapipe, all on GPUs
+    #[arg(
+        long,
+        value_name = "adaptive|all|TRIANGLES|auto",
+        default_value = "adaptive"
+    )]
     occluder_budget: OccluderBudget,
     /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest)
     #[arg(long)]

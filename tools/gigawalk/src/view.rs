@@ -79,8 +79,12 @@ pub struct Args {
     /// Start with the HUD hidden (Tab shows it)
     #[arg(long)]
     no_hud: bool,
-    /// Occluder triangles OR draws a frame, those hiding most per triangle first: all (the paper; measured fastest), a count (30k), or auto (30k on CPU rasterizers such as lavapipe, all on GPUs)
-    #[arg(long, value_name = "all|TRIANGLES|auto", default_value = "all")]
+    /// Occluder triangles OR draws a frame, those hiding most per triangle first: adaptive (chosen frame by frame from what OR costs against what it saves, starting from all), all (the paper), a count (30k), or auto (30k on CPU rasterizers such as lavapipe, all on GPUs)
+    #[arg(
+        long,
+        value_name = "adaptive|all|TRIANGLES|auto",
+        default_value = "adaptive"
+    )]
     occluder_budget: gigawalk_runtime::OccluderBudget,
     /// Geometry memory a device may hold: all (load the whole scene first), a size (256M, 1G) or auto (a quarter of RAM); bigger scenes stream while you walk (the HUD shows resident MB and stand-ins)
     #[arg(long, value_name = "all|BYTES|auto", default_value = "all")]

@@ -160,8 +160,10 @@ fn small_plant_replays_into_a_report() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(json["frames"], 12);
-    // The default budget is all occluders (null), on any device.
+    // The default budget is adaptive (no fixed budget: null), on any
+    // device, and frames.csv has each frame's choice.
     assert_eq!(json["occluder_budget"], serde_json::Value::Null);
+    assert_eq!(json["occluder_selection"], "adaptive");
     assert_eq!(json["modes"].as_array().unwrap().len(), 2);
     let rows = std::fs::read_to_string(out.join("frames.csv"))
         .unwrap()

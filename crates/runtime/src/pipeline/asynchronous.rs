@@ -145,8 +145,7 @@ fn async_or_thread(
         let msg = OrToStc {
             sample,
             depth: o.depth,
-            occluder_items: o.occluder_items,
-            or_ms: o.ms,
+            or: o.figures,
         };
         if out.send(msg).is_err() {
             return Ok(());
@@ -172,8 +171,7 @@ fn async_stc_thread(
         let _ = feedback.send((m.sample.frame, s.visible.clone()));
         let end = FrameEnd {
             sample: m.sample,
-            occluder_items: m.occluder_items,
-            or_ms: m.or_ms,
+            or: m.or,
             stc: s,
             reused: false,
         };
@@ -224,8 +222,7 @@ fn async_rvg_thread(
         draw_set(&mut rvg, t.skeleton, &set.stc, opts.chunk, retile)?;
         let end = FrameEnd {
             sample,
-            occluder_items: set.occluder_items,
-            or_ms: set.or_ms,
+            or: set.or,
             stc: set.stc.clone(),
             reused,
         };

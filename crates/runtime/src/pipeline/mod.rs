@@ -19,7 +19,7 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
-use crate::stages::{lod_ids, Prefetch, RvgStage, StcOutput, Target};
+use crate::stages::{lod_ids, OrFigures, Prefetch, RvgStage, StcOutput, Target};
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
 };
@@ -57,8 +57,7 @@ pub(super) struct Sample {
 pub(super) struct OrToStc {
     pub(super) sample: Sample,
     pub(super) depth: Option<DepthImage>,
-    pub(super) occluder_items: usize,
-    pub(super) or_ms: f64,
+    pub(super) or: OrFigures,
 }
 
 /// STC -> RVG: a frame is `Begin`, any number of `Items` (each drawn under
@@ -128,8 +127,7 @@ pub(super) fn draw_set(
 /// What the sentinel carries.
 pub(super) struct FrameEnd {
     pub(super) sample: Sample,
-    pub(super) occluder_items: usize,
-    pub(super) or_ms: f64,
+    pub(super) or: OrFigures,
     pub(super) stc: StcOutput,
     pub(super) reused: bool,
 }
@@ -177,8 +175,11 @@ pub(super) fn report(
         sampled_at: end.sample.sampled_at,
         finished_at: Instant::now(),
         occlusion_used: end.stc.occlusion_used,
-        occluder_items: end.occluder_items,
-        or_ms: end.or_ms,
+        occluder_items: end.or.items,
+        occluder_triangles: end.or.triangles,
+        occluder_candidates: end.or.candidates,
+        occluder_limit: end.or.limit,
+        or_ms: end.or.ms,
         hzb_ms: end.stc.hzb_ms,
         grid: end.stc.grid,
         oq: end.stc.oq,

@@ -7,7 +7,7 @@ use std::time::Duration;
 use crossbeam_channel::{unbounded, RecvTimeoutError};
 
 use super::*;
-use crate::stages::{OrStage, StcOutput, StcStage, Target};
+use crate::stages::{OrFigures, OrStage, StcOutput, StcStage, Target};
 use crate::{CameraSource, Presenter};
 
 pub(crate) fn run_pipelined(
@@ -97,8 +97,7 @@ fn or_thread(
             OrToStc {
                 sample,
                 depth: None,
-                occluder_items: 0,
-                or_ms: 0.0,
+                or: OrFigures::default(),
             }
         } else {
             let o = or.run(
@@ -110,8 +109,7 @@ fn or_thread(
             OrToStc {
                 sample,
                 depth: o.depth,
-                occluder_items: o.occluder_items,
-                or_ms: o.ms,
+                or: o.figures,
             }
         };
         if out.send(msg).is_err() {
@@ -196,8 +194,7 @@ fn stc_thread(
         frozen.record(&s);
         let end = FrameEnd {
             sample: m.sample,
-            occluder_items: m.occluder_items,
-            or_ms: m.or_ms,
+            or: m.or,
             stc: s,
             reused,
         };
@@ -276,8 +273,7 @@ fn rvg_thread(
                             sampled_at: Instant::now(),
                             tolerance: Some(set.tolerance),
                         },
-                        occluder_items: 0,
-                        or_ms: 0.0,
+                        or: OrFigures::default(),
                         stc: StcOutput {
                             ms: 0.0,
                             hzb_ms: 0.0,

@@ -83,8 +83,7 @@ fn sequential_frames<'a>(
         frozen.record(&stc_out);
         let end = FrameEnd {
             sample,
-            occluder_items: o.as_ref().map_or(0, |o| o.occluder_items),
-            or_ms: o.as_ref().map_or(0.0, |o| o.ms),
+            or: o.map(|o| o.figures).unwrap_or_default(),
             stc: stc_out,
             reused,
         };

@@ -98,4 +98,6 @@ pub enum ImportError {
     MalformedObj { file: String, message: String },
     #[error("{file}: no triangles to import")]
     NoGeometry { file: String },
+    #[error("{dir}: no .gltf, .glb or .obj files in this directory")]
+    NoModelFiles { dir: String },
 }

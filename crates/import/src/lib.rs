@@ -7,7 +7,8 @@
 //! (KHR_draco_mesh_compression) and any other required extension is an
 //! error naming it.
 //!
-//! Main entry point: [`import`] (by file extension). Byte-level entry points
+//! Main entry points: [`import`] (one file, by extension) and
+//! [`import_all`] (several files and directories of them as one model). Byte-level entry points
 //! ([`import_gltf_bytes`], [`import_glb_bytes`], [`import_obj_str`]) serve
 //! the fuzz targets and in-memory callers. Every failure is an
 //! [`ImportError`] naming the file, the mesh/primitive or group, and the
@@ -22,7 +23,8 @@ mod model;
 mod obj_import;
 mod triangles;
 
-use std::path::Path;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
 
 pub use error::ImportError;
 pub use gltf_import::{import_glb_bytes, import_gltf_bytes};
@@ -51,6 +53,109 @@ pub fn import(path: &Path) -> Result<Model, ImportError> {
         }
         _ => Err(ImportError::UnsupportedFormat { file }),
     }
+}
+
+/// Whether `path` names a file [`import`] reads (by extension).
+pub fn is_model_file(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| ["gltf", "glb", "obj"].contains(&e.to_ascii_lowercase().as_str()))
+}
+
+/// The model files `inputs` name, in order: each file as given (whatever
+/// its extension: [`import`] says what is wrong with it), and for each
+/// directory the `.gltf`, `.glb` and `.obj` files below it, recursively,
+/// sorted by path so the order never depends on the file system. Hidden
+/// entries (names starting with '.') are skipped, and a file reached
+/// twice (named and inside a named directory, or through a link) is
+/// listed once. A directory with no model file is an error naming it.
+pub fn model_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ImportError> {
+    let mut out = Vec::new();
+    let mut seen = HashSet::new();
+    let mut push = |p: PathBuf, out: &mut Vec<PathBuf>| {
+        let key = std::fs::canonicalize(&p).unwrap_or_else(|_| p.clone());
+        if seen.insert(key) {
+            out.push(p);
+        }
+    };
+    for input in inputs {
+        if input.is_dir() {
+            let mut found = Vec::new();
+            let mut dirs = HashSet::new();
+            walk(input, &mut found, &mut dirs)?;
+            if found.is_empty() {
+                return Err(ImportError::NoModelFiles {
+                    dir: input.display().to_string(),
+                });
+            }
+            found.sort();
+            for f in found {
+                push(f, &mut out);
+            }
+        } else {
+            push(input.clone(), &mut out);
+        }
+    }
+    Ok(out)
+}
+
+/// Model files under `dir` (unsorted); `dirs` holds the directories
+/// visited, canonical, so a link cycle ends.
+fn walk(
+    dir: &Path,
+    found: &mut Vec<PathBuf>,
+    dirs: &mut HashSet<PathBuf>,
+) -> Result<(), ImportError> {
+    let io = |source| ImportError::Io {
+        file: dir.display().to_string(),
+        source,
+    };
+    if !dirs.insert(std::fs::canonicalize(dir).map_err(io)?) {
+        return Ok(());
+    }
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let path = entry.map_err(io)?.path();
+        if path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with('.'))
+        {
+            continue;
+        }
+        if path.is_dir() {
+            walk(&path, found, dirs)?;
+        } else if is_model_file(&path) {
+            found.push(path);
+        }
+    }
+    Ok(())
+}
+
+/// Imports several files as one model ([`model_files`] says which, and in
+/// what order). With more than one file every object's name starts with
+/// its file's path (`plant/unit2.glb/Pipe.003#prim0`). The first file
+/// that fails stops the import with its error, which names it.
+/// `each(i, n, path)` hears of each file before it is read.
+pub fn import_all(
+    inputs: &[PathBuf],
+    each: &mut dyn FnMut(usize, usize, &Path),
+) -> Result<Model, ImportError> {
+    let files = model_files(inputs)?;
+    if files.is_empty() {
+        return Err(ImportError::NoGeometry {
+            file: "(no input files)".into(),
+        });
+    }
+    if let [only] = files.as_slice() {
+        each(0, 1, only);
+        return import(only);
+    }
+    let mut model = Model::default();
+    for (i, f) in files.iter().enumerate() {
+        each(i, files.len(), f);
+        model.append(import(f)?, &f.display().to_string());
+    }
+    Ok(model)
 }
 
 fn read(path: &Path) -> Result<Vec<u8>, ImportError> {

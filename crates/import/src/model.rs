@@ -44,6 +44,22 @@ pub struct Model {
     pub stats: ImportStats,
 }
 
+impl Model {
+    /// Appends `other`'s objects, each name prefixed with `label` and a
+    /// slash (the file it came from, when one model is made of many).
+    pub fn append(&mut self, other: Model, label: &str) {
+        self.objects.extend(other.objects.into_iter().map(|mut o| {
+            o.name = format!("{label}/{}", o.name);
+            o
+        }));
+        let (s, o) = (&mut self.stats, other.stats);
+        s.triangles += o.triangles;
+        s.degenerate_triangles_dropped += o.degenerate_triangles_dropped;
+        s.skipped_primitives += o.skipped_primitives;
+        s.warnings.extend(o.warnings);
+    }
+}
+
 impl ImportStats {
     /// The one line users see after an import.
     pub fn summary(&self, objects: usize) -> String {

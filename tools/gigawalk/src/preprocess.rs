@@ -13,8 +13,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input model: glTF 2.0 (.gltf, .glb) or Wavefront OBJ (.obj)
-    input: PathBuf,
+    /// Input model: glTF 2.0 (.gltf, .glb) or Wavefront OBJ (.obj) files, or directories of them (searched recursively, in path order), all made into one model; with several files each object's name starts with its file's path
+    #[arg(required = true, num_args = 1.., value_name = "MODEL")]
+    input: Vec<PathBuf>,
     /// Output scene file (.gwk), written atomically: nothing appears on failure
     #[arg(short, long)]
     output: PathBuf,
@@ -103,9 +104,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     let progress = Display::new();
     let t = Instant::now();
-    progress.line(&format!("importing {}", args.input.display()));
-    let model = gigawalk_import::import(&args.input)
-        .with_context(|| format!("cannot import {}", args.input.display()))?;
+    let inputs = args
+        .input
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" ");
+    let files = gigawalk_import::model_files(&args.input)
+        .with_context(|| format!("cannot import {inputs}"))?;
+    let model = gigawalk_import::import_all(&files, &mut |i, n, path| {
+        progress.line(&match n {
+            1 => format!("importing {}", path.display()),
+            _ => format!("importing {}/{n}: {}", i + 1, path.display()),
+        })
+    })
+    .with_context(|| format!("cannot import {inputs}"))?;
     let import_secs = t.elapsed().as_secs_f64();
     let kept: u64 = model
         .objects
@@ -122,12 +135,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 
     let import_dropped = model.stats.degenerate_triangles_dropped;
-    let source = args.input.display().to_string();
+    let source = inputs.clone();
     let mut stats =
         preprocess(&model, &params, &args.output, &source, &progress).with_context(|| {
             format!(
                 "cannot preprocess {} into {}",
-                args.input.display(),
+                inputs,
                 args.output.display()
             )
         })?;
@@ -135,7 +148,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     stats
         .phase_seconds
         .insert(0, ("import".into(), import_secs));
-    stats.input_file_bytes = std::fs::metadata(&args.input).map(|m| m.len()).unwrap_or(0);
+    stats.input_file_bytes = files
+        .iter()
+        .map(|f| std::fs::metadata(f).map_or(0, |m| m.len()))
+        .sum();
     // Triangles the importer dropped never reach the preprocessor; count them too.
     stats.degenerate_dropped += import_dropped;
     stats.input_triangles += import_dropped;

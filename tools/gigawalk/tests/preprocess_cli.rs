@@ -1,0 +1,121 @@
+//! `gigawalk preprocess` with several inputs: files and directories of
+//! them made into one model.
+
+use std::path::Path;
+use std::process::Command;
+
+fn gigawalk(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `input_triangles` of a `--stats` file.
+fn input_triangles(stats: &Path) -> u64 {
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
+    j["input_triangles"].as_u64().unwrap()
+}
+
+#[test]
+fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itself() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let units = d.join("units");
+    std::fs::create_dir(&units).unwrap();
+    let (a, b) = (units.join("a.glb"), units.join("deck/b.glb"));
+    std::fs::create_dir(units.join("deck")).unwrap();
+    for (f, seed) in [(&a, "1"), (&b, "2")] {
+        let (ok, _, err) = gigawalk(&[
+            "generate",
+            "machine",
+            "--triangles",
+            "4k",
+            "--seed",
+            seed,
+            "-o",
+            s(f),
+        ]);
+        assert!(ok, "{err}");
+    }
+    let obj = d.join("frame.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 0 0 10\nf 1 2 3\nf 1 2 4\n",
+    )
+    .unwrap();
+
+    // Each file alone, for the triangle counts.
+    let mut alone = 0;
+    for f in [&a, &b, &obj] {
+        let st = d.join("alone.json");
+        let (ok, _, err) = gigawalk(&[
+            "preprocess",
+            s(f),
+            "-o",
+            s(&d.join("alone.gwk")),
+            "--stats",
+            s(&st),
+        ]);
+        assert!(ok, "{err}");
+        alone += input_triangles(&st);
+    }
+
+    let (gwk, st) = (d.join("all.gwk"), d.join("all.json"));
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        s(&units),
+        s(&obj),
+        "-o",
+        s(&gwk),
+        "--stats",
+        s(&st),
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(input_triangles(&st), alone);
+    // Progress names each file, in path order.
+    let ia = err.find("importing 1/3: ").expect(&err);
+    let ib = err.find("importing 2/3: ").expect(&err);
+    let io = err.find("importing 3/3: ").expect(&err);
+    assert!(ia < ib && ib < io, "{err}");
+    assert!(
+        err[ia..ib].contains("a.glb") && err[ib..io].contains("b.glb"),
+        "{err}"
+    );
+    let (ok, info, err) = gigawalk(&["info", s(&gwk)]);
+    assert!(ok, "{err}");
+    assert!(
+        info.contains("frame.obj"),
+        "the source names the inputs: {info}"
+    );
+
+    // A bad file among them: its name, and the scene already there kept.
+    let before = std::fs::read(&gwk).unwrap();
+    std::fs::write(units.join("deck/c.obj"), "v 0 0 0\nf 1 2 3\n").unwrap();
+    let (ok, _, err) = gigawalk(&["preprocess", s(&units), s(&obj), "-o", s(&gwk)]);
+    assert!(!ok);
+    assert!(err.contains("c.obj"), "{err}");
+    assert_eq!(
+        std::fs::read(&gwk).unwrap(),
+        before,
+        "the old scene was touched"
+    );
+    // A directory without models, and no input at all.
+    let empty = d.join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let (ok, _, err) = gigawalk(&["preprocess", s(&empty), "-o", s(&d.join("e.gwk"))]);
+    assert!(!ok && err.contains("no .gltf, .glb or .obj files"), "{err}");
+    assert!(!d.join("e.gwk").exists());
+    let (ok, _, err) = gigawalk(&["preprocess", "-o", s(&d.join("e.gwk"))]);
+    assert!(!ok && err.contains("MODEL"), "{err}");
+}

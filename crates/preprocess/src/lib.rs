@@ -28,6 +28,7 @@ pub mod params;
 pub mod partition;
 pub mod parts;
 mod planar;
+pub mod shards;
 pub mod stats;
 #[cfg(test)]
 mod test_models;
@@ -157,10 +158,24 @@ pub fn preprocess(
     source: &str,
     progress: &dyn Progress,
 ) -> Result<Stats, PreprocessError> {
-    params.validate()?;
+    let layout = layout(model, params, progress)?;
+    write_scene(model, params, layout, output, source, progress, Role::All)
+}
+
+/// Step 6 for `role` (every node, or a merge's) into a scene file at
+/// `output`, with its provenance and occluders.
+pub(crate) fn write_scene(
+    model: &Model,
+    params: &Params,
+    layout: Layout,
+    output: &Path,
+    source: &str,
+    progress: &dyn Progress,
+    role: Role,
+) -> Result<Stats, PreprocessError> {
     // On any error below, dropping the writer removes its temporary file.
     let mut writer = SceneWriter::create(output).map_err(|e| PreprocessError::Write(e.into()))?;
-    let mut built = build(model, params, &mut writer, progress)?;
+    let (mut built, _) = build_role(model, params, layout, &mut writer, progress, role)?;
     let t = Instant::now();
     progress.start(Phase::Write, 0);
     let mut parameters = params.to_json();
@@ -221,6 +236,63 @@ pub fn build<S: LodSink>(
     sink: &mut S,
     progress: &dyn Progress,
 ) -> Result<Built, PreprocessError> {
+    let layout = layout(model, params, progress)?;
+    Ok(build_role(model, params, layout, sink, progress, Role::All)?.0)
+}
+
+/// Steps 1-5: the parts and the hierarchy over them, before any LOD.
+/// Cheap next to the LODs, and a function of the model and parameters
+/// only, so every shard of a split build makes the same one.
+pub(crate) struct Layout {
+    parts: Vec<Part>,
+    pub(crate) tree: Vec<hierarchy::HNode>,
+    resolved: Resolved,
+    stats: Stats,
+}
+
+impl Layout {
+    /// Triangles at full detail below each node.
+    pub(crate) fn subtree_triangles(&self) -> Vec<u64> {
+        let mut t = vec![0u64; self.tree.len()];
+        for i in (0..self.tree.len()).rev() {
+            let n = &self.tree[i];
+            t[i] += match n.object {
+                Some(o) => self.parts[o as usize].triangles as u64,
+                None => (n.first_child..n.first_child + n.child_count)
+                    .map(|c| t[c as usize])
+                    .sum(),
+            };
+        }
+        t
+    }
+}
+
+/// Which nodes' levels a run makes ([`build_role`]).
+pub(crate) enum Role<'a> {
+    /// Every node: the single-process build.
+    All,
+    /// A shard: the nodes with `mine` set (whole subtrees); the [`Done`]
+    /// of `roots` is returned for the nodes above.
+    Shard { mine: &'a [bool], roots: &'a [u32] },
+    /// The nodes above the shards; every other node's levels (and a shard
+    /// root's [`Done`]) are taken from `given`, in the order a
+    /// single-process build makes them, so the sink sees the same LODs in
+    /// the same order.
+    Merge { given: &'a mut Given },
+}
+
+/// Levels made by shards, for the merge.
+#[derive(Default)]
+pub(crate) struct Given {
+    pub(crate) lods: std::collections::HashMap<u32, Vec<(LodMesh, f32)>>,
+    pub(crate) done: std::collections::HashMap<u32, Done>,
+}
+
+pub(crate) fn layout(
+    model: &Model,
+    params: &Params,
+    progress: &dyn Progress,
+) -> Result<Layout, PreprocessError> {
     params.validate()?;
     let mut stats = Stats {
         raw_input_bytes: stats::raw_input_bytes(model),
@@ -291,8 +363,41 @@ pub fn build<S: LodSink>(
     stats.leaves = tree.iter().filter(|n| n.object.is_some()).count();
     stats.depth = tree.iter().map(|n| n.depth).max().unwrap_or(0);
     clock.finish(&mut stats);
+    Ok(Layout {
+        parts,
+        tree,
+        resolved,
+        stats,
+    })
+}
 
-    // 6. LODs and HLODs (Section 4.3), bottom-up.
+/// Step 6, LODs and HLODs (Section 4.3), bottom-up, for the nodes `role`
+/// says; the rest of [`build`]. Returns the [`Done`] of a shard's roots
+/// (empty for the other roles).
+#[allow(clippy::type_complexity)]
+pub(crate) fn build_role<S: LodSink>(
+    model: &Model,
+    params: &Params,
+    layout: Layout,
+    sink: &mut S,
+    progress: &dyn Progress,
+    mut role: Role,
+) -> Result<(Built, Vec<(u32, Done)>), PreprocessError> {
+    let Layout {
+        parts,
+        tree,
+        resolved,
+        mut stats,
+    } = layout;
+    let mut clock = PhaseClock::new(progress);
+    let mine = |ni: usize, role: &Role| match role {
+        Role::Shard { mine, .. } => mine[ni],
+        _ => true,
+    };
+    let given = |ni: usize, role: &Role| match role {
+        Role::Merge { given } => given.lods.contains_key(&(ni as u32)),
+        _ => false,
+    };
     clock.start(Phase::Hlod, tree.len() as u64);
     let chain = ChainParams {
         ratio: params.lod_ratio,
@@ -328,11 +433,12 @@ pub fn build<S: LodSink>(
         Ok(())
     };
     let leaves: Vec<usize> = (0..tree.len())
-        .filter(|&i| tree[i].object.is_some())
+        .filter(|&i| tree[i].object.is_some() && mine(i, &role))
         .collect();
     for batch in leaves.chunks(HLOD_BATCH) {
         let made: Vec<Finished> = batch
             .par_iter()
+            .filter(|&&ni| !given(ni, &role))
             .map(|&ni| {
                 let node = &tree[ni];
                 let object = node
@@ -346,7 +452,12 @@ pub fn build<S: LodSink>(
                 (out, Done { levels, full })
             })
             .collect();
-        for (&ni, (lods, d)) in batch.iter().zip(made) {
+        let mut made = made.into_iter();
+        for &ni in batch {
+            let (lods, d) = match take(&mut role, ni) {
+                Some(f) => f,
+                None => made.next().expect("one made per node not given"),
+            };
             emit(ni, lods, &mut stats.leaf_lod_triangles)?;
             done[ni] = Some(d);
         }
@@ -355,7 +466,7 @@ pub fn build<S: LodSink>(
     drop(parts);
     // Inner nodes deepest first, so every child is done before its parent.
     let mut inner: Vec<usize> = (0..tree.len())
-        .filter(|&i| tree[i].object.is_none())
+        .filter(|&i| tree[i].object.is_none() && mine(i, &role))
         .collect();
     inner.sort_by_key(|&i| (std::cmp::Reverse(tree[i].depth), i));
     let mut at = 0;
@@ -369,6 +480,7 @@ pub fn build<S: LodSink>(
         for batch in inner[at..level_end].chunks(HLOD_BATCH) {
             let made: Vec<Finished> = batch
                 .par_iter()
+                .filter(|&&ni| !given(ni, &role))
                 .map(|&ni| {
                     let node = &tree[ni];
                     let below: Vec<&Done> = (node.first_child..node.first_child + node.child_count)
@@ -407,7 +519,12 @@ pub fn build<S: LodSink>(
                     )
                 })
                 .collect();
-            for (&ni, (lods, d)) in batch.iter().zip(made) {
+            let mut made = made.into_iter();
+            for &ni in batch {
+                let (lods, d) = match take(&mut role, ni) {
+                    Some(f) => f,
+                    None => made.next().expect("one made per node not given"),
+                };
                 let node = &tree[ni];
                 lowest[ni] = match lods.first() {
                     Some(l) => l.1,
@@ -439,7 +556,32 @@ pub fn build<S: LodSink>(
         })
         .collect();
     stats.resolved = Some(resolved);
-    Ok(Built { nodes, stats })
+    let roots = match role {
+        Role::Shard { roots, .. } => roots
+            .iter()
+            .map(|&r| {
+                let d = done[r as usize].take().expect("a shard's roots are done");
+                (r, d)
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    Ok((Built { nodes, stats }, roots))
+}
+
+/// A merge's node made by a shard: its levels, and what it leaves for its
+/// parent (a shard root's [`Done`]; nothing for a node inside a shard,
+/// whose parent was made there too).
+fn take(role: &mut Role, ni: usize) -> Option<Finished> {
+    let Role::Merge { given } = role else {
+        return None;
+    };
+    let lods = given.lods.remove(&(ni as u32))?;
+    let done = given.done.remove(&(ni as u32)).unwrap_or(Done {
+        levels: Vec::new(),
+        full: None,
+    });
+    Some((lods, done))
 }
 
 /// A node's levels in the scene file's form, and what it leaves for its
@@ -447,13 +589,13 @@ pub fn build<S: LodSink>(
 type Finished = (Vec<(LodMesh, f32)>, Done);
 
 /// What a done node leaves for its parent's HLODs.
-#[derive(Clone)]
-struct Done {
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Done {
     /// The levels its parent may merge.
-    levels: Vec<Lod>,
+    pub(crate) levels: Vec<Lod>,
     /// Its full-detail surface, while that has at most [`EXACT_REFERENCE`]
     /// triangles, for its parent's levels to be measured against.
-    full: Option<hlod::WorkMesh>,
+    pub(crate) full: Option<hlod::WorkMesh>,
 }
 
 /// An inner node whose leaves hold at most this many triangles has its

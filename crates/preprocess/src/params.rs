@@ -7,7 +7,8 @@ use serde_json::{json, Map, Value};
 /// Every knob of the preprocess. Sizes are fractions of a model measure so
 /// that the same defaults work on a model in millimetres or in kilometres;
 /// [`Params::resolve`] turns them into model units for one model.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Params {
     /// Partition-I triangle threshold t1 (Section 4.2.1, 6.3.1: 1000).
     /// An object is split only when it has more triangles than this.

@@ -1,0 +1,891 @@
+//! A build split into independent jobs: a plan, shards, a merge.
+//!
+//! Steps 1-5 (partition, clustering, hierarchy) are cheap next to the LODs
+//! (about 1% of the time on the real-CAD floor), so every job makes them
+//! again from the model and gets the same hierarchy. The plan cuts that
+//! hierarchy into whole subtrees of at most `shard_triangles` triangles
+//! (the highest nodes that small, or single leaves), grouped in tree order
+//! into shards of about that many triangles. A shard makes the LODs and
+//! HLODs of its subtrees, as GigaWalk's bottom-up HLOD generation needs
+//! only a node's children (Section 4.3), and writes them to one file. The
+//! merge makes the levels above the shards' roots from what the roots
+//! leave for their parents, and writes the scene, taking every other
+//! node's levels from the shards' files in the order a single-process
+//! build makes them: the scene is byte-identical to that build, however
+//! and wherever the shards ran.
+//!
+//! How the work splits depends on the model and the parameters only. Shard
+//! files are written atomically and named by the plan's identity (a hash
+//! of the input files, the parameters and the revision), so a rerun redoes
+//! only what is missing or corrupt, a shard run twice at once writes the
+//! same bytes twice, and a changed input is refused rather than mixed in.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use gigawalk_import::Model;
+use gigawalk_scene::{Colours, LodMesh};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::hlod::{Lod, WorkMesh};
+use crate::{Done, Given, Layout, Params, PreprocessError, Progress, Role, Stats, REVISION};
+
+/// Triangles a shard holds by default: the 10M plant makes about ten
+/// shards. The number of shards is a function of the model and this, never
+/// of how many workers run them.
+pub const DEFAULT_SHARD_TRIANGLES: u64 = 1_000_000;
+
+/// The plan file in a work directory.
+pub const PLAN_FILE: &str = "plan.json";
+
+const FORMAT: &str = "gigawalk-preprocess-plan";
+const PLAN_VERSION: u32 = 1;
+const SHARD_MAGIC: &[u8; 8] = b"GWSHARD1";
+
+/// One input file as the plan saw it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputFile {
+    /// As found (absolute, so jobs may run from any directory).
+    pub path: PathBuf,
+    pub bytes: u64,
+    /// BLAKE3 of the file's bytes, hex.
+    pub blake3: String,
+}
+
+/// One shard: whole subtrees of the hierarchy.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShardSpec {
+    pub index: usize,
+    /// The subtrees' roots (node indices of the hierarchy).
+    pub roots: Vec<u32>,
+    pub nodes: u64,
+    pub triangles: u64,
+}
+
+/// `DIR/plan.json` (docs/preprocess.md, "Split builds").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    pub format: String,
+    pub version: u32,
+    /// The preprocessor revision ([`REVISION`]) the plan is for.
+    pub revision: u32,
+    /// A hash of the inputs, the parameters, the shard size and the
+    /// revision (hex): shard files carry it in their names.
+    pub id: String,
+    /// The scene's provenance names the model by this.
+    pub source: String,
+    pub inputs: Vec<InputFile>,
+    pub params: Params,
+    pub shard_triangles: u64,
+    pub nodes: u64,
+    pub triangles: u64,
+    pub shards: Vec<ShardSpec>,
+}
+
+/// Why a split build failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ShardError {
+    #[error(transparent)]
+    Import(#[from] gigawalk_import::ImportError),
+    #[error(transparent)]
+    Preprocess(#[from] PreprocessError),
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: not a preprocess plan: {reason}")]
+    BadPlan { path: PathBuf, reason: String },
+    #[error("{dir} holds a plan for other inputs or parameters (plan {old}, this run {new}); use another --work-dir or remove it")]
+    OtherPlan {
+        dir: PathBuf,
+        old: String,
+        new: String,
+    },
+    #[error(
+        "{path} changed since the plan was made ({what}); use another --work-dir or remove it"
+    )]
+    InputChanged { path: PathBuf, what: String },
+    #[error("shard {index} is not in the plan ({count} shards: 0 to {})", count.saturating_sub(1))]
+    NoSuchShard { index: usize, count: usize },
+    #[error("the model's hierarchy differs from the plan's ({what}): the inputs or the preprocessor changed")]
+    LayoutChanged { what: String },
+    #[error("{path}: shard output is corrupt: {reason}")]
+    Corrupt { path: PathBuf, reason: String },
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ShardError + '_ {
+    move |source| ShardError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// BLAKE3 of a file, hex, and its length.
+fn hash_file(path: &Path) -> Result<(u64, String), ShardError> {
+    let mut h = blake3::Hasher::new();
+    let mut f = std::fs::File::open(path).map_err(io(path))?;
+    let bytes = std::io::copy(&mut f, &mut h).map_err(io(path))?;
+    Ok((bytes, h.finalize().to_hex().to_string()))
+}
+
+/// The model files and what they hold now.
+fn describe_inputs(files: &[PathBuf]) -> Result<Vec<InputFile>, ShardError> {
+    files
+        .iter()
+        .map(|f| {
+            let path = std::path::absolute(f).map_err(io(f))?;
+            let (bytes, blake3) = hash_file(&path)?;
+            Ok(InputFile {
+                path,
+                bytes,
+                blake3,
+            })
+        })
+        .collect()
+}
+
+/// The subtrees a shard holds, grouped: the highest nodes with at most
+/// `limit` triangles below them (or leaves), in tree order, packed into
+/// shards of at most `limit` triangles (one root alone may be bigger only
+/// when it is a leaf).
+pub(crate) fn cut(layout: &Layout, limit: u64) -> Vec<ShardSpec> {
+    let tri = layout.subtree_triangles();
+    let tree = &layout.tree;
+    if tree.is_empty() {
+        return Vec::new();
+    }
+    let mut nodes_below = vec![1u64; tree.len()];
+    for i in (0..tree.len()).rev() {
+        let n = &tree[i];
+        for c in n.first_child..n.first_child + n.child_count {
+            nodes_below[i] += nodes_below[c as usize];
+        }
+    }
+    // Depth first, children in order: the roots come out in tree order.
+    let mut roots = Vec::new();
+    let mut stack = vec![0u32];
+    while let Some(i) = stack.pop() {
+        let n = &tree[i as usize];
+        if tri[i as usize] <= limit || n.object.is_some() {
+            roots.push(i);
+        } else {
+            stack.extend((n.first_child..n.first_child + n.child_count).rev());
+        }
+    }
+    let mut shards: Vec<ShardSpec> = Vec::new();
+    for r in roots {
+        let t = tri[r as usize];
+        match shards.last_mut() {
+            Some(s) if s.triangles + t <= limit => {
+                s.roots.push(r);
+                s.triangles += t;
+                s.nodes += nodes_below[r as usize];
+            }
+            _ => shards.push(ShardSpec {
+                index: shards.len(),
+                roots: vec![r],
+                nodes: nodes_below[r as usize],
+                triangles: t,
+            }),
+        }
+    }
+    shards
+}
+
+/// Nodes in the subtrees of `roots`.
+fn subtree_mask(tree: &[crate::hierarchy::HNode], roots: &[u32]) -> Vec<bool> {
+    let mut mine = vec![false; tree.len()];
+    let mut stack: Vec<u32> = roots.to_vec();
+    while let Some(i) = stack.pop() {
+        mine[i as usize] = true;
+        let n = &tree[i as usize];
+        stack.extend(n.first_child..n.first_child + n.child_count);
+    }
+    mine
+}
+
+fn plan_id(
+    inputs: &[InputFile],
+    source: &str,
+    params: &Params,
+    shard_triangles: u64,
+) -> Result<String, ShardError> {
+    let key = serde_json::json!({
+        "revision": REVISION,
+        "inputs": inputs,
+        "source": source,
+        "params": params,
+        "shard_triangles": shard_triangles,
+    });
+    let bytes = serde_json::to_vec(&key).map_err(|e| ShardError::BadPlan {
+        path: PathBuf::from(PLAN_FILE),
+        reason: e.to_string(),
+    })?;
+    Ok(blake3::hash(&bytes).to_hex()[..32].to_string())
+}
+
+/// Reads `DIR/plan.json`.
+pub fn read_plan(dir: &Path) -> Result<Plan, ShardError> {
+    let path = dir.join(PLAN_FILE);
+    let text = std::fs::read_to_string(&path).map_err(io(&path))?;
+    let plan: Plan = serde_json::from_str(&text).map_err(|e| ShardError::BadPlan {
+        path: path.clone(),
+        reason: e.to_string(),
+    })?;
+    let bad = |reason: String| ShardError::BadPlan {
+        path: path.clone(),
+        reason,
+    };
+    if plan.format != FORMAT || plan.version != PLAN_VERSION {
+        return Err(bad(format!(
+            "format {:?} version {} (this gigawalk reads {FORMAT:?} version {PLAN_VERSION})",
+            plan.format, plan.version
+        )));
+    }
+    if plan.revision != REVISION {
+        return Err(bad(format!(
+            "made for preprocessor revision {}, this is revision {REVISION}: remove the work directory and plan again",
+            plan.revision
+        )));
+    }
+    plan.params
+        .validate()
+        .map_err(|e| bad(format!("parameters: {e}")))?;
+    if plan.shards.iter().enumerate().any(|(i, s)| s.index != i) {
+        return Err(bad("shards are not numbered 0, 1, 2, ...".into()));
+    }
+    Ok(plan)
+}
+
+/// Makes the plan for `inputs` in `dir` (created if need be), or finds the
+/// same plan already there. A different plan there is refused. The plan
+/// needs the whole model (imported and laid out once).
+pub fn make_plan(
+    inputs: &[PathBuf],
+    source: &str,
+    params: &Params,
+    shard_triangles: u64,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<Plan, ShardError> {
+    params.validate().map_err(PreprocessError::from)?;
+    let files = gigawalk_import::model_files(inputs)?;
+    let described = describe_inputs(&files)?;
+    let id = plan_id(&described, source, params, shard_triangles)?;
+    if dir.join(PLAN_FILE).exists() {
+        let old = read_plan(dir)?;
+        if old.id != id {
+            return Err(ShardError::OtherPlan {
+                dir: dir.to_path_buf(),
+                old: old.id,
+                new: id,
+            });
+        }
+        return Ok(old);
+    }
+    let model = gigawalk_import::import_all(&files, &mut |_, _, _| {})?;
+    let layout = crate::layout(&model, params, progress)?;
+    let shards = cut(&layout, shard_triangles.max(1));
+    let plan = Plan {
+        format: FORMAT.into(),
+        version: PLAN_VERSION,
+        revision: REVISION,
+        id,
+        source: source.into(),
+        inputs: described,
+        params: params.clone(),
+        shard_triangles,
+        nodes: layout.tree.len() as u64,
+        triangles: layout.stats.triangles,
+        shards,
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let text = serde_json::to_string_pretty(&plan).map_err(|e| ShardError::BadPlan {
+        path: dir.join(PLAN_FILE),
+        reason: e.to_string(),
+    })?;
+    let path = dir.join(PLAN_FILE);
+    gigawalk_scene::write_atomic(&path, text.as_bytes()).map_err(io(&path))?;
+    Ok(plan)
+}
+
+/// Where shard `index`'s output goes.
+pub fn shard_path(dir: &Path, plan: &Plan, index: usize) -> PathBuf {
+    dir.join(format!("shard-{index:05}-{}.bin", plan.id))
+}
+
+/// The plan's model, refused if any input changed since the plan.
+fn import_planned(plan: &Plan) -> Result<Model, ShardError> {
+    for f in &plan.inputs {
+        let (bytes, hash) = hash_file(&f.path)?;
+        if bytes != f.bytes || hash != f.blake3 {
+            return Err(ShardError::InputChanged {
+                path: f.path.clone(),
+                what: format!(
+                    "{bytes} bytes, BLAKE3 {}, against {} bytes, {} in the plan",
+                    &hash[..16],
+                    f.bytes,
+                    &f.blake3[..16.min(f.blake3.len())]
+                ),
+            });
+        }
+    }
+    let files: Vec<PathBuf> = plan.inputs.iter().map(|f| f.path.clone()).collect();
+    Ok(gigawalk_import::import_all(&files, &mut |_, _, _| {})?)
+}
+
+/// The model's layout, checked against the plan's.
+fn planned_layout(
+    plan: &Plan,
+    model: &Model,
+    progress: &dyn Progress,
+) -> Result<Layout, ShardError> {
+    let layout = crate::layout(model, &plan.params, progress)?;
+    if layout.tree.len() as u64 != plan.nodes || layout.stats.triangles != plan.triangles {
+        return Err(ShardError::LayoutChanged {
+            what: format!(
+                "{} nodes and {} triangles against {} and {}",
+                layout.tree.len(),
+                layout.stats.triangles,
+                plan.nodes,
+                plan.triangles
+            ),
+        });
+    }
+    let shards = cut(&layout, plan.shard_triangles.max(1));
+    if shards != plan.shards {
+        return Err(ShardError::LayoutChanged {
+            what: "other shards".into(),
+        });
+    }
+    Ok(layout)
+}
+
+/// What [`run_shard`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShardRun {
+    Made,
+    /// A valid output was already there.
+    AlreadyDone,
+}
+
+/// Runs shard `index` of the plan in `dir`, unless its output is there
+/// and valid.
+pub fn run_shard(
+    dir: &Path,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<ShardRun, ShardError> {
+    let plan = read_plan(dir)?;
+    let spec = plan
+        .shards
+        .get(index)
+        .ok_or(ShardError::NoSuchShard {
+            index,
+            count: plan.shards.len(),
+        })?
+        .clone();
+    let path = shard_path(dir, &plan, index);
+    if read_shard(&path, &plan, index).is_ok() {
+        return Ok(ShardRun::AlreadyDone);
+    }
+    let model = import_planned(&plan)?;
+    let layout = planned_layout(&plan, &model, progress)?;
+    make_shard(&plan, &spec, &model, layout, &path, progress)?;
+    Ok(ShardRun::Made)
+}
+
+fn make_shard(
+    plan: &Plan,
+    spec: &ShardSpec,
+    model: &Model,
+    layout: Layout,
+    path: &Path,
+    progress: &dyn Progress,
+) -> Result<(), ShardError> {
+    let mine = subtree_mask(&layout.tree, &spec.roots);
+    let mut sink = Collect::default();
+    let (built, roots) = crate::build_role(
+        model,
+        &plan.params,
+        layout,
+        &mut sink,
+        progress,
+        Role::Shard {
+            mine: &mine,
+            roots: &spec.roots,
+        },
+    )?;
+    // Nodes' LODs arrived in the build's order, not node order: each
+    // node's are the range the sink gave it.
+    let lods: ShardLods = built
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|&(ni, _)| mine[ni])
+        .map(|(ni, n)| {
+            let r = n.first_lod as usize..(n.first_lod + n.lod_count) as usize;
+            (ni as u32, sink.lods[r].to_vec())
+        })
+        .collect();
+    let bytes = encode_shard(plan, spec.index, &lods, &roots);
+    gigawalk_scene::write_atomic(path, &bytes).map_err(io(path))
+}
+
+/// A sink that keeps LODs in memory, numbered as they come.
+#[derive(Default)]
+struct Collect {
+    lods: Vec<(LodMesh, f32)>,
+}
+
+impl crate::LodSink for Collect {
+    type Error = std::convert::Infallible;
+    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error> {
+        self.lods.push((mesh.clone(), error));
+        Ok(self.lods.len() as u32 - 1)
+    }
+}
+
+/// Shards of the plan in `dir` whose output is missing or corrupt.
+pub fn unfinished_shards(dir: &Path, plan: &Plan) -> Vec<usize> {
+    (0..plan.shards.len())
+        .filter(|&i| read_shard(&shard_path(dir, plan, i), plan, i).is_err())
+        .collect()
+}
+
+/// Finishes the scene from the plan in `dir`: any shard not done (or
+/// whose output is corrupt) is made first, in this process, and `redo`
+/// hears of it; then the levels above the shards, and the scene file,
+/// written atomically to `output`.
+pub fn merge(
+    dir: &Path,
+    output: &Path,
+    progress: &dyn Progress,
+    redo: &mut dyn FnMut(usize, &ShardError),
+) -> Result<Stats, ShardError> {
+    let plan = read_plan(dir)?;
+    let model = import_planned(&plan)?;
+    let mut given = Given::default();
+    for spec in &plan.shards {
+        let path = shard_path(dir, &plan, spec.index);
+        let shard = match read_shard(&path, &plan, spec.index) {
+            Ok(s) => s,
+            Err(e) => {
+                redo(spec.index, &e);
+                let layout = planned_layout(&plan, &model, progress)?;
+                make_shard(&plan, spec, &model, layout, &path, progress)?;
+                read_shard(&path, &plan, spec.index)?
+            }
+        };
+        let (lods, done) = shard;
+        given.lods.extend(lods);
+        given.done.extend(done);
+    }
+    let layout = planned_layout(&plan, &model, progress)?;
+    // Every node below a shard root is given, and nothing else.
+    let roots: Vec<u32> = plan.shards.iter().flat_map(|s| s.roots.clone()).collect();
+    let mask = subtree_mask(&layout.tree, &roots);
+    let expected = mask.iter().filter(|&&m| m).count();
+    if given.lods.len() != expected
+        || !given
+            .lods
+            .keys()
+            .all(|&k| mask.get(k as usize) == Some(&true))
+        || roots.iter().any(|r| !given.done.contains_key(r))
+    {
+        return Err(ShardError::LayoutChanged {
+            what: format!(
+                "the shards hold {} nodes, the plan's subtrees {expected}",
+                given.lods.len()
+            ),
+        });
+    }
+    let stats = crate::write_scene(
+        &model,
+        &plan.params,
+        layout,
+        output,
+        &plan.source,
+        progress,
+        Role::Merge { given: &mut given },
+    )?;
+    Ok(stats)
+}
+
+// ---- shard files ----
+
+struct Put(Vec<u8>);
+
+impl Put {
+    fn u8(&mut self, v: u8) {
+        self.0.push(v);
+    }
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f32(&mut self, v: f32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn len(&mut self, n: usize) {
+        self.u32(u32::try_from(n).expect("a shard's arrays fit in u32"));
+    }
+    fn dvec3(&mut self, v: DVec3) {
+        self.f64(v.x);
+        self.f64(v.y);
+        self.f64(v.z);
+    }
+    fn vec3s(&mut self, v: &[[f32; 3]]) {
+        self.len(v.len());
+        for p in v {
+            p.iter().for_each(|&x| self.f32(x));
+        }
+    }
+    fn rgba(&mut self, v: &[[u8; 4]]) {
+        self.len(v.len());
+        for c in v {
+            self.0.extend_from_slice(c);
+        }
+    }
+    fn u32s(&mut self, v: &[u32]) {
+        self.len(v.len());
+        v.iter().for_each(|&x| self.u32(x));
+    }
+    fn lod_mesh(&mut self, m: &LodMesh) {
+        self.dvec3(m.origin);
+        self.vec3s(&m.positions);
+        self.vec3s(&m.normals);
+        match &m.colours {
+            Colours::Uniform(c) => {
+                self.u8(0);
+                self.0.extend_from_slice(c);
+            }
+            Colours::PerVertex(v) => {
+                self.u8(1);
+                self.rgba(v);
+            }
+        }
+        self.u32s(&m.indices);
+    }
+    fn work_mesh(&mut self, m: &WorkMesh) {
+        self.dvec3(m.origin);
+        self.vec3s(&m.positions);
+        self.vec3s(&m.normals);
+        self.rgba(&m.colours);
+        self.u32s(&m.indices);
+    }
+}
+
+/// A bounds-checked reader; every failure is a message, never a panic.
+struct Get<'a> {
+    b: &'a [u8],
+}
+
+type R<T> = Result<T, String>;
+
+impl<'a> Get<'a> {
+    fn take(&mut self, n: usize) -> R<&'a [u8]> {
+        if n > self.b.len() {
+            return Err(format!(
+                "ends early ({n} bytes wanted, {} left)",
+                self.b.len()
+            ));
+        }
+        let (h, t) = self.b.split_at(n);
+        self.b = t;
+        Ok(h)
+    }
+    fn u8(&mut self) -> R<u8> {
+        Ok(self.take(1)?[0])
+    }
+    fn u32(&mut self) -> R<u32> {
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().map_err(|_| "u32")?,
+        ))
+    }
+    fn f32(&mut self) -> R<f32> {
+        Ok(f32::from_le_bytes(
+            self.take(4)?.try_into().map_err(|_| "f32")?,
+        ))
+    }
+    fn f64(&mut self) -> R<f64> {
+        Ok(f64::from_le_bytes(
+            self.take(8)?.try_into().map_err(|_| "f64")?,
+        ))
+    }
+    /// A length, checked against the bytes left (`each` bytes an item).
+    fn len(&mut self, each: usize) -> R<usize> {
+        let n = self.u32()? as usize;
+        if n.saturating_mul(each) > self.b.len() {
+            return Err(format!("an array of {n} items runs past the end"));
+        }
+        Ok(n)
+    }
+    fn dvec3(&mut self) -> R<DVec3> {
+        Ok(DVec3::new(self.f64()?, self.f64()?, self.f64()?))
+    }
+    fn vec3s(&mut self) -> R<Vec<[f32; 3]>> {
+        let n = self.len(12)?;
+        (0..n)
+            .map(|_| Ok([self.f32()?, self.f32()?, self.f32()?]))
+            .collect()
+    }
+    fn rgba(&mut self) -> R<Vec<[u8; 4]>> {
+        let n = self.len(4)?;
+        (0..n)
+            .map(|_| Ok(self.take(4)?.try_into().map_err(|_| "rgba")?))
+            .collect()
+    }
+    fn u32s(&mut self) -> R<Vec<u32>> {
+        let n = self.len(4)?;
+        (0..n).map(|_| self.u32()).collect()
+    }
+    fn lod_mesh(&mut self) -> R<LodMesh> {
+        let origin = self.dvec3()?;
+        let positions = self.vec3s()?;
+        let normals = self.vec3s()?;
+        let colours = match self.u8()? {
+            0 => Colours::Uniform(self.take(4)?.try_into().map_err(|_| "rgba")?),
+            1 => Colours::PerVertex(self.rgba()?),
+            k => return Err(format!("colour kind {k}")),
+        };
+        let indices = self.u32s()?;
+        check_mesh(positions.len(), normals.len(), &indices)?;
+        Ok(LodMesh {
+            origin,
+            positions,
+            normals,
+            colours,
+            indices,
+        })
+    }
+    fn work_mesh(&mut self) -> R<WorkMesh> {
+        let origin = self.dvec3()?;
+        let positions = self.vec3s()?;
+        let normals = self.vec3s()?;
+        let colours = self.rgba()?;
+        let indices = self.u32s()?;
+        check_mesh(positions.len(), normals.len(), &indices)?;
+        if colours.len() != positions.len() {
+            return Err("colours and positions differ in number".into());
+        }
+        Ok(WorkMesh {
+            origin,
+            positions,
+            normals,
+            colours,
+            indices,
+        })
+    }
+}
+
+fn check_mesh(positions: usize, normals: usize, indices: &[u32]) -> R<()> {
+    if normals != positions {
+        return Err("normals and positions differ in number".into());
+    }
+    if indices.len() % 3 != 0 || indices.iter().any(|&i| i as usize >= positions) {
+        return Err("indices out of range".into());
+    }
+    Ok(())
+}
+
+type ShardLods = Vec<(u32, Vec<(LodMesh, f32)>)>;
+
+fn encode_shard(plan: &Plan, index: usize, lods: &ShardLods, done: &[(u32, Done)]) -> Vec<u8> {
+    let mut p = Put(Vec::new());
+    p.0.extend_from_slice(SHARD_MAGIC);
+    p.0.extend_from_slice(plan.id.as_bytes());
+    p.len(index);
+    p.len(lods.len());
+    for (ni, l) in lods {
+        p.u32(*ni);
+        p.len(l.len());
+        for (m, e) in l {
+            p.f32(*e);
+            p.lod_mesh(m);
+        }
+    }
+    p.len(done.len());
+    for (ni, d) in done {
+        p.u32(*ni);
+        p.len(d.levels.len());
+        for l in &d.levels {
+            p.f32(l.error);
+            p.work_mesh(&l.mesh);
+        }
+        match &d.full {
+            None => p.u8(0),
+            Some(m) => {
+                p.u8(1);
+                p.work_mesh(m);
+            }
+        }
+    }
+    let crc = crc32fast::hash(&p.0);
+    p.u32(crc);
+    p.0
+}
+
+/// Shard `index`'s output at `path`, checked against the plan.
+#[allow(clippy::type_complexity)]
+fn read_shard(
+    path: &Path,
+    plan: &Plan,
+    index: usize,
+) -> Result<(HashMap<u32, Vec<(LodMesh, f32)>>, HashMap<u32, Done>), ShardError> {
+    let bytes = std::fs::read(path).map_err(io(path))?;
+    decode_shard(&bytes, plan, index).map_err(|reason| ShardError::Corrupt {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
+
+#[allow(clippy::type_complexity)]
+fn decode_shard(
+    bytes: &[u8],
+    plan: &Plan,
+    index: usize,
+) -> R<(HashMap<u32, Vec<(LodMesh, f32)>>, HashMap<u32, Done>)> {
+    let Some((body, crc)) = bytes.split_last_chunk::<4>() else {
+        return Err("too short".into());
+    };
+    if crc32fast::hash(body) != u32::from_le_bytes(*crc) {
+        return Err("checksum mismatch".into());
+    }
+    let mut g = Get { b: body };
+    if g.take(SHARD_MAGIC.len())? != SHARD_MAGIC {
+        return Err("not a shard file".into());
+    }
+    if g.take(plan.id.len())? != plan.id.as_bytes() {
+        return Err("made for another plan".into());
+    }
+    if g.u32()? as usize != index {
+        return Err(format!("not shard {index}'s"));
+    }
+    let spec = plan.shards.get(index).ok_or("no such shard in the plan")?;
+    let nodes = g.len(8)?;
+    if nodes as u64 != spec.nodes {
+        return Err(format!("{nodes} nodes, the plan says {}", spec.nodes));
+    }
+    let mut lods = HashMap::with_capacity(nodes);
+    for _ in 0..nodes {
+        let ni = g.u32()?;
+        let n = g.len(8)?;
+        let l = (0..n)
+            .map(|_| {
+                let e = g.f32()?;
+                Ok((g.lod_mesh()?, e))
+            })
+            .collect::<R<Vec<_>>>()?;
+        if lods.insert(ni, l).is_some() {
+            return Err(format!("node {ni} twice"));
+        }
+    }
+    let roots = g.len(9)?;
+    let mut done = HashMap::with_capacity(roots);
+    for _ in 0..roots {
+        let ni = g.u32()?;
+        let n = g.len(8)?;
+        let levels = (0..n)
+            .map(|_| {
+                let error = g.f32()?;
+                Ok(Lod {
+                    mesh: g.work_mesh()?,
+                    error,
+                })
+            })
+            .collect::<R<Vec<_>>>()?;
+        let full = match g.u8()? {
+            0 => None,
+            1 => Some(g.work_mesh()?),
+            k => return Err(format!("full-detail flag {k}")),
+        };
+        done.insert(ni, Done { levels, full });
+    }
+    if !g.b.is_empty()
+        || spec.roots.iter().any(|r| !done.contains_key(r))
+        || done.len() != spec.roots.len()
+    {
+        return Err("its roots are not the plan's".into());
+    }
+    Ok((lods, done))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shard_file_round_trips_and_every_flipped_byte_is_caught() {
+        let mesh = WorkMesh {
+            origin: DVec3::new(1e7, -2.5, 0.125),
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, f32::MIN_POSITIVE],
+            ],
+            normals: vec![[0.0, 0.0, 1.0]; 3],
+            colours: vec![[1, 2, 3, 255]; 3],
+            indices: vec![0, 1, 2],
+        };
+        let plan = Plan {
+            format: FORMAT.into(),
+            version: PLAN_VERSION,
+            revision: REVISION,
+            id: "0123456789abcdef0123456789abcdef".into(),
+            source: "m.glb".into(),
+            inputs: Vec::new(),
+            params: Params::default(),
+            shard_triangles: 10,
+            nodes: 3,
+            triangles: 2,
+            shards: vec![ShardSpec {
+                index: 0,
+                roots: vec![1],
+                nodes: 2,
+                triangles: 2,
+            }],
+        };
+        let lods: ShardLods = vec![
+            (
+                1,
+                vec![(mesh.to_lod_mesh(), 0.5), (mesh.to_lod_mesh(), 1.5)],
+            ),
+            (2, vec![]),
+        ];
+        let done = vec![(
+            1,
+            Done {
+                levels: vec![Lod {
+                    mesh: mesh.clone(),
+                    error: 0.25,
+                }],
+                full: Some(mesh.clone()),
+            },
+        )];
+        let bytes = encode_shard(&plan, 0, &lods, &done);
+        let (l, d) = decode_shard(&bytes, &plan, 0).unwrap();
+        assert_eq!(l[&1], lods[0].1);
+        assert!(l[&2].is_empty());
+        assert_eq!(d[&1], done[0].1);
+        for i in (0..bytes.len()).step_by(7) {
+            let mut b = bytes.clone();
+            b[i] ^= 0x10;
+            assert!(decode_shard(&b, &plan, 0).is_err(), "byte {i}");
+        }
+        assert!(decode_shard(&bytes[..bytes.len() - 1], &plan, 0).is_err());
+        assert!(decode_shard(&bytes, &plan, 1).is_err() || plan.shards.len() == 1);
+        let other = Plan {
+            id: "ffffffffffffffffffffffffffffffff".into(),
+            ..plan.clone()
+        };
+        assert!(decode_shard(&bytes, &other, 0).is_err());
+    }
+}

@@ -690,7 +690,7 @@ fn check_mesh(positions: usize, normals: usize, indices: &[u32]) -> R<()> {
     if normals != positions {
         return Err("normals and positions differ in number".into());
     }
-    if indices.len() % 3 != 0 || indices.iter().any(|&i| i as usize >= positions) {
+    if !indices.len().is_multiple_of(3) || indices.iter().any(|&i| i as usize >= positions) {
         return Err("indices out of range".into());
     }
     Ok(())

@@ -39,7 +39,7 @@ fn parse_kind(s: &str) -> Result<Kind, String> {
 }
 
 /// `1000`, `500k`, `2M`, `1.5M`.
-fn parse_count(s: &str) -> Result<u64, String> {
+pub(crate) fn parse_count(s: &str) -> Result<u64, String> {
     let (num, mul) = match s.as_bytes().last() {
         Some(b'k' | b'K') => (&s[..s.len() - 1], 1e3),
         Some(b'm' | b'M') => (&s[..s.len() - 1], 1e6),

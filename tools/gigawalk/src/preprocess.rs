@@ -2,23 +2,46 @@
 //! display and the stats table; the work is in gigawalk-preprocess.
 
 use std::io::IsTerminal as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use gigawalk_preprocess::{preprocess, Params, Phase, Progress};
+use gigawalk_preprocess::{preprocess, shards, Params, Phase, Progress};
 use gigawalk_scene::{SceneReader, SceneStats};
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args)]
 pub struct Args {
     /// Input model: glTF 2.0 (.gltf, .glb) or Wavefront OBJ (.obj) files, or directories of them (searched recursively, in path order), all made into one model; with several files each object's name starts with its file's path
-    #[arg(required = true, num_args = 1.., value_name = "MODEL")]
+    #[arg(num_args = 1.., value_name = "MODEL", required_unless_present_any = ["shard", "merge"], conflicts_with_all = ["shard", "merge"])]
     input: Vec<PathBuf>,
     /// Output scene file (.gwk), written atomically: nothing appears on failure
-    #[arg(short, long)]
-    output: PathBuf,
+    #[arg(short, long, required_unless_present_any = ["shard", "plan_only"], conflicts_with_all = ["shard", "plan_only"])]
+    output: Option<PathBuf>,
+    /// Split the build into shards kept in this directory (plan.json and one file per shard, docs/preprocess.md "Split builds"): a rerun with the same inputs and parameters redoes only the shards that did not finish, and any number of machines sharing the directory may run them
+    #[arg(long, value_name = "DIR")]
+    work_dir: Option<PathBuf>,
+    /// With --work-dir and MODEL: write DIR/plan.json and print the number of shards N on stdout, nothing else
+    #[arg(long, requires = "work_dir", conflicts_with_all = ["shard", "merge"])]
+    plan_only: bool,
+    /// With --work-dir: run shard K of DIR's plan (0 <= K < N; nothing to do when its output is there and valid)
+    #[arg(
+        long,
+        value_name = "K",
+        requires = "work_dir",
+        conflicts_with = "merge"
+    )]
+    shard: Option<usize>,
+    /// With --work-dir and -o: finish the scene from DIR's shards (making any that are missing or corrupt)
+    #[arg(long, requires = "work_dir")]
+    merge: bool,
+    /// Worker processes for the shards (each a `gigawalk preprocess --shard K`); above 1 the build is split (in --work-dir, or a temporary directory beside the output). The scene is the same bytes at any count
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    jobs: u32,
+    /// Triangles per shard of a split build (e.g. 500k, 2M): how the work splits depends on the model and this only, never on --jobs
+    #[arg(long, default_value = "1M", value_parser = crate::generate::parse_count)]
+    shard_triangles: u64,
     /// Also write the run's statistics as JSON to this file
     #[arg(long)]
     stats: Option<PathBuf>,
@@ -103,64 +126,46 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     params.validate().context("bad parameter")?;
 
     let progress = Display::new();
-    let t = Instant::now();
+    if let Some(dir) = &args.work_dir {
+        if let Some(k) = args.shard {
+            let t = Instant::now();
+            let done = shards::run_shard(dir, k, &progress)
+                .with_context(|| format!("shard {k} of {}", dir.display()))?;
+            progress.line(&match done {
+                shards::ShardRun::Made => {
+                    format!("shard {k} done in {:.1} s", t.elapsed().as_secs_f64())
+                }
+                shards::ShardRun::AlreadyDone => format!("shard {k} was already done"),
+            });
+            return Ok(());
+        }
+    }
+    let output = args.output.clone().unwrap_or_default();
     let inputs = args
         .input
         .iter()
         .map(|p| p.display().to_string())
         .collect::<Vec<_>>()
         .join(" ");
-    let files = gigawalk_import::model_files(&args.input)
-        .with_context(|| format!("cannot import {inputs}"))?;
-    let model = gigawalk_import::import_all(&files, &mut |i, n, path| {
-        progress.line(&match n {
-            1 => format!("importing {}", path.display()),
-            _ => format!("importing {}/{n}: {}", i + 1, path.display()),
-        })
-    })
-    .with_context(|| format!("cannot import {inputs}"))?;
-    let import_secs = t.elapsed().as_secs_f64();
-    let kept: u64 = model
-        .objects
-        .iter()
-        .map(|o| o.triangle_count() as u64)
-        .sum();
-    progress.line(&format!(
-        "import: {} objects, {kept} triangles ({} degenerate dropped) in {import_secs:.2} s",
-        model.objects.len(),
-        model.stats.degenerate_triangles_dropped
-    ));
-    for w in &model.stats.warnings {
-        tracing::warn!("{w}");
-    }
-
-    let import_dropped = model.stats.degenerate_triangles_dropped;
-    let source = inputs.clone();
-    let mut stats =
-        preprocess(&model, &params, &args.output, &source, &progress).with_context(|| {
-            format!(
-                "cannot preprocess {} into {}",
-                inputs,
-                args.output.display()
-            )
-        })?;
-    drop(model);
-    stats
-        .phase_seconds
-        .insert(0, ("import".into(), import_secs));
+    let split = args.work_dir.is_some() || args.jobs > 1;
+    let (mut stats, files) = if split {
+        match split_build(&args, &params, &inputs, &output, &progress)? {
+            Some(built) => built,
+            None => return Ok(()), // --plan-only
+        }
+    } else {
+        single_build(&args.input, &inputs, &params, &output, &progress)?
+    };
     stats.input_file_bytes = files
         .iter()
         .map(|f| std::fs::metadata(f).map_or(0, |m| m.len()))
         .sum();
-    // Triangles the importer dropped never reach the preprocessor; count them too.
-    stats.degenerate_dropped += import_dropped;
-    stats.input_triangles += import_dropped;
     stats.finish();
 
     // The LOD structure's health, from the file as a reader sees it. The
     // scene is written either way: a failure to read it back is said, not
     // fatal.
-    let scene = match SceneReader::open(&args.output) {
+    let scene = match SceneReader::open(&output) {
         Ok(r) => Some(SceneStats::of(&r)),
         Err(e) => {
             eprintln!("warning: cannot read back the scene to check its LODs: {e}");
@@ -215,8 +220,192 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             stats.output_bytes as f64 / stats.input_file_bytes.max(1) as f64
         )?;
     }
-    out!("wrote {}", args.output.display())?;
+    out!("wrote {}", output.display())?;
     Ok(())
+}
+
+/// Import and build in this process (no shards).
+fn single_build(
+    input: &[PathBuf],
+    inputs: &str,
+    params: &Params,
+    output: &Path,
+    progress: &Display,
+) -> anyhow::Result<(gigawalk_preprocess::Stats, Vec<PathBuf>)> {
+    let t = Instant::now();
+    let files =
+        gigawalk_import::model_files(input).with_context(|| format!("cannot import {inputs}"))?;
+    let model = gigawalk_import::import_all(&files, &mut |i, n, path| {
+        progress.line(&match n {
+            1 => format!("importing {}", path.display()),
+            _ => format!("importing {}/{n}: {}", i + 1, path.display()),
+        })
+    })
+    .with_context(|| format!("cannot import {inputs}"))?;
+    let import_secs = t.elapsed().as_secs_f64();
+    let kept: u64 = model
+        .objects
+        .iter()
+        .map(|o| o.triangle_count() as u64)
+        .sum();
+    progress.line(&format!(
+        "import: {} objects, {kept} triangles ({} degenerate dropped) in {import_secs:.2} s",
+        model.objects.len(),
+        model.stats.degenerate_triangles_dropped
+    ));
+    for w in &model.stats.warnings {
+        tracing::warn!("{w}");
+    }
+    let import_dropped = model.stats.degenerate_triangles_dropped;
+    let mut stats = preprocess(&model, params, output, inputs, progress)
+        .with_context(|| format!("cannot preprocess {inputs} into {}", output.display()))?;
+    drop(model);
+    stats
+        .phase_seconds
+        .insert(0, ("import".into(), import_secs));
+    // Triangles the importer dropped never reach the preprocessor; count them too.
+    stats.degenerate_dropped += import_dropped;
+    stats.input_triangles += import_dropped;
+    Ok((stats, files))
+}
+
+/// A build split into shards: plan (or find the plan), run the shards not
+/// done (here, or in `--jobs` worker processes), merge. Returns the
+/// merge's statistics and the model files, `None` after `--plan-only`.
+fn split_build(
+    args: &Args,
+    params: &Params,
+    inputs: &str,
+    output: &Path,
+    progress: &Display,
+) -> anyhow::Result<Option<(gigawalk_preprocess::Stats, Vec<PathBuf>)>> {
+    // Without --work-dir (--jobs above 1): a temporary one beside the
+    // output, removed however the run ends.
+    let temp;
+    let dir: &Path = match &args.work_dir {
+        Some(d) => d,
+        None => {
+            let parent = match output.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            temp = tempfile::Builder::new()
+                .prefix(".gigawalk-work-")
+                .tempdir_in(parent)
+                .with_context(|| format!("cannot make a work directory in {}", parent.display()))?;
+            temp.path()
+        }
+    };
+    if !args.merge {
+        let t = Instant::now();
+        progress.line(&format!("planning {inputs}"));
+        let plan = shards::make_plan(
+            &args.input,
+            inputs,
+            params,
+            args.shard_triangles,
+            dir,
+            progress,
+        )
+        .with_context(|| format!("cannot plan {inputs} in {}", dir.display()))?;
+        let todo = shards::unfinished_shards(dir, &plan);
+        progress.line(&format!(
+            "plan: {} shards of at most {} triangles ({} triangles, {} nodes), {} to do, in {:.1} s: {}",
+            plan.shards.len(),
+            plan.shard_triangles,
+            plan.triangles,
+            plan.nodes,
+            todo.len(),
+            t.elapsed().as_secs_f64(),
+            dir.join(shards::PLAN_FILE).display()
+        ));
+        if args.plan_only {
+            crate::write_stdout(format_args!("{}\n", plan.shards.len()), false)?;
+            return Ok(None);
+        }
+        run_shards(dir, &todo, args.jobs, progress)?;
+    }
+    let t = Instant::now();
+    let stats = shards::merge(dir, output, progress, &mut |k, why| {
+        progress.line(&format!("shard {k} is not done ({why}): making it here"))
+    })
+    .with_context(|| format!("cannot merge {} into {}", dir.display(), output.display()))?;
+    progress.line(&format!("merge done in {:.1} s", t.elapsed().as_secs_f64()));
+    let files = shards::read_plan(dir)
+        .map(|p| p.inputs.into_iter().map(|f| f.path).collect())
+        .unwrap_or_default();
+    Ok(Some((stats, files)))
+}
+
+/// Runs shards `todo` of the plan in `dir`: in this process with one job,
+/// else in `jobs` worker processes of this binary at a time. The first
+/// failure stops new shards and is the error, with the worker's output.
+fn run_shards(dir: &Path, todo: &[usize], jobs: u32, progress: &Display) -> anyhow::Result<()> {
+    let t = Instant::now();
+    if jobs <= 1 {
+        for (i, &k) in todo.iter().enumerate() {
+            shards::run_shard(dir, k, progress)
+                .with_context(|| format!("shard {k} of {}", dir.display()))?;
+            progress.line(&format!(
+                "shards {}/{} done, {:.1} s",
+                i + 1,
+                todo.len(),
+                t.elapsed().as_secs_f64()
+            ));
+        }
+        return Ok(());
+    }
+    let exe =
+        std::env::current_exe().context("cannot find the gigawalk binary to start workers")?;
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let failed: Mutex<Option<anyhow::Error>> = Mutex::new(None);
+    std::thread::scope(|s| {
+        for _ in 0..jobs.min(todo.len() as u32) {
+            s.spawn(|| loop {
+                if failed.lock().map_or(true, |f| f.is_some()) {
+                    return;
+                }
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let Some(&k) = todo.get(i) else {
+                    return;
+                };
+                let out = std::process::Command::new(&exe)
+                    .arg("preprocess")
+                    .arg("--work-dir")
+                    .arg(dir)
+                    .arg("--shard")
+                    .arg(k.to_string())
+                    .stdin(std::process::Stdio::null())
+                    .output();
+                let error = match out {
+                    Ok(o) if o.status.success() => None,
+                    Ok(o) => Some(anyhow::anyhow!(
+                        "shard {k}'s worker failed ({}):\n{}",
+                        o.status,
+                        String::from_utf8_lossy(&o.stderr).trim_end()
+                    )),
+                    Err(e) => Some(anyhow::anyhow!("cannot start a worker for shard {k}: {e}")),
+                };
+                if let Some(e) = error {
+                    if let Ok(mut f) = failed.lock() {
+                        f.get_or_insert(e);
+                    }
+                    return;
+                }
+                let n = finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+                progress.line(&format!(
+                    "shards {n}/{} done ({jobs} workers), {:.1} s",
+                    todo.len(),
+                    t.elapsed().as_secs_f64()
+                ));
+            });
+        }
+    });
+    match failed.into_inner().ok().flatten() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
 }
 
 /// Progress on stderr: an indicatif bar per phase on a terminal, one plain

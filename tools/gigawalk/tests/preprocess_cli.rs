@@ -119,3 +119,109 @@ fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itse
     let (ok, _, err) = gigawalk(&["preprocess", "-o", s(&d.join("e.gwk"))]);
     assert!(!ok && err.contains("MODEL"), "{err}");
 }
+
+#[test]
+fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let glb = d.join("p.glb");
+    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "20k", "-o", s(&glb)]);
+    assert!(ok, "{err}");
+    let single = d.join("single.gwk");
+    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&single)]);
+    assert!(ok, "{err}");
+    let reference = std::fs::read(&single).unwrap();
+
+    // Plan, shards in reverse order, merge.
+    let work = d.join("work");
+    let (ok, out, err) = gigawalk(&[
+        "preprocess",
+        s(&glb),
+        "--work-dir",
+        s(&work),
+        "--plan-only",
+        "--shard-triangles",
+        "4k",
+    ]);
+    assert!(ok, "{err}");
+    let n: usize = out.trim().parse().expect(&out);
+    assert!(n >= 3, "{n} shards");
+    assert!(work.join("plan.json").is_file());
+    for k in (0..n).rev() {
+        let (ok, _, err) = gigawalk(&[
+            "preprocess",
+            "--work-dir",
+            s(&work),
+            "--shard",
+            &k.to_string(),
+        ]);
+        assert!(ok, "{err}");
+    }
+    let (ok, _, err) = gigawalk(&["preprocess", "--work-dir", s(&work), "--shard", "0"]);
+    assert!(ok && err.contains("already done"), "{err}");
+    let merged = d.join("merged.gwk");
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        "--work-dir",
+        s(&work),
+        "--merge",
+        "-o",
+        s(&merged),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        std::fs::read(&merged).unwrap() == reference,
+        "merged bytes differ"
+    );
+
+    // Two workers, no work directory: the same bytes, nothing left over.
+    let jobs = d.join("jobs.gwk");
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        s(&glb),
+        "-o",
+        s(&jobs),
+        "--jobs",
+        "2",
+        "--shard-triangles",
+        "4k",
+    ]);
+    assert!(ok, "{err}");
+    assert!(err.contains("workers"), "{err}");
+    assert!(
+        std::fs::read(&jobs).unwrap() == reference,
+        "--jobs 2 bytes differ"
+    );
+    let left: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with(".gigawalk"))
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+
+    // Bad requests: a shard the plan lacks, steps without a work dir, a
+    // work dir that holds another plan.
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        "--work-dir",
+        s(&work),
+        "--shard",
+        &n.to_string(),
+    ]);
+    assert!(!ok && err.contains("not in the plan"), "{err}");
+    let (ok, _, err) = gigawalk(&["preprocess", "--shard", "0"]);
+    assert!(!ok && err.contains("--work-dir"), "{err}");
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        s(&glb),
+        "--work-dir",
+        s(&work),
+        "--plan-only",
+        "--shard-triangles",
+        "5k",
+    ]);
+    assert!(
+        !ok && err.contains("holds a plan for other inputs"),
+        "{err}"
+    );
+}

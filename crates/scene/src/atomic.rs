@@ -8,6 +8,15 @@
 //! process-wide registry, and [`remove_temp_files`] deletes them all: the
 //! `gigawalk` binary calls it on SIGINT and SIGTERM before it exits.
 //! Libraries never call it, and nothing here installs a signal handler.
+//!
+//! A process killed outright (SIGKILL, a crash, the power) cleans up
+//! nothing. Temporary names therefore carry their owner's process id
+//! (`.gigawalk-<pid>-XXXXXX.tmp`), and the first write into a directory
+//! removes the temporary files there whose owner is gone (on Linux, where
+//! `/proc` says which processes run; elsewhere they stay), as well as
+//! `.gigawalk-work-<pid>-*` directories of split builds.
+//! [`stale_temp_files_removed`] lists what was removed, for the caller to
+//! say so.
 
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -24,6 +33,82 @@ static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
     live: Vec::new(),
     stopping: false,
 });
+
+/// Directories swept of dead processes' temporaries, and what was removed.
+static SWEPT: Mutex<(Vec<PathBuf>, Vec<PathBuf>)> = Mutex::new((Vec::new(), Vec::new()));
+
+/// The process id a gigawalk temporary name carries:
+/// `.gigawalk-<pid>-*.tmp` (a file) or `.gigawalk-work-<pid>-*` (a split
+/// build's directory); `None` for any other name.
+fn owner_pid(name: &str, is_dir: bool) -> Option<u32> {
+    let rest = name.strip_prefix(".gigawalk-")?;
+    let rest = match (is_dir, rest.strip_prefix("work-")) {
+        (true, Some(r)) => r,
+        (false, None) if name.ends_with(".tmp") => rest,
+        _ => return None,
+    };
+    let (pid, _) = rest.split_once('-')?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` may still run (`true` where that cannot be told).
+fn alive(pid: u32) -> bool {
+    if cfg!(target_os = "linux") {
+        Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        true
+    }
+}
+
+/// Removes, once per directory per process, the temporaries in `dir` whose
+/// owner is gone.
+fn sweep(dir: &Path) {
+    let key = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let mut swept = SWEPT.lock().unwrap_or_else(PoisonError::into_inner);
+    if swept.0.contains(&key) {
+        return;
+    }
+    swept.0.push(key);
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let me = std::process::id();
+    for e in entries.flatten() {
+        let Ok(kind) = e.file_type() else { continue };
+        let name = e.file_name();
+        let Some(pid) = name.to_str().and_then(|n| owner_pid(n, kind.is_dir())) else {
+            continue;
+        };
+        if pid == me || alive(pid) {
+            continue;
+        }
+        let path = e.path();
+        let removed = if kind.is_dir() {
+            std::fs::remove_dir_all(&path)
+        } else {
+            std::fs::remove_file(&path)
+        };
+        if removed.is_ok() {
+            swept.1.push(path);
+        }
+    }
+}
+
+/// The temporary files and directories of gigawalk processes that are gone
+/// that this process removed so far (see the module's note).
+pub fn stale_temp_files_removed() -> Vec<PathBuf> {
+    SWEPT
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .1
+        .clone()
+}
+
+/// The prefix of this process's temporary work directories (split
+/// builds): removed like its temporary files once it is gone.
+pub fn work_dir_prefix() -> String {
+    format!(".gigawalk-work-{}-", std::process::id())
+}
 
 /// The registry, also after a panic elsewhere: its list stays consistent
 /// because every change is a single push or remove.
@@ -133,8 +218,10 @@ pub fn temp_file_for(path: &Path) -> io::Result<TempFile> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    sweep(dir);
+    let prefix = format!(".gigawalk-{}-", std::process::id());
     let mut b = tempfile::Builder::new();
-    b.prefix(".gigawalk-").suffix(".tmp");
+    b.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt as _;
@@ -177,6 +264,42 @@ pub fn remove_temp_files() -> usize {
 #[cfg(test)]
 mod tests {
     use std::io::Write as _;
+
+    #[test]
+    fn temporaries_of_processes_that_are_gone_are_removed_and_listed() {
+        assert_eq!(super::owner_pid(".gigawalk-123-abc.tmp", false), Some(123));
+        assert_eq!(super::owner_pid(".gigawalk-work-45-x", true), Some(45));
+        assert_eq!(super::owner_pid(".gigawalk-abc.tmp", false), None);
+        assert_eq!(super::owner_pid(".gigawalk-123-abc", false), None);
+        assert_eq!(super::owner_pid(".gigawalk-work-45-x", false), None);
+        assert_eq!(super::owner_pid("scene.gwk", false), None);
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // Above Linux's largest pid: never a running process.
+        let dead = d.join(".gigawalk-4000000000-dead.tmp");
+        let dead_work = d.join(".gigawalk-work-4000000000-w");
+        let mine = d.join(format!(".gigawalk-{}-mine.tmp", std::process::id()));
+        let old = d.join(".gigawalk-old.tmp");
+        for f in [&dead, &mine, &old] {
+            std::fs::write(f, b"x").unwrap();
+        }
+        std::fs::create_dir(&dead_work).unwrap();
+        std::fs::write(dead_work.join("plan.json"), b"{}").unwrap();
+        super::write_atomic(&d.join("out"), b"y").unwrap();
+        assert!(
+            mine.exists() && old.exists(),
+            "a live owner's and an unnamed one stay"
+        );
+        if cfg!(target_os = "linux") {
+            assert!(!dead.exists() && !dead_work.exists());
+            let removed = super::stale_temp_files_removed();
+            assert!(
+                removed.contains(&dead) && removed.contains(&dead_work),
+                "{removed:?}"
+            );
+        }
+        assert_eq!(std::fs::read(d.join("out")).unwrap(), b"y");
+    }
 
     fn listed(p: &std::path::Path) -> bool {
         super::registry().live.iter().any(|l| l == p)

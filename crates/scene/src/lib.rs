@@ -28,7 +28,10 @@ mod validate;
 mod write;
 
 pub use aabb::Aabb;
-pub use atomic::{remove_temp_files, temp_file_for, write_atomic, TempFile};
+pub use atomic::{
+    remove_temp_files, stale_temp_files_removed, temp_file_for, work_dir_prefix, write_atomic,
+    TempFile,
+};
 pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};

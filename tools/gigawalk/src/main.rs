@@ -100,6 +100,19 @@ fn main() -> std::process::ExitCode {
         Command::View(a) => view::run(a),
         Command::GpuRunResults(a) => gpu_run::run(a),
     };
+    // Temporaries of killed gigawalk runs found beside this run's outputs.
+    let stale = gigawalk_scene::stale_temp_files_removed();
+    if !stale.is_empty() {
+        eprintln!(
+            "removed {} temporary file(s) left by gigawalk runs that are gone: {}",
+            stale.len(),
+            stale
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     // A command that finished after a signal (a replay that stopped early
     // and wrote what it measured) still reports the signal.
     let interrupted = signals::exit_status().map(std::process::ExitCode::from);

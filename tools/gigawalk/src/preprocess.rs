@@ -289,8 +289,11 @@ fn split_build(
                 Some(p) if !p.as_os_str().is_empty() => p,
                 _ => Path::new("."),
             };
+            // Named with this process's id: should it be killed, a later
+            // run removes the directory (gigawalk_scene's atomic writes).
+            let prefix = gigawalk_scene::work_dir_prefix();
             temp = tempfile::Builder::new()
-                .prefix(".gigawalk-work-")
+                .prefix(&prefix)
                 .tempdir_in(parent)
                 .with_context(|| format!("cannot make a work directory in {}", parent.display()))?;
             temp.path()

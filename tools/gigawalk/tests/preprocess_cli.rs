@@ -225,3 +225,85 @@ fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
         "{err}"
     );
 }
+
+/// Files in `dir` whose names start with `prefix`.
+fn named(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with(prefix))
+        .map(|e| e.path())
+        .collect()
+}
+
+/// Waits up to a minute for `done` to hold.
+fn wait_for(mut done: impl FnMut() -> bool) -> bool {
+    let t = std::time::Instant::now();
+    while t.elapsed() < std::time::Duration::from_secs(60) {
+        if done() {
+            return true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    false
+}
+
+#[test]
+fn a_split_build_killed_midway_resumes_with_the_same_bytes_and_stale_temporaries_go() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let glb = d.join("p.glb");
+    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "60k", "-o", s(&glb)]);
+    assert!(ok, "{err}");
+    let single = d.join("single.gwk");
+    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&single)]);
+    assert!(ok, "{err}");
+    let work = d.join("work");
+    let out = d.join("split.gwk");
+    let args = [
+        "preprocess",
+        s(&glb),
+        "-o",
+        s(&out),
+        "--work-dir",
+        s(&work),
+        "--shard-triangles",
+        "6k",
+    ];
+    // SIGKILL once the first shard is written: nothing cleans up.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(args)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let first = wait_for(|| work.is_dir() && !named(&work, "shard-").is_empty());
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(first, "no shard was written within a minute");
+    let made = named(&work, "shard-").len();
+    // A temporary file a killed run left (as one killed while writing).
+    let stale = work.join(".gigawalk-4000000000-abcdef.tmp");
+    std::fs::write(&stale, b"half a shard").unwrap();
+    let (ok, _, err) = gigawalk(&args);
+    assert!(ok, "{err}");
+    assert!(
+        std::fs::read(&out).unwrap() == std::fs::read(&single).unwrap(),
+        "resumed bytes differ"
+    );
+    // The rerun found the shards done and redid only the rest.
+    let plan_line = err.lines().find(|l| l.starts_with("plan: ")).expect(&err);
+    let total: usize = plan_line["plan: ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        plan_line.contains(&format!("{} to do", total - made)) || made == total,
+        "{plan_line} ({made} made before the kill)"
+    );
+    if cfg!(target_os = "linux") {
+        assert!(!stale.exists());
+        assert!(err.contains("left by gigawalk runs that are gone"), "{err}");
+    }
+}

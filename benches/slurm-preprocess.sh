@@ -22,6 +22,8 @@ WORK=${WORK:-$(mktemp -d /tmp/gigawalk-slurm-XXXXXX)}
 SHARD_TRIANGLES=${SHARD_TRIANGLES:-200k}
 mkdir -p "$WORK"
 WORK=$(realpath "$WORK")
+# munged runs as the munge user: it must reach its files under WORK.
+chmod 755 "$WORK"
 say() { echo "[slurm-preprocess $(date +%T)] $*" >&2; }
 
 if [ "$(id -u)" != 0 ]; then

@@ -132,9 +132,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let done = shards::run_shard(dir, k, &progress)
                 .with_context(|| format!("shard {k} of {}", dir.display()))?;
             progress.line(&match done {
-                shards::ShardRun::Made => {
-                    format!("shard {k} done in {:.1} s", t.elapsed().as_secs_f64())
-                }
+                shards::ShardRun::Made => format!(
+                    "shard {k} done in {:.1} s, {PEAK}{}",
+                    t.elapsed().as_secs_f64(),
+                    mib(gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0))
+                ),
                 shards::ShardRun::AlreadyDone => format!("shard {k} was already done"),
             });
             return Ok(());
@@ -326,7 +328,7 @@ fn split_build(
             crate::write_stdout(format_args!("{}\n", plan.shards.len()), false)?;
             return Ok(None);
         }
-        run_shards(dir, &todo, args.jobs, progress)?;
+        run_shards(dir, &plan, &todo, args.jobs, progress)?;
     }
     let t = Instant::now();
     let stats = shards::merge(dir, output, progress, &mut |k, why| {
@@ -340,28 +342,81 @@ fn split_build(
     Ok(Some((stats, files)))
 }
 
+/// How a finished shard reports its peak memory on stderr (the parent
+/// reads it back from a worker's output).
+const PEAK: &str = "peak memory ";
+
+fn mib(bytes: u64) -> String {
+    format!("{:.0} MiB", bytes as f64 / (1024.0 * 1024.0))
+}
+
+/// The run's one progress line after each shard: shards and triangles
+/// done, triangles per second, time left at that rate, peak memory.
+struct ShardProgress<'a> {
+    plan: &'a shards::Plan,
+    todo: u64,
+    started: Instant,
+    shards: usize,
+    triangles: u64,
+    worker_peak: u64,
+}
+
+impl ShardProgress<'_> {
+    fn done(&mut self, k: usize, peak: Option<u64>) -> String {
+        self.shards += 1;
+        self.triangles += self.plan.shards[k].triangles;
+        self.worker_peak = self.worker_peak.max(peak.unwrap_or(0));
+        let secs = self.started.elapsed().as_secs_f64().max(1e-3);
+        let rate = self.triangles as f64 / secs;
+        let left = self.todo.saturating_sub(self.triangles) as f64 / rate.max(1.0);
+        let own = gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0);
+        format!(
+            "shards {}/{} done ({} of {} triangles), {:.0} triangles/s, {:.0} s, eta {:.0} s, {PEAK}{} (largest worker {})",
+            self.shards,
+            self.plan.shards.len(),
+            self.triangles,
+            self.todo,
+            rate,
+            secs,
+            left,
+            mib(own),
+            mib(self.worker_peak)
+        )
+    }
+}
+
 /// Runs shards `todo` of the plan in `dir`: in this process with one job,
 /// else in `jobs` worker processes of this binary at a time. The first
 /// failure stops new shards and is the error, with the worker's output.
-fn run_shards(dir: &Path, todo: &[usize], jobs: u32, progress: &Display) -> anyhow::Result<()> {
+fn run_shards(
+    dir: &Path,
+    plan: &shards::Plan,
+    todo: &[usize],
+    jobs: u32,
+    progress: &Display,
+) -> anyhow::Result<()> {
     let t = Instant::now();
+    let line = Mutex::new(ShardProgress {
+        plan,
+        todo: todo.iter().map(|&k| plan.shards[k].triangles).sum(),
+        started: t,
+        shards: plan.shards.len() - todo.len(),
+        triangles: 0,
+        worker_peak: 0,
+    });
     if jobs <= 1 {
-        for (i, &k) in todo.iter().enumerate() {
+        for &k in todo {
             shards::run_shard(dir, k, progress)
                 .with_context(|| format!("shard {k} of {}", dir.display()))?;
-            progress.line(&format!(
-                "shards {}/{} done, {:.1} s",
-                i + 1,
-                todo.len(),
-                t.elapsed().as_secs_f64()
-            ));
+            if let Ok(mut l) = line.lock() {
+                progress.line(&l.done(k, None));
+            }
         }
         return Ok(());
     }
     let exe =
         std::env::current_exe().context("cannot find the gigawalk binary to start workers")?;
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let finished = std::sync::atomic::AtomicUsize::new(0);
     let failed: Mutex<Option<anyhow::Error>> = Mutex::new(None);
     std::thread::scope(|s| {
         for _ in 0..jobs.min(todo.len() as u32) {
@@ -381,27 +436,31 @@ fn run_shards(dir: &Path, todo: &[usize], jobs: u32, progress: &Display) -> anyh
                     .arg(k.to_string())
                     .stdin(std::process::Stdio::null())
                     .output();
-                let error = match out {
-                    Ok(o) if o.status.success() => None,
-                    Ok(o) => Some(anyhow::anyhow!(
-                        "shard {k}'s worker failed ({}):\n{}",
-                        o.status,
-                        String::from_utf8_lossy(&o.stderr).trim_end()
-                    )),
-                    Err(e) => Some(anyhow::anyhow!("cannot start a worker for shard {k}: {e}")),
-                };
-                if let Some(e) = error {
-                    if let Ok(mut f) = failed.lock() {
-                        f.get_or_insert(e);
+                let stderr = match out {
+                    Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stderr).into_owned(),
+                    failure => {
+                        let e = match failure {
+                            Ok(o) => anyhow::anyhow!(
+                                "shard {k}'s worker failed ({}):\n{}",
+                                o.status,
+                                String::from_utf8_lossy(&o.stderr).trim_end()
+                            ),
+                            Err(e) => anyhow::anyhow!("cannot start a worker for shard {k}: {e}"),
+                        };
+                        if let Ok(mut f) = failed.lock() {
+                            f.get_or_insert(e);
+                        }
+                        return;
                     }
-                    return;
+                };
+                // "shard K done in S s, peak memory N MiB"
+                let peak = stderr.rsplit_once(PEAK).and_then(|(_, r)| {
+                    let mib: f64 = r.split_whitespace().next()?.parse().ok()?;
+                    Some((mib * 1024.0 * 1024.0) as u64)
+                });
+                if let Ok(mut l) = line.lock() {
+                    progress.line(&format!("{} [{jobs} workers]", l.done(k, peak)));
                 }
-                let n = finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
-                progress.line(&format!(
-                    "shards {n}/{} done ({jobs} workers), {:.1} s",
-                    todo.len(),
-                    t.elapsed().as_secs_f64()
-                ));
             });
         }
     });

@@ -118,6 +118,26 @@ fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itse
     assert!(!d.join("e.gwk").exists());
     let (ok, _, err) = gigawalk(&["preprocess", "-o", s(&d.join("e.gwk"))]);
     assert!(!ok && err.contains("MODEL"), "{err}");
+    // A .gltf whose external buffer is short, among good files.
+    let gltf = d.join("short/m.gltf");
+    std::fs::create_dir(d.join("short")).unwrap();
+    std::fs::write(
+        &gltf,
+        r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"b.bin","byteLength":1000}],"scenes":[{"nodes":[]}]}"#,
+    )
+    .unwrap();
+    std::fs::write(d.join("short/b.bin"), [0u8; 100]).unwrap();
+    let (ok, _, err) = gigawalk(&["preprocess", s(&obj), s(&gltf), "-o", s(&d.join("e.gwk"))]);
+    assert!(
+        !ok && err.contains("m.gltf") && err.contains("holds 100 bytes but declares 1000"),
+        "{err}"
+    );
+    assert!(!d.join("e.gwk").exists());
+    assert!(
+        named(d, ".gigawalk").is_empty(),
+        "temporaries left: {:?}",
+        named(d, ".gigawalk")
+    );
 }
 
 #[test]

@@ -133,6 +133,8 @@ pub enum PreprocessError {
     Input(#[from] InputError),
     #[error("cannot write the scene file")]
     Write(#[source] Box<dyn std::error::Error + Send + Sync>),
+    #[error("a shard's output: {0}")]
+    Shard(String),
 }
 
 /// The hierarchy and the run's statistics; the LODs are in the sink.
@@ -281,10 +283,13 @@ pub(crate) enum Role<'a> {
     Merge { given: &'a mut Given },
 }
 
-/// Levels made by shards, for the merge.
+/// Levels made by shards, for the merge: where each node's LODs are in
+/// the (checked) shard files, read when the node's turn comes so only a
+/// batch of them is in memory; and the shard roots' [`Done`].
 #[derive(Default)]
 pub(crate) struct Given {
-    pub(crate) lods: std::collections::HashMap<u32, Vec<(LodMesh, f32)>>,
+    pub(crate) files: Vec<std::fs::File>,
+    pub(crate) lods: std::collections::HashMap<u32, (usize, std::ops::Range<usize>)>,
     pub(crate) done: std::collections::HashMap<u32, Done>,
 }
 
@@ -454,7 +459,7 @@ pub(crate) fn build_role<S: LodSink>(
             .collect();
         let mut made = made.into_iter();
         for &ni in batch {
-            let (lods, d) = match take(&mut role, ni) {
+            let (lods, d) = match take(&mut role, ni)? {
                 Some(f) => f,
                 None => made.next().expect("one made per node not given"),
             };
@@ -521,7 +526,7 @@ pub(crate) fn build_role<S: LodSink>(
                 .collect();
             let mut made = made.into_iter();
             for &ni in batch {
-                let (lods, d) = match take(&mut role, ni) {
+                let (lods, d) = match take(&mut role, ni)? {
                     Some(f) => f,
                     None => made.next().expect("one made per node not given"),
                 };
@@ -572,16 +577,20 @@ pub(crate) fn build_role<S: LodSink>(
 /// A merge's node made by a shard: its levels, and what it leaves for its
 /// parent (a shard root's [`Done`]; nothing for a node inside a shard,
 /// whose parent was made there too).
-fn take(role: &mut Role, ni: usize) -> Option<Finished> {
+fn take(role: &mut Role, ni: usize) -> Result<Option<Finished>, PreprocessError> {
     let Role::Merge { given } = role else {
-        return None;
+        return Ok(None);
     };
-    let lods = given.lods.remove(&(ni as u32))?;
+    let Some((file, range)) = given.lods.remove(&(ni as u32)) else {
+        return Ok(None);
+    };
+    let lods = shards::read_node_lods(&mut given.files[file], range)
+        .map_err(|why| PreprocessError::Shard(format!("node {ni}: {why}")))?;
     let done = given.done.remove(&(ni as u32)).unwrap_or(Done {
         levels: Vec::new(),
         full: None,
     });
-    Some((lods, done))
+    Ok(Some((lods, done)))
 }
 
 /// A node's levels in the scene file's form, and what it leaves for its

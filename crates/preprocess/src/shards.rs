@@ -482,8 +482,12 @@ pub fn merge(
                 read_shard(&path, &plan, spec.index)?
             }
         };
-        let (lods, done) = shard;
-        given.lods.extend(lods);
+        let (file, (lods, done)) = shard;
+        let f = given.files.len();
+        given.files.push(file);
+        given
+            .lods
+            .extend(lods.into_iter().map(|(ni, r)| (ni, (f, r))));
         given.done.extend(done);
     }
     let layout = planned_layout(&plan, &model, progress)?;
@@ -666,6 +670,16 @@ impl<'a> Get<'a> {
             indices,
         })
     }
+    /// One node's LODs, as `Put::node_lods` wrote them.
+    fn node_lods(&mut self) -> R<Vec<(LodMesh, f32)>> {
+        let n = self.len(8)?;
+        (0..n)
+            .map(|_| {
+                let e = self.f32()?;
+                Ok((self.lod_mesh()?, e))
+            })
+            .collect()
+    }
     fn work_mesh(&mut self) -> R<WorkMesh> {
         let origin = self.dvec3()?;
         let positions = self.vec3s()?;
@@ -712,6 +726,7 @@ fn encode_shard(plan: &Plan, index: usize, lods: &ShardLods, done: &[(u32, Done)
             p.lod_mesh(m);
         }
     }
+    // (Get::node_lods reads one node's list back.)
     p.len(done.len());
     for (ni, d) in done {
         p.u32(*ni);
@@ -733,26 +748,48 @@ fn encode_shard(plan: &Plan, index: usize, lods: &ShardLods, done: &[(u32, Done)
     p.0
 }
 
-/// Shard `index`'s output at `path`, checked against the plan.
-#[allow(clippy::type_complexity)]
+/// Where each node's LODs lie in a shard file, and its roots' [`Done`].
+type ShardIndex = (HashMap<u32, std::ops::Range<usize>>, HashMap<u32, Done>);
+
+/// Shard `index`'s output at `path`, checked against the plan (every byte
+/// read and its checksum verified); the open file, for reading the LODs
+/// again where the index says.
 fn read_shard(
     path: &Path,
     plan: &Plan,
     index: usize,
-) -> Result<(HashMap<u32, Vec<(LodMesh, f32)>>, HashMap<u32, Done>), ShardError> {
-    let bytes = std::fs::read(path).map_err(io(path))?;
-    decode_shard(&bytes, plan, index).map_err(|reason| ShardError::Corrupt {
+) -> Result<(std::fs::File, ShardIndex), ShardError> {
+    use std::io::Read as _;
+    let mut file = std::fs::File::open(path).map_err(io(path))?;
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes).map_err(io(path))?;
+    let index = decode_shard(&bytes, plan, index).map_err(|reason| ShardError::Corrupt {
         path: path.to_path_buf(),
         reason,
-    })
+    })?;
+    Ok((file, index))
 }
 
-#[allow(clippy::type_complexity)]
-fn decode_shard(
-    bytes: &[u8],
-    plan: &Plan,
-    index: usize,
-) -> R<(HashMap<u32, Vec<(LodMesh, f32)>>, HashMap<u32, Done>)> {
+/// One node's LODs from a shard file checked by [`read_shard`], at the
+/// range its index gave.
+pub(crate) fn read_node_lods(
+    file: &mut std::fs::File,
+    range: std::ops::Range<usize>,
+) -> Result<Vec<(LodMesh, f32)>, String> {
+    use std::io::{Read as _, Seek as _};
+    let mut bytes = vec![0u8; range.len()];
+    file.seek(std::io::SeekFrom::Start(range.start as u64))
+        .and_then(|_| file.read_exact(&mut bytes))
+        .map_err(|e| format!("cannot read a shard file again: {e}"))?;
+    let mut g = Get { b: &bytes };
+    let lods = g.node_lods()?;
+    if !g.b.is_empty() {
+        return Err("a node's LODs do not fill their range".into());
+    }
+    Ok(lods)
+}
+
+fn decode_shard(bytes: &[u8], plan: &Plan, index: usize) -> R<ShardIndex> {
     let Some((body, crc)) = bytes.split_last_chunk::<4>() else {
         return Err("too short".into());
     };
@@ -777,14 +814,9 @@ fn decode_shard(
     let mut lods = HashMap::with_capacity(nodes);
     for _ in 0..nodes {
         let ni = g.u32()?;
-        let n = g.len(8)?;
-        let l = (0..n)
-            .map(|_| {
-                let e = g.f32()?;
-                Ok((g.lod_mesh()?, e))
-            })
-            .collect::<R<Vec<_>>>()?;
-        if lods.insert(ni, l).is_some() {
+        let start = body.len() - g.b.len();
+        g.node_lods()?;
+        if lods.insert(ni, start..body.len() - g.b.len()).is_some() {
             return Err(format!("node {ni} twice"));
         }
     }
@@ -872,9 +904,23 @@ mod tests {
         )];
         let bytes = encode_shard(&plan, 0, &lods, &done);
         let (l, d) = decode_shard(&bytes, &plan, 0).unwrap();
-        assert_eq!(l[&1], lods[0].1);
-        assert!(l[&2].is_empty());
+        let node = |ni: u32| {
+            Get {
+                b: &bytes[l[&ni].clone()],
+            }
+            .node_lods()
+            .unwrap()
+        };
+        assert_eq!(node(1), lods[0].1);
+        assert!(node(2).is_empty());
         assert_eq!(d[&1], done[0].1);
+        // Read back through a file, as the merge does.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.bin");
+        std::fs::write(&path, &bytes).unwrap();
+        let (mut file, (l, _)) = read_shard(&path, &plan, 0).unwrap();
+        assert_eq!(read_node_lods(&mut file, l[&1].clone()).unwrap(), lods[0].1);
+        assert!(read_node_lods(&mut file, l[&1].start..l[&1].end - 1).is_err());
         for i in (0..bytes.len()).step_by(7) {
             let mut b = bytes.clone();
             b[i] ^= 0x10;

@@ -235,8 +235,26 @@ fn a_failing_stage_ends_every_cpu_schedule_with_its_error() {
             let mut o = options(schedule, true, CullMethod::Hzb);
             o.async_rvg = async_rvg;
             o.inject_failure = Some((stage, 5));
+            // Asynchronous RVG does not wait for OR and STC once it has a
+            // set: on a loaded machine it could draw the whole walk before
+            // they reach frame 5, so it gets a walk long enough not to.
+            let walk: Vec<Pose> = match async_rvg {
+                true => poses
+                    .iter()
+                    .cycle()
+                    .take(poses.len() * 20)
+                    .cloned()
+                    .collect(),
+                false => poses.clone(),
+            };
             let t = Instant::now();
-            let e = run(&scene, &o, &mut cameras(&scene, &poses)).unwrap_err();
+            let e = match run(&scene, &o, &mut cameras(&scene, &walk)) {
+                Ok(f) => panic!(
+                    "{schedule:?} async {async_rvg} {stage}: {} frames and no injected error",
+                    f.len()
+                ),
+                Err(e) => e,
+            };
             assert!(
                 matches!(e, RuntimeError::Injected { stage: s, .. } if s == stage),
                 "{schedule:?} async {async_rvg} {stage}: {e}"

@@ -140,17 +140,23 @@ fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itse
     );
 }
 
-#[test]
-fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
-    let t = tempfile::tempdir().unwrap();
-    let d = t.path();
+/// A generated plant of `triangles` in `d`, and the bytes of its plain
+/// one-process build (the reference every split build must equal).
+fn plant_and_reference(d: &Path, triangles: &str) -> (std::path::PathBuf, Vec<u8>) {
     let glb = d.join("p.glb");
-    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "20k", "-o", s(&glb)]);
+    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", triangles, "-o", s(&glb)]);
     assert!(ok, "{err}");
     let single = d.join("single.gwk");
     let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&single)]);
     assert!(ok, "{err}");
-    let reference = std::fs::read(&single).unwrap();
+    (glb, std::fs::read(&single).unwrap())
+}
+
+#[test]
+fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let (glb, reference) = plant_and_reference(d, "20k");
 
     // Plan, shards in reverse order, merge.
     let work = d.join("work");
@@ -272,12 +278,7 @@ fn wait_for(mut done: impl FnMut() -> bool) -> bool {
 fn a_split_build_killed_midway_resumes_with_the_same_bytes_and_stale_temporaries_go() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let glb = d.join("p.glb");
-    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "60k", "-o", s(&glb)]);
-    assert!(ok, "{err}");
-    let single = d.join("single.gwk");
-    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&single)]);
-    assert!(ok, "{err}");
+    let (glb, reference) = plant_and_reference(d, "60k");
     let work = d.join("work");
     let out = d.join("split.gwk");
     let args = [
@@ -307,7 +308,7 @@ fn a_split_build_killed_midway_resumes_with_the_same_bytes_and_stale_temporaries
     let (ok, _, err) = gigawalk(&args);
     assert!(ok, "{err}");
     assert!(
-        std::fs::read(&out).unwrap() == std::fs::read(&single).unwrap(),
+        std::fs::read(&out).unwrap() == reference,
         "resumed bytes differ"
     );
     // The rerun found the shards done and redid only the rest.

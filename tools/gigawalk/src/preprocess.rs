@@ -36,7 +36,7 @@ pub struct Args {
     /// With --work-dir and -o: finish the scene from DIR's shards (making any that are missing or corrupt)
     #[arg(long, requires = "work_dir")]
     merge: bool,
-    /// Worker processes for the shards (each a `gigawalk preprocess --shard K`); above 1 the build is split (in --work-dir, or a temporary directory beside the output). The scene is the same bytes at any count
+    /// Worker processes for the shards (each a `gigawalk preprocess --shard K`); above 1 the build is split (in --work-dir, or a temporary directory beside the output). The scene is the same bytes at any count. One process already uses every core, so on one machine this is slower (1.2x on the 10M plant, 2 cores): it is for resumable runs and for trying a split before a cluster runs it
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
     jobs: u32,
     /// Triangles per shard of a split build (e.g. 500k, 2M): how the work splits depends on the model and this only, never on --jobs

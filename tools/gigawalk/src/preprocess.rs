@@ -17,12 +17,12 @@ pub struct Args {
     #[arg(num_args = 1.., value_name = "MODEL", required_unless_present_any = ["shard", "merge"], conflicts_with_all = ["shard", "merge"])]
     input: Vec<PathBuf>,
     /// Output scene file (.gwk), written atomically: nothing appears on failure
-    #[arg(short, long, required_unless_present_any = ["shard", "plan_only"], conflicts_with_all = ["shard", "plan_only"])]
+    #[arg(short, long, required_unless_present_any = ["shard", "plan_only"], conflicts_with = "shard")]
     output: Option<PathBuf>,
     /// Split the build into shards kept in this directory (plan.json and one file per shard, docs/preprocess.md "Split builds"): a rerun with the same inputs and parameters redoes only the shards that did not finish, and any number of machines sharing the directory may run them
     #[arg(long, value_name = "DIR")]
     work_dir: Option<PathBuf>,
-    /// With --work-dir and MODEL: write DIR/plan.json and print the number of shards N on stdout, nothing else
+    /// With --work-dir and MODEL: write DIR/plan.json and print the number of shards N on stdout, nothing else (-o may be given and is not written: --merge writes it)
     #[arg(long, requires = "work_dir", conflicts_with_all = ["shard", "merge"])]
     plan_only: bool,
     /// With --work-dir: run shard K of DIR's plan (0 <= K < N; nothing to do when its output is there and valid)

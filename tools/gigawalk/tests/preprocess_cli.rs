@@ -158,11 +158,15 @@ fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
     let d = t.path();
     let (glb, reference) = plant_and_reference(d, "20k");
 
-    // Plan, shards in reverse order, merge.
+    // Plan (with -o, as a script might pass it), shards in reverse
+    // order, merge.
     let work = d.join("work");
+    let merged = d.join("merged.gwk");
     let (ok, out, err) = gigawalk(&[
         "preprocess",
         s(&glb),
+        "-o",
+        s(&merged),
         "--work-dir",
         s(&work),
         "--plan-only",
@@ -185,7 +189,7 @@ fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
     }
     let (ok, _, err) = gigawalk(&["preprocess", "--work-dir", s(&work), "--shard", "0"]);
     assert!(ok && err.contains("already done"), "{err}");
-    let merged = d.join("merged.gwk");
+    assert!(!merged.exists(), "--plan-only wrote the scene");
     let (ok, _, err) = gigawalk(&[
         "preprocess",
         "--work-dir",

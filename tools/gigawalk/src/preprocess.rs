@@ -529,6 +529,15 @@ impl Progress for Display {
                 bar.finish_and_clear();
             }
         }
-        eprintln!("{:>13} done in {seconds:.2} s", phase.name());
+        // The peak so far, so a run near the machine's memory shows it
+        // before the end.
+        match gigawalk_preprocess::stats::peak_memory_bytes() {
+            Some(peak) => eprintln!(
+                "{:>13} done in {seconds:.2} s, {PEAK}{} so far",
+                phase.name(),
+                mib(peak)
+            ),
+            None => eprintln!("{:>13} done in {seconds:.2} s", phase.name()),
+        }
     }
 }

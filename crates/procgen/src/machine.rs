@@ -487,8 +487,20 @@ impl Asm {
 fn bolt(m: &mut Mesh, at: Vec3, n: Vec3, d: f32, len: f32) {
     let fine = d >= 0.014;
     let shank = circle(0.5 * d, if fine { 12 } else { 6 });
-    let head = hexagon(1.6 * d, fine);
-    let h = 0.65 * d;
+    headed_shank(m, at, n, shank, hexagon(1.6 * d, fine), len, 0.65 * d);
+}
+
+/// A shank `len` into the surface at `at` under a head `h` tall facing
+/// `n`, both prisms of their outlines, capped: bolts and screws.
+fn headed_shank(
+    m: &mut Mesh,
+    at: Vec3,
+    n: Vec3,
+    shank: Vec<Vec2>,
+    head: Vec<Vec2>,
+    len: f32,
+    h: f32,
+) {
     m.loft(
         &Frame::along(at, n),
         &[
@@ -539,19 +551,7 @@ fn rivet(m: &mut Mesh, at: Vec3, n: Vec3, d: f32) {
 
 /// Socket-head cap screw: round head on the surface at `at`, 64 triangles.
 fn screw(m: &mut Mesh, at: Vec3, n: Vec3, d: f32, len: f32) {
-    let (shank, head) = (circle(0.5 * d, 8), circle(0.8 * d, 8));
-    m.loft(
-        &Frame::along(at, n),
-        &[
-            Ring::apex(-len),
-            Ring::new(-len, shank.clone()),
-            Ring::new(0.0, shank),
-            Ring::new(0.0, head.clone()),
-            Ring::new(d, head),
-            Ring::apex(d),
-        ],
-        false,
-    );
+    headed_shank(m, at, n, circle(0.5 * d, 8), circle(0.8 * d, 8), len, d);
 }
 
 /// Solid cylinder of radius `r` along `f.w` from `z0` to `z1`: `4 * sides`
@@ -2575,34 +2575,14 @@ mod tests {
             pos.extend(m.positions.iter().map(|p| p.to_array().map(f32::to_bits)));
             tris.extend(m.indices.iter().map(|i| i + base));
         }
-        let mut order: Vec<usize> = (0..pos.len()).collect();
-        order.sort_by_key(|&i| pos[i]);
-        let mut parent: Vec<usize> = (0..pos.len()).collect();
-        fn root(p: &mut [usize], mut i: usize) -> usize {
-            while p[i] != i {
-                p[i] = p[p[i]];
-                i = p[i];
+        let mut count = Vec::new();
+        for p in crate::shapes::welded_pieces(&pos, &tris) {
+            if p == count.len() {
+                count.push(0);
             }
-            i
+            count[p] += 1;
         }
-        let join = |p: &mut Vec<usize>, a: usize, b: usize| {
-            let (ra, rb) = (root(p, a), root(p, b));
-            p[ra] = rb;
-        };
-        for w in order.windows(2) {
-            if pos[w[0]] == pos[w[1]] {
-                join(&mut parent, w[0], w[1]);
-            }
-        }
-        for t in tris.chunks_exact(3) {
-            join(&mut parent, t[0] as usize, t[1] as usize);
-            join(&mut parent, t[0] as usize, t[2] as usize);
-        }
-        let mut count = vec![0usize; pos.len()];
-        for t in tris.chunks_exact(3) {
-            count[root(&mut parent, t[0] as usize)] += 1;
-        }
-        count.into_iter().filter(|&c| c > 0).collect()
+        count
     }
 
     /// Names the parts that share a position with another part.

@@ -519,6 +519,48 @@ impl Mesh {
     }
 }
 
+/// Each triangle's connected piece, numbered from 0 in order of first
+/// appearance, once vertices with equal `keys` are welded: the pieces a
+/// simplifier sees (the tests count a model's parts with it).
+pub fn welded_pieces<K: Ord>(keys: &[K], indices: &[u32]) -> Vec<usize> {
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let join = |p: &mut [usize], a: usize, b: usize| {
+        let (ra, rb) = (root(p, a), root(p, b));
+        p[ra] = rb;
+    };
+    let mut parent: Vec<usize> = (0..keys.len()).collect();
+    let mut order: Vec<usize> = (0..keys.len()).collect();
+    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]));
+    for w in order.windows(2) {
+        if keys[w[0]] == keys[w[1]] {
+            join(&mut parent, w[0], w[1]);
+        }
+    }
+    for t in indices.chunks_exact(3) {
+        join(&mut parent, t[0] as usize, t[1] as usize);
+        join(&mut parent, t[0] as usize, t[2] as usize);
+    }
+    let mut number = vec![usize::MAX; keys.len()];
+    let mut next = 0;
+    indices
+        .chunks_exact(3)
+        .map(|t| {
+            let r = root(&mut parent, t[0] as usize);
+            if number[r] == usize::MAX {
+                number[r] = next;
+                next += 1;
+            }
+            number[r]
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -575,41 +617,15 @@ mod tests {
 
     /// Connected pieces once equal positions are welded.
     fn pieces(m: &Mesh) -> usize {
-        let key = |p: Vec3| p.to_array().map(f32::to_bits);
-        let mut order: Vec<u32> = (0..m.positions.len() as u32).collect();
-        order.sort_by_key(|&i| key(m.positions[i as usize]));
-        let mut weld = vec![0u32; m.positions.len()];
-        for w in 0..order.len() {
-            let i = order[w] as usize;
-            weld[i] = if w > 0 && key(m.positions[order[w - 1] as usize]) == key(m.positions[i]) {
-                weld[order[w - 1] as usize]
-            } else {
-                i as u32
-            };
-        }
-        let mut parent: Vec<u32> = (0..m.positions.len() as u32).collect();
-        fn root(p: &mut [u32], mut i: u32) -> u32 {
-            while p[i as usize] != i {
-                p[i as usize] = p[p[i as usize] as usize];
-                i = p[i as usize];
-            }
-            i
-        }
-        for t in m.indices.chunks_exact(3) {
-            let r0 = root(&mut parent, weld[t[0] as usize]);
-            for &v in &t[1..] {
-                let r = root(&mut parent, weld[v as usize]);
-                parent[r as usize] = r0;
-            }
-        }
-        let mut roots: Vec<u32> = m
-            .indices
+        let keys: Vec<[u32; 3]> = m
+            .positions
             .iter()
-            .map(|&v| root(&mut parent, weld[v as usize]))
+            .map(|p| p.to_array().map(f32::to_bits))
             .collect();
-        roots.sort_unstable();
-        roots.dedup();
-        roots.len()
+        welded_pieces(&keys, &m.indices)
+            .into_iter()
+            .max()
+            .map_or(0, |n| n + 1)
     }
 
     #[test]

@@ -52,43 +52,21 @@ fn pieces(model: &Model, objects: &[usize]) -> Vec<(usize, f64)> {
         pos.extend(o.positions.iter().copied());
         tris.extend(o.indices.iter().map(|i| i + base));
     }
-    let key = |i: usize| pos[i].to_array().map(f64::to_bits);
-    let mut order: Vec<usize> = (0..pos.len()).collect();
-    order.sort_by_key(|&i| key(i));
-    let mut parent: Vec<usize> = (0..pos.len()).collect();
-    fn root(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
+    let keys: Vec<[u64; 3]> = pos.iter().map(|p| p.to_array().map(f64::to_bits)).collect();
+    let mut out: Vec<(usize, Aabb)> = Vec::new();
+    for (t, p) in tris
+        .chunks_exact(3)
+        .zip(gigawalk_procgen::shapes::welded_pieces(&keys, &tris))
+    {
+        if p == out.len() {
+            out.push((0, Aabb::EMPTY));
         }
-        i
-    }
-    let join = |p: &mut Vec<usize>, a: usize, b: usize| {
-        let (ra, rb) = (root(p, a), root(p, b));
-        p[ra] = rb;
-    };
-    for w in order.windows(2) {
-        if key(w[0]) == key(w[1]) {
-            join(&mut parent, w[0], w[1]);
-        }
-    }
-    for t in tris.chunks_exact(3) {
-        join(&mut parent, t[0] as usize, t[1] as usize);
-        join(&mut parent, t[0] as usize, t[2] as usize);
-    }
-    let mut count = vec![0usize; pos.len()];
-    let mut boxes = vec![Aabb::EMPTY; pos.len()];
-    for t in tris.chunks_exact(3) {
-        let r = root(&mut parent, t[0] as usize);
-        count[r] += 1;
+        out[p].0 += 1;
         for &v in t {
-            boxes[r].grow(pos[v as usize]);
+            out[p].1.grow(pos[v as usize]);
         }
     }
-    (0..pos.len())
-        .filter(|&r| count[r] > 0)
-        .map(|r| (count[r], boxes[r].diagonal()))
-        .collect()
+    out.into_iter().map(|(n, b)| (n, b.diagonal())).collect()
 }
 
 #[test]

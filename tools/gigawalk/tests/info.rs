@@ -5,17 +5,8 @@ use std::process::Command;
 use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneWriter, NO_NODE};
 use glam::DVec3;
 
-fn gigawalk(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+mod common;
+use common::gigawalk;
 
 /// Root with two leaf triangles; each leaf has LODs of 2 and 1 triangles.
 fn write_scene(path: &std::path::Path) {

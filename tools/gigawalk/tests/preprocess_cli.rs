@@ -4,21 +4,8 @@
 use std::path::Path;
 use std::process::Command;
 
-fn gigawalk(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{gigawalk, s};
 
 /// `input_triangles` of a `--stats` file.
 fn input_triangles(stats: &Path) -> u64 {

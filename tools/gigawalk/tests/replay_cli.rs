@@ -2,23 +2,9 @@
 //! with a non-zero exit code; a small generated plant replays into a report.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn gigawalk(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{gigawalk, s};
 
 /// `gigawalk replay SCENE --path PATH --out OUT` with `more` flags.
 fn replay(gwk: &Path, path: &Path, out: &Path, more: &[&str]) -> (bool, String, String) {

@@ -70,6 +70,17 @@ fn run(
     Ok(frames)
 }
 
+/// The walk without occlusion, sequential: the image every conservative
+/// run must match.
+fn full_detail(scene: &SceneReader, poses: &[Pose]) -> Vec<FrameReport> {
+    run(
+        scene,
+        &options(Schedule::Sequential, false, CullMethod::Hzb),
+        &mut cameras(scene, poses),
+    )
+    .unwrap()
+}
+
 fn depth(r: &FrameReport) -> &[f32] {
     &r.image.as_ref().expect("read back").depth.depth
 }
@@ -78,12 +89,7 @@ fn depth(r: &FrameReport) -> &[f32] {
 fn every_schedule_and_culler_on_the_cpu_loses_no_pixel_and_pipelined_culls_as_sequential() {
     let dir = tempfile::tempdir().unwrap();
     let (scene, poses) = city(dir.path());
-    let reference = run(
-        &scene,
-        &options(Schedule::Sequential, false, CullMethod::Hzb),
-        &mut cameras(&scene, &poses),
-    )
-    .unwrap();
+    let reference = full_detail(&scene, &poses);
     assert_eq!(reference.len(), poses.len());
     // Occlusion queries need a device.
     let e = run(
@@ -143,12 +149,7 @@ fn every_schedule_and_culler_on_the_cpu_loses_no_pixel_and_pipelined_culls_as_se
 fn an_adaptive_occluder_budget_probes_and_loses_no_pixel_in_every_cpu_schedule() {
     let dir = tempfile::tempdir().unwrap();
     let (scene, poses) = city(dir.path());
-    let reference = run(
-        &scene,
-        &options(Schedule::Sequential, false, CullMethod::Hzb),
-        &mut cameras(&scene, &poses),
-    )
-    .unwrap();
+    let reference = full_detail(&scene, &poses);
     for (schedule, async_rvg) in [
         (Schedule::Sequential, false),
         (Schedule::Pipelined, false),

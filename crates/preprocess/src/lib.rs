@@ -245,6 +245,7 @@ pub fn build<S: LodSink>(
 /// Steps 1-5: the parts and the hierarchy over them, before any LOD.
 /// Cheap next to the LODs, and a function of the model and parameters
 /// only, so every shard of a split build makes the same one.
+#[derive(Clone)]
 pub(crate) struct Layout {
     parts: Vec<Part>,
     pub(crate) tree: Vec<hierarchy::HNode>,

@@ -375,29 +375,137 @@ pub enum ShardRun {
 }
 
 /// Runs shard `index` of the plan in `dir`, unless its output is there
-/// and valid.
+/// and valid (then nothing is imported).
 pub fn run_shard(
     dir: &Path,
     index: usize,
     progress: &dyn Progress,
 ) -> Result<ShardRun, ShardError> {
     let plan = read_plan(dir)?;
-    let spec = plan
-        .shards
-        .get(index)
-        .ok_or(ShardError::NoSuchShard {
-            index,
-            count: plan.shards.len(),
-        })?
-        .clone();
-    let path = shard_path(dir, &plan, index);
-    if read_shard(&path, &plan, index).is_ok() {
+    let spec = shard_spec(&plan, index)?;
+    if read_shard(&shard_path(dir, &plan, index), &plan, index).is_ok() {
         return Ok(ShardRun::AlreadyDone);
     }
-    let model = import_planned(&plan)?;
-    let layout = planned_layout(&plan, &model, progress)?;
-    make_shard(&plan, &spec, &model, layout, &path, progress)?;
+    Planned::open(dir, progress)?.make(spec, progress)?;
     Ok(ShardRun::Made)
+}
+
+fn shard_spec(plan: &Plan, index: usize) -> Result<&ShardSpec, ShardError> {
+    plan.shards.get(index).ok_or(ShardError::NoSuchShard {
+        index,
+        count: plan.shards.len(),
+    })
+}
+
+/// A plan's model, its inputs checked, imported and laid out once, for
+/// any number of shards and the merge in one process.
+pub struct Planned {
+    dir: PathBuf,
+    plan: Plan,
+    model: Model,
+    layout: Layout,
+}
+
+impl Planned {
+    /// The plan in `dir` and its model.
+    pub fn open(dir: &Path, progress: &dyn Progress) -> Result<Planned, ShardError> {
+        let plan = read_plan(dir)?;
+        let model = import_planned(&plan)?;
+        let layout = planned_layout(&plan, &model, progress)?;
+        Ok(Planned {
+            dir: dir.to_path_buf(),
+            plan,
+            model,
+            layout,
+        })
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// Runs shard `index`, unless its output is there and valid.
+    pub fn run_shard(&self, index: usize, progress: &dyn Progress) -> Result<ShardRun, ShardError> {
+        let spec = shard_spec(&self.plan, index)?;
+        if read_shard(&shard_path(&self.dir, &self.plan, index), &self.plan, index).is_ok() {
+            return Ok(ShardRun::AlreadyDone);
+        }
+        self.make(spec, progress)?;
+        Ok(ShardRun::Made)
+    }
+
+    /// Makes shard `spec` and writes its output.
+    fn make(&self, spec: &ShardSpec, progress: &dyn Progress) -> Result<(), ShardError> {
+        let path = shard_path(&self.dir, &self.plan, spec.index);
+        make_shard(
+            &self.plan,
+            spec,
+            &self.model,
+            self.layout.clone(),
+            &path,
+            progress,
+        )
+    }
+
+    /// Finishes the scene: any shard not done (or whose output is
+    /// corrupt) is made first, here, and `redo` hears of it; then the
+    /// levels above the shards, and the scene file, written atomically to
+    /// `output`.
+    pub fn merge(
+        self,
+        output: &Path,
+        progress: &dyn Progress,
+        redo: &mut dyn FnMut(usize, &ShardError),
+    ) -> Result<Stats, ShardError> {
+        let (dir, plan) = (&self.dir, &self.plan);
+        let mut given = Given::default();
+        for spec in &plan.shards {
+            let path = shard_path(dir, plan, spec.index);
+            let shard = match read_shard(&path, plan, spec.index) {
+                Ok(s) => s,
+                Err(e) => {
+                    redo(spec.index, &e);
+                    self.make(spec, progress)?;
+                    read_shard(&path, plan, spec.index)?
+                }
+            };
+            let (file, (lods, done)) = shard;
+            let f = given.files.len();
+            given.files.push(file);
+            given
+                .lods
+                .extend(lods.into_iter().map(|(ni, r)| (ni, (f, r))));
+            given.done.extend(done);
+        }
+        // Every node below a shard root is given, and nothing else.
+        let roots: Vec<u32> = plan.shards.iter().flat_map(|s| s.roots.clone()).collect();
+        let mask = subtree_mask(&self.layout.tree, &roots);
+        let expected = mask.iter().filter(|&&m| m).count();
+        if given.lods.len() != expected
+            || !given
+                .lods
+                .keys()
+                .all(|&k| mask.get(k as usize) == Some(&true))
+            || roots.iter().any(|r| !given.done.contains_key(r))
+        {
+            return Err(ShardError::LayoutChanged {
+                what: format!(
+                    "the shards hold {} nodes, the plan's subtrees {expected}",
+                    given.lods.len()
+                ),
+            });
+        }
+        let stats = crate::write_scene(
+            &self.model,
+            &plan.params,
+            self.layout,
+            output,
+            &plan.source,
+            progress,
+            Role::Merge { given: &mut given },
+        )?;
+        Ok(stats)
+    }
 }
 
 fn make_shard(
@@ -458,67 +566,14 @@ pub fn unfinished_shards(dir: &Path, plan: &Plan) -> Vec<usize> {
         .collect()
 }
 
-/// Finishes the scene from the plan in `dir`: any shard not done (or
-/// whose output is corrupt) is made first, in this process, and `redo`
-/// hears of it; then the levels above the shards, and the scene file,
-/// written atomically to `output`.
+/// Finishes the scene from the plan in `dir` ([`Planned::merge`]).
 pub fn merge(
     dir: &Path,
     output: &Path,
     progress: &dyn Progress,
     redo: &mut dyn FnMut(usize, &ShardError),
 ) -> Result<Stats, ShardError> {
-    let plan = read_plan(dir)?;
-    let model = import_planned(&plan)?;
-    let mut given = Given::default();
-    for spec in &plan.shards {
-        let path = shard_path(dir, &plan, spec.index);
-        let shard = match read_shard(&path, &plan, spec.index) {
-            Ok(s) => s,
-            Err(e) => {
-                redo(spec.index, &e);
-                let layout = planned_layout(&plan, &model, progress)?;
-                make_shard(&plan, spec, &model, layout, &path, progress)?;
-                read_shard(&path, &plan, spec.index)?
-            }
-        };
-        let (file, (lods, done)) = shard;
-        let f = given.files.len();
-        given.files.push(file);
-        given
-            .lods
-            .extend(lods.into_iter().map(|(ni, r)| (ni, (f, r))));
-        given.done.extend(done);
-    }
-    let layout = planned_layout(&plan, &model, progress)?;
-    // Every node below a shard root is given, and nothing else.
-    let roots: Vec<u32> = plan.shards.iter().flat_map(|s| s.roots.clone()).collect();
-    let mask = subtree_mask(&layout.tree, &roots);
-    let expected = mask.iter().filter(|&&m| m).count();
-    if given.lods.len() != expected
-        || !given
-            .lods
-            .keys()
-            .all(|&k| mask.get(k as usize) == Some(&true))
-        || roots.iter().any(|r| !given.done.contains_key(r))
-    {
-        return Err(ShardError::LayoutChanged {
-            what: format!(
-                "the shards hold {} nodes, the plan's subtrees {expected}",
-                given.lods.len()
-            ),
-        });
-    }
-    let stats = crate::write_scene(
-        &model,
-        &plan.params,
-        layout,
-        output,
-        &plan.source,
-        progress,
-        Role::Merge { given: &mut given },
-    )?;
-    Ok(stats)
+    Planned::open(dir, progress)?.merge(output, progress, redo)
 }
 
 // ---- shard files ----

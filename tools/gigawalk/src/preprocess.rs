@@ -301,6 +301,13 @@ fn split_build(
             temp.path()
         }
     };
+    // The model imported and laid out once for the shards run here and
+    // the merge.
+    let open = || {
+        shards::Planned::open(dir, progress)
+            .with_context(|| format!("cannot read the plan and model of {}", dir.display()))
+    };
+    let mut planned = None;
     if !args.merge {
         let t = Instant::now();
         progress.line(&format!("planning {inputs}"));
@@ -328,17 +335,31 @@ fn split_build(
             crate::write_stdout(format_args!("{}\n", plan.shards.len()), false)?;
             return Ok(None);
         }
-        run_shards(dir, &plan, &todo, args.jobs, progress)?;
+        if args.jobs <= 1 && !todo.is_empty() {
+            let here = open()?;
+            run_shards_here(&here, &todo, progress)?;
+            planned = Some(here);
+        } else {
+            run_workers(dir, &plan, &todo, args.jobs, progress)?;
+        }
     }
+    let planned = match planned {
+        Some(p) => p,
+        None => open()?,
+    };
+    let files = planned
+        .plan()
+        .inputs
+        .iter()
+        .map(|f| f.path.clone())
+        .collect();
     let t = Instant::now();
-    let stats = shards::merge(dir, output, progress, &mut |k, why| {
-        progress.line(&format!("shard {k} is not done ({why}): making it here"))
-    })
-    .with_context(|| format!("cannot merge {} into {}", dir.display(), output.display()))?;
+    let stats = planned
+        .merge(output, progress, &mut |k, why| {
+            progress.line(&format!("shard {k} is not done ({why}): making it here"))
+        })
+        .with_context(|| format!("cannot merge {} into {}", dir.display(), output.display()))?;
     progress.line(&format!("merge done in {:.1} s", t.elapsed().as_secs_f64()));
-    let files = shards::read_plan(dir)
-        .map(|p| p.inputs.into_iter().map(|f| f.path).collect())
-        .unwrap_or_default();
     Ok(Some((stats, files)))
 }
 
@@ -385,35 +406,46 @@ impl ShardProgress<'_> {
     }
 }
 
-/// Runs shards `todo` of the plan in `dir`: in this process with one job,
-/// else in `jobs` worker processes of this binary at a time. The first
-/// failure stops new shards and is the error, with the worker's output.
-fn run_shards(
+impl<'a> ShardProgress<'a> {
+    fn new(plan: &'a shards::Plan, todo: &[usize]) -> Self {
+        ShardProgress {
+            plan,
+            todo: todo.iter().map(|&k| plan.shards[k].triangles).sum(),
+            started: Instant::now(),
+            shards: plan.shards.len() - todo.len(),
+            triangles: 0,
+            worker_peak: 0,
+        }
+    }
+}
+
+/// Runs shards `todo` in this process, one after another.
+fn run_shards_here(
+    planned: &shards::Planned,
+    todo: &[usize],
+    progress: &Display,
+) -> anyhow::Result<()> {
+    let mut line = ShardProgress::new(planned.plan(), todo);
+    for &k in todo {
+        planned
+            .run_shard(k, progress)
+            .with_context(|| format!("shard {k}"))?;
+        progress.line(&line.done(k, None));
+    }
+    Ok(())
+}
+
+/// Runs shards `todo` of the plan in `dir` in `jobs` worker processes of
+/// this binary at a time. The first failure stops new shards and is the
+/// error, with the worker's output.
+fn run_workers(
     dir: &Path,
     plan: &shards::Plan,
     todo: &[usize],
     jobs: u32,
     progress: &Display,
 ) -> anyhow::Result<()> {
-    let t = Instant::now();
-    let line = Mutex::new(ShardProgress {
-        plan,
-        todo: todo.iter().map(|&k| plan.shards[k].triangles).sum(),
-        started: t,
-        shards: plan.shards.len() - todo.len(),
-        triangles: 0,
-        worker_peak: 0,
-    });
-    if jobs <= 1 {
-        for &k in todo {
-            shards::run_shard(dir, k, progress)
-                .with_context(|| format!("shard {k} of {}", dir.display()))?;
-            if let Ok(mut l) = line.lock() {
-                progress.line(&l.done(k, None));
-            }
-        }
-        return Ok(());
-    }
+    let line = Mutex::new(ShardProgress::new(plan, todo));
     let exe =
         std::env::current_exe().context("cannot find the gigawalk binary to start workers")?;
     let next = std::sync::atomic::AtomicUsize::new(0);

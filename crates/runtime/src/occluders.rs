@@ -437,17 +437,26 @@ mod tests {
         (60_000.0 * (1.0 - (-(o as f64) / 16_000.0).exp())) as u64
     }
 
+    /// The real-CAD floor's shape: 246k occluder triangles, 311k drawn
+    /// without occlusion, 0.45 us a drawn triangle; OR's rate and the
+    /// noise vary by test.
+    const CAD_FLOOR: Sim = Sim {
+        candidates: 246_000,
+        visible: 311_000,
+        hidden: saturating,
+        or_rate: 6e-4,
+        rvg_rate: 4.5e-4,
+        noise: 0.05,
+    };
+
     #[test]
     fn an_expensive_or_comes_down_to_the_budget_that_pays() {
         // The CAD floor's shape: 246k occluder triangles at 0.6 us each
         // against 0.45 us per drawn triangle.
         let sim = Sim {
-            candidates: 246_000,
-            visible: 311_000,
-            hidden: saturating,
             or_rate: 6e-4,
-            rvg_rate: 4.5e-4,
             noise: 0.05,
+            ..CAD_FLOOR
         };
         let (c, seen) = sim.run(240, 2, true);
         let b = c.current().expect("came down from all");
@@ -512,12 +521,9 @@ mod tests {
         // OR at 1/4 of RVG's rate: drawing all occluders never makes OR the
         // slower stage, and every one of them saves RVG time.
         let sim = Sim {
-            candidates: 246_000,
-            visible: 311_000,
-            hidden: saturating,
             or_rate: 1e-4,
-            rvg_rate: 4.5e-4,
             noise: 0.05,
+            ..CAD_FLOOR
         };
         let (separate, _) = sim.run(240, 2, false);
         assert_eq!(separate.current(), None, "{:?}", separate.stats);
@@ -560,12 +566,9 @@ mod tests {
     fn frames_that_never_arrive_abandon_the_probe_not_the_run() {
         let mut c = AdaptiveBudget::new(true);
         let sim = Sim {
-            candidates: 246_000,
-            visible: 311_000,
-            hidden: saturating,
             or_rate: 6e-4,
-            rvg_rate: 4.5e-4,
             noise: 0.0,
+            ..CAD_FLOOR
         };
         for f in 0..100 {
             let limit = c.limit_for(f);

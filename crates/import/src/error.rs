@@ -11,6 +11,10 @@ pub enum ImportError {
         file: String,
         source: std::io::Error,
     },
+    /// A caller's sink could not keep an object (a preprocessor writing
+    /// the model to disk as it is read, say).
+    #[error("cannot write the model's objects to {dir}: {source}")]
+    Spill { dir: String, source: std::io::Error },
     #[error("{file}: unsupported file type (expected .gltf, .glb or .obj)")]
     UnsupportedFormat { file: String },
     #[error("{file}: malformed glTF: {message}")]

@@ -27,7 +27,7 @@ use serde::Deserialize;
 use crate::error::ImportError;
 use crate::gltf_extensions;
 use crate::meshopt_views;
-use crate::model::{ImportStats, Model};
+use crate::model::{ImportStats, Model, Object};
 use crate::triangles::{finish, RawObject};
 
 /// Imports glTF from memory, JSON or binary (.glb, recognised by its magic).
@@ -115,6 +115,23 @@ pub(crate) fn import_gltf(
     file: &str,
     base_dir: Option<&Path>,
 ) -> Result<Model, ImportError> {
+    let mut objects = Vec::new();
+    let stats = import_gltf_each(bytes, file, base_dir, &mut |o| {
+        objects.push(o);
+        Ok(())
+    })?;
+    Ok(Model { objects, stats })
+}
+
+/// [`import_gltf`], handing each object to `sink` as it is read (only
+/// the file's bytes and one object are held), in file order; returns the
+/// stats. A `sink` error stops the import.
+pub(crate) fn import_gltf_each(
+    bytes: &[u8],
+    file: &str,
+    base_dir: Option<&Path>,
+    sink: &mut dyn FnMut(Object) -> Result<(), ImportError>,
+) -> Result<ImportStats, ImportError> {
     let malformed = |message: String| ImportError::MalformedGltf {
         file: file.to_owned(),
         message,
@@ -177,7 +194,7 @@ pub(crate) fn import_gltf(
 
     let data = load_data(&doc, &raw, blob, file, base_dir)?;
     let mut stats = ImportStats::default();
-    let mut objects = Vec::new();
+    let mut objects = 0usize;
 
     // Roots: the default scene, else the first, else every parentless node.
     let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
@@ -220,17 +237,18 @@ pub(crate) fn import_gltf(
                 read_primitive(node, &mesh, &prim, &world, &data, file, &mut stats)?
             {
                 if let Some(o) = finish(raw_obj, &mut stats) {
-                    objects.push(o);
+                    objects += 1;
+                    sink(o)?;
                 }
             }
         }
     }
-    if objects.is_empty() {
+    if objects == 0 {
         return Err(ImportError::NoGeometry {
             file: file.to_owned(),
         });
     }
-    Ok(Model { objects, stats })
+    Ok(stats)
 }
 
 fn local_transform(n: &RawNode, index: usize, file: &str) -> Result<DMat4, ImportError> {

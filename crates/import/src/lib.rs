@@ -35,6 +35,22 @@ pub use obj_import::import_obj_str;
 /// (case-insensitive). External glTF buffers and OBJ material libraries are
 /// resolved relative to the file's directory.
 pub fn import(path: &Path) -> Result<Model, ImportError> {
+    let mut objects = Vec::new();
+    let stats = import_each(path, &mut |o| {
+        objects.push(o);
+        Ok(())
+    })?;
+    Ok(Model { objects, stats })
+}
+
+/// [`import`], handing each object to `sink` as it is read instead of
+/// collecting them: a glTF file's bytes and one object are held at a
+/// time (an OBJ file is parsed whole first). Returns the stats; a `sink`
+/// error stops the import.
+pub fn import_each(
+    path: &Path,
+    sink: &mut dyn FnMut(Object) -> Result<(), ImportError>,
+) -> Result<ImportStats, ImportError> {
     let file = path.display().to_string();
     let ext = path
         .extension()
@@ -44,12 +60,12 @@ pub fn import(path: &Path) -> Result<Model, ImportError> {
     match ext.as_deref() {
         Some("gltf") | Some("glb") => {
             let bytes = read(path)?;
-            gltf_import::import_gltf(&bytes, &file, Some(base_dir))
+            gltf_import::import_gltf_each(&bytes, &file, Some(base_dir), sink)
         }
         Some("obj") => {
             let bytes = read(path)?;
             let text = String::from_utf8_lossy(&bytes);
-            obj_import::import_obj(&text, &file, Some(base_dir))
+            obj_import::import_obj_each(&text, &file, Some(base_dir), sink)
         }
         _ => Err(ImportError::UnsupportedFormat { file }),
     }
@@ -140,6 +156,21 @@ pub fn import_all(
     inputs: &[PathBuf],
     each: &mut dyn FnMut(usize, usize, &Path),
 ) -> Result<Model, ImportError> {
+    let mut objects = Vec::new();
+    let stats = import_all_each(inputs, each, &mut |o| {
+        objects.push(o);
+        Ok(())
+    })?;
+    Ok(Model { objects, stats })
+}
+
+/// [`import_all`], handing each object to `sink` as it is read (as
+/// [`import_each`] does), named as [`import_all`] names them.
+pub fn import_all_each(
+    inputs: &[PathBuf],
+    each: &mut dyn FnMut(usize, usize, &Path),
+    sink: &mut dyn FnMut(Object) -> Result<(), ImportError>,
+) -> Result<ImportStats, ImportError> {
     let files = model_files(inputs)?;
     if files.is_empty() {
         return Err(ImportError::NoGeometry {
@@ -148,14 +179,19 @@ pub fn import_all(
     }
     if let [only] = files.as_slice() {
         each(0, 1, only);
-        return import(only);
+        return import_each(only, sink);
     }
-    let mut model = Model::default();
+    let mut stats = ImportStats::default();
     for (i, f) in files.iter().enumerate() {
         each(i, files.len(), f);
-        model.append(import(f)?, &f.display().to_string());
+        let label = f.display().to_string();
+        let s = import_each(f, &mut |mut o| {
+            o.name = format!("{label}/{}", o.name);
+            sink(o)
+        })?;
+        stats.add(s);
     }
-    Ok(model)
+    Ok(stats)
 }
 
 fn read(path: &Path) -> Result<Vec<u8>, ImportError> {

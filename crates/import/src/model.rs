@@ -52,15 +52,19 @@ impl Model {
             o.name = format!("{label}/{}", o.name);
             o
         }));
-        let (s, o) = (&mut self.stats, other.stats);
-        s.triangles += o.triangles;
-        s.degenerate_triangles_dropped += o.degenerate_triangles_dropped;
-        s.skipped_primitives += o.skipped_primitives;
-        s.warnings.extend(o.warnings);
+        self.stats.add(other.stats);
     }
 }
 
 impl ImportStats {
+    /// Adds another file's stats to these.
+    pub fn add(&mut self, o: ImportStats) {
+        self.triangles += o.triangles;
+        self.degenerate_triangles_dropped += o.degenerate_triangles_dropped;
+        self.skipped_primitives += o.skipped_primitives;
+        self.warnings.extend(o.warnings);
+    }
+
     /// The one line users see after an import.
     pub fn summary(&self, objects: usize) -> String {
         let mut s = format!("{} triangles in {} objects", self.triangles, objects);

@@ -22,7 +22,7 @@ use std::path::Path;
 use glam::DVec3;
 
 use crate::error::ImportError;
-use crate::model::{ImportStats, Model};
+use crate::model::{ImportStats, Model, Object};
 use crate::triangles::{finish, RawObject};
 
 /// Colour of objects without a material (tobj gives none, or the .mtl is
@@ -40,6 +40,22 @@ pub(crate) fn import_obj(
     file: &str,
     base_dir: Option<&Path>,
 ) -> Result<Model, ImportError> {
+    let mut objects = Vec::new();
+    let stats = import_obj_each(text, file, base_dir, &mut |o| {
+        objects.push(o);
+        Ok(())
+    })?;
+    Ok(Model { objects, stats })
+}
+
+/// [`import_obj`], handing each object to `sink` as it is converted, in
+/// file order (tobj reads the whole text first); returns the stats.
+pub(crate) fn import_obj_each(
+    text: &str,
+    file: &str,
+    base_dir: Option<&Path>,
+    sink: &mut dyn FnMut(Object) -> Result<(), ImportError>,
+) -> Result<ImportStats, ImportError> {
     prescan(text, file)?;
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -77,7 +93,7 @@ pub(crate) fn import_obj(
         }
     };
 
-    let mut objects = Vec::new();
+    let mut objects = 0usize;
     for m in models {
         let object = format!("group \"{}\"", m.name);
         let mesh = m.mesh;
@@ -141,15 +157,16 @@ pub(crate) fn import_obj(
             vertex_colours,
         };
         if let Some(o) = finish(raw, &mut stats) {
-            objects.push(o);
+            objects += 1;
+            sink(o)?;
         }
     }
-    if objects.is_empty() {
+    if objects == 0 {
         return Err(ImportError::NoGeometry {
             file: file.to_owned(),
         });
     }
-    Ok(Model { objects, stats })
+    Ok(stats)
 }
 
 /// Reads a material library for tobj, first checking what tobj's parser

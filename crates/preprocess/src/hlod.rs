@@ -26,7 +26,7 @@
 //! union of the children's levels, plus their errors (the triangle
 //! inequality), which compounds with every level of the tree.
 
-use gigawalk_import::{Model, Object};
+use gigawalk_import::Object;
 use gigawalk_scene::{Colours, LodMesh};
 use glam::DVec3;
 use meshopt::{SimplifyOptions, VertexDataAdapter};
@@ -34,6 +34,7 @@ use rustc_hash::FxHashMap;
 
 use crate::hausdorff::{self, Nearest, Sampling, Surface};
 use crate::parts::Part;
+use crate::source::{Source, SpillError};
 
 /// A level is accepted only if it has at most this fraction of the previous
 /// level's triangles; otherwise the simplifier has stalled (e.g. on many
@@ -125,7 +126,7 @@ impl ChainParams {
 
 /// The full-detail mesh of a final object, relative to `origin`, with
 /// only the vertices its triangles use.
-pub fn leaf_mesh(model: &Model, part: &Part, origin: DVec3) -> WorkMesh {
+pub fn leaf_mesh(model: &dyn Source, part: &Part, origin: DVec3) -> Result<WorkMesh, SpillError> {
     let mut m = WorkMesh {
         origin,
         ..Default::default()
@@ -133,7 +134,8 @@ pub fn leaf_mesh(model: &Model, part: &Part, origin: DVec3) -> WorkMesh {
     m.indices.reserve(3 * part.triangles);
     let mut used: Vec<u32> = Vec::new();
     for piece in &part.pieces {
-        let o: &Object = &model.objects[piece.object as usize];
+        let o = model.object(piece.object)?;
+        let o: &Object = &o;
         used.clear();
         for &t in &piece.triangles {
             used.extend_from_slice(&o.indices[3 * t as usize..3 * t as usize + 3]);
@@ -161,7 +163,7 @@ pub fn leaf_mesh(model: &Model, part: &Part, origin: DVec3) -> WorkMesh {
             }
         }
     }
-    m
+    Ok(m)
 }
 
 /// A leaf's chain: the mesh itself (error 0), then coarser levels, each
@@ -734,6 +736,7 @@ mod tests {
     use super::*;
     use crate::parts::initial_parts;
     use crate::test_models::{box_object, grid_object, pipe_object};
+    use gigawalk_import::Model;
 
     const P: ChainParams = ChainParams {
         ratio: 0.5,
@@ -750,7 +753,7 @@ mod tests {
             ..Default::default()
         };
         let (parts, _) = initial_parts(&m).unwrap();
-        leaf_mesh(&m, &parts[0], parts[0].bounds.center())
+        leaf_mesh(&m, &parts[0], parts[0].bounds.center()).unwrap()
     }
 
     #[test]

@@ -29,6 +29,7 @@ pub mod partition;
 pub mod parts;
 mod planar;
 pub mod shards;
+pub mod source;
 pub mod stats;
 #[cfg(test)]
 mod test_models;
@@ -48,18 +49,20 @@ pub mod verify;
 /// leaves' (collapse and clustering both measured, the lower error per
 /// triangle kept; no jump far below a level's target), measured against
 /// the full detail below a node of at most 65,536 triangles, vanished
-/// pieces covered at the level's error limit.
-pub const REVISION: u32 = 8;
+/// pieces covered at the level's error limit; 9: levels made and stored
+/// unit by unit (subtrees of at most 2^18 triangles), so memory no longer
+/// grows with the model (the same levels, in another order in the file).
+pub const REVISION: u32 = 9;
 
 use std::path::Path;
 use std::time::Instant;
 
-use gigawalk_import::Model;
 use gigawalk_scene::{Aabb, LodMesh, Node, Provenance, SceneWriter, WriteError};
 use rayon::prelude::*;
 
 pub use params::{ParamError, Params, Resolved};
 pub use parts::InputError;
+pub use source::{Source, Spill, SpillError, SpillWriter};
 pub use stats::Stats;
 
 use crate::cluster::ClusterParams;
@@ -154,7 +157,7 @@ const HLOD_BATCH: usize = 256;
 /// `output` unless everything succeeds). `source` names the input for the
 /// file's provenance.
 pub fn preprocess(
-    model: &Model,
+    model: &dyn Source,
     params: &Params,
     output: &Path,
     source: &str,
@@ -167,7 +170,7 @@ pub fn preprocess(
 /// Step 6 for `role` (every node, or a merge's) into a scene file at
 /// `output`, with its provenance and occluders.
 pub(crate) fn write_scene(
-    model: &Model,
+    model: &dyn Source,
     params: &Params,
     layout: Layout,
     output: &Path,
@@ -197,7 +200,7 @@ pub(crate) fn write_scene(
         ),
         parameters,
     };
-    let occluders = occluders::scene_occluders(model);
+    let occluders = occluders::scene_occluders(model).map_err(InputError::from)?;
     built.stats.occluders = occluders.len();
     let bounds = occluders::model_bounds(model).unwrap_or((glam::DVec3::ZERO, glam::DVec3::ZERO));
     let cells = occluders::occluder_cells(
@@ -233,7 +236,7 @@ pub(crate) fn write_scene(
 /// Runs the pipeline, handing every LOD to `sink`; returns the nodes (with
 /// LOD indices from the sink) and the statistics.
 pub fn build<S: LodSink>(
-    model: &Model,
+    model: &dyn Source,
     params: &Params,
     sink: &mut S,
     progress: &dyn Progress,
@@ -256,17 +259,7 @@ pub(crate) struct Layout {
 impl Layout {
     /// Triangles at full detail below each node.
     pub(crate) fn subtree_triangles(&self) -> Vec<u64> {
-        let mut t = vec![0u64; self.tree.len()];
-        for i in (0..self.tree.len()).rev() {
-            let n = &self.tree[i];
-            t[i] += match n.object {
-                Some(o) => self.parts[o as usize].triangles as u64,
-                None => (n.first_child..n.first_child + n.child_count)
-                    .map(|c| t[c as usize])
-                    .sum(),
-            };
-        }
-        t
+        subtree_triangles(&self.tree, &self.parts)
     }
 }
 
@@ -295,13 +288,13 @@ pub(crate) struct Given {
 }
 
 pub(crate) fn layout(
-    model: &Model,
+    model: &dyn Source,
     params: &Params,
     progress: &dyn Progress,
 ) -> Result<Layout, PreprocessError> {
     params.validate()?;
     let mut stats = Stats {
-        raw_input_bytes: stats::raw_input_bytes(model),
+        raw_input_bytes: model.raw_bytes(),
         ..Default::default()
     };
     let mut clock = PhaseClock::new(progress);
@@ -325,7 +318,8 @@ pub(crate) fn layout(
         max_aspect: resolved.r1,
         at: SplitAt::Midpoint,
     };
-    let parts = partition::partition(model, parts, &rule1, &|n| progress.advance(n));
+    let parts = partition::partition(model, parts, &rule1, &|n| progress.advance(n))
+        .map_err(InputError::from)?;
     stats.objects_part1 = parts.len();
     clock.finish(&mut stats);
 
@@ -357,7 +351,8 @@ pub(crate) fn layout(
         max_aspect: resolved.r2,
         at: SplitAt::CentreOfMass,
     };
-    let parts = partition::partition(model, parts, &rule2, &|n| progress.advance(n));
+    let parts = partition::partition(model, parts, &rule2, &|n| progress.advance(n))
+        .map_err(InputError::from)?;
     stats.objects_part2 = parts.len();
     clock.finish(&mut stats);
 
@@ -382,7 +377,7 @@ pub(crate) fn layout(
 /// (empty for the other roles).
 #[allow(clippy::type_complexity)]
 pub(crate) fn build_role<S: LodSink>(
-    model: &Model,
+    model: &dyn Source,
     params: &Params,
     layout: Layout,
     sink: &mut S,
@@ -438,114 +433,50 @@ pub(crate) fn build_role<S: LodSink>(
         lod_ranges[ni] = (first.unwrap_or(0), lods.len() as u32);
         Ok(())
     };
-    let leaves: Vec<usize> = (0..tree.len())
-        .filter(|&i| tree[i].object.is_some() && mine(i, &role))
-        .collect();
-    for batch in leaves.chunks(HLOD_BATCH) {
-        let made: Vec<Finished> = batch
-            .par_iter()
-            .filter(|&&ni| !given(ni, &role))
-            .map(|&ni| {
-                let node = &tree[ni];
-                let object = node
-                    .object
-                    .expect("the leaves were chosen by having an object");
-                let part = &parts[object as usize];
-                let mesh = hlod::leaf_mesh(model, part, node.bounds.center());
-                let full = (mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
-                let (out, levels) =
-                    finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), &chain), keep);
-                (out, Done { levels, full })
-            })
-            .collect();
-        let mut made = made.into_iter();
-        for &ni in batch {
-            let (lods, d) = match take(&mut role, ni)? {
-                Some(f) => f,
-                None => made.next().expect("one made per node not given"),
-            };
-            emit(ni, lods, &mut stats.leaf_lod_triangles)?;
-            done[ni] = Some(d);
-        }
-        progress.advance(batch.len() as u64);
-    }
-    drop(parts);
-    // Inner nodes deepest first, so every child is done before its parent.
-    let mut inner: Vec<usize> = (0..tree.len())
-        .filter(|&i| tree[i].object.is_none() && mine(i, &role))
-        .collect();
-    inner.sort_by_key(|&i| (std::cmp::Reverse(tree[i].depth), i));
-    let mut at = 0;
-    while at < inner.len() {
-        let depth = tree[inner[at]].depth;
-        let level_end = at
-            + inner[at..]
-                .iter()
-                .take_while(|&&i| tree[i].depth == depth)
-                .count();
-        for batch in inner[at..level_end].chunks(HLOD_BATCH) {
-            let made: Vec<Finished> = batch
+    // Unit by unit, so the levels and full detail that wait for a parent
+    // stay a unit's worth ([`order`]).
+    for stage in order(&tree, &subtree_triangles(&tree, &parts)) {
+        let stage: Vec<usize> = stage.into_iter().filter(|&i| mine(i, &role)).collect();
+        let leaves = stage.first().is_some_and(|&i| tree[i].object.is_some());
+        for batch in stage.chunks(HLOD_BATCH) {
+            let made: Vec<Result<Finished, SpillError>> = batch
                 .par_iter()
                 .filter(|&&ni| !given(ni, &role))
-                .map(|&ni| {
-                    let node = &tree[ni];
-                    let below: Vec<&Done> = (node.first_child..node.first_child + node.child_count)
-                        .filter_map(|c| done[c as usize].as_ref())
-                        .collect();
-                    let children: Vec<&[Lod]> = below.iter().map(|d| d.levels.as_slice()).collect();
-                    // Every child's full detail, or none: a reference
-                    // missing a child would not bound the node.
-                    let full: Option<Vec<&hlod::WorkMesh>> =
-                        below.iter().map(|d| d.full.as_ref()).collect();
-                    let full = full
-                        .filter(|b| b.len() == node.child_count as usize)
-                        .filter(|b| {
-                            b.iter().map(|m| m.triangles()).sum::<usize>() <= EXACT_REFERENCE
-                        })
-                        .map(|b| hlod::merge(&b, node.bounds.center()));
-                    let mut lods = hlod::inner_lods(
-                        &children,
-                        full.as_ref(),
-                        node.bounds.center(),
-                        node.bounds.diagonal(),
-                        &chain,
-                    );
-                    // Never claim less error than a stored level below (the
-                    // scene file's rule: errors do not decrease from a
-                    // node to its nearest ancestor with LODs).
-                    let below = lowest_below(&lowest, node);
-                    for l in &mut lods {
-                        l.error = l.error.max(below);
+                .map(|&ni| match tree[ni].object {
+                    Some(object) => {
+                        make_leaf(model, &parts[object as usize], &tree[ni], &chain, keep)
                     }
-                    let stored = hlod::worth_drawing(&lods, &children);
-                    let (out, levels) = finish_chain(lods, keep);
-                    (
-                        out.into_iter().skip(stored.start).collect(),
-                        Done { levels, full },
-                    )
+                    None => Ok(make_inner(&tree[ni], &done, &lowest, &chain, keep)),
                 })
                 .collect();
             let mut made = made.into_iter();
             for &ni in batch {
                 let (lods, d) = match take(&mut role, ni)? {
                     Some(f) => f,
-                    None => made.next().expect("one made per node not given"),
+                    None => made
+                        .next()
+                        .expect("one made per node not given")
+                        .map_err(InputError::from)?,
                 };
                 let node = &tree[ni];
-                lowest[ni] = match lods.first() {
-                    Some(l) => l.1,
-                    None => lowest_below(&lowest, node),
-                };
-                emit(ni, lods, &mut stats.inner_lod_triangles)?;
-                for ch in node.first_child..node.first_child + node.child_count {
-                    done[ch as usize] = None;
+                if leaves {
+                    emit(ni, lods, &mut stats.leaf_lod_triangles)?;
+                } else {
+                    lowest[ni] = match lods.first() {
+                        Some(l) => l.1,
+                        None => lowest_below(&lowest, node),
+                    };
+                    emit(ni, lods, &mut stats.inner_lod_triangles)?;
+                    for ch in node.first_child..node.first_child + node.child_count {
+                        done[ch as usize] = None;
+                    }
                 }
                 done[ni] = Some(d);
             }
             progress.advance(batch.len() as u64);
         }
-        at = level_end;
     }
+    drop(parts);
     stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
     clock.finish(&mut stats);
 
@@ -573,6 +504,137 @@ pub(crate) fn build_role<S: LodSink>(
         _ => Vec::new(),
     };
     Ok((Built { nodes, stats }, roots))
+}
+
+/// A leaf's levels, and what it leaves for its parent.
+fn make_leaf(
+    model: &dyn Source,
+    part: &Part,
+    node: &hierarchy::HNode,
+    chain: &ChainParams,
+    keep: usize,
+) -> Result<Finished, SpillError> {
+    let mesh = hlod::leaf_mesh(model, part, node.bounds.center())?;
+    let full = (mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
+    let (out, levels) = finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), chain), keep);
+    Ok((out, Done { levels, full }))
+}
+
+/// An inner node's levels (its children are done), and what it leaves
+/// for its parent.
+fn make_inner(
+    node: &hierarchy::HNode,
+    done: &[Option<Done>],
+    lowest: &[f32],
+    chain: &ChainParams,
+    keep: usize,
+) -> Finished {
+    let below: Vec<&Done> = (node.first_child..node.first_child + node.child_count)
+        .filter_map(|c| done[c as usize].as_ref())
+        .collect();
+    let children: Vec<&[Lod]> = below.iter().map(|d| d.levels.as_slice()).collect();
+    // Every child's full detail, or none: a reference missing a child
+    // would not bound the node.
+    let full: Option<Vec<&hlod::WorkMesh>> = below.iter().map(|d| d.full.as_ref()).collect();
+    let full = full
+        .filter(|b| b.len() == node.child_count as usize)
+        .filter(|b| b.iter().map(|m| m.triangles()).sum::<usize>() <= EXACT_REFERENCE)
+        .map(|b| hlod::merge(&b, node.bounds.center()));
+    let mut lods = hlod::inner_lods(
+        &children,
+        full.as_ref(),
+        node.bounds.center(),
+        node.bounds.diagonal(),
+        chain,
+    );
+    // Never claim less error than a stored level below (the scene file's
+    // rule: errors do not decrease from a node to its nearest ancestor
+    // with LODs).
+    let below = lowest_below(lowest, node);
+    for l in &mut lods {
+        l.error = l.error.max(below);
+    }
+    let stored = hlod::worth_drawing(&lods, &children);
+    let (out, levels) = finish_chain(lods, keep);
+    (
+        out.into_iter().skip(stored.start).collect(),
+        Done { levels, full },
+    )
+}
+
+/// Triangles a unit of [`order`] holds at most (unless it is one leaf):
+/// what bounds the levels and full detail that wait for their parents,
+/// about 130 bytes a triangle, whatever the model's size.
+const UNIT_TRIANGLES: u64 = 1 << 18;
+
+/// The order nodes' levels are made in, as stages of nodes that only
+/// depend on earlier stages: unit by unit (the highest subtrees of at
+/// most [`UNIT_TRIANGLES`] triangles, or single leaves, in tree order),
+/// each its leaves then its inner nodes deepest first, then the nodes
+/// above the units deepest first. Within a stage nodes are in index
+/// order. A function of the tree only, so every run (and every shard,
+/// taking its own nodes) makes and emits the same levels in the same
+/// order.
+pub(crate) fn order(tree: &[hierarchy::HNode], triangles: &[u64]) -> Vec<Vec<usize>> {
+    let mut stages = Vec::new();
+    let by_depth = |nodes: &mut Vec<usize>, stages: &mut Vec<Vec<usize>>| {
+        nodes.sort_by_key(|&i| (std::cmp::Reverse(tree[i].depth), i));
+        for run in nodes.chunk_by(|&a, &b| tree[a].depth == tree[b].depth) {
+            stages.push(run.to_vec());
+        }
+    };
+    let roots = subtree_roots(tree, triangles, UNIT_TRIANGLES);
+    let mut in_unit = vec![false; tree.len()];
+    for &r in &roots {
+        let (mut leaves, mut inner) = (Vec::new(), Vec::new());
+        let mut stack = vec![r];
+        while let Some(i) = stack.pop() {
+            in_unit[i as usize] = true;
+            let n = &tree[i as usize];
+            match n.object {
+                Some(_) => leaves.push(i as usize),
+                None => inner.push(i as usize),
+            }
+            stack.extend(n.first_child..n.first_child + n.child_count);
+        }
+        leaves.sort_unstable();
+        stages.push(leaves);
+        by_depth(&mut inner, &mut stages);
+    }
+    let mut top: Vec<usize> = (0..tree.len()).filter(|&i| !in_unit[i]).collect();
+    by_depth(&mut top, &mut stages);
+    stages
+}
+
+/// The highest nodes with at most `limit` triangles below them, or
+/// leaves, in tree order (depth first, children in order).
+pub(crate) fn subtree_roots(tree: &[hierarchy::HNode], triangles: &[u64], limit: u64) -> Vec<u32> {
+    let mut roots = Vec::new();
+    let mut stack = if tree.is_empty() { vec![] } else { vec![0u32] };
+    while let Some(i) = stack.pop() {
+        let n = &tree[i as usize];
+        if triangles[i as usize] <= limit || n.object.is_some() {
+            roots.push(i);
+        } else {
+            stack.extend((n.first_child..n.first_child + n.child_count).rev());
+        }
+    }
+    roots
+}
+
+/// Triangles at full detail below each node.
+pub(crate) fn subtree_triangles(tree: &[hierarchy::HNode], parts: &[Part]) -> Vec<u64> {
+    let mut t = vec![0u64; tree.len()];
+    for i in (0..tree.len()).rev() {
+        let n = &tree[i];
+        t[i] += match n.object {
+            Some(o) => parts[o as usize].triangles as u64,
+            None => (n.first_child..n.first_child + n.child_count)
+                .map(|c| t[c as usize])
+                .sum(),
+        };
+    }
+    t
 }
 
 /// A merge's node made by a shard: its levels, and what it leaves for its

@@ -17,6 +17,9 @@
 use std::collections::HashMap;
 
 use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::source::{Source, SpillError};
 
 /// Most occluders a scene keeps (the largest).
 pub const MAX_OCCLUDERS: usize = 4096;
@@ -26,38 +29,43 @@ pub const MIN_OCCLUDER_SIZE: f64 = 0.005;
 
 /// The box of every position of the model (`None` when it has none or a
 /// non-finite one).
-pub fn model_bounds(model: &gigawalk_import::Model) -> Option<(DVec3, DVec3)> {
-    let (lo, hi) = model.objects.iter().flat_map(|o| &o.positions).fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    (hi - lo).length().is_finite().then_some((lo, hi))
+pub fn model_bounds(model: &dyn Source) -> Option<(DVec3, DVec3)> {
+    model.bounds()
 }
 
 /// The scene's occluders: every object's convex faces of at least
 /// `(MIN_OCCLUDER_SIZE x diagonal)^2`, the [`MAX_OCCLUDERS`] largest.
 pub fn scene_occluders(
-    model: &gigawalk_import::Model,
-) -> Vec<gigawalk_scene::occluders::OccluderRecord> {
+    model: &dyn Source,
+) -> Result<Vec<gigawalk_scene::occluders::OccluderRecord>, SpillError> {
     let Some((lo, hi)) = model_bounds(model) else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
     let diag = (hi - lo).length();
     let min_area = (MIN_OCCLUDER_SIZE * diag).powi(2);
-    let mut all: Vec<OccluderPolygon> = model
-        .objects
-        .iter()
-        .flat_map(|o| convex_faces(&o.positions, &o.indices, min_area))
-        .filter(|o| o.vertices.len() <= gigawalk_scene::occluders::MAX_OCCLUDER_VERTICES)
+    let per_object: Vec<Result<Vec<OccluderPolygon>, SpillError>> = (0..model.len() as u32)
+        .into_par_iter()
+        .map(|i| {
+            let o = model.object(i)?;
+            Ok(convex_faces(&o.positions, &o.indices, min_area)
+                .into_iter()
+                .filter(|o| o.vertices.len() <= gigawalk_scene::occluders::MAX_OCCLUDER_VERTICES)
+                .collect())
+        })
         .collect();
+    let mut all: Vec<OccluderPolygon> = Vec::new();
+    for faces in per_object {
+        all.extend(faces?);
+    }
     all.sort_by(|a, b| b.area.total_cmp(&a.area));
     all.truncate(MAX_OCCLUDERS);
-    all.into_iter()
+    Ok(all
+        .into_iter()
         .map(|o| gigawalk_scene::occluders::OccluderRecord {
             vertices: o.vertices,
             area: o.area,
         })
-        .collect()
+        .collect())
 }
 
 /// The view directions of a cell tree: 4, 8 (the paper's count) or 16

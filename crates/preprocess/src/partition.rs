@@ -4,12 +4,12 @@
 //! Triangles go by centroid and are never cut, so sibling boxes may overlap
 //! a little (Bartz's "sloppy" trees); every triangle ends in exactly one part.
 
-use gigawalk_import::Model;
 use gigawalk_scene::Aabb;
 use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::parts::{triangle, Part, Piece};
+use crate::source::{Loaded, Source, SpillError};
 
 /// Where a part is cut along the chosen axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,12 +74,12 @@ struct Item {
 /// it is down to a single triangle). Parts are processed in parallel; the
 /// output order depends only on the input, never on scheduling.
 pub fn partition(
-    model: &Model,
+    model: &dyn Source,
     parts: Vec<Part>,
     rule: &SplitRule,
     progress: &(dyn Fn(u64) + Sync),
-) -> Vec<Part> {
-    let nested: Vec<Vec<Part>> = parts
+) -> Result<Vec<Part>, SpillError> {
+    let nested: Vec<Result<Vec<Part>, SpillError>> = parts
         .into_par_iter()
         .map(|p| {
             let n = p.triangles as u64;
@@ -88,16 +88,22 @@ pub fn partition(
             out
         })
         .collect();
-    nested.into_iter().flatten().collect()
+    let mut out = Vec::new();
+    for n in nested {
+        out.extend(n?);
+    }
+    Ok(out)
 }
 
-fn split_part(model: &Model, part: Part, rule: &SplitRule) -> Vec<Part> {
+fn split_part(model: &dyn Source, part: Part, rule: &SplitRule) -> Result<Vec<Part>, SpillError> {
     if !rule.needs_split(part.triangles, &part.bounds) {
-        return vec![part];
+        return Ok(vec![part]);
     }
+    let model = Loaded::of(model, part.pieces.iter().map(|p| p.object))?;
+    let model = &model;
     let mut items = Vec::with_capacity(part.triangles);
     for piece in &part.pieces {
-        let o = &model.objects[piece.object as usize];
+        let o = model.get(piece.object);
         items.extend(piece.triangles.iter().map(|&t| {
             let [a, b, c] = triangle(o, t);
             Item {
@@ -108,10 +114,10 @@ fn split_part(model: &Model, part: Part, rule: &SplitRule) -> Vec<Part> {
         }));
     }
     drop(part.pieces);
-    split_range(model, &mut items, part.bounds, rule)
+    Ok(split_range(model, &mut items, part.bounds, rule))
 }
 
-fn split_range(model: &Model, items: &mut [Item], bounds: Aabb, rule: &SplitRule) -> Vec<Part> {
+fn split_range(model: &Loaded, items: &mut [Item], bounds: Aabb, rule: &SplitRule) -> Vec<Part> {
     if !rule.needs_split(items.len(), &bounds) {
         return vec![make_part(items, bounds)];
     }
@@ -167,10 +173,10 @@ fn cut(items: &mut [Item], bounds: &Aabb, at: SplitAt) -> usize {
     k
 }
 
-fn items_bounds(model: &Model, items: &[Item]) -> Aabb {
+fn items_bounds(model: &Loaded, items: &[Item]) -> Aabb {
     let mut b = Aabb::EMPTY;
     for i in items {
-        for p in triangle(&model.objects[i.object as usize], i.triangle) {
+        for p in triangle(model.get(i.object), i.triangle) {
             b.grow(p);
         }
     }
@@ -221,7 +227,7 @@ mod tests {
         };
         let (parts, _) = initial_parts(&m).unwrap();
         let whole = parts[0].bounds;
-        let out = partition(&m, parts, &rule(1000, 10.0, 2.5), &|_| {});
+        let out = partition(&m, parts, &rule(1000, 10.0, 2.5), &|_| {}).unwrap();
         assert!(out.len() >= 8, "{} parts", out.len());
         for p in &out {
             // Each part spans the pipe's full cross-section but only a slice of its length.
@@ -244,7 +250,7 @@ mod tests {
             ..Default::default()
         };
         let (parts, _) = initial_parts(&m).unwrap();
-        let out = partition(&m, parts.clone(), &rule(1000, 0.01, 2.5), &|_| {});
+        let out = partition(&m, parts.clone(), &rule(1000, 0.01, 2.5), &|_| {}).unwrap();
         assert_eq!(out, parts);
     }
 
@@ -259,7 +265,7 @@ mod tests {
             ..Default::default()
         };
         let (parts, _) = initial_parts(&m).unwrap();
-        let out = partition(&m, parts, &rule(1000, 0.0, 1.0), &|_| {});
+        let out = partition(&m, parts, &rule(1000, 0.0, 1.0), &|_| {}).unwrap();
         assert!(out.iter().all(|p| p.triangles <= 1000));
         assert_eq!(out.iter().map(|p| p.triangles).sum::<usize>(), 4000);
     }
@@ -278,7 +284,7 @@ mod tests {
             at: SplitAt::CentreOfMass,
             ..rule(300, 5.0, 2.0)
         };
-        let out = partition(&m, parts, &r, &|_| {});
+        let out = partition(&m, parts, &r, &|_| {}).unwrap();
         let mut seen: Vec<(u32, u32)> = out
             .iter()
             .flat_map(|p| {

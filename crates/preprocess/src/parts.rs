@@ -2,7 +2,9 @@
 //! into the imported model, so partitioning and clustering move indices,
 //! never geometry. Also the input checks that make every later step safe.
 
-use gigawalk_import::{Model, Object};
+use gigawalk_import::Object;
+
+use crate::source::{Source, SpillError};
 use gigawalk_scene::Aabb;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -66,6 +68,8 @@ pub enum InputError {
     },
     #[error("the model has no triangles (after dropping {dropped} degenerate ones)")]
     Empty { dropped: u64 },
+    #[error(transparent)]
+    Spill(#[from] SpillError),
 }
 
 /// The positions of triangle `t` of `o`.
@@ -82,12 +86,10 @@ pub fn triangle(o: &Object, t: u32) -> [DVec3; 3] {
 /// Checks every object and lists, per object, the triangles worth keeping:
 /// degenerate ones (a repeated vertex or zero area) are dropped and counted.
 /// Returns one part per object that keeps any triangle.
-pub fn initial_parts(model: &Model) -> Result<(Vec<Part>, u64), InputError> {
-    let per_object: Vec<Result<Option<(Part, u64)>, InputError>> = model
-        .objects
-        .par_iter()
-        .enumerate()
-        .map(|(index, o)| check_object(index, o))
+pub fn initial_parts(model: &dyn Source) -> Result<(Vec<Part>, u64), InputError> {
+    let per_object: Vec<Result<Option<(Part, u64)>, InputError>> = (0..model.len())
+        .into_par_iter()
+        .map(|index| check_object(index, &*model.object(index as u32)?))
         .collect();
     let mut parts = Vec::new();
     let mut dropped = 0;
@@ -202,6 +204,7 @@ pub fn piece_bounds(o: &Object, tris: impl IntoIterator<Item = u32>) -> Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use gigawalk_import::Model;
     use glam::Vec3;
 
     fn object(positions: &[[f64; 3]], indices: &[u32]) -> Object {

@@ -23,7 +23,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use gigawalk_import::Model;
+use crate::source::{Imported, Source};
 use gigawalk_scene::{Colours, LodMesh};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -166,17 +166,7 @@ pub(crate) fn cut(layout: &Layout, limit: u64) -> Vec<ShardSpec> {
             nodes_below[i] += nodes_below[c as usize];
         }
     }
-    // Depth first, children in order: the roots come out in tree order.
-    let mut roots = Vec::new();
-    let mut stack = vec![0u32];
-    while let Some(i) = stack.pop() {
-        let n = &tree[i as usize];
-        if tri[i as usize] <= limit || n.object.is_some() {
-            roots.push(i);
-        } else {
-            stack.extend((n.first_child..n.first_child + n.child_count).rev());
-        }
-    }
+    let roots = crate::subtree_roots(tree, &tri, limit);
     let mut shards: Vec<ShardSpec> = Vec::new();
     for r in roots {
         let t = tri[r as usize];
@@ -273,6 +263,22 @@ pub fn make_plan(
     dir: &Path,
     progress: &dyn Progress,
 ) -> Result<Plan, ShardError> {
+    Ok(plan(inputs, source, params, shard_triangles, dir, None, progress)?.plan)
+}
+
+/// [`make_plan`], keeping the model (imported under `budget`,
+/// [`crate::source::import_within`], spilled into `dir` if need be) and
+/// its layout for shards and the merge run in this process. An existing
+/// plan's inputs are checked as [`Planned::open`] checks them.
+pub fn plan(
+    inputs: &[PathBuf],
+    source: &str,
+    params: &Params,
+    shard_triangles: u64,
+    dir: &Path,
+    budget: Option<u64>,
+    progress: &dyn Progress,
+) -> Result<Planned, ShardError> {
     params.validate().map_err(PreprocessError::from)?;
     let files = gigawalk_import::model_files(inputs)?;
     let described = describe_inputs(&files)?;
@@ -286,10 +292,11 @@ pub fn make_plan(
                 new: id,
             });
         }
-        return Ok(old);
+        return Planned::open(dir, budget, progress);
     }
-    let model = gigawalk_import::import_all(&files, &mut |_, _, _| {})?;
-    let layout = crate::layout(&model, params, progress)?;
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let model = crate::source::import_within(&files, budget, dir, &mut |_, _, _| {})?;
+    let layout = crate::layout(model.source(), params, progress)?;
     let shards = cut(&layout, shard_triangles.max(1));
     let plan = Plan {
         format: FORMAT.into(),
@@ -304,14 +311,18 @@ pub fn make_plan(
         triangles: layout.stats.triangles,
         shards,
     };
-    std::fs::create_dir_all(dir).map_err(io(dir))?;
     let text = serde_json::to_string_pretty(&plan).map_err(|e| ShardError::BadPlan {
         path: dir.join(PLAN_FILE),
         reason: e.to_string(),
     })?;
     let path = dir.join(PLAN_FILE);
     gigawalk_scene::write_atomic(&path, text.as_bytes()).map_err(io(&path))?;
-    Ok(plan)
+    Ok(Planned {
+        dir: dir.to_path_buf(),
+        plan,
+        model,
+        layout,
+    })
 }
 
 /// Where shard `index`'s output goes.
@@ -319,8 +330,9 @@ pub fn shard_path(dir: &Path, plan: &Plan, index: usize) -> PathBuf {
     dir.join(format!("shard-{index:05}-{}.bin", plan.id))
 }
 
-/// The plan's model, refused if any input changed since the plan.
-fn import_planned(plan: &Plan) -> Result<Model, ShardError> {
+/// The plan's model, refused if any input changed since the plan,
+/// imported under `budget` (spilled into `dir` if need be).
+fn import_planned(plan: &Plan, dir: &Path, budget: Option<u64>) -> Result<Imported, ShardError> {
     for f in &plan.inputs {
         let (bytes, hash) = hash_file(&f.path)?;
         if bytes != f.bytes || hash != f.blake3 {
@@ -336,13 +348,18 @@ fn import_planned(plan: &Plan) -> Result<Model, ShardError> {
         }
     }
     let files: Vec<PathBuf> = plan.inputs.iter().map(|f| f.path.clone()).collect();
-    Ok(gigawalk_import::import_all(&files, &mut |_, _, _| {})?)
+    Ok(crate::source::import_within(
+        &files,
+        budget,
+        dir,
+        &mut |_, _, _| {},
+    )?)
 }
 
 /// The model's layout, checked against the plan's.
 fn planned_layout(
     plan: &Plan,
-    model: &Model,
+    model: &dyn Source,
     progress: &dyn Progress,
 ) -> Result<Layout, ShardError> {
     let layout = crate::layout(model, &plan.params, progress)?;
@@ -375,10 +392,12 @@ pub enum ShardRun {
 }
 
 /// Runs shard `index` of the plan in `dir`, unless its output is there
-/// and valid (then nothing is imported).
+/// and valid (then nothing is imported); the model is imported under
+/// `budget` ([`crate::source::import_within`]).
 pub fn run_shard(
     dir: &Path,
     index: usize,
+    budget: Option<u64>,
     progress: &dyn Progress,
 ) -> Result<ShardRun, ShardError> {
     let plan = read_plan(dir)?;
@@ -386,7 +405,7 @@ pub fn run_shard(
     if read_shard(&shard_path(dir, &plan, index), &plan, index).is_ok() {
         return Ok(ShardRun::AlreadyDone);
     }
-    Planned::open(dir, progress)?.make(spec, progress)?;
+    Planned::open(dir, budget, progress)?.make(spec, progress)?;
     Ok(ShardRun::Made)
 }
 
@@ -402,16 +421,21 @@ fn shard_spec(plan: &Plan, index: usize) -> Result<&ShardSpec, ShardError> {
 pub struct Planned {
     dir: PathBuf,
     plan: Plan,
-    model: Model,
+    model: Imported,
     layout: Layout,
 }
 
 impl Planned {
-    /// The plan in `dir` and its model.
-    pub fn open(dir: &Path, progress: &dyn Progress) -> Result<Planned, ShardError> {
+    /// The plan in `dir` and its model, imported under `budget`
+    /// ([`crate::source::import_within`], spilled into `dir` if need be).
+    pub fn open(
+        dir: &Path,
+        budget: Option<u64>,
+        progress: &dyn Progress,
+    ) -> Result<Planned, ShardError> {
         let plan = read_plan(dir)?;
-        let model = import_planned(&plan)?;
-        let layout = planned_layout(&plan, &model, progress)?;
+        let model = import_planned(&plan, dir, budget)?;
+        let layout = planned_layout(&plan, model.source(), progress)?;
         Ok(Planned {
             dir: dir.to_path_buf(),
             plan,
@@ -422,6 +446,11 @@ impl Planned {
 
     pub fn plan(&self) -> &Plan {
         &self.plan
+    }
+
+    /// Bytes of the model in a spill file (0: in memory).
+    pub fn spilled_bytes(&self) -> u64 {
+        self.model.spilled_bytes()
     }
 
     /// Runs shard `index`, unless its output is there and valid.
@@ -440,7 +469,7 @@ impl Planned {
         make_shard(
             &self.plan,
             spec,
-            &self.model,
+            self.model.source(),
             self.layout.clone(),
             &path,
             progress,
@@ -495,8 +524,8 @@ impl Planned {
                 ),
             });
         }
-        let stats = crate::write_scene(
-            &self.model,
+        let mut stats = crate::write_scene(
+            self.model.source(),
             &plan.params,
             self.layout,
             output,
@@ -504,6 +533,7 @@ impl Planned {
             progress,
             Role::Merge { given: &mut given },
         )?;
+        stats.spilled_bytes = self.model.spilled_bytes();
         Ok(stats)
     }
 }
@@ -511,7 +541,7 @@ impl Planned {
 fn make_shard(
     plan: &Plan,
     spec: &ShardSpec,
-    model: &Model,
+    model: &dyn Source,
     layout: Layout,
     path: &Path,
     progress: &dyn Progress,
@@ -566,14 +596,16 @@ pub fn unfinished_shards(dir: &Path, plan: &Plan) -> Vec<usize> {
         .collect()
 }
 
-/// Finishes the scene from the plan in `dir` ([`Planned::merge`]).
+/// Finishes the scene from the plan in `dir` ([`Planned::merge`]), the
+/// model imported under `budget`.
 pub fn merge(
     dir: &Path,
     output: &Path,
+    budget: Option<u64>,
     progress: &dyn Progress,
     redo: &mut dyn FnMut(usize, &ShardError),
 ) -> Result<Stats, ShardError> {
-    Planned::open(dir, progress)?.merge(output, progress, redo)
+    Planned::open(dir, budget, progress)?.merge(output, progress, redo)
 }
 
 // ---- shard files ----

@@ -58,6 +58,10 @@ pub struct Stats {
     pub total_seconds: f64,
     /// Triangles kept per second of total time.
     pub triangles_per_second: f64,
+    /// Bytes of the model written to a spill file because it did not fit
+    /// the memory budget (0: held in memory).
+    #[serde(default)]
+    pub spilled_bytes: u64,
     /// Peak resident memory of the process (Linux VmHWM), when known.
     pub peak_memory_bytes: Option<u64>,
     /// The thresholds in model units.

@@ -50,18 +50,18 @@ fn shards_in_any_order_and_a_redone_shard_give_the_single_process_bytes() {
     order.swap(0, n / 2);
     for &k in &order {
         assert_eq!(
-            shards::run_shard(&work, k, &NoProgress).unwrap(),
+            shards::run_shard(&work, k, None, &NoProgress).unwrap(),
             ShardRun::Made
         );
     }
     assert_eq!(
-        shards::run_shard(&work, 0, &NoProgress).unwrap(),
+        shards::run_shard(&work, 0, None, &NoProgress).unwrap(),
         ShardRun::AlreadyDone
     );
     assert!(shards::unfinished_shards(&work, &plan).is_empty());
     let out = t.path().join("merged.gwk");
     let mut redone = Vec::new();
-    shards::merge(&work, &out, &NoProgress, &mut |k, _| redone.push(k)).unwrap();
+    shards::merge(&work, &out, None, &NoProgress, &mut |k, _| redone.push(k)).unwrap();
     assert!(redone.is_empty());
     assert!(
         std::fs::read(&out).unwrap() == reference,
@@ -77,7 +77,7 @@ fn shards_in_any_order_and_a_redone_shard_give_the_single_process_bytes() {
     std::fs::remove_file(shards::shard_path(&work, &plan, n - 1)).unwrap();
     assert_eq!(shards::unfinished_shards(&work, &plan), vec![1, n - 1]);
     let out2 = t.path().join("merged2.gwk");
-    shards::merge(&work, &out2, &NoProgress, &mut |k, _| redone.push(k)).unwrap();
+    shards::merge(&work, &out2, None, &NoProgress, &mut |k, _| redone.push(k)).unwrap();
     assert_eq!(redone, vec![1, n - 1]);
     assert!(
         std::fs::read(&out2).unwrap() == reference,
@@ -110,17 +110,24 @@ fn a_changed_input_or_other_parameters_are_refused() {
     let last = bytes.len() - 1;
     bytes[last] ^= 0x20;
     std::fs::write(&plant, bytes).unwrap();
-    let e = shards::run_shard(&work, 0, &NoProgress).unwrap_err();
+    let e = shards::run_shard(&work, 0, None, &NoProgress).unwrap_err();
     assert!(matches!(e, shards::ShardError::InputChanged { .. }), "{e}");
     assert!(e.to_string().contains("plant.glb"), "{e}");
-    let e = shards::merge(&work, &t.path().join("x.gwk"), &NoProgress, &mut |_, _| {}).unwrap_err();
+    let e = shards::merge(
+        &work,
+        &t.path().join("x.gwk"),
+        None,
+        &NoProgress,
+        &mut |_, _| {},
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("plant.glb"), "{e}");
     assert!(!t.path().join("x.gwk").exists());
     // A shard the plan does not have.
-    let e = shards::run_shard(&work, plan.shards.len(), &NoProgress).unwrap_err();
+    let e = shards::run_shard(&work, plan.shards.len(), None, &NoProgress).unwrap_err();
     assert!(matches!(e, shards::ShardError::NoSuchShard { .. }), "{e}");
     // A plan file that is not one.
     std::fs::write(work.join(shards::PLAN_FILE), "{\"format\": 3}").unwrap();
-    let e = shards::run_shard(&work, 0, &NoProgress).unwrap_err();
+    let e = shards::run_shard(&work, 0, None, &NoProgress).unwrap_err();
     assert!(matches!(e, shards::ShardError::BadPlan { .. }), "{e}");
 }

@@ -42,6 +42,9 @@ pub struct Args {
     /// Triangles per shard of a split build (e.g. 500k, 2M): how the work splits depends on the model and this only, never on --jobs
     #[arg(long, default_value = "1M", value_parser = crate::generate::parse_count)]
     shard_triangles: u64,
+    /// Memory the run may use: all (hold the whole model in memory, the fastest), auto (half the machine's memory, at most 2G) or a size such as 512M or 4G. A model whose objects would take more than 40% of it is written to an unnamed spill file beside the output (or in --work-dir) as it is read, and read back an object at a time; levels are made a unit of at most 262,144 triangles at a time whatever the budget (docs/preprocess.md "Memory")
+    #[arg(long, default_value = "auto", value_name = "all|auto|BYTES")]
+    memory_budget: gigawalk_runtime::MemoryBudget,
     /// Also write the run's statistics as JSON to this file
     #[arg(long)]
     stats: Option<PathBuf>,
@@ -126,10 +129,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     params.validate().context("bad parameter")?;
 
     let progress = Display::new();
+    let budget = preprocess_budget(args.memory_budget)?;
     if let Some(dir) = &args.work_dir {
         if let Some(k) = args.shard {
             let t = Instant::now();
-            let done = shards::run_shard(dir, k, &progress)
+            let done = shards::run_shard(dir, k, budget, &progress)
                 .with_context(|| format!("shard {k} of {}", dir.display()))?;
             progress.line(&match done {
                 shards::ShardRun::Made => format!(
@@ -151,12 +155,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .join(" ");
     let split = args.work_dir.is_some() || args.jobs > 1;
     let (mut stats, files) = if split {
-        match split_build(&args, &params, &inputs, &output, &progress)? {
+        match split_build(&args, &params, &inputs, &output, budget, &progress)? {
             Some(built) => built,
             None => return Ok(()), // --plan-only
         }
     } else {
-        single_build(&args.input, &inputs, &params, &output, &progress)?
+        single_build(&args.input, &inputs, &params, &output, budget, &progress)?
     };
     stats.input_file_bytes = files
         .iter()
@@ -232,35 +236,49 @@ fn single_build(
     inputs: &str,
     params: &Params,
     output: &Path,
+    budget: Option<u64>,
     progress: &Display,
 ) -> anyhow::Result<(gigawalk_preprocess::Stats, Vec<PathBuf>)> {
     let t = Instant::now();
     let files =
         gigawalk_import::model_files(input).with_context(|| format!("cannot import {inputs}"))?;
-    let model = gigawalk_import::import_all(&files, &mut |i, n, path| {
-        progress.line(&match n {
-            1 => format!("importing {}", path.display()),
-            _ => format!("importing {}/{n}: {}", i + 1, path.display()),
-        })
-    })
+    let model = gigawalk_preprocess::source::import_within(
+        &files,
+        budget,
+        output_dir(output),
+        &mut |i, n, path| {
+            progress.line(&match n {
+                1 => format!("importing {}", path.display()),
+                _ => format!("importing {}/{n}: {}", i + 1, path.display()),
+            })
+        },
+    )
     .with_context(|| format!("cannot import {inputs}"))?;
     let import_secs = t.elapsed().as_secs_f64();
-    let kept: u64 = model
-        .objects
-        .iter()
-        .map(|o| o.triangle_count() as u64)
-        .sum();
+    let import_stats = model.stats().clone();
+    let spilled = model.spilled_bytes();
     progress.line(&format!(
-        "import: {} objects, {kept} triangles ({} degenerate dropped) in {import_secs:.2} s",
-        model.objects.len(),
-        model.stats.degenerate_triangles_dropped
+        "import: {} objects, {} triangles ({} degenerate dropped) in {import_secs:.2} s, {}",
+        model.source().len(),
+        import_stats.triangles - import_stats.degenerate_triangles_dropped,
+        import_stats.degenerate_triangles_dropped,
+        match spilled {
+            0 => format!("in memory, {PEAK}{}", mib(peak_memory())),
+            b => format!(
+                "spilled to disk ({}: over {:.0}% of the memory budget), {PEAK}{}",
+                mib(b),
+                100.0 * gigawalk_preprocess::source::MEMORY_SHARE,
+                mib(peak_memory())
+            ),
+        }
     ));
-    for w in &model.stats.warnings {
+    for w in &import_stats.warnings {
         tracing::warn!("{w}");
     }
-    let import_dropped = model.stats.degenerate_triangles_dropped;
-    let mut stats = preprocess(&model, params, output, inputs, progress)
+    let import_dropped = import_stats.degenerate_triangles_dropped;
+    let mut stats = preprocess(model.source(), params, output, inputs, progress)
         .with_context(|| format!("cannot preprocess {inputs} into {}", output.display()))?;
+    stats.spilled_bytes = spilled;
     drop(model);
     stats
         .phase_seconds
@@ -271,6 +289,32 @@ fn single_build(
     Ok((stats, files))
 }
 
+/// The directory `output` goes in.
+fn output_dir(output: &Path) -> &Path {
+    match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+fn peak_memory() -> u64 {
+    gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0)
+}
+
+/// The memory budget in bytes, `None` for all.
+fn preprocess_budget(b: gigawalk_runtime::MemoryBudget) -> anyhow::Result<Option<u64>> {
+    use gigawalk_runtime::MemoryBudget;
+    Ok(match b {
+        MemoryBudget::All => None,
+        MemoryBudget::Bytes(n) => Some(n),
+        MemoryBudget::Auto => Some(
+            gigawalk_preprocess::source::auto_budget().context(
+                "memory budget auto: cannot read this machine's memory size (/proc/meminfo); give a size such as 2G, or all",
+            )?,
+        ),
+    })
+}
+
 /// A build split into shards: plan (or find the plan), run the shards not
 /// done (here, or in `--jobs` worker processes), merge. Returns the
 /// merge's statistics and the model files, `None` after `--plan-only`.
@@ -279,6 +323,7 @@ fn split_build(
     params: &Params,
     inputs: &str,
     output: &Path,
+    budget: Option<u64>,
     progress: &Display,
 ) -> anyhow::Result<Option<(gigawalk_preprocess::Stats, Vec<PathBuf>)>> {
     // Without --work-dir (--jobs above 1): a temporary one beside the
@@ -304,22 +349,24 @@ fn split_build(
     // The model imported and laid out once for the shards run here and
     // the merge.
     let open = || {
-        shards::Planned::open(dir, progress)
+        shards::Planned::open(dir, budget, progress)
             .with_context(|| format!("cannot read the plan and model of {}", dir.display()))
     };
     let mut planned = None;
     if !args.merge {
         let t = Instant::now();
         progress.line(&format!("planning {inputs}"));
-        let plan = shards::make_plan(
+        let here = shards::plan(
             &args.input,
             inputs,
             params,
             args.shard_triangles,
             dir,
+            budget,
             progress,
         )
         .with_context(|| format!("cannot plan {inputs} in {}", dir.display()))?;
+        let plan = here.plan().clone();
         let todo = shards::unfinished_shards(dir, &plan);
         progress.line(&format!(
             "plan: {} shards of at most {} triangles ({} triangles, {} nodes), {} to do, in {:.1} s: {}",
@@ -335,12 +382,22 @@ fn split_build(
             crate::write_stdout(format_args!("{}\n", plan.shards.len()), false)?;
             return Ok(None);
         }
-        if args.jobs <= 1 && !todo.is_empty() {
-            let here = open()?;
+        if args.jobs <= 1 || todo.is_empty() {
             run_shards_here(&here, &todo, progress)?;
             planned = Some(here);
         } else {
-            run_workers(dir, &plan, &todo, args.jobs, progress)?;
+            // The workers share the budget; this process holds nothing
+            // meanwhile and imports the model again for the merge.
+            drop(here);
+            let jobs = workers_within(args.jobs, budget, progress);
+            run_workers(
+                dir,
+                &plan,
+                &todo,
+                jobs,
+                budget.map(|b| b / jobs as u64),
+                progress,
+            )?;
         }
     }
     let planned = match planned {
@@ -435,6 +492,28 @@ fn run_shards_here(
     Ok(())
 }
 
+/// The least memory a worker is given: what one shard of the default size
+/// needs, with the model spilled (about 150 MiB measured on the plants,
+/// docs/PERFORMANCE.md "Memory").
+const MIN_WORKER_BUDGET: u64 = 192 << 20;
+
+/// `jobs`, or fewer when the budget cannot give each worker
+/// [`MIN_WORKER_BUDGET`] (said on the progress line).
+fn workers_within(jobs: u32, budget: Option<u64>, progress: &Display) -> u32 {
+    let Some(b) = budget else {
+        return jobs;
+    };
+    let fit = (b / MIN_WORKER_BUDGET).clamp(1, jobs as u64) as u32;
+    if fit < jobs {
+        progress.line(&format!(
+            "{fit} workers, not {jobs}: the memory budget of {} gives each at least {}",
+            mib(b),
+            mib(MIN_WORKER_BUDGET)
+        ));
+    }
+    fit
+}
+
 /// Runs shards `todo` of the plan in `dir` in `jobs` worker processes of
 /// this binary at a time. The first failure stops new shards and is the
 /// error, with the worker's output.
@@ -443,6 +522,7 @@ fn run_workers(
     plan: &shards::Plan,
     todo: &[usize],
     jobs: u32,
+    budget: Option<u64>,
     progress: &Display,
 ) -> anyhow::Result<()> {
     let line = Mutex::new(ShardProgress::new(plan, todo));
@@ -466,6 +546,8 @@ fn run_workers(
                     .arg(dir)
                     .arg("--shard")
                     .arg(k.to_string())
+                    .arg("--memory-budget")
+                    .arg(budget.map_or("all".into(), |b| b.to_string()))
                     .stdin(std::process::Stdio::null())
                     .output();
                 let stderr = match out {

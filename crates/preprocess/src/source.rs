@@ -1,0 +1,582 @@
+//! Where the pipeline reads the model's objects: a [`Model`] in memory, or
+//! a [`Spill`], the objects written to an unnamed file on disk as they are
+//! imported and read back one at a time, so a model of any size costs
+//! memory only for what each step works on (GigaWalk Section 6.3 built
+//! the 82M-triangle Double Eagle in at most 1 GB this way).
+//!
+//! A spill keeps, per object, where its bytes are (16 bytes), the box of
+//! every position and the raw geometry's size; objects read back sit in a
+//! small cache, so the leaves of one large object, made one after another,
+//! read it once.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufWriter, Write as _};
+use std::ops::Deref;
+use std::os::unix::fs::FileExt as _;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use gigawalk_import::{ImportStats, Model, Object};
+use glam::{DVec3, Vec3};
+
+/// A model's objects, by index.
+pub trait Source: Sync {
+    /// How many objects there are.
+    fn len(&self) -> usize;
+    /// Whether there are none.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Object `i` (< [`Source::len`]).
+    fn object(&self, i: u32) -> Result<ObjectRef<'_>, SpillError>;
+    /// The raw size of the geometry ([`crate::Stats::raw_input_bytes`]).
+    fn raw_bytes(&self) -> u64;
+    /// The box of every position (`None` when there is none or a
+    /// non-finite one).
+    fn bounds(&self) -> Option<(DVec3, DVec3)>;
+}
+
+/// An object borrowed from memory or shared from a spill's cache.
+pub enum ObjectRef<'a> {
+    Borrowed(&'a Object),
+    Shared(Arc<Object>),
+}
+
+impl Deref for ObjectRef<'_> {
+    type Target = Object;
+    fn deref(&self) -> &Object {
+        match self {
+            ObjectRef::Borrowed(o) => o,
+            ObjectRef::Shared(o) => o,
+        }
+    }
+}
+
+/// The objects some pieces use, each read once.
+pub(crate) struct Loaded<'a> {
+    ids: Vec<u32>,
+    objects: Vec<ObjectRef<'a>>,
+}
+
+impl<'a> Loaded<'a> {
+    pub(crate) fn of(
+        source: &'a dyn Source,
+        ids: impl Iterator<Item = u32>,
+    ) -> Result<Loaded<'a>, SpillError> {
+        let mut ids: Vec<u32> = ids.collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let objects = ids
+            .iter()
+            .map(|&i| source.object(i))
+            .collect::<Result<_, _>>()?;
+        Ok(Loaded { ids, objects })
+    }
+
+    /// Object `id`, which must be one [`Loaded::of`] was given.
+    pub(crate) fn get(&self, id: u32) -> &Object {
+        let k = self
+            .ids
+            .binary_search(&id)
+            .expect("only objects of the pieces are asked for");
+        &self.objects[k]
+    }
+}
+
+/// Reading a spilled object back failed (the disk, not the model).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("cannot read object {object} back from the spill file in {}: {reason}", dir.display())]
+pub struct SpillError {
+    pub dir: PathBuf,
+    pub object: u32,
+    pub reason: String,
+}
+
+impl Source for Model {
+    fn len(&self) -> usize {
+        self.objects.len()
+    }
+    fn object(&self, i: u32) -> Result<ObjectRef<'_>, SpillError> {
+        self.objects
+            .get(i as usize)
+            .map(ObjectRef::Borrowed)
+            .ok_or_else(|| SpillError {
+                dir: PathBuf::new(),
+                object: i,
+                reason: "no such object".into(),
+            })
+    }
+    fn raw_bytes(&self) -> u64 {
+        self.objects.iter().map(raw_bytes).sum()
+    }
+    fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        let (lo, hi) = self
+            .objects
+            .iter()
+            .flat_map(|o| &o.positions)
+            .fold(EMPTY, |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        finite(lo, hi)
+    }
+}
+
+const EMPTY: (DVec3, DVec3) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+
+fn finite(lo: DVec3, hi: DVec3) -> Option<(DVec3, DVec3)> {
+    (hi - lo).length().is_finite().then_some((lo, hi))
+}
+
+/// An object's raw geometry: f64 positions, u32 indices and, when it has
+/// them, RGBA f32 vertex colours.
+pub(crate) fn raw_bytes(o: &Object) -> u64 {
+    let v = o.positions.len() as u64;
+    let colours = if o.vertex_colours.is_some() {
+        16 * v
+    } else {
+        0
+    };
+    24 * v + colours + 4 * o.indices.len() as u64
+}
+
+/// Bytes an object takes once read back (what the cache counts).
+fn resident_bytes(o: &Object) -> u64 {
+    let v = o.positions.len() as u64;
+    let colours = if o.vertex_colours.is_some() {
+        16 * v
+    } else {
+        0
+    };
+    (24 + 12) * v + colours + 4 * o.indices.len() as u64 + o.name.len() as u64 + 64
+}
+
+/// A model imported under a memory budget ([`import_within`]).
+pub enum Imported {
+    /// It fit: every object in memory.
+    Memory(Model),
+    /// It did not: every object on disk.
+    Spilled(Spill, ImportStats),
+}
+
+impl Imported {
+    pub fn source(&self) -> &dyn Source {
+        match self {
+            Imported::Memory(m) => m,
+            Imported::Spilled(s, _) => s,
+        }
+    }
+    pub fn stats(&self) -> &ImportStats {
+        match self {
+            Imported::Memory(m) => &m.stats,
+            Imported::Spilled(_, s) => s,
+        }
+    }
+    /// The spill file's size, 0 in memory.
+    pub fn spilled_bytes(&self) -> u64 {
+        match self {
+            Imported::Memory(_) => 0,
+            Imported::Spilled(s, _) => s.bytes(),
+        }
+    }
+}
+
+/// `--memory-budget auto`: half the machine's physical memory, at most
+/// [`AUTO_BUDGET_MAX`]; `None` when /proc/meminfo cannot be read.
+pub fn auto_budget() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some((kib.checked_mul(1024)? / 2).min(AUTO_BUDGET_MAX))
+}
+
+/// The most `auto` gives: 2 GiB.
+pub const AUTO_BUDGET_MAX: u64 = 2 << 30;
+
+/// The share of a memory budget the imported objects may take in
+/// memory; a model that needs more goes to a spill file.
+pub const MEMORY_SHARE: f64 = 0.4;
+
+/// The share of a memory budget a spill's cache of objects read back
+/// takes.
+pub const CACHE_SHARE: f64 = 0.1;
+
+/// Imports `inputs` ([`gigawalk_import::import_all_each`]) under a memory
+/// budget: objects are held in memory while they take at most
+/// [`MEMORY_SHARE`] of `budget`, and the moment they would take more, all
+/// of them go to a spill file in `spill_dir`, as do the rest as they are
+/// read. `None`: no budget, all in memory.
+pub fn import_within(
+    inputs: &[PathBuf],
+    budget: Option<u64>,
+    spill_dir: &Path,
+    each: &mut dyn FnMut(usize, usize, &Path),
+) -> Result<Imported, gigawalk_import::ImportError> {
+    let limit = budget.map_or(u64::MAX, |b| (b as f64 * MEMORY_SHARE) as u64);
+    let spill_err = |source| gigawalk_import::ImportError::Spill {
+        dir: spill_dir.display().to_string(),
+        source,
+    };
+    let mut held: Vec<Object> = Vec::new();
+    let mut held_bytes = 0u64;
+    let mut spill: Option<SpillWriter> = None;
+    let stats = gigawalk_import::import_all_each(inputs, each, &mut |o| {
+        if let Some(w) = &mut spill {
+            return w.push(&o).map_err(spill_err);
+        }
+        held_bytes += resident_bytes(&o);
+        held.push(o);
+        if held_bytes > limit {
+            let mut w = SpillWriter::create_in(spill_dir).map_err(spill_err)?;
+            for o in held.drain(..) {
+                w.push(&o).map_err(spill_err)?;
+            }
+            held.shrink_to_fit();
+            spill = Some(w);
+        }
+        Ok(())
+    })?;
+    Ok(match spill {
+        None => Imported::Memory(Model {
+            objects: held,
+            stats,
+        }),
+        Some(w) => {
+            let cache = budget.map_or(0, |b| (b as f64 * CACHE_SHARE) as u64);
+            Imported::Spilled(w.finish(cache).map_err(spill_err)?, stats)
+        }
+    })
+}
+
+/// Writes objects to a spill as they come ([`SpillWriter::push`]), then
+/// [`SpillWriter::finish`] gives the [`Spill`] to read them from.
+pub struct SpillWriter {
+    dir: PathBuf,
+    out: BufWriter<File>,
+    pos: u64,
+    at: Vec<(u64, u64)>,
+    raw_bytes: u64,
+    bounds: (DVec3, DVec3),
+    largest: u64,
+}
+
+impl SpillWriter {
+    /// An unnamed file in `dir`: the system removes it when the run ends,
+    /// however it ends, so nothing is left behind.
+    pub fn create_in(dir: &Path) -> std::io::Result<SpillWriter> {
+        let file = tempfile::tempfile_in(dir)?;
+        Ok(SpillWriter {
+            dir: dir.to_path_buf(),
+            out: BufWriter::with_capacity(1 << 20, file),
+            pos: 0,
+            at: Vec::new(),
+            raw_bytes: 0,
+            bounds: EMPTY,
+            largest: 0,
+        })
+    }
+
+    /// Appends one object.
+    pub fn push(&mut self, o: &Object) -> std::io::Result<()> {
+        let bytes = encode(o);
+        self.out.write_all(&bytes)?;
+        self.at.push((self.pos, bytes.len() as u64));
+        self.pos += bytes.len() as u64;
+        self.raw_bytes += raw_bytes(o);
+        self.largest = self.largest.max(resident_bytes(o));
+        for p in &o.positions {
+            self.bounds = (self.bounds.0.min(*p), self.bounds.1.max(*p));
+        }
+        Ok(())
+    }
+
+    /// Objects pushed so far.
+    pub fn len(&self) -> usize {
+        self.at.len()
+    }
+
+    /// Whether none was pushed.
+    pub fn is_empty(&self) -> bool {
+        self.at.is_empty()
+    }
+
+    /// Bytes written so far.
+    pub fn bytes(&self) -> u64 {
+        self.pos
+    }
+
+    /// The spill, reading objects back through a cache of about
+    /// `cache_bytes` (never less than the largest object).
+    pub fn finish(self, cache_bytes: u64) -> std::io::Result<Spill> {
+        let file = self.out.into_inner().map_err(|e| e.into_error())?;
+        Ok(Spill {
+            dir: self.dir,
+            file,
+            at: self.at,
+            raw_bytes: self.raw_bytes,
+            bounds: finite(self.bounds.0, self.bounds.1),
+            bytes: self.pos,
+            cache: Mutex::new(Cache {
+                limit: cache_bytes.max(self.largest),
+                ..Default::default()
+            }),
+        })
+    }
+}
+
+/// Objects spilled to disk ([`SpillWriter`]).
+pub struct Spill {
+    dir: PathBuf,
+    file: File,
+    at: Vec<(u64, u64)>,
+    raw_bytes: u64,
+    bounds: Option<(DVec3, DVec3)>,
+    bytes: u64,
+    cache: Mutex<Cache>,
+}
+
+impl Spill {
+    /// The spill file's size.
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    fn read(&self, i: u32) -> Result<Object, SpillError> {
+        let err = |reason: String| SpillError {
+            dir: self.dir.clone(),
+            object: i,
+            reason,
+        };
+        let &(offset, len) = self
+            .at
+            .get(i as usize)
+            .ok_or_else(|| err(format!("only {} objects", self.at.len())))?;
+        let mut bytes = vec![0u8; len as usize];
+        self.file
+            .read_exact_at(&mut bytes, offset)
+            .map_err(|e| err(e.to_string()))?;
+        decode(&bytes).ok_or_else(|| err("its bytes do not decode".into()))
+    }
+}
+
+impl Source for Spill {
+    fn len(&self) -> usize {
+        self.at.len()
+    }
+    fn object(&self, i: u32) -> Result<ObjectRef<'_>, SpillError> {
+        let lock = || self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(o) = lock().get(i) {
+            return Ok(ObjectRef::Shared(o));
+        }
+        // Read outside the lock, so threads read different objects at once.
+        let o = Arc::new(self.read(i)?);
+        lock().put(i, o.clone());
+        Ok(ObjectRef::Shared(o))
+    }
+    fn raw_bytes(&self) -> u64 {
+        self.raw_bytes
+    }
+    fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.bounds
+    }
+}
+
+/// Objects read back, least recently used dropped first once they hold
+/// more than `limit` bytes.
+#[derive(Default)]
+struct Cache {
+    limit: u64,
+    held: u64,
+    tick: u64,
+    entries: HashMap<u32, (Arc<Object>, u64, u64)>,
+}
+
+impl Cache {
+    fn get(&mut self, i: u32) -> Option<Arc<Object>> {
+        self.tick += 1;
+        let tick = self.tick;
+        self.entries.get_mut(&i).map(|e| {
+            e.1 = tick;
+            e.0.clone()
+        })
+    }
+
+    fn put(&mut self, i: u32, o: Arc<Object>) {
+        self.tick += 1;
+        let bytes = resident_bytes(&o);
+        if let Some(old) = self.entries.insert(i, (o, self.tick, bytes)) {
+            self.held -= old.2;
+        }
+        self.held += bytes;
+        while self.held > self.limit && self.entries.len() > 1 {
+            let Some((&oldest, _)) = self.entries.iter().min_by_key(|(_, e)| e.1) else {
+                break;
+            };
+            if let Some(e) = self.entries.remove(&oldest) {
+                self.held -= e.2;
+            }
+        }
+    }
+}
+
+// One object's bytes, little-endian: name length (u32) and UTF-8 name;
+// colour (4 f32); vertex and index counts (u64 each); a flag (u8, 1 when
+// vertex colours follow); positions (3 f64 each), normals (3 f32 each),
+// indices (u32), vertex colours (4 f32 each).
+
+fn encode(o: &Object) -> Vec<u8> {
+    let nv = o.positions.len();
+    let vc = o.vertex_colours.as_ref();
+    let mut b = Vec::with_capacity(
+        4 + o.name.len() + 33 + 36 * nv + 4 * o.indices.len() + vc.map_or(0, |_| 16 * nv),
+    );
+    b.extend_from_slice(&(o.name.len() as u32).to_le_bytes());
+    b.extend_from_slice(o.name.as_bytes());
+    for c in o.colour {
+        b.extend_from_slice(&c.to_le_bytes());
+    }
+    b.extend_from_slice(&(nv as u64).to_le_bytes());
+    b.extend_from_slice(&(o.indices.len() as u64).to_le_bytes());
+    b.push(vc.is_some() as u8);
+    for p in &o.positions {
+        for x in p.to_array() {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    for n in &o.normals {
+        for x in n.to_array() {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    for i in &o.indices {
+        b.extend_from_slice(&i.to_le_bytes());
+    }
+    for c in vc.into_iter().flatten() {
+        for x in c {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    b
+}
+
+/// Reads [`encode`]'s bytes; `None` when they do not fit.
+fn decode(b: &[u8]) -> Option<Object> {
+    let mut r = Reader { b, at: 0 };
+    let name_len = u32::from_le_bytes(r.take()?) as usize;
+    let name = String::from_utf8(r.bytes(name_len)?.to_vec()).ok()?;
+    let colour = [r.f32()?, r.f32()?, r.f32()?, r.f32()?];
+    let nv = usize::try_from(u64::from_le_bytes(r.take()?)).ok()?;
+    let ni = usize::try_from(u64::from_le_bytes(r.take()?)).ok()?;
+    let has_vc = r.take::<1>()?[0] == 1;
+    // Counts are checked against the bytes before anything is allocated.
+    let need = nv
+        .checked_mul(36 + if has_vc { 16 } else { 0 })?
+        .checked_add(ni.checked_mul(4)?)?;
+    if need != b.len() - r.at {
+        return None;
+    }
+    let positions = (0..nv)
+        .map(|_| Some(DVec3::new(r.f64()?, r.f64()?, r.f64()?)))
+        .collect::<Option<Vec<_>>>()?;
+    let normals = (0..nv)
+        .map(|_| Some(Vec3::new(r.f32()?, r.f32()?, r.f32()?)))
+        .collect::<Option<Vec<_>>>()?;
+    let indices = (0..ni)
+        .map(|_| Some(u32::from_le_bytes(r.take()?)))
+        .collect::<Option<Vec<_>>>()?;
+    let vertex_colours = if has_vc {
+        Some(
+            (0..nv)
+                .map(|_| Some([r.f32()?, r.f32()?, r.f32()?, r.f32()?]))
+                .collect::<Option<Vec<_>>>()?,
+        )
+    } else {
+        None
+    };
+    Some(Object {
+        name,
+        positions,
+        normals,
+        indices,
+        colour,
+        vertex_colours,
+    })
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn bytes(&mut self, n: usize) -> Option<&[u8]> {
+        let s = self.b.get(self.at..self.at.checked_add(n)?)?;
+        self.at += n;
+        Some(s)
+    }
+    fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
+        self.bytes(N)?.try_into().ok()
+    }
+    fn f32(&mut self) -> Option<f32> {
+        Some(f32::from_le_bytes(self.take()?))
+    }
+    fn f64(&mut self) -> Option<f64> {
+        Some(f64::from_le_bytes(self.take()?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn object(k: u32, colours: bool) -> Object {
+        let nv = 3 + k as usize;
+        Object {
+            name: format!("part {k} \u{e9}"),
+            positions: (0..nv)
+                .map(|i| DVec3::new(i as f64, 1e7 + k as f64, -0.5 * i as f64))
+                .collect(),
+            normals: (0..nv).map(|i| Vec3::new(0.0, 1.0, i as f32)).collect(),
+            indices: (0..nv as u32 - 2).flat_map(|i| [0, i + 1, i + 2]).collect(),
+            colour: [0.1, 0.2, 0.3, 1.0],
+            vertex_colours: colours.then(|| vec![[0.5, 0.25, 1.0, 1.0]; nv]),
+        }
+    }
+
+    #[test]
+    fn objects_read_back_as_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = Model {
+            objects: (0..50).map(|k| object(k, k % 3 == 0)).collect(),
+            ..Default::default()
+        };
+        let mut w = SpillWriter::create_in(dir.path()).unwrap();
+        for o in &model.objects {
+            w.push(o).unwrap();
+        }
+        assert_eq!(w.len(), 50);
+        // A cache of one object at a time: every read after the first
+        // few goes back to the file.
+        let spill = w.finish(0).unwrap();
+        assert_eq!(spill.len(), 50);
+        for k in [0u32, 7, 49, 7, 3, 0] {
+            assert_eq!(*spill.object(k).unwrap(), model.objects[k as usize]);
+        }
+        assert_eq!(spill.raw_bytes(), Source::raw_bytes(&model));
+        assert_eq!(spill.bounds(), Source::bounds(&model));
+        assert!(spill.object(50).is_err());
+        // Nothing is left in the directory: the file has no name.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn bad_bytes_do_not_decode() {
+        let bytes = encode(&object(4, true));
+        assert!(decode(&bytes).is_some());
+        for cut in [0, 1, 10, bytes.len() / 2, bytes.len() - 1] {
+            assert!(decode(&bytes[..cut]).is_none(), "cut at {cut}");
+        }
+        let mut huge = bytes.clone();
+        let at = 4 + object(4, true).name.len() + 16;
+        huge[at..at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+        assert!(decode(&huge).is_none());
+    }
+}

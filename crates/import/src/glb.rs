@@ -42,19 +42,62 @@ fn chunk_name(ty: [u8; 4]) -> String {
 /// would otherwise be misaligned and readers disagree on where it is (the
 /// last chunk may end unpadded: nothing depends on it).
 pub(crate) fn check(bytes: &[u8]) -> Result<&[u8], String> {
-    if bytes.len() < HEADER_LEN {
+    let (declared, _) = layout(bytes.len(), &mut |at, n| Ok(bytes[at..at + n].to_vec()))?;
+    Ok(&bytes[..declared])
+}
+
+/// A chunk [`layout`] found: its type, and where its data lies.
+struct Chunk {
+    ty: [u8; 4],
+    at: usize,
+    len: usize,
+}
+
+/// Where a chunk's data lies in a file: offset, length.
+pub(crate) type Span = (u64, usize);
+
+/// [`check`] for a file read in place: its JSON chunk's bytes, and where
+/// its BIN chunk's data lies, if it has one. Only the headers and the JSON
+/// are read.
+pub(crate) fn check_file(file: &std::fs::File) -> Result<(Vec<u8>, Option<Span>), String> {
+    use std::os::unix::fs::FileExt as _;
+    let len = file.metadata().map_err(|e| e.to_string())?.len();
+    let len = usize::try_from(len).map_err(|_| "the file is too large".to_string())?;
+    let mut read = |at: usize, n: usize| {
+        let mut b = vec![0u8; n];
+        file.read_exact_at(&mut b, at as u64)
+            .map_err(|e| format!("cannot read bytes {at}..{}: {e}", at + n))?;
+        Ok(b)
+    };
+    let (_, chunks) = layout(len, &mut read)?;
+    let json = read(chunks[0].at, chunks[0].len)?;
+    let bin = chunks
+        .get(1)
+        .filter(|c| c.ty == BIN)
+        .map(|c| (c.at as u64, c.len));
+    Ok((json, bin))
+}
+
+/// The container's declared length and chunks, checked as [`check`] says,
+/// for a file of `len` bytes whose bytes `read(at, n)` gives (every read
+/// in range).
+fn layout(
+    len: usize,
+    read: &mut dyn FnMut(usize, usize) -> Result<Vec<u8>, String>,
+) -> Result<(usize, Vec<Chunk>), String> {
+    if len < HEADER_LEN {
         return Err(format!(
-            "GLB header needs {HEADER_LEN} bytes, the file has {}",
-            bytes.len()
+            "GLB header needs {HEADER_LEN} bytes, the file has {len}"
         ));
     }
-    let version = u32_at(bytes, 4);
+    let header = read(0, HEADER_LEN)?;
+    let version = u32_at(&header, 4);
     if version != 2 {
         return Err(format!(
             "GLB header (byte 4): version {version}, only version 2 is supported"
         ));
     }
-    let declared = u32_at(bytes, 8) as usize;
+    let declared = u32_at(&header, 8) as usize;
     let least = HEADER_LEN + CHUNK_HEADER_LEN;
     if declared < least {
         return Err(format!(
@@ -62,13 +105,12 @@ pub(crate) fn check(bytes: &[u8]) -> Result<&[u8], String> {
              header and a JSON chunk header"
         ));
     }
-    if declared > bytes.len() {
+    if declared > len {
         return Err(format!(
-            "GLB header (byte 8): total length {declared} but the file has {} bytes (truncated?)",
-            bytes.len()
+            "GLB header (byte 8): total length {declared} but the file has {len} bytes (truncated?)"
         ));
     }
-    let bytes = &bytes[..declared];
+    let mut chunks = Vec::new();
     let mut at = HEADER_LEN;
     let mut index = 0usize;
     while at < declared {
@@ -79,8 +121,9 @@ pub(crate) fn check(bytes: &[u8]) -> Result<&[u8], String> {
                  before the declared end ({declared})"
             ));
         }
-        let length = u32_at(bytes, at) as usize;
-        let ty = [bytes[at + 4], bytes[at + 5], bytes[at + 6], bytes[at + 7]];
+        let h = read(at, CHUNK_HEADER_LEN)?;
+        let length = u32_at(&h, 0) as usize;
+        let ty = [h[4], h[5], h[6], h[7]];
         let name = chunk_name(ty);
         let expected = match index {
             0 => Some(JSON),
@@ -114,12 +157,17 @@ pub(crate) fn check(bytes: &[u8]) -> Result<&[u8], String> {
                  the chunk after it is misaligned"
             ));
         }
+        chunks.push(Chunk {
+            ty,
+            at: data_at,
+            len: length,
+        });
         at = end;
         index += 1;
     }
     // declared >= HEADER_LEN + CHUNK_HEADER_LEN, so the loop has checked
     // the JSON chunk at least.
-    Ok(bytes)
+    Ok((declared, chunks))
 }
 
 #[cfg(test)]

@@ -85,24 +85,79 @@ struct RawMesh {
     primitives: Vec<RawExtensible>,
 }
 
-/// The file's bytes as accessors see them: loaded buffers (a meshopt
-/// fallback buffer is empty) and decoded meshopt buffer views, which take
-/// the place of their view's bytes.
+/// A buffer's bytes: in memory, or a range of a file read a piece at a
+/// time.
+enum Buffer<'a> {
+    Bytes(Cow<'a, [u8]>),
+    File {
+        file: std::fs::File,
+        at: u64,
+        len: usize,
+    },
+}
+
+impl Buffer<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Buffer::Bytes(b) => b.len(),
+            Buffer::File { len, .. } => *len,
+        }
+    }
+
+    /// `n` bytes from `start` (in range: `start + n <= len`).
+    fn range(&self, start: usize, n: usize) -> std::io::Result<Cow<'_, [u8]>> {
+        match self {
+            Buffer::Bytes(b) => Ok(Cow::Borrowed(&b[start..start + n])),
+            Buffer::File { file, at, .. } => {
+                use std::os::unix::fs::FileExt as _;
+                let mut out = vec![0u8; n];
+                file.read_exact_at(&mut out, at + start as u64)?;
+                Ok(Cow::Owned(out))
+            }
+        }
+    }
+
+    /// All of it in memory.
+    fn into_bytes(self) -> std::io::Result<Cow<'static, [u8]>> {
+        match self {
+            Buffer::Bytes(b) => Ok(Cow::Owned(b.into_owned())),
+            f @ Buffer::File { .. } => Ok(Cow::Owned(f.range(0, f.len())?.into_owned())),
+        }
+    }
+}
+
+/// The file's bytes as accessors see them: buffers (a meshopt fallback
+/// buffer is empty) and decoded meshopt buffer views, which take the place
+/// of their view's bytes.
 struct BufferData<'a> {
-    buffers: Vec<Cow<'a, [u8]>>,
+    buffers: Vec<Buffer<'a>>,
     decoded: Vec<Option<Vec<u8>>>,
 }
 
 impl BufferData<'_> {
-    /// The bytes of a buffer view, `None` when they run past its buffer.
-    fn view(&self, view: &gltf::buffer::View) -> Option<&[u8]> {
+    /// The length of a buffer view's bytes, `None` when they run past its
+    /// buffer.
+    fn view_len(&self, view: &gltf::buffer::View) -> Option<usize> {
         if let Some(Some(bytes)) = self.decoded.get(view.index()) {
-            return Some(bytes);
+            return Some(bytes.len());
         }
         let buffer = &self.buffers[view.buffer().index()];
-        view.offset()
-            .checked_add(view.length())
-            .and_then(|end| buffer.get(view.offset()..end))
+        let end = view.offset().checked_add(view.length())?;
+        (end <= buffer.len()).then_some(view.length())
+    }
+
+    /// `n` bytes from `start` of a view ([`BufferData::view_len`] said
+    /// they are in range).
+    fn view_range(
+        &self,
+        view: &gltf::buffer::View,
+        start: usize,
+        n: usize,
+    ) -> std::io::Result<Cow<'_, [u8]>> {
+        if let Some(Some(bytes)) = self.decoded.get(view.index()) {
+            return Ok(Cow::Borrowed(&bytes[start..start + n]));
+        }
+        self.buffers[view.buffer().index()].range(view.offset() + start, n)
     }
 }
 
@@ -144,6 +199,40 @@ pub(crate) fn import_gltf_each(
         (&glb.json[..], glb.bin.as_deref())
     } else {
         (bytes, None)
+    };
+    let blob = blob.map(|b| Buffer::Bytes(Cow::Borrowed(b)));
+    import_document(json_bytes, blob, file, base_dir, sink)
+}
+
+/// [`import_gltf_each`] for a binary glTF file read in place: only its
+/// JSON is read whole, and each accessor's bytes when its primitive's turn
+/// comes (all of the BIN chunk when a view is meshopt-compressed, since a
+/// compressed view decodes whole).
+pub(crate) fn import_glb_file_each(
+    f: std::fs::File,
+    file: &str,
+    base_dir: Option<&Path>,
+    sink: &mut dyn FnMut(Object) -> Result<(), ImportError>,
+) -> Result<ImportStats, ImportError> {
+    let (json, bin) = crate::glb::check_file(&f).map_err(|message| ImportError::MalformedGltf {
+        file: file.to_owned(),
+        message,
+    })?;
+    let blob = bin.map(|(at, len)| Buffer::File { file: f, at, len });
+    import_document(&json, blob, file, base_dir, sink)
+}
+
+/// The glTF JSON and the GLB BIN chunk, if any, into objects for `sink`.
+fn import_document(
+    json_bytes: &[u8],
+    blob: Option<Buffer<'_>>,
+    file: &str,
+    base_dir: Option<&Path>,
+    sink: &mut dyn FnMut(Object) -> Result<(), ImportError>,
+) -> Result<ImportStats, ImportError> {
+    let malformed = |message: String| ImportError::MalformedGltf {
+        file: file.to_owned(),
+        message,
     };
     let mut root = gltf::json::deserialize::from_slice::<gltf::json::Root>(json_bytes)
         .map_err(|e| malformed(format!("{e}")))?;
@@ -305,13 +394,42 @@ fn check_draco_primitives(
 fn load_data<'a>(
     doc: &gltf::Document,
     raw: &RawRoot,
-    blob: Option<&'a [u8]>,
+    blob: Option<Buffer<'a>>,
     file: &str,
     base_dir: Option<&Path>,
 ) -> Result<BufferData<'a>, ImportError> {
-    let buffers = load_buffers(doc, raw, blob, file, base_dir)?;
+    let mut buffers = load_buffers(doc, raw, blob, file, base_dir)?;
     let mut decoded: Vec<Option<Vec<u8>>> = vec![None; doc.views().len()];
-    let sources: Vec<&[u8]> = buffers.iter().map(|b| &b[..]).collect();
+    let compressed = doc
+        .meshes()
+        .flat_map(|m| m.primitives().collect::<Vec<_>>())
+        .any(|p| {
+            p.attributes()
+                .map(|(_, a)| a)
+                .chain(p.indices())
+                .filter_map(|a| a.view())
+                .any(|v| meshopt_views::find(&raw.buffer_views[v.index()].extensions).is_some())
+        });
+    if !compressed {
+        return Ok(BufferData { buffers, decoded });
+    }
+    // A compressed view decodes whole, from its buffer in memory.
+    for b in &mut buffers {
+        if matches!(b, Buffer::File { .. }) {
+            let whole = std::mem::replace(b, Buffer::Bytes(Cow::Borrowed(&[])));
+            *b = Buffer::Bytes(whole.into_bytes().map_err(|source| ImportError::Io {
+                file: file.to_owned(),
+                source,
+            })?);
+        }
+    }
+    let sources: Vec<&[u8]> = buffers
+        .iter()
+        .map(|b| match b {
+            Buffer::Bytes(b) => &b[..],
+            Buffer::File { .. } => &[][..],
+        })
+        .collect();
     for mesh in doc.meshes() {
         for prim in mesh.primitives() {
             let accessors = prim.attributes().map(|(_, a)| a).chain(prim.indices());
@@ -365,14 +483,15 @@ fn is_placeholder(
 fn load_buffers<'a>(
     doc: &gltf::Document,
     raw: &RawRoot,
-    blob: Option<&'a [u8]>,
+    mut blob: Option<Buffer<'a>>,
     file: &str,
     base_dir: Option<&Path>,
-) -> Result<Vec<Cow<'a, [u8]>>, ImportError> {
+) -> Result<Vec<Buffer<'a>>, ImportError> {
     let mut out = Vec::new();
+    let has_blob = blob.is_some();
     for buffer in doc.buffers() {
-        if is_placeholder(doc, raw, &buffer, blob.is_some()) {
-            out.push(Cow::Borrowed(&[][..]));
+        if is_placeholder(doc, raw, &buffer, has_blob) {
+            out.push(Buffer::Bytes(Cow::Borrowed(&[][..])));
             continue;
         }
         let missing = |uri: &str, reason: String| ImportError::MissingBuffer {
@@ -381,9 +500,10 @@ fn load_buffers<'a>(
             uri: uri.to_owned(),
             reason,
         };
-        let data: Cow<[u8]> = match buffer.source() {
-            gltf::buffer::Source::Bin => match blob {
-                Some(b) => Cow::Borrowed(b),
+        let data: Buffer = match buffer.source() {
+            // glTF allows one buffer to be the BIN chunk (buffer 0).
+            gltf::buffer::Source::Bin => match blob.take() {
+                Some(b) => b,
                 None => return Err(missing("GLB BIN chunk", "the file has no BIN chunk".into())),
             },
             gltf::buffer::Source::Uri(uri) => {
@@ -394,7 +514,7 @@ fn load_buffers<'a>(
                     let decoded = base64::engine::general_purpose::STANDARD
                         .decode(payload)
                         .map_err(|e| missing("data: URI", format!("bad base64: {e}")))?;
-                    Cow::Owned(decoded)
+                    Buffer::Bytes(Cow::Owned(decoded))
                 } else if uri.contains("://") {
                     return Err(missing(
                         uri,
@@ -407,11 +527,21 @@ fn load_buffers<'a>(
                             "external buffers need a file path, not bytes".into(),
                         ));
                     };
+                    // Read in place, an accessor at a time.
                     let path = dir.join(percent_decode(uri));
-                    let bytes = std::fs::read(&path).map_err(|e| {
+                    let cannot = |e: std::io::Error| {
                         missing(uri, format!("cannot read {}: {e}", path.display()))
-                    })?;
-                    Cow::Owned(bytes)
+                    };
+                    let f = std::fs::File::open(&path).map_err(cannot)?;
+                    let meta = f.metadata().map_err(cannot)?;
+                    if meta.is_dir() {
+                        return Err(missing(uri, format!("{} is a directory", path.display())));
+                    }
+                    Buffer::File {
+                        file: f,
+                        at: 0,
+                        len: usize::try_from(meta.len()).unwrap_or(usize::MAX),
+                    }
                 }
             }
         };
@@ -656,7 +786,7 @@ fn accessor_bytes<'b>(
     file: &str,
     object: &str,
     semantic: &'static str,
-) -> Result<(&'b [u8], usize, usize), ImportError> {
+) -> Result<(Cow<'b, [u8]>, usize, usize), ImportError> {
     let bad = |reason: String| bad_accessor(file, object, acc, semantic, reason);
     if acc.sparse().is_some() {
         return Err(bad("sparse accessors are not supported".into()));
@@ -664,7 +794,7 @@ fn accessor_bytes<'b>(
     let view = acc
         .view()
         .ok_or_else(|| bad("no bufferView (all-zero accessors are not supported)".into()))?;
-    let view_bytes = data.view(&view).ok_or_else(|| {
+    let view_len = data.view_len(&view).ok_or_else(|| {
         bad(format!(
             "bufferView {} runs past the end of its buffer",
             view.index()
@@ -679,19 +809,26 @@ fn accessor_bytes<'b>(
     }
     let count = acc.count();
     if count == 0 {
-        return Ok((&[], stride, elem));
+        return Ok((Cow::Borrowed(&[]), stride, elem));
     }
     let needed = (count - 1)
         .checked_mul(stride)
         .and_then(|x| x.checked_add(elem))
         .and_then(|x| x.checked_add(acc.offset()));
     match needed {
-        Some(end) if end <= view_bytes.len() => Ok((&view_bytes[acc.offset()..end], stride, elem)),
+        Some(end) if end <= view_len => {
+            let bytes = data
+                .view_range(&view, acc.offset(), end - acc.offset())
+                .map_err(|source| ImportError::Io {
+                    file: file.to_owned(),
+                    source,
+                })?;
+            Ok((bytes, stride, elem))
+        }
         _ => Err(bad(format!(
-            "{count} elements at offset {} do not fit in bufferView {} ({} bytes)",
+            "{count} elements at offset {} do not fit in bufferView {} ({view_len} bytes)",
             acc.offset(),
             view.index(),
-            view_bytes.len()
         ))),
     }
 }

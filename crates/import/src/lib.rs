@@ -59,8 +59,23 @@ pub fn import_each(
     let base_dir = path.parent().unwrap_or(Path::new("."));
     match ext.as_deref() {
         Some("gltf") | Some("glb") => {
-            let bytes = read(path)?;
-            gltf_import::import_gltf_each(&bytes, &file, Some(base_dir), sink)
+            // A binary container is read in place; JSON is read whole.
+            let io = |source| ImportError::Io {
+                file: file.clone(),
+                source,
+            };
+            let f = std::fs::File::open(path).map_err(io)?;
+            let mut magic = [0u8; 4];
+            let binary = {
+                use std::os::unix::fs::FileExt as _;
+                f.read_at(&mut magic, 0).map_err(io)? == 4 && &magic == b"glTF"
+            };
+            if binary && !f.metadata().map_err(io)?.is_dir() {
+                gltf_import::import_glb_file_each(f, &file, Some(base_dir), sink)
+            } else {
+                let bytes = read(path)?;
+                gltf_import::import_gltf_each(&bytes, &file, Some(base_dir), sink)
+            }
         }
         Some("obj") => {
             let bytes = read(path)?;

@@ -50,7 +50,7 @@ pub mod verify;
 /// triangle kept; no jump far below a level's target), measured against
 /// the full detail below a node of at most 65,536 triangles, vanished
 /// pieces covered at the level's error limit; 9: levels made and stored
-/// unit by unit (subtrees of at most 2^18 triangles), so memory no longer
+/// unit by unit (subtrees of at most 2^16 triangles), so memory no longer
 /// grows with the model (the same levels, in another order in the file).
 pub const REVISION: u32 = 9;
 
@@ -118,6 +118,11 @@ pub trait LodSink {
     /// Stores one LOD; returns its index. A node's LODs arrive
     /// consecutively, finest first.
     fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error>;
+    /// Every LOD of node `node` has been added (called once per node the
+    /// run makes, after its LODs, even when it has none).
+    fn node_done(&mut self, _node: u32) -> Result<(), Self::Error> {
+        Ok(())
+    }
 }
 
 impl LodSink for SceneWriter {
@@ -180,7 +185,7 @@ pub(crate) fn write_scene(
 ) -> Result<Stats, PreprocessError> {
     // On any error below, dropping the writer removes its temporary file.
     let mut writer = SceneWriter::create(output).map_err(|e| PreprocessError::Write(e.into()))?;
-    let (mut built, _) = build_role(model, params, layout, &mut writer, progress, role)?;
+    let (mut built, _) = build_role(model, params, &layout, &mut writer, progress, role)?;
     let t = Instant::now();
     progress.start(Phase::Write, 0);
     let mut parameters = params.to_json();
@@ -242,7 +247,7 @@ pub fn build<S: LodSink>(
     progress: &dyn Progress,
 ) -> Result<Built, PreprocessError> {
     let layout = layout(model, params, progress)?;
-    Ok(build_role(model, params, layout, sink, progress, Role::All)?.0)
+    Ok(build_role(model, params, &layout, sink, progress, Role::All)?.0)
 }
 
 /// Steps 1-5: the parts and the hierarchy over them, before any LOD.
@@ -379,7 +384,7 @@ pub(crate) fn layout(
 pub(crate) fn build_role<S: LodSink>(
     model: &dyn Source,
     params: &Params,
-    layout: Layout,
+    layout: &Layout,
     sink: &mut S,
     progress: &dyn Progress,
     mut role: Role,
@@ -388,8 +393,9 @@ pub(crate) fn build_role<S: LodSink>(
         parts,
         tree,
         resolved,
-        mut stats,
+        stats,
     } = layout;
+    let mut stats = stats.clone();
     let mut clock = PhaseClock::new(progress);
     let mine = |ni: usize, role: &Role| match role {
         Role::Shard { mine, .. } => mine[ni],
@@ -430,12 +436,22 @@ pub(crate) fn build_role<S: LodSink>(
             }
             per_level[k] += mesh.triangle_count() as u64;
         }
+        sink.node_done(ni as u32)
+            .map_err(|e| PreprocessError::Write(e.into()))?;
         lod_ranges[ni] = (first.unwrap_or(0), lods.len() as u32);
         Ok(())
     };
     // Unit by unit, so the levels and full detail that wait for a parent
     // stay a unit's worth ([`order`]).
-    for stage in order(&tree, &subtree_triangles(&tree, &parts)) {
+    let below = subtree_triangles(tree, parts);
+    // A node's full detail is kept for its parent only when the parent
+    // will be measured against it: when the parent has at most
+    // EXACT_REFERENCE triangles below it.
+    let wanted = |ni: usize| {
+        let p = tree[ni].parent;
+        p != gigawalk_scene::NO_NODE && below[p as usize] <= EXACT_REFERENCE as u64
+    };
+    for stage in order(tree, &below) {
         let stage: Vec<usize> = stage.into_iter().filter(|&i| mine(i, &role)).collect();
         let leaves = stage.first().is_some_and(|&i| tree[i].object.is_some());
         for batch in stage.chunks(HLOD_BATCH) {
@@ -443,10 +459,22 @@ pub(crate) fn build_role<S: LodSink>(
                 .par_iter()
                 .filter(|&&ni| !given(ni, &role))
                 .map(|&ni| match tree[ni].object {
-                    Some(object) => {
-                        make_leaf(model, &parts[object as usize], &tree[ni], &chain, keep)
-                    }
-                    None => Ok(make_inner(&tree[ni], &done, &lowest, &chain, keep)),
+                    Some(object) => make_leaf(
+                        model,
+                        &parts[object as usize],
+                        &tree[ni],
+                        &chain,
+                        keep,
+                        wanted(ni),
+                    ),
+                    None => Ok(make_inner(
+                        &tree[ni],
+                        &done,
+                        &lowest,
+                        &chain,
+                        keep,
+                        wanted(ni),
+                    )),
                 })
                 .collect();
             let mut made = made.into_iter();
@@ -476,7 +504,6 @@ pub(crate) fn build_role<S: LodSink>(
             progress.advance(batch.len() as u64);
         }
     }
-    drop(parts);
     stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
     clock.finish(&mut stats);
 
@@ -492,7 +519,7 @@ pub(crate) fn build_role<S: LodSink>(
             lod_count,
         })
         .collect();
-    stats.resolved = Some(resolved);
+    stats.resolved = Some(resolved.clone());
     let roots = match role {
         Role::Shard { roots, .. } => roots
             .iter()
@@ -513,9 +540,10 @@ fn make_leaf(
     node: &hierarchy::HNode,
     chain: &ChainParams,
     keep: usize,
+    full_wanted: bool,
 ) -> Result<Finished, SpillError> {
     let mesh = hlod::leaf_mesh(model, part, node.bounds.center())?;
-    let full = (mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
+    let full = (full_wanted && mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
     let (out, levels) = finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), chain), keep);
     Ok((out, Done { levels, full }))
 }
@@ -528,6 +556,7 @@ fn make_inner(
     lowest: &[f32],
     chain: &ChainParams,
     keep: usize,
+    full_wanted: bool,
 ) -> Finished {
     let below: Vec<&Done> = (node.first_child..node.first_child + node.child_count)
         .filter_map(|c| done[c as usize].as_ref())
@@ -558,14 +587,22 @@ fn make_inner(
     let (out, levels) = finish_chain(lods, keep);
     (
         out.into_iter().skip(stored.start).collect(),
-        Done { levels, full },
+        Done {
+            levels,
+            full: full.filter(|_| full_wanted),
+        },
     )
 }
 
 /// Triangles a unit of [`order`] holds at most (unless it is one leaf):
-/// what bounds the levels and full detail that wait for their parents,
-/// about 130 bytes a triangle, whatever the model's size.
-const UNIT_TRIANGLES: u64 = 1 << 18;
+/// what bounds the levels and full detail that wait for their parents
+/// (about 100 bytes a triangle: some 6 MiB), whatever the model's size.
+/// Smaller units idle cores at each unit's top levels (one or two nodes a
+/// stage); on the 2M plant 2^16 took the same time as 2^18 and 40 MiB less
+/// at its peak. A unit's root keeps no full detail for its parent (that
+/// has more than [`EXACT_REFERENCE`] triangles below it), so no unit
+/// leaves more than its coarse levels behind.
+const UNIT_TRIANGLES: u64 = 1 << 16;
 
 /// The order nodes' levels are made in, as stages of nodes that only
 /// depend on earlier stages: unit by unit (the highest subtrees of at

@@ -41,7 +41,7 @@ pub const PLAN_FILE: &str = "plan.json";
 
 const FORMAT: &str = "gigawalk-preprocess-plan";
 const PLAN_VERSION: u32 = 1;
-const SHARD_MAGIC: &[u8; 8] = b"GWSHARD1";
+const SHARD_MAGIC: &[u8; 8] = b"GWSHARD2";
 
 /// One input file as the plan saw it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -470,7 +470,7 @@ impl Planned {
             &self.plan,
             spec,
             self.model.source(),
-            self.layout.clone(),
+            &self.layout,
             &path,
             progress,
         )
@@ -542,13 +542,13 @@ fn make_shard(
     plan: &Plan,
     spec: &ShardSpec,
     model: &dyn Source,
-    layout: Layout,
+    layout: &Layout,
     path: &Path,
     progress: &dyn Progress,
 ) -> Result<(), ShardError> {
     let mine = subtree_mask(&layout.tree, &spec.roots);
-    let mut sink = Collect::default();
-    let (built, roots) = crate::build_role(
+    let mut sink = ShardWriter::create(path, plan, spec.index, spec.nodes)?;
+    let (_, roots) = crate::build_role(
         model,
         &plan.params,
         layout,
@@ -559,33 +559,122 @@ fn make_shard(
             roots: &spec.roots,
         },
     )?;
-    // Nodes' LODs arrived in the build's order, not node order: each
-    // node's are the range the sink gave it.
-    let lods: ShardLods = built
-        .nodes
-        .iter()
-        .enumerate()
-        .filter(|&(ni, _)| mine[ni])
-        .map(|(ni, n)| {
-            let r = n.first_lod as usize..(n.first_lod + n.lod_count) as usize;
-            (ni as u32, sink.lods[r].to_vec())
-        })
-        .collect();
-    let bytes = encode_shard(plan, spec.index, &lods, &roots);
-    gigawalk_scene::write_atomic(path, &bytes).map_err(io(path))
+    sink.finish(&roots)
 }
 
-/// A sink that keeps LODs in memory, numbered as they come.
-#[derive(Default)]
-struct Collect {
-    lods: Vec<(LodMesh, f32)>,
+/// Writes a shard file as its nodes' LODs come (only one node's are held),
+/// then the index of where each node's lie and the roots' [`Done`]:
+///
+/// - header: [`SHARD_MAGIC`], the plan id, the shard index (u32), the
+///   node count (u32);
+/// - per node, in the order they were made: its LOD count (u32), then
+///   per LOD its error (f32) and mesh;
+/// - the trailer: the node count again, per node its index (u32) and
+///   the byte range of its LODs (two u64); the root count, per root its
+///   index, its levels (count, then error and mesh each) and its full
+///   detail (flag u8, then the mesh);
+/// - where the trailer starts (u64), and the CRC-32 of every byte before.
+///
+/// Written to a temporary file and renamed into place when whole.
+struct ShardWriter {
+    path: PathBuf,
+    out: std::io::BufWriter<gigawalk_scene::TempFile>,
+    crc: crc32fast::Hasher,
+    pos: u64,
+    /// The current node's LODs, encoded.
+    node: Put,
+    count: usize,
+    index: Put,
+    nodes: u64,
 }
 
-impl crate::LodSink for Collect {
-    type Error = std::convert::Infallible;
-    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error> {
-        self.lods.push((mesh.clone(), error));
-        Ok(self.lods.len() as u32 - 1)
+impl ShardWriter {
+    fn create(path: &Path, plan: &Plan, index: usize, nodes: u64) -> Result<Self, ShardError> {
+        let tmp = gigawalk_scene::temp_file_for(path).map_err(io(path))?;
+        let mut w = ShardWriter {
+            path: path.to_path_buf(),
+            out: std::io::BufWriter::with_capacity(1 << 20, tmp),
+            crc: crc32fast::Hasher::new(),
+            pos: 0,
+            node: Put(Vec::new()),
+            count: 0,
+            index: Put(Vec::new()),
+            nodes: 0,
+        };
+        let mut h = Put(Vec::new());
+        h.0.extend_from_slice(SHARD_MAGIC);
+        h.0.extend_from_slice(plan.id.as_bytes());
+        h.len(index);
+        h.len(nodes as usize);
+        w.write(&h.0).map_err(io(path))?;
+        w.index.len(nodes as usize);
+        Ok(w)
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        use std::io::Write as _;
+        self.out.write_all(bytes)?;
+        self.crc.update(bytes);
+        self.pos += bytes.len() as u64;
+        Ok(())
+    }
+
+    /// The trailer and checksum, then the rename into place.
+    fn finish(mut self, roots: &[(u32, Done)]) -> Result<(), ShardError> {
+        let path = self.path.clone();
+        let trailer_at = self.pos;
+        let mut t = std::mem::replace(&mut self.index, Put(Vec::new()));
+        t.len(roots.len());
+        for (ni, d) in roots {
+            t.u32(*ni);
+            t.len(d.levels.len());
+            for l in &d.levels {
+                t.f32(l.error);
+                t.work_mesh(&l.mesh);
+            }
+            match &d.full {
+                None => t.u8(0),
+                Some(m) => {
+                    t.u8(1);
+                    t.work_mesh(m);
+                }
+            }
+        }
+        t.0.extend_from_slice(&trailer_at.to_le_bytes());
+        self.write(&t.0).map_err(io(&path))?;
+        let crc = self.crc.clone().finalize();
+        self.write(&crc.to_le_bytes()).map_err(io(&path))?;
+        let tmp = self
+            .out
+            .into_inner()
+            .map_err(|e| io(&path)(e.into_error()))?;
+        tmp.as_file().sync_all().map_err(io(&path))?;
+        tmp.persist(&path).map_err(io(&path))
+    }
+}
+
+impl crate::LodSink for ShardWriter {
+    type Error = ShardError;
+    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, ShardError> {
+        self.node.f32(error);
+        self.node.lod_mesh(mesh);
+        self.count += 1;
+        Ok(0)
+    }
+    fn node_done(&mut self, node: u32) -> Result<(), ShardError> {
+        let start = self.pos;
+        let mut c = Put(Vec::new());
+        c.len(self.count);
+        let body = std::mem::replace(&mut self.node, Put(Vec::new()));
+        let path = self.path.clone();
+        self.write(&c.0).map_err(io(&path))?;
+        self.write(&body.0).map_err(io(&path))?;
+        self.index.u32(node);
+        self.index.0.extend_from_slice(&start.to_le_bytes());
+        self.index.0.extend_from_slice(&self.pos.to_le_bytes());
+        self.count = 0;
+        self.nodes += 1;
+        Ok(())
     }
 }
 
@@ -711,6 +800,11 @@ impl<'a> Get<'a> {
             self.take(8)?.try_into().map_err(|_| "f64")?,
         ))
     }
+    fn u64(&mut self) -> R<u64> {
+        Ok(u64::from_le_bytes(
+            self.take(8)?.try_into().map_err(|_| "u64")?,
+        ))
+    }
     /// A length, checked against the bytes left (`each` bytes an item).
     fn len(&mut self, each: usize) -> R<usize> {
         let n = self.u32()? as usize;
@@ -797,63 +891,56 @@ fn check_mesh(positions: usize, normals: usize, indices: &[u32]) -> R<()> {
     Ok(())
 }
 
-type ShardLods = Vec<(u32, Vec<(LodMesh, f32)>)>;
-
-fn encode_shard(plan: &Plan, index: usize, lods: &ShardLods, done: &[(u32, Done)]) -> Vec<u8> {
-    let mut p = Put(Vec::new());
-    p.0.extend_from_slice(SHARD_MAGIC);
-    p.0.extend_from_slice(plan.id.as_bytes());
-    p.len(index);
-    p.len(lods.len());
-    for (ni, l) in lods {
-        p.u32(*ni);
-        p.len(l.len());
-        for (m, e) in l {
-            p.f32(*e);
-            p.lod_mesh(m);
-        }
-    }
-    // (Get::node_lods reads one node's list back.)
-    p.len(done.len());
-    for (ni, d) in done {
-        p.u32(*ni);
-        p.len(d.levels.len());
-        for l in &d.levels {
-            p.f32(l.error);
-            p.work_mesh(&l.mesh);
-        }
-        match &d.full {
-            None => p.u8(0),
-            Some(m) => {
-                p.u8(1);
-                p.work_mesh(m);
-            }
-        }
-    }
-    let crc = crc32fast::hash(&p.0);
-    p.u32(crc);
-    p.0
-}
-
 /// Where each node's LODs lie in a shard file, and its roots' [`Done`].
 type ShardIndex = (HashMap<u32, std::ops::Range<usize>>, HashMap<u32, Done>);
 
 /// Shard `index`'s output at `path`, checked against the plan (every byte
-/// read and its checksum verified); the open file, for reading the LODs
-/// again where the index says.
+/// read, a piece at a time, and its checksum verified; only the trailer is
+/// kept); the open file, for reading the LODs again where the index says.
 fn read_shard(
     path: &Path,
     plan: &Plan,
     index: usize,
 ) -> Result<(std::fs::File, ShardIndex), ShardError> {
     use std::io::Read as _;
-    let mut file = std::fs::File::open(path).map_err(io(path))?;
-    let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes).map_err(io(path))?;
-    let index = decode_shard(&bytes, plan, index).map_err(|reason| ShardError::Corrupt {
+    use std::os::unix::fs::FileExt as _;
+    let corrupt = |reason: String| ShardError::Corrupt {
         path: path.to_path_buf(),
         reason,
-    })?;
+    };
+    let file = std::fs::File::open(path).map_err(io(path))?;
+    let len = file.metadata().map_err(io(path))?.len();
+    if len < 12 {
+        return Err(corrupt("too short".into()));
+    }
+    let mut crc = crc32fast::Hasher::new();
+    let mut left = len - 4;
+    let mut r = std::io::BufReader::with_capacity(1 << 20, &file);
+    let mut buf = vec![0u8; 1 << 20];
+    while left > 0 {
+        let n = left.min(buf.len() as u64) as usize;
+        r.read_exact(&mut buf[..n]).map_err(io(path))?;
+        crc.update(&buf[..n]);
+        left -= n as u64;
+    }
+    let mut tail = [0u8; 12];
+    file.read_exact_at(&mut tail, len - 12).map_err(io(path))?;
+    if crc.finalize() != u32::from_le_bytes([tail[8], tail[9], tail[10], tail[11]]) {
+        return Err(corrupt("checksum mismatch".into()));
+    }
+    let trailer_at = u64::from_le_bytes(tail[..8].try_into().map_err(|_| corrupt("u64".into()))?);
+    let head_len = SHARD_MAGIC.len() + plan.id.len() + 8;
+    if trailer_at < head_len as u64 || trailer_at > len - 12 {
+        return Err(corrupt(format!(
+            "trailer at {trailer_at}, the file has {len} bytes"
+        )));
+    }
+    let mut head = vec![0u8; head_len];
+    file.read_exact_at(&mut head, 0).map_err(io(path))?;
+    let mut trailer = vec![0u8; (len - 12 - trailer_at) as usize];
+    file.read_exact_at(&mut trailer, trailer_at)
+        .map_err(io(path))?;
+    let index = decode_shard(&head, &trailer, trailer_at, plan, index).map_err(corrupt)?;
     Ok((file, index))
 }
 
@@ -876,14 +963,16 @@ pub(crate) fn read_node_lods(
     Ok(lods)
 }
 
-fn decode_shard(bytes: &[u8], plan: &Plan, index: usize) -> R<ShardIndex> {
-    let Some((body, crc)) = bytes.split_last_chunk::<4>() else {
-        return Err("too short".into());
-    };
-    if crc32fast::hash(body) != u32::from_le_bytes(*crc) {
-        return Err("checksum mismatch".into());
-    }
-    let mut g = Get { b: body };
+/// A shard file's header and trailer (at `trailer_at`), checked against
+/// the plan: where each node's LODs lie, and the roots' [`Done`].
+fn decode_shard(
+    head: &[u8],
+    trailer: &[u8],
+    trailer_at: u64,
+    plan: &Plan,
+    index: usize,
+) -> R<ShardIndex> {
+    let mut g = Get { b: head };
     if g.take(SHARD_MAGIC.len())? != SHARD_MAGIC {
         return Err("not a shard file".into());
     }
@@ -894,18 +983,27 @@ fn decode_shard(bytes: &[u8], plan: &Plan, index: usize) -> R<ShardIndex> {
         return Err(format!("not shard {index}'s"));
     }
     let spec = plan.shards.get(index).ok_or("no such shard in the plan")?;
-    let nodes = g.len(8)?;
-    if nodes as u64 != spec.nodes {
+    let nodes = g.u32()? as u64;
+    let mut g = Get { b: trailer };
+    if nodes != spec.nodes || g.u32()? as u64 != nodes {
         return Err(format!("{nodes} nodes, the plan says {}", spec.nodes));
     }
-    let mut lods = HashMap::with_capacity(nodes);
+    let mut lods = HashMap::with_capacity(nodes as usize);
+    let mut at = head.len() as u64;
     for _ in 0..nodes {
         let ni = g.u32()?;
-        let start = body.len() - g.b.len();
-        g.node_lods()?;
-        if lods.insert(ni, start..body.len() - g.b.len()).is_some() {
+        let (start, end) = (g.u64()?, g.u64()?);
+        // Nodes lie one after another, up to the trailer.
+        if start != at || end < start.saturating_add(4) || end > trailer_at {
+            return Err(format!("node {ni}'s LODs at {start}..{end}"));
+        }
+        at = end;
+        if lods.insert(ni, start as usize..end as usize).is_some() {
             return Err(format!("node {ni} twice"));
         }
+    }
+    if at != trailer_at {
+        return Err("the nodes' LODs do not reach the trailer".into());
     }
     let roots = g.len(9)?;
     let mut done = HashMap::with_capacity(roots);
@@ -972,7 +1070,7 @@ mod tests {
                 triangles: 2,
             }],
         };
-        let lods: ShardLods = vec![
+        let lods: Vec<(u32, Vec<(LodMesh, f32)>)> = vec![
             (
                 1,
                 vec![(mesh.to_lod_mesh(), 0.5), (mesh.to_lod_mesh(), 1.5)],
@@ -989,36 +1087,39 @@ mod tests {
                 full: Some(mesh.clone()),
             },
         )];
-        let bytes = encode_shard(&plan, 0, &lods, &done);
-        let (l, d) = decode_shard(&bytes, &plan, 0).unwrap();
-        let node = |ni: u32| {
-            Get {
-                b: &bytes[l[&ni].clone()],
-            }
-            .node_lods()
-            .unwrap()
-        };
-        assert_eq!(node(1), lods[0].1);
-        assert!(node(2).is_empty());
-        assert_eq!(d[&1], done[0].1);
-        // Read back through a file, as the merge does.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.bin");
-        std::fs::write(&path, &bytes).unwrap();
-        let (mut file, (l, _)) = read_shard(&path, &plan, 0).unwrap();
+        let mut w = ShardWriter::create(&path, &plan, 0, 2).unwrap();
+        for (ni, l) in &lods {
+            for (m, e) in l {
+                crate::LodSink::add_lod(&mut w, m, *e).unwrap();
+            }
+            crate::LodSink::node_done(&mut w, *ni).unwrap();
+        }
+        w.finish(&done).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let (mut file, (l, d)) = read_shard(&path, &plan, 0).unwrap();
         assert_eq!(read_node_lods(&mut file, l[&1].clone()).unwrap(), lods[0].1);
+        assert!(read_node_lods(&mut file, l[&2].clone()).unwrap().is_empty());
         assert!(read_node_lods(&mut file, l[&1].start..l[&1].end - 1).is_err());
+        assert_eq!(d[&1], done[0].1);
+        let check = |b: &[u8], plan: &Plan, index: usize| {
+            std::fs::write(dir.path().join("t.bin"), b).unwrap();
+            read_shard(&dir.path().join("t.bin"), plan, index).map(|_| ())
+        };
         for i in (0..bytes.len()).step_by(7) {
             let mut b = bytes.clone();
             b[i] ^= 0x10;
-            assert!(decode_shard(&b, &plan, 0).is_err(), "byte {i}");
+            assert!(check(&b, &plan, 0).is_err(), "byte {i}");
         }
-        assert!(decode_shard(&bytes[..bytes.len() - 1], &plan, 0).is_err());
-        assert!(decode_shard(&bytes, &plan, 1).is_err() || plan.shards.len() == 1);
+        for cut in [0, 11, bytes.len() / 2, bytes.len() - 1] {
+            assert!(check(&bytes[..cut], &plan, 0).is_err(), "cut at {cut}");
+        }
+        assert!(check(&bytes, &plan, 1).is_err());
         let other = Plan {
             id: "ffffffffffffffffffffffffffffffff".into(),
             ..plan.clone()
         };
-        assert!(decode_shard(&bytes, &other, 0).is_err());
+        assert!(check(&bytes, &other, 0).is_err());
     }
 }

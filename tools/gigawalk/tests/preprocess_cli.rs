@@ -319,3 +319,83 @@ fn a_split_build_killed_midway_resumes_with_the_same_bytes_and_stale_temporaries
         assert!(err.contains("left by gigawalk runs that are gone"), "{err}");
     }
 }
+
+/// A `--stats` file's figure `key`.
+fn stat(stats: &Path, key: &str) -> u64 {
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
+    j[key]
+        .as_u64()
+        .unwrap_or_else(|| panic!("{key} in {}", stats.display()))
+}
+
+/// Preprocesses `glb` under `budget` on one thread (so peak memory does
+/// not depend on scheduling); the scene's bytes and the stats file.
+fn one_thread_build(d: &Path, glb: &Path, budget: &str) -> (Vec<u8>, std::path::PathBuf) {
+    let stem = glb.file_stem().unwrap().to_str().unwrap();
+    let out = d.join(format!("{stem}-{budget}.gwk"));
+    let stats = d.join(format!("{stem}-{budget}.json"));
+    let run = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        .args(["preprocess", s(glb), "-o", s(&out), "--stats", s(&stats)])
+        .args(["--memory-budget", budget])
+        .env("RAYON_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    (std::fs::read(&out).unwrap(), stats)
+}
+
+/// The fixed part of a spilled run's peak memory: code, the thread's
+/// stack and working set, one unit of levels (docs/preprocess.md
+/// "Memory"; about 60-110 MiB measured on the plants).
+const FIXED_MEMORY: u64 = 128 << 20;
+
+#[test]
+fn a_model_20x_the_budget_is_spilled_and_its_memory_grows_a_fraction_as_fast() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let mut peak = std::collections::HashMap::new();
+    for (name, triangles) in [("small", "50k"), ("large", "250k")] {
+        let glb = d.join(format!("{name}.glb"));
+        let (ok, _, err) =
+            gigawalk(&["generate", "plant", "--triangles", triangles, "-o", s(&glb)]);
+        assert!(ok, "{err}");
+        let (whole, whole_stats) = one_thread_build(d, &glb, "all");
+        assert_eq!(stat(&whole_stats, "spilled_bytes"), 0);
+        // A budget a twentieth of the model's raw geometry.
+        let budget = stat(&whole_stats, "raw_input_bytes") / 20;
+        let (spilled, spilled_stats) = one_thread_build(d, &glb, &budget.to_string());
+        assert!(
+            stat(&spilled_stats, "spilled_bytes") > 0,
+            "{name} was not spilled"
+        );
+        assert_eq!(spilled, whole, "{name}: spilling changed the scene");
+        let p = stat(&spilled_stats, "peak_memory_bytes");
+        assert!(
+            p <= budget + FIXED_MEMORY,
+            "{name}: peak {p} over the budget {budget} + {FIXED_MEMORY}"
+        );
+        eprintln!(
+            "{name}: budget {budget}, peak {} whole, {p} spilled",
+            stat(&whole_stats, "peak_memory_bytes")
+        );
+        peak.insert(name, (stat(&whole_stats, "peak_memory_bytes"), p));
+    }
+    // Five times the model: held whole, memory grows with it; spilled, it
+    // grows by a fraction of that (what remains is the glTF document and
+    // 4-8 bytes a triangle of bookkeeping).
+    let grown = |k: usize| {
+        let (s, l) = (peak["small"], peak["large"]);
+        let pick = |p: (u64, u64)| if k == 0 { p.0 } else { p.1 };
+        pick(l) as i64 - pick(s) as i64
+    };
+    let (whole, spilled) = (grown(0), grown(1));
+    assert!(
+        spilled * 2 < whole,
+        "peak memory grew {spilled} bytes spilled, {whole} held whole"
+    );
+}

@@ -568,6 +568,43 @@ mod tests {
     }
 
     #[test]
+    fn a_model_over_the_budget_spills_midway_and_reads_back_in_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut files = Vec::new();
+        for f in 0..3 {
+            let path = dir.path().join(format!("m{f}.obj"));
+            let mut text = String::new();
+            for g in 0..4 {
+                let z = (f * 4 + g) as f64;
+                text += &format!("o part{g}\nv 0 0 {z}\nv 1 0 {z}\nv 0 1 {z}\n");
+                let b = 3 * g + 1;
+                text += &format!("f {} {} {}\n", b, b + 1, b + 2);
+            }
+            std::fs::write(&path, text).unwrap();
+            files.push(path);
+        }
+        let whole = gigawalk_import::import_all(&files, &mut |_, _, _| {}).unwrap();
+        let held = import_within(&files, None, dir.path(), &mut |_, _, _| {}).unwrap();
+        assert!(matches!(held, Imported::Memory(_)));
+        assert_eq!(held.spilled_bytes(), 0);
+        // Five objects fit the budget's share; the sixth spills them all.
+        let one = resident_bytes(&whole.objects[0]);
+        let budget = ((5 * one) as f64 / MEMORY_SHARE) as u64 + 1;
+        let spilled = import_within(&files, Some(budget), dir.path(), &mut |_, _, _| {}).unwrap();
+        assert!(matches!(spilled, Imported::Spilled(..)));
+        assert!(spilled.spilled_bytes() > 0);
+        let s = spilled.source();
+        assert_eq!(s.len(), whole.objects.len());
+        for (i, o) in whole.objects.iter().enumerate() {
+            assert_eq!(*s.object(i as u32).unwrap(), *o, "object {i}");
+        }
+        assert_eq!(spilled.stats(), &whole.stats);
+        assert_eq!(s.bounds(), Source::bounds(&whole));
+        // The spill has no name: only the model files are in the directory.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+    }
+
+    #[test]
     fn bad_bytes_do_not_decode() {
         let bytes = encode(&object(4, true));
         assert!(decode(&bytes).is_some());

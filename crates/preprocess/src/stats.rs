@@ -161,6 +161,13 @@ impl Stats {
         if let Some(p) = self.peak_memory_bytes {
             let _ = writeln!(s, "peak memory       {:.1} MiB", mib(p));
         }
+        if self.spilled_bytes > 0 {
+            let _ = writeln!(
+                s,
+                "spilled           {:.1} MiB of objects on disk (over the memory budget's share)",
+                mib(self.spilled_bytes)
+            );
+        }
         s
     }
 }

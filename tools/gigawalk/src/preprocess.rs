@@ -167,6 +167,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .map(|f| std::fs::metadata(f).map_or(0, |m| m.len()))
         .sum();
     stats.finish();
+    if let (Some(b), Some(p)) = (budget, stats.peak_memory_bytes) {
+        if p > b.saturating_add(FIXED_MEMORY) {
+            eprintln!(
+                "warning: peak memory {} is over the memory budget {} plus the run's fixed {}: \
+                 what stays in memory whatever the budget is each input file's glTF document \
+                 and 4-8 bytes a triangle of bookkeeping (docs/preprocess.md \"Memory\")",
+                mib(p),
+                mib(b),
+                mib(FIXED_MEMORY)
+            );
+        }
+    }
 
     // The LOD structure's health, from the file as a reader sees it. The
     // scene is written either way: a failure to read it back is said, not
@@ -491,6 +503,10 @@ fn run_shards_here(
     }
     Ok(())
 }
+
+/// What a run needs whatever its budget (code, threads' working sets,
+/// one unit of levels): 60-110 MiB measured on the plants, 2 cores.
+const FIXED_MEMORY: u64 = 128 << 20;
 
 /// The least memory a worker is given: what one shard of the default size
 /// needs, with the model spilled (about 150 MiB measured on the plants,

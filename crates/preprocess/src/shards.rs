@@ -295,7 +295,15 @@ pub fn plan(
         return Planned::open(dir, budget, progress);
     }
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let model = crate::source::import_within(&files, budget, dir, &mut |_, _, _| {})?;
+    let spill = crate::source::import_to_named_spill(
+        &files,
+        &dir.join(format!("model-{id}.spill")),
+        &id,
+        crate::source::cache_bytes(budget),
+        &mut |_, _, _| {},
+    )?;
+    let stats = spill.stats().clone();
+    let model = Imported::Spilled(spill, stats);
     let layout = crate::layout(model.source(), params, progress)?;
     let shards = cut(&layout, shard_triangles.max(1));
     let plan = Plan {
@@ -330,8 +338,9 @@ pub fn shard_path(dir: &Path, plan: &Plan, index: usize) -> PathBuf {
     dir.join(format!("shard-{index:05}-{}.bin", plan.id))
 }
 
-/// The plan's model, refused if any input changed since the plan,
-/// imported under `budget` (spilled into `dir` if need be).
+/// The plan's model, refused if any input changed since the plan: the
+/// work directory's spill of it ([`spill_path`]), made now if it is not
+/// there (or not whole), read through a cache sized by `budget`.
 fn import_planned(plan: &Plan, dir: &Path, budget: Option<u64>) -> Result<Imported, ShardError> {
     for f in &plan.inputs {
         let (bytes, hash) = hash_file(&f.path)?;
@@ -347,13 +356,23 @@ fn import_planned(plan: &Plan, dir: &Path, budget: Option<u64>) -> Result<Import
             });
         }
     }
-    let files: Vec<PathBuf> = plan.inputs.iter().map(|f| f.path.clone()).collect();
-    Ok(crate::source::import_within(
-        &files,
-        budget,
-        dir,
-        &mut |_, _, _| {},
-    )?)
+    let path = spill_path(dir, plan);
+    let cache = crate::source::cache_bytes(budget);
+    let spill = match crate::source::Spill::open(&path, &plan.id, cache) {
+        Some(s) => s,
+        None => {
+            let files: Vec<PathBuf> = plan.inputs.iter().map(|f| f.path.clone()).collect();
+            crate::source::import_to_named_spill(&files, &path, &plan.id, cache, &mut |_, _, _| {})?
+        }
+    };
+    let stats = spill.stats().clone();
+    Ok(Imported::Spilled(spill, stats))
+}
+
+/// Where the plan's model is spilled in `dir`, for every process that
+/// runs a shard or the merge to read instead of importing it again.
+pub fn spill_path(dir: &Path, plan: &Plan) -> PathBuf {
+    dir.join(format!("model-{}.spill", plan.id))
 }
 
 /// The model's layout, checked against the plan's.

@@ -240,45 +240,115 @@ pub fn import_within(
             stats,
         }),
         Some(w) => {
-            let cache = budget.map_or(0, |b| (b as f64 * CACHE_SHARE) as u64);
-            Imported::Spilled(w.finish(cache).map_err(spill_err)?, stats)
+            let cache = cache_bytes(budget);
+            Imported::Spilled(w.finish(cache, &stats).map_err(spill_err)?, stats)
         }
     })
+}
+
+/// Imports `inputs` into a named spill at `path` for plan `id`
+/// ([`SpillWriter::create_named`]): every object on disk, for any number
+/// of processes to read ([`Spill::open`]).
+pub fn import_to_named_spill(
+    inputs: &[PathBuf],
+    path: &Path,
+    id: &str,
+    cache_bytes: u64,
+    each: &mut dyn FnMut(usize, usize, &Path),
+) -> Result<Spill, gigawalk_import::ImportError> {
+    let spill_err = |source| gigawalk_import::ImportError::Spill {
+        dir: path.display().to_string(),
+        source,
+    };
+    let mut w = SpillWriter::create_named(path, id).map_err(spill_err)?;
+    let stats =
+        gigawalk_import::import_all_each(inputs, each, &mut |o| w.push(&o).map_err(spill_err))?;
+    w.finish(cache_bytes, &stats).map_err(spill_err)
+}
+
+/// The cache a spill read under `budget` gets (`None`: no budget, so
+/// every object read back stays).
+pub fn cache_bytes(budget: Option<u64>) -> u64 {
+    budget.map_or(u64::MAX, |b| (b as f64 * CACHE_SHARE) as u64)
 }
 
 /// Writes objects to a spill as they come ([`SpillWriter::push`]), then
 /// [`SpillWriter::finish`] gives the [`Spill`] to read them from.
 pub struct SpillWriter {
     dir: PathBuf,
-    out: BufWriter<File>,
+    out: BufWriter<Out>,
     pos: u64,
-    at: Vec<(u64, u64)>,
+    at: Vec<(u64, u64, u32)>,
     raw_bytes: u64,
     bounds: (DVec3, DVec3),
     largest: u64,
 }
+
+/// Where a spill is written: an unnamed file, or a named one (for other
+/// processes to read) under a temporary name until it is whole.
+enum Out {
+    Unnamed(File),
+    Named(gigawalk_scene::TempFile, PathBuf),
+}
+
+impl std::io::Write for Out {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Out::Unnamed(f) => f.write(b),
+            Out::Named(f, _) => f.write(b),
+        }
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Out::Unnamed(f) => f.flush(),
+            Out::Named(f, _) => f.flush(),
+        }
+    }
+}
+
+/// A named spill's first bytes, before the plan id it belongs to.
+const SPILL_MAGIC: &[u8; 8] = b"GWSPILL1";
 
 impl SpillWriter {
     /// An unnamed file in `dir`: the system removes it when the run ends,
     /// however it ends, so nothing is left behind.
     pub fn create_in(dir: &Path) -> std::io::Result<SpillWriter> {
         let file = tempfile::tempfile_in(dir)?;
-        Ok(SpillWriter {
+        Ok(Self::new(dir, Out::Unnamed(file)))
+    }
+
+    /// A spill other processes can open at `path` ([`Spill::open`]) once
+    /// [`SpillWriter::finish`] has renamed it into place; `id` (the plan's)
+    /// is written in it and checked on opening.
+    pub fn create_named(path: &Path, id: &str) -> std::io::Result<SpillWriter> {
+        let tmp = gigawalk_scene::temp_file_for(path)?;
+        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let mut w = Self::new(&dir, Out::Named(tmp, path.to_path_buf()));
+        w.out.write_all(SPILL_MAGIC)?;
+        w.out.write_all(&(id.len() as u32).to_le_bytes())?;
+        w.out.write_all(id.as_bytes())?;
+        w.pos = (SPILL_MAGIC.len() + 4 + id.len()) as u64;
+        Ok(w)
+    }
+
+    fn new(dir: &Path, out: Out) -> SpillWriter {
+        SpillWriter {
             dir: dir.to_path_buf(),
-            out: BufWriter::with_capacity(1 << 20, file),
+            out: BufWriter::with_capacity(1 << 20, out),
             pos: 0,
             at: Vec::new(),
             raw_bytes: 0,
             bounds: EMPTY,
             largest: 0,
-        })
+        }
     }
 
     /// Appends one object.
     pub fn push(&mut self, o: &Object) -> std::io::Result<()> {
         let bytes = encode(o);
         self.out.write_all(&bytes)?;
-        self.at.push((self.pos, bytes.len() as u64));
+        self.at
+            .push((self.pos, bytes.len() as u64, crc32fast::hash(&bytes)));
         self.pos += bytes.len() as u64;
         self.raw_bytes += raw_bytes(o);
         self.largest = self.largest.max(resident_bytes(o));
@@ -304,20 +374,148 @@ impl SpillWriter {
     }
 
     /// The spill, reading objects back through a cache of about
-    /// `cache_bytes` (never less than the largest object).
-    pub fn finish(self, cache_bytes: u64) -> std::io::Result<Spill> {
-        let file = self.out.into_inner().map_err(|e| e.into_error())?;
+    /// `cache_bytes` (never less than the largest object). A named spill
+    /// gets its table (`stats`, every object's place and checksum) at its
+    /// end, is synced and renamed into place.
+    pub fn finish(mut self, cache_bytes: u64, stats: &ImportStats) -> std::io::Result<Spill> {
+        let table = Table {
+            at: std::mem::take(&mut self.at),
+            raw_bytes: self.raw_bytes,
+            bounds: finite(self.bounds.0, self.bounds.1),
+            largest: self.largest,
+            stats: stats.clone(),
+        };
+        let (file, bytes) = match self.out.into_inner().map_err(|e| e.into_error())? {
+            Out::Unnamed(f) => (f, self.pos),
+            Out::Named(mut tmp, path) => {
+                let t = table.encode(self.pos);
+                tmp.write_all(&t)?;
+                tmp.as_file().sync_all()?;
+                tmp.persist(&path)?;
+                (File::open(&path)?, self.pos + t.len() as u64)
+            }
+        };
         Ok(Spill {
             dir: self.dir,
             file,
-            at: self.at,
-            raw_bytes: self.raw_bytes,
-            bounds: finite(self.bounds.0, self.bounds.1),
-            bytes: self.pos,
+            bytes,
             cache: Mutex::new(Cache {
-                limit: cache_bytes.max(self.largest),
+                limit: cache_bytes.max(table.largest),
                 ..Default::default()
             }),
+            table,
+        })
+    }
+}
+
+/// What a spill knows of its objects.
+struct Table {
+    /// Offset, length and CRC-32 of each object's bytes.
+    at: Vec<(u64, u64, u32)>,
+    raw_bytes: u64,
+    bounds: Option<(DVec3, DVec3)>,
+    largest: u64,
+    stats: ImportStats,
+}
+
+impl Table {
+    /// The table as a named spill ends: the table, where it starts (u64)
+    /// and its CRC-32 (u32).
+    fn encode(&self, start: u64) -> Vec<u8> {
+        let mut b = Vec::with_capacity(20 * self.at.len() + 256);
+        let u64s = |b: &mut Vec<u8>, v: u64| b.extend_from_slice(&v.to_le_bytes());
+        u64s(&mut b, self.at.len() as u64);
+        for &(o, l, c) in &self.at {
+            u64s(&mut b, o);
+            u64s(&mut b, l);
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+        u64s(&mut b, self.raw_bytes);
+        match self.bounds {
+            None => b.push(0),
+            Some((lo, hi)) => {
+                b.push(1);
+                for x in lo.to_array().into_iter().chain(hi.to_array()) {
+                    b.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+        }
+        u64s(&mut b, self.largest);
+        let s = &self.stats;
+        for v in [
+            s.triangles,
+            s.degenerate_triangles_dropped,
+            s.skipped_primitives,
+        ] {
+            u64s(&mut b, v);
+        }
+        u64s(&mut b, s.warnings.len() as u64);
+        for w in &s.warnings {
+            u64s(&mut b, w.len() as u64);
+            b.extend_from_slice(w.as_bytes());
+        }
+        u64s(&mut b, start);
+        let crc = crc32fast::hash(&b);
+        b.extend_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// [`Table::encode`]'s bytes (from the table's start to the file's
+    /// end); `None` when they do not decode.
+    fn decode(b: &[u8], start: u64) -> Option<Table> {
+        let (body, crc) = b.split_last_chunk::<4>()?;
+        if crc32fast::hash(body) != u32::from_le_bytes(*crc) {
+            return None;
+        }
+        let mut r = Reader { b: body, at: 0 };
+        let u64s = |r: &mut Reader| Some(u64::from_le_bytes(r.take()?));
+        let n = usize::try_from(u64s(&mut r)?).ok()?;
+        if n.checked_mul(20)? > body.len() {
+            return None;
+        }
+        let mut at = Vec::with_capacity(n);
+        let mut next = 0;
+        for _ in 0..n {
+            let (o, l, c) = (u64s(&mut r)?, u64s(&mut r)?, u32::from_le_bytes(r.take()?));
+            // Objects lie one after another, before the table.
+            if (next != 0 && o != next) || o.checked_add(l)? > start {
+                return None;
+            }
+            next = o + l;
+            at.push((o, l, c));
+        }
+        let raw_bytes = u64s(&mut r)?;
+        let bounds = match r.take::<1>()?[0] {
+            0 => None,
+            1 => {
+                let lo = DVec3::new(r.f64()?, r.f64()?, r.f64()?);
+                let hi = DVec3::new(r.f64()?, r.f64()?, r.f64()?);
+                Some((lo, hi))
+            }
+            _ => return None,
+        };
+        let largest = u64s(&mut r)?;
+        let (t, d, s) = (u64s(&mut r)?, u64s(&mut r)?, u64s(&mut r)?);
+        let warnings = (0..u64s(&mut r)?)
+            .map(|_| {
+                let len = usize::try_from(u64s(&mut r)?).ok()?;
+                String::from_utf8(r.bytes(len)?.to_vec()).ok()
+            })
+            .collect::<Option<Vec<_>>>()?;
+        if u64s(&mut r)? != start || r.at != body.len() {
+            return None;
+        }
+        Some(Table {
+            at,
+            raw_bytes,
+            bounds,
+            largest,
+            stats: ImportStats {
+                triangles: t,
+                degenerate_triangles_dropped: d,
+                skipped_primitives: s,
+                warnings,
+            },
         })
     }
 }
@@ -326,9 +524,7 @@ impl SpillWriter {
 pub struct Spill {
     dir: PathBuf,
     file: File,
-    at: Vec<(u64, u64)>,
-    raw_bytes: u64,
-    bounds: Option<(DVec3, DVec3)>,
+    table: Table,
     bytes: u64,
     cache: Mutex<Cache>,
 }
@@ -339,27 +535,80 @@ impl Spill {
         self.bytes
     }
 
+    /// What the import that made it said.
+    pub fn stats(&self) -> &ImportStats {
+        &self.table.stats
+    }
+
+    /// A named spill another process wrote ([`SpillWriter::create_named`])
+    /// for the plan `id`; `None` when there is none at `path`, or it is
+    /// not whole, not a spill, or another plan's (then it is made again).
+    pub fn open(path: &Path, id: &str, cache_bytes: u64) -> Option<Spill> {
+        let file = File::open(path).ok()?;
+        let len = file.metadata().ok()?.len();
+        let head = SPILL_MAGIC.len() as u64 + 4 + id.len() as u64;
+        if len < head + 12 {
+            return None;
+        }
+        let mut h = vec![0u8; head as usize];
+        file.read_exact_at(&mut h, 0).ok()?;
+        let mut expect = SPILL_MAGIC.to_vec();
+        expect.extend_from_slice(&(id.len() as u32).to_le_bytes());
+        expect.extend_from_slice(id.as_bytes());
+        if h != expect {
+            return None;
+        }
+        let mut tail = [0u8; 12];
+        file.read_exact_at(&mut tail, len - 12).ok()?;
+        let start = u64::from_le_bytes(tail[..8].try_into().ok()?);
+        if start < head || start > len - 12 {
+            return None;
+        }
+        let mut t = vec![0u8; (len - start) as usize];
+        file.read_exact_at(&mut t, start).ok()?;
+        let table = Table::decode(&t, start)?;
+        if table.at.first().is_some_and(|a| a.0 != head) {
+            return None;
+        }
+        Some(Spill {
+            dir: path.to_path_buf(),
+            file,
+            bytes: len,
+            cache: Mutex::new(Cache {
+                limit: cache_bytes.max(table.largest),
+                ..Default::default()
+            }),
+            table,
+        })
+    }
+
     fn read(&self, i: u32) -> Result<Object, SpillError> {
         let err = |reason: String| SpillError {
             dir: self.dir.clone(),
             object: i,
             reason,
         };
-        let &(offset, len) = self
+        let &(offset, len, crc) = self
+            .table
             .at
             .get(i as usize)
-            .ok_or_else(|| err(format!("only {} objects", self.at.len())))?;
+            .ok_or_else(|| err(format!("only {} objects", self.table.at.len())))?;
         let mut bytes = vec![0u8; len as usize];
         self.file
             .read_exact_at(&mut bytes, offset)
             .map_err(|e| err(e.to_string()))?;
+        if crc32fast::hash(&bytes) != crc {
+            return Err(err(
+                "its checksum does not match (remove the file to make it again)".into(),
+            ));
+        }
         decode(&bytes).ok_or_else(|| err("its bytes do not decode".into()))
     }
 }
 
 impl Source for Spill {
     fn len(&self) -> usize {
-        self.at.len()
+        self.table.at.len()
     }
     fn object(&self, i: u32) -> Result<ObjectRef<'_>, SpillError> {
         let lock = || self.cache.lock().unwrap_or_else(|p| p.into_inner());
@@ -372,10 +621,10 @@ impl Source for Spill {
         Ok(ObjectRef::Shared(o))
     }
     fn raw_bytes(&self) -> u64 {
-        self.raw_bytes
+        self.table.raw_bytes
     }
     fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.bounds
+        self.table.bounds
     }
 }
 
@@ -555,7 +804,7 @@ mod tests {
         assert_eq!(w.len(), 50);
         // A cache of one object at a time: every read after the first
         // few goes back to the file.
-        let spill = w.finish(0).unwrap();
+        let spill = w.finish(0, &ImportStats::default()).unwrap();
         assert_eq!(spill.len(), 50);
         for k in [0u32, 7, 49, 7, 3, 0] {
             assert_eq!(*spill.object(k).unwrap(), model.objects[k as usize]);
@@ -602,6 +851,54 @@ mod tests {
         assert_eq!(s.bounds(), Source::bounds(&whole));
         // The spill has no name: only the model files are in the directory.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+    }
+
+    #[test]
+    fn a_named_spill_opens_elsewhere_and_refuses_what_is_not_its_own() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.spill");
+        let objects: Vec<Object> = (0..20).map(|k| object(k, k % 2 == 0)).collect();
+        let stats = ImportStats {
+            triangles: 7,
+            warnings: vec!["w1".into(), "w\u{e9}2".into()],
+            ..Default::default()
+        };
+        let mut w = SpillWriter::create_named(&path, "plan-a").unwrap();
+        for o in &objects {
+            w.push(o).unwrap();
+        }
+        // Not in place until whole.
+        assert!(!path.exists());
+        let written = w.finish(0, &stats).unwrap();
+        let s = Spill::open(&path, "plan-a", 0).expect("whole and its own");
+        assert_eq!(s.stats(), &stats);
+        assert_eq!(s.len(), 20);
+        assert_eq!(s.bounds(), written.bounds());
+        assert_eq!(s.raw_bytes(), written.raw_bytes());
+        for k in [19u32, 0, 5] {
+            assert_eq!(*s.object(k).unwrap(), objects[k as usize]);
+        }
+        assert!(Spill::open(&path, "plan-b", 0).is_none());
+        assert!(Spill::open(&dir.path().join("none"), "plan-a", 0).is_none());
+        let bytes = std::fs::read(&path).unwrap();
+        for cut in [0, 10, bytes.len() / 2, bytes.len() - 1] {
+            std::fs::write(&path, &bytes[..cut]).unwrap();
+            assert!(Spill::open(&path, "plan-a", 0).is_none(), "cut at {cut}");
+        }
+        // A flipped byte in the table: refused; in an object: that
+        // object's read is an error, the others read.
+        let mut b = bytes.clone();
+        let n = b.len();
+        b[n - 20] ^= 1;
+        std::fs::write(&path, &b).unwrap();
+        assert!(Spill::open(&path, "plan-a", 0).is_none());
+        let mut b = bytes.clone();
+        b[60] ^= 1;
+        std::fs::write(&path, &b).unwrap();
+        let s = Spill::open(&path, "plan-a", 0).unwrap();
+        let e = s.object(0).map(|_| ()).unwrap_err();
+        assert!(e.reason.contains("checksum"), "{e}");
+        assert_eq!(*s.object(1).unwrap(), objects[1]);
     }
 
     #[test]

@@ -83,6 +83,22 @@ fn shards_in_any_order_and_a_redone_shard_give_the_single_process_bytes() {
         std::fs::read(&out2).unwrap() == reference,
         "redone scene differs"
     );
+
+    // The model's spill cut short (or gone): made again from the inputs,
+    // the same scene.
+    let spill = shards::spill_path(&work, &plan);
+    let len = std::fs::metadata(&spill).unwrap().len();
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(&spill)
+        .unwrap();
+    f.set_len(len / 2).unwrap();
+    drop(f);
+    std::fs::remove_file(shards::shard_path(&work, &plan, 0)).unwrap();
+    let out3 = t.path().join("merged3.gwk");
+    shards::merge(&work, &out3, Some(64 << 20), &NoProgress, &mut |_, _| {}).unwrap();
+    assert!(std::fs::read(&out3).unwrap() == reference, "remade spill");
+    assert_eq!(std::fs::metadata(&spill).unwrap().len(), len);
 }
 
 #[test]

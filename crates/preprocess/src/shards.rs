@@ -302,8 +302,7 @@ pub fn plan(
         crate::source::cache_bytes(budget),
         &mut |_, _, _| {},
     )?;
-    let stats = spill.stats().clone();
-    let model = Imported::Spilled(spill, stats);
+    let model = Imported::Spilled(Box::new(spill));
     let layout = crate::layout(model.source(), params, progress)?;
     let shards = cut(&layout, shard_triangles.max(1));
     let plan = Plan {
@@ -365,8 +364,7 @@ fn import_planned(plan: &Plan, dir: &Path, budget: Option<u64>) -> Result<Import
             crate::source::import_to_named_spill(&files, &path, &plan.id, cache, &mut |_, _, _| {})?
         }
     };
-    let stats = spill.stats().clone();
-    Ok(Imported::Spilled(spill, stats))
+    Ok(Imported::Spilled(Box::new(spill)))
 }
 
 /// Where the plan's model is spilled in `dir`, for every process that

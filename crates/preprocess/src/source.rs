@@ -154,27 +154,27 @@ pub enum Imported {
     /// It fit: every object in memory.
     Memory(Model),
     /// It did not: every object on disk.
-    Spilled(Spill, ImportStats),
+    Spilled(Box<Spill>),
 }
 
 impl Imported {
     pub fn source(&self) -> &dyn Source {
         match self {
             Imported::Memory(m) => m,
-            Imported::Spilled(s, _) => s,
+            Imported::Spilled(s) => s.as_ref(),
         }
     }
     pub fn stats(&self) -> &ImportStats {
         match self {
             Imported::Memory(m) => &m.stats,
-            Imported::Spilled(_, s) => s,
+            Imported::Spilled(s) => s.stats(),
         }
     }
     /// The spill file's size, 0 in memory.
     pub fn spilled_bytes(&self) -> u64 {
         match self {
             Imported::Memory(_) => 0,
-            Imported::Spilled(s, _) => s.bytes(),
+            Imported::Spilled(s) => s.bytes(),
         }
     }
 }
@@ -241,7 +241,7 @@ pub fn import_within(
         }),
         Some(w) => {
             let cache = cache_bytes(budget);
-            Imported::Spilled(w.finish(cache, &stats).map_err(spill_err)?, stats)
+            Imported::Spilled(Box::new(w.finish(cache, &stats).map_err(spill_err)?))
         }
     })
 }

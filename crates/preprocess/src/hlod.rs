@@ -137,7 +137,7 @@ pub fn leaf_mesh(model: &dyn Source, part: &Part, origin: DVec3) -> Result<WorkM
         let o = model.object(piece.object)?;
         let o: &Object = &o;
         used.clear();
-        for &t in &piece.triangles {
+        for t in piece.triangles.iter() {
             used.extend_from_slice(&o.indices[3 * t as usize..3 * t as usize + 3]);
         }
         used.sort_unstable();
@@ -154,7 +154,7 @@ pub fn leaf_mesh(model: &dyn Source, part: &Part, origin: DVec3) -> Result<WorkM
                 None => uniform,
             });
         }
-        for &t in &piece.triangles {
+        for t in piece.triangles.iter() {
             for &v in &o.indices[3 * t as usize..3 * t as usize + 3] {
                 let local = used
                     .binary_search(&v)

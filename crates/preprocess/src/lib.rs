@@ -68,7 +68,7 @@ pub use stats::Stats;
 use crate::cluster::ClusterParams;
 use crate::hlod::{ChainParams, Lod};
 use crate::partition::{SplitAt, SplitRule};
-use crate::parts::{Part, Piece};
+use crate::parts::{Part, Piece, Tris};
 
 /// The pipeline's phases, in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -758,14 +758,18 @@ fn merge_clusters(parts: Vec<Part>, clusters: &[Vec<u32>]) -> Vec<Part> {
             let mut pieces: Vec<Piece> = g.into_iter().flat_map(|p| p.pieces).collect();
             pieces.sort_by_key(|p| p.object);
             let mut merged: Vec<Piece> = Vec::with_capacity(pieces.len());
+            // Two pieces of one object (split by Partition-I, joined by
+            // clustering) become one list.
             for p in pieces {
                 match merged.last_mut() {
-                    Some(m) if m.object == p.object => m.triangles.extend(p.triangles),
+                    Some(m) if m.object == p.object => {
+                        let mut list = m.triangles.to_vec();
+                        list.extend(p.triangles.iter());
+                        list.sort_unstable();
+                        m.triangles = Tris::List(list);
+                    }
                     _ => merged.push(p),
                 }
-            }
-            for m in &mut merged {
-                m.triangles.sort_unstable();
             }
             Part {
                 pieces: merged,

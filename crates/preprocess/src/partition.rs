@@ -8,7 +8,7 @@ use gigawalk_scene::Aabb;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::parts::{triangle, Part, Piece};
+use crate::parts::{triangle, Part, Piece, Tris};
 use crate::source::{Loaded, Source, SpillError};
 
 /// Where a part is cut along the chosen axis.
@@ -104,7 +104,7 @@ fn split_part(model: &dyn Source, part: Part, rule: &SplitRule) -> Result<Vec<Pa
     let mut items = Vec::with_capacity(part.triangles);
     for piece in &part.pieces {
         let o = model.get(piece.object);
-        items.extend(piece.triangles.iter().map(|&t| {
+        items.extend(piece.triangles.iter().map(|t| {
             let [a, b, c] = triangle(o, t);
             Item {
                 object: piece.object,
@@ -119,7 +119,7 @@ fn split_part(model: &dyn Source, part: Part, rule: &SplitRule) -> Result<Vec<Pa
 
 fn split_range(model: &Loaded, items: &mut [Item], bounds: Aabb, rule: &SplitRule) -> Vec<Part> {
     if !rule.needs_split(items.len(), &bounds) {
-        return vec![make_part(items, bounds)];
+        return vec![make_part(model, items, bounds)];
     }
     let mid = cut(items, &bounds, rule.at);
     let (l, r) = items.split_at_mut(mid);
@@ -183,18 +183,19 @@ fn items_bounds(model: &Loaded, items: &[Item]) -> Aabb {
     b
 }
 
-fn make_part(items: &mut [Item], bounds: Aabb) -> Part {
+fn make_part(model: &Loaded, items: &mut [Item], bounds: Aabb) -> Part {
     items.sort_unstable_by_key(|i| (i.object, i.triangle));
-    let mut pieces: Vec<Piece> = Vec::new();
-    for i in items.iter() {
-        match pieces.last_mut() {
-            Some(p) if p.object == i.object => p.triangles.push(i.triangle),
-            _ => pieces.push(Piece {
-                object: i.object,
-                triangles: vec![i.triangle],
-            }),
-        }
-    }
+    let pieces = items
+        .chunk_by(|a, b| a.object == b.object)
+        .map(|run| {
+            let object = run[0].object;
+            let list = run.iter().map(|i| i.triangle).collect();
+            Piece {
+                object,
+                triangles: Tris::of(list, model.get(object).triangle_count()),
+            }
+        })
+        .collect();
     Part {
         pieces,
         bounds,
@@ -290,7 +291,7 @@ mod tests {
             .flat_map(|p| {
                 p.pieces
                     .iter()
-                    .flat_map(|pc| pc.triangles.iter().map(move |&t| (pc.object, t)))
+                    .flat_map(|pc| pc.triangles.iter().map(move |t| (pc.object, t)))
             })
             .collect();
         seen.sort_unstable();

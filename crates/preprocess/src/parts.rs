@@ -13,7 +13,54 @@ use rayon::prelude::*;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
     pub object: u32,
-    pub triangles: Vec<u32>,
+    pub triangles: Tris,
+}
+
+/// Sorted triangle indices of one object: all of them, kept as their
+/// count (most pieces of most models: 4 bytes a triangle saved), or a
+/// list.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Tris {
+    /// Triangles `0..n`.
+    All(u32),
+    List(Vec<u32>),
+}
+
+impl Tris {
+    /// `list`, sorted and of distinct indices of an object of
+    /// `object_triangles` triangles: [`Tris::All`] when it holds them all.
+    pub fn of(list: Vec<u32>, object_triangles: usize) -> Tris {
+        if list.len() == object_triangles {
+            Tris::All(list.len() as u32)
+        } else {
+            Tris::List(list)
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        match self {
+            Tris::All(n) => *n as usize,
+            Tris::List(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The indices, in order.
+    pub fn iter(&self) -> impl Iterator<Item = u32> + '_ {
+        let (all, list) = match self {
+            Tris::All(n) => (0..*n, &[][..]),
+            Tris::List(v) => (0..0, &v[..]),
+        };
+        all.chain(list.iter().copied())
+    }
+
+    /// The indices as a list.
+    pub fn to_vec(&self) -> Vec<u32> {
+        self.iter().collect()
+    }
 }
 
 /// One working object: after Partition-I a piece of one imported object,
@@ -182,7 +229,7 @@ fn check_object(index: usize, o: &Object) -> Result<Option<(Part, u64)>, InputEr
     let part = Part {
         pieces: vec![Piece {
             object: index as u32,
-            triangles: keep,
+            triangles: Tris::of(keep, tris),
         }],
         bounds,
         triangles,
@@ -235,7 +282,7 @@ mod tests {
         };
         let (parts, dropped) = initial_parts(&m).unwrap();
         assert_eq!(dropped, 2);
-        assert_eq!(parts[0].pieces[0].triangles, vec![0]);
+        assert_eq!(parts[0].pieces[0].triangles, Tris::List(vec![0]));
         assert_eq!(
             parts[0].bounds,
             Aabb::new(DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0))

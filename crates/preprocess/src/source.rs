@@ -195,15 +195,20 @@ pub const AUTO_BUDGET_MAX: u64 = 2 << 30;
 /// memory; a model that needs more goes to a spill file.
 pub const MEMORY_SHARE: f64 = 0.4;
 
+/// The share of a memory budget the whole process may take while objects
+/// are still held in memory (checked as they are read).
+pub const RESIDENT_SHARE: f64 = 0.5;
+
 /// The share of a memory budget a spill's cache of objects read back
 /// takes.
 pub const CACHE_SHARE: f64 = 0.1;
 
 /// Imports `inputs` ([`gigawalk_import::import_all_each`]) under a memory
 /// budget: objects are held in memory while they take at most
-/// [`MEMORY_SHARE`] of `budget`, and the moment they would take more, all
-/// of them go to a spill file in `spill_dir`, as do the rest as they are
-/// read. `None`: no budget, all in memory.
+/// [`MEMORY_SHARE`] of `budget` and the process as a whole (the file being
+/// read, its glTF document) at most [`RESIDENT_SHARE`] of it; the moment
+/// either would be more, all of them go to a spill file in `spill_dir`, as
+/// do the rest as they are read. `None`: no budget, all in memory.
 pub fn import_within(
     inputs: &[PathBuf],
     budget: Option<u64>,
@@ -215,8 +220,10 @@ pub fn import_within(
         dir: spill_dir.display().to_string(),
         source,
     };
+    let resident_limit = budget.map_or(u64::MAX, |b| (b as f64 * RESIDENT_SHARE) as u64);
     let mut held: Vec<Object> = Vec::new();
     let mut held_bytes = 0u64;
+    let mut checked_at = 0u64;
     let mut spill: Option<SpillWriter> = None;
     let stats = gigawalk_import::import_all_each(inputs, each, &mut |o| {
         if let Some(w) = &mut spill {
@@ -224,7 +231,12 @@ pub fn import_within(
         }
         held_bytes += resident_bytes(&o);
         held.push(o);
-        if held_bytes > limit {
+        // The process's size is read every 16 MiB of objects held.
+        let over = budget.is_some() && held_bytes >= checked_at + (16 << 20) && {
+            checked_at = held_bytes;
+            crate::stats::resident_memory_bytes().is_some_and(|r| r > resident_limit)
+        };
+        if held_bytes > limit || over {
             let mut w = SpillWriter::create_in(spill_dir).map_err(spill_err)?;
             for o in held.drain(..) {
                 w.push(&o).map_err(spill_err)?;

@@ -87,8 +87,17 @@ pub fn raw_input_bytes(model: &Model) -> u64 {
 
 /// Peak resident set size of this process, from /proc (Linux only).
 pub fn peak_memory_bytes() -> Option<u64> {
+    proc_status("VmHWM:")
+}
+
+/// Resident set size of this process now, from /proc (Linux only).
+pub fn resident_memory_bytes() -> Option<u64> {
+    proc_status("VmRSS:")
+}
+
+fn proc_status(key: &str) -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let line = status.lines().find(|l| l.starts_with(key))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
 }

@@ -277,9 +277,10 @@ fn single_build(
         match spilled {
             0 => format!("in memory, {PEAK}{}", mib(peak_memory())),
             b => format!(
-                "spilled to disk ({}: over {:.0}% of the memory budget), {PEAK}{}",
+                "spilled to disk ({}: the objects would take over {:.0}% of the memory budget, or the process over {:.0}%), {PEAK}{}",
                 mib(b),
                 100.0 * gigawalk_preprocess::source::MEMORY_SHARE,
+                100.0 * gigawalk_preprocess::source::RESIDENT_SHARE,
                 mib(peak_memory())
             ),
         }

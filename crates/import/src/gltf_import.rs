@@ -170,12 +170,7 @@ pub(crate) fn import_gltf(
     file: &str,
     base_dir: Option<&Path>,
 ) -> Result<Model, ImportError> {
-    let mut objects = Vec::new();
-    let stats = import_gltf_each(bytes, file, base_dir, &mut |o| {
-        objects.push(o);
-        Ok(())
-    })?;
-    Ok(Model { objects, stats })
+    Model::collect(|sink| import_gltf_each(bytes, file, base_dir, sink))
 }
 
 /// [`import_gltf`], handing each object to `sink` as it is read (only

@@ -35,12 +35,7 @@ pub use obj_import::import_obj_str;
 /// (case-insensitive). External glTF buffers and OBJ material libraries are
 /// resolved relative to the file's directory.
 pub fn import(path: &Path) -> Result<Model, ImportError> {
-    let mut objects = Vec::new();
-    let stats = import_each(path, &mut |o| {
-        objects.push(o);
-        Ok(())
-    })?;
-    Ok(Model { objects, stats })
+    Model::collect(|sink| import_each(path, sink))
 }
 
 /// [`import`], handing each object to `sink` as it is read instead of
@@ -171,12 +166,7 @@ pub fn import_all(
     inputs: &[PathBuf],
     each: &mut dyn FnMut(usize, usize, &Path),
 ) -> Result<Model, ImportError> {
-    let mut objects = Vec::new();
-    let stats = import_all_each(inputs, each, &mut |o| {
-        objects.push(o);
-        Ok(())
-    })?;
-    Ok(Model { objects, stats })
+    Model::collect(|sink| import_all_each(inputs, each, sink))
 }
 
 /// [`import_all`], handing each object to `sink` as it is read (as

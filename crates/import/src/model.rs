@@ -56,6 +56,23 @@ impl Model {
     }
 }
 
+impl Model {
+    /// The model a streaming import (given the sink to call per object)
+    /// makes, its objects collected in order.
+    pub(crate) fn collect(
+        import: impl FnOnce(
+            &mut dyn FnMut(Object) -> Result<(), crate::ImportError>,
+        ) -> Result<ImportStats, crate::ImportError>,
+    ) -> Result<Model, crate::ImportError> {
+        let mut objects = Vec::new();
+        let stats = import(&mut |o| {
+            objects.push(o);
+            Ok(())
+        })?;
+        Ok(Model { objects, stats })
+    }
+}
+
 impl ImportStats {
     /// Adds another file's stats to these.
     pub fn add(&mut self, o: ImportStats) {

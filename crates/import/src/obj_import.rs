@@ -40,12 +40,7 @@ pub(crate) fn import_obj(
     file: &str,
     base_dir: Option<&Path>,
 ) -> Result<Model, ImportError> {
-    let mut objects = Vec::new();
-    let stats = import_obj_each(text, file, base_dir, &mut |o| {
-        objects.push(o);
-        Ok(())
-    })?;
-    Ok(Model { objects, stats })
+    Model::collect(|sink| import_obj_each(text, file, base_dir, sink))
 }
 
 /// [`import_obj`], handing each object to `sink` as it is converted, in

@@ -315,16 +315,21 @@ pub(crate) fn layout(
     let resolved = params.resolve(&scene);
     clock.finish(&mut stats);
 
+    let split = |parts, (max_triangles, max_diagonal, max_aspect, at)| {
+        let rule = SplitRule {
+            max_triangles,
+            max_diagonal,
+            max_aspect,
+            at,
+        };
+        partition::partition(model, parts, &rule, &|n| progress.advance(n))
+            .map_err(InputError::from)
+    };
+
     // 2. Partition-I (Section 4.2.1): split at the box middle.
     clock.start(Phase::PartitionI, stats.triangles);
-    let rule1 = SplitRule {
-        max_triangles: resolved.t1,
-        max_diagonal: resolved.s1,
-        max_aspect: resolved.r1,
-        at: SplitAt::Midpoint,
-    };
-    let parts = partition::partition(model, parts, &rule1, &|n| progress.advance(n))
-        .map_err(InputError::from)?;
+    let rule1 = (resolved.t1, resolved.s1, resolved.r1, SplitAt::Midpoint);
+    let parts = split(parts, rule1)?;
     stats.objects_part1 = parts.len();
     clock.finish(&mut stats);
 
@@ -350,14 +355,8 @@ pub(crate) fn layout(
 
     // 4. Partition-II (Section 4.2.3): split about the centre of mass.
     clock.start(Phase::PartitionII, stats.triangles);
-    let rule2 = SplitRule {
-        max_triangles: resolved.t2,
-        max_diagonal: resolved.s2,
-        max_aspect: resolved.r2,
-        at: SplitAt::CentreOfMass,
-    };
-    let parts = partition::partition(model, parts, &rule2, &|n| progress.advance(n))
-        .map_err(InputError::from)?;
+    let rule2 = (resolved.t2, resolved.s2, resolved.r2, SplitAt::CentreOfMass);
+    let parts = split(parts, rule2)?;
     stats.objects_part2 = parts.len();
     clock.finish(&mut stats);
 

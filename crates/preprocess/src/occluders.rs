@@ -23,6 +23,9 @@ use crate::source::{Source, SpillError};
 
 /// Most occluders a scene keeps (the largest).
 pub const MAX_OCCLUDERS: usize = 4096;
+
+/// Objects searched for occluders at a time.
+const OCCLUDER_CHUNK: usize = 4096;
 /// Smallest occluder side kept, as a fraction of the model's diagonal
 /// (its area must reach this squared).
 pub const MIN_OCCLUDER_SIZE: f64 = 0.005;
@@ -43,22 +46,32 @@ pub fn scene_occluders(
     };
     let diag = (hi - lo).length();
     let min_area = (MIN_OCCLUDER_SIZE * diag).powi(2);
-    let per_object: Vec<Result<Vec<OccluderPolygon>, SpillError>> = (0..model.len() as u32)
-        .into_par_iter()
-        .map(|i| {
-            let o = model.object(i)?;
-            Ok(convex_faces(&o.positions, &o.indices, min_area)
-                .into_iter()
-                .filter(|o| o.vertices.len() <= gigawalk_scene::occluders::MAX_OCCLUDER_VERTICES)
-                .collect())
-        })
-        .collect();
+    // A chunk of objects at a time, keeping the largest so far: memory for
+    // MAX_OCCLUDERS faces and a chunk's, not every object's. The stable
+    // sort keeps equal areas in object order, so the result is the same
+    // as one sort of every face.
     let mut all: Vec<OccluderPolygon> = Vec::new();
-    for faces in per_object {
-        all.extend(faces?);
+    let n = model.len() as u32;
+    for start in (0..n).step_by(OCCLUDER_CHUNK) {
+        let end = (start + OCCLUDER_CHUNK as u32).min(n);
+        let per_object: Vec<Result<Vec<OccluderPolygon>, SpillError>> = (start..end)
+            .into_par_iter()
+            .map(|i| {
+                let o = model.object(i)?;
+                Ok(convex_faces(&o.positions, &o.indices, min_area)
+                    .into_iter()
+                    .filter(|o| {
+                        o.vertices.len() <= gigawalk_scene::occluders::MAX_OCCLUDER_VERTICES
+                    })
+                    .collect())
+            })
+            .collect();
+        for faces in per_object {
+            all.extend(faces?);
+        }
+        all.sort_by(|a, b| b.area.total_cmp(&a.area));
+        all.truncate(MAX_OCCLUDERS);
     }
-    all.sort_by(|a, b| b.area.total_cmp(&a.area));
-    all.truncate(MAX_OCCLUDERS);
     Ok(all
         .into_iter()
         .map(|o| gigawalk_scene::occluders::OccluderRecord {

@@ -641,34 +641,48 @@ impl Source for Spill {
 }
 
 /// Objects read back, least recently used dropped first once they hold
-/// more than `limit` bytes.
+/// more than `limit` bytes; every operation O(log n) in the objects held.
 #[derive(Default)]
 struct Cache {
     limit: u64,
     held: u64,
     tick: u64,
+    /// Object: it, when it was last used, its bytes.
     entries: HashMap<u32, (Arc<Object>, u64, u64)>,
+    /// When each held object was last used: the oldest first.
+    by_use: std::collections::BTreeMap<u64, u32>,
 }
 
 impl Cache {
-    fn get(&mut self, i: u32) -> Option<Arc<Object>> {
+    fn touch(&mut self, i: u32) -> u64 {
         self.tick += 1;
         let tick = self.tick;
-        self.entries.get_mut(&i).map(|e| {
+        if let Some(e) = self.entries.get_mut(&i) {
+            self.by_use.remove(&e.1);
             e.1 = tick;
-            e.0.clone()
-        })
+            self.by_use.insert(tick, i);
+        }
+        tick
+    }
+
+    fn get(&mut self, i: u32) -> Option<Arc<Object>> {
+        self.touch(i);
+        self.entries.get(&i).map(|e| e.0.clone())
     }
 
     fn put(&mut self, i: u32, o: Arc<Object>) {
+        if self.entries.contains_key(&i) {
+            // Another thread read it meanwhile.
+            self.touch(i);
+            return;
+        }
         self.tick += 1;
         let bytes = resident_bytes(&o);
-        if let Some(old) = self.entries.insert(i, (o, self.tick, bytes)) {
-            self.held -= old.2;
-        }
+        self.entries.insert(i, (o, self.tick, bytes));
+        self.by_use.insert(self.tick, i);
         self.held += bytes;
         while self.held > self.limit && self.entries.len() > 1 {
-            let Some((&oldest, _)) = self.entries.iter().min_by_key(|(_, e)| e.1) else {
+            let Some((_, oldest)) = self.by_use.pop_first() else {
                 break;
             };
             if let Some(e) = self.entries.remove(&oldest) {
@@ -911,6 +925,28 @@ mod tests {
         let e = s.object(0).map(|_| ()).unwrap_err();
         assert!(e.reason.contains("checksum"), "{e}");
         assert_eq!(*s.object(1).unwrap(), objects[1]);
+    }
+
+    #[test]
+    fn the_cache_drops_the_least_recently_used_first() {
+        let o = Arc::new(object(2, false));
+        let each = resident_bytes(&o);
+        let mut c = Cache {
+            limit: 3 * each,
+            ..Default::default()
+        };
+        for i in 0..3 {
+            c.put(i, o.clone());
+        }
+        assert!(c.get(0).is_some());
+        c.put(3, o.clone());
+        // 1 was the least recently used.
+        assert!(c.get(1).is_none());
+        for i in [0, 2, 3] {
+            assert!(c.get(i).is_some(), "{i}");
+        }
+        c.put(3, o.clone());
+        assert_eq!((c.entries.len(), c.by_use.len(), c.held), (3, 3, 3 * each));
     }
 
     #[test]

@@ -130,6 +130,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     let progress = Display::new();
     let budget = preprocess_budget(args.memory_budget)?;
+    if let Some(b) = budget {
+        threads_within(b, &progress);
+    }
     if let Some(dir) = &args.work_dir {
         if let Some(k) = args.shard {
             let t = Instant::now();
@@ -508,6 +511,34 @@ fn run_shards_here(
 /// What a run needs whatever its budget (code, threads' working sets,
 /// one unit of levels): 60-110 MiB measured on the plants, 2 cores.
 const FIXED_MEMORY: u64 = 128 << 20;
+
+/// What each thread of a run needs of the budget: a unit's working set
+/// and one node's chain (2 threads held 15 MiB more than one on the 2M
+/// plant; twice that, for larger nodes).
+const THREAD_MEMORY: u64 = 32 << 20;
+
+/// Caps this process's threads so each has [`THREAD_MEMORY`] of `budget`
+/// (unless RAYON_NUM_THREADS says how many), and says so when that is
+/// fewer than the cores.
+fn threads_within(budget: u64, progress: &Display) {
+    if std::env::var_os("RAYON_NUM_THREADS").is_some() {
+        return;
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let fit = ((budget / THREAD_MEMORY) as usize).clamp(1, cores);
+    if fit < cores
+        && rayon::ThreadPoolBuilder::new()
+            .num_threads(fit)
+            .build_global()
+            .is_ok()
+    {
+        progress.line(&format!(
+            "{fit} threads, not {cores}: the memory budget of {} gives each {}",
+            mib(budget),
+            mib(THREAD_MEMORY)
+        ));
+    }
+}
 
 /// The least memory a worker is given: what one shard of the default size
 /// needs, with the model spilled (about 150 MiB measured on the plants,

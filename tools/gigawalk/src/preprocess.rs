@@ -19,7 +19,7 @@ pub struct Args {
     /// Output scene file (.gwk), written atomically: nothing appears on failure
     #[arg(short, long, required_unless_present_any = ["shard", "plan_only"], conflicts_with = "shard")]
     output: Option<PathBuf>,
-    /// Split the build into shards kept in this directory (plan.json and one file per shard, docs/preprocess.md "Split builds"): a rerun with the same inputs and parameters redoes only the shards that did not finish, and any number of machines sharing the directory may run them
+    /// Split the build into shards kept in this directory (plan.json, the model's spill and one file per shard, docs/preprocess.md "Split builds"): a rerun with the same inputs and parameters redoes only the shards that did not finish, and any number of machines sharing the directory may run them
     #[arg(long, value_name = "DIR")]
     work_dir: Option<PathBuf>,
     /// With --work-dir and MODEL: write DIR/plan.json and print the number of shards N on stdout, nothing else (-o may be given and is not written: --merge writes it)
@@ -36,13 +36,13 @@ pub struct Args {
     /// With --work-dir and -o: finish the scene from DIR's shards (making any that are missing or corrupt)
     #[arg(long, requires = "work_dir")]
     merge: bool,
-    /// Worker processes for the shards (each a `gigawalk preprocess --shard K`); above 1 the build is split (in --work-dir, or a temporary directory beside the output). The scene is the same bytes at any count. One process already uses every core, so on one machine this is slower (1.2x on the 10M plant, 2 cores): it is for resumable runs and for trying a split before a cluster runs it
+    /// Worker processes for the shards (each a `gigawalk preprocess --shard K`); above 1 the build is split (in --work-dir, or a temporary directory beside the output). The scene is the same bytes at any count. One process already uses every core, so on one machine this is slower (1.10x on the 10M plant, 2 cores): it is for resumable runs and for trying a split before a cluster runs it
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
     jobs: u32,
     /// Triangles per shard of a split build (e.g. 500k, 2M): how the work splits depends on the model and this only, never on --jobs
     #[arg(long, default_value = "1M", value_parser = crate::generate::parse_count)]
     shard_triangles: u64,
-    /// Memory the run may use: all (hold the whole model in memory, the fastest), auto (half the machine's memory, at most 2G) or a size such as 512M or 4G. A model whose objects would take more than 40% of it is written to an unnamed spill file beside the output (or in --work-dir) as it is read, and read back an object at a time; levels are made a unit of at most 262,144 triangles at a time whatever the budget (docs/preprocess.md "Memory")
+    /// Memory the run may use, besides a fixed 60-110 MiB: all (hold the whole model in memory), auto (half the machine's memory, at most 2G) or a size such as 512M or 4G. A model whose objects would take more than 40% of it (or the process more than 50%) is written to an unnamed spill file beside the output as it is read, and read back an object at a time; split builds keep one spill in --work-dir for every worker. Threads and --jobs workers are capped by it too. Levels are made 65,536 triangles at a time whatever the budget, and the scene is the same bytes at any budget (docs/preprocess.md "Memory")
     #[arg(long, default_value = "auto", value_name = "all|auto|BYTES")]
     memory_budget: gigawalk_runtime::MemoryBudget,
     /// Also write the run's statistics as JSON to this file

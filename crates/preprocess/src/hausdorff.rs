@@ -76,13 +76,19 @@ pub struct Sampling {
     pub spacing: f32,
     /// The finest cover aimed for, in model units.
     pub floor: f32,
+    /// A bound that is good enough whatever the distance: a piece within
+    /// it is settled (0: none). The caller's figure will be at least this
+    /// anyway (a level's error never falls below the previous level's),
+    /// so bounding a piece more tightly than this buys nothing.
+    pub enough: f32,
 }
 
 impl Sampling {
     /// The bound a piece must reach to be settled, with `max` the largest
-    /// distance measured so far: (1 + spacing) max + floor.
+    /// distance measured so far: (1 + spacing) max + floor, or `enough`
+    /// when that is larger.
     fn goal(&self, max: f32) -> f32 {
-        (1.0 + self.spacing) * max + self.floor
+        ((1.0 + self.spacing) * max + self.floor).max(self.enough)
     }
 }
 
@@ -272,6 +278,31 @@ impl Nearest {
     }
 }
 
+/// Triangles already known to lie within a distance of the other
+/// surface: those of a level that was measured against the same
+/// reference, which the next level keeps unchanged (bit-identical
+/// corners). A measurement bounds them by that distance without a query.
+pub struct Known {
+    keys: FxHashSet<[[u32; 3]; 3]>,
+    within: f32,
+}
+
+impl Known {
+    /// The triangles of `s`, each within `within` of the other surface.
+    pub fn new(s: Surface<'_>, within: f32) -> Self {
+        Known {
+            keys: (0..s.triangles())
+                .map(|t| corner_key(&s.triangle(t)))
+                .collect(),
+            within,
+        }
+    }
+
+    fn bound(&self, t: &[Vec3A; 3]) -> Option<f32> {
+        self.keys.contains(&corner_key(t)).then_some(self.within)
+    }
+}
+
 /// A piece of a triangle being bounded: its corners, and each corner's
 /// distance bound and nearest triangle of the other surface.
 type Piece = ([Vec3A; 3], [(f32, u32); 3]);
@@ -283,7 +314,39 @@ type Piece = ([Vec3A; 3], [(f32, u32); 3]);
 /// simplifier's untouched triangles are) are at distance 0 and skipped.
 pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
     let tree = Nearest::new(a);
-    one_sided_in(a, &tree.bvh, b, sampling).0
+    one_sided_in(a, &tree.bvh, b, sampling, f32::INFINITY, None).bound
+}
+
+/// The answer to "is every point of `a` within `limit` of `b`?"
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Within {
+    /// Yes: the measured bound, at most `limit` (and, as [`one_sided`]'s,
+    /// within about (1 + spacing) of the true distance plus the floor).
+    Yes(f32),
+    /// No: a point of `a` (relative to the surfaces' origin) whose
+    /// distance to `b`, measured exactly up to rounding, is above
+    /// `limit` by more than the rounding slack.
+    Beyond { point: Vec3A, distance: f32 },
+    /// Not certified: the bound could not be brought to `limit` or
+    /// below (a point's distance is within the sampling's tolerance of
+    /// it), though no point was found farther than `limit`.
+    Undecided,
+}
+
+/// Decides whether `a` is within `limit` of `b` (one way), stopping at the
+/// first point found farther than `limit`, or as soon as the bound passes
+/// it. The same measurement as [`one_sided`] otherwise: a `Yes` carries
+/// the bound [`one_sided`] would return, so deciding instead of measuring
+/// never changes a stored figure, only saves the rest of a measurement
+/// whose answer is already known.
+pub fn one_sided_within(
+    a: Surface<'_>,
+    b: &mut Nearest,
+    sampling: &Sampling,
+    limit: f32,
+) -> Within {
+    let tree = Nearest::new(a);
+    one_sided_in(a, &tree.bvh, b, sampling, limit, None).decision(limit)
 }
 
 /// [`one_sided`] with a BVH over `a`'s triangles (primitive i = triangle
@@ -295,43 +358,69 @@ pub fn one_sided(a: Surface<'_>, b: &mut Nearest, sampling: &Sampling) -> f32 {
 /// fine level away from its changes) one query settles hundreds of
 /// triangles; elsewhere the traversal reaches the triangles, bounded one
 /// by one as below. Also returns how many clusters were bounded whole.
+///
+/// `stop` ends the measurement early: once a point of `a` is found
+/// farther than it from `b`, or the bound passes it, the outcome is
+/// marked stopped (its bound is then at least `stop`, not the full
+/// measurement). `f32::INFINITY` measures to the end.
 fn one_sided_in(
     a: Surface<'_>,
     a_bvh: &Bvh2,
     b: &mut Nearest,
     sampling: &Sampling,
-) -> (f32, usize) {
+    stop: f32,
+    known: Option<&Known>,
+) -> Outcome {
     if a.triangles() == 0 {
-        return (0.0, 0);
+        return Outcome::done(0.0, 0);
     }
     if b.tris.is_empty() {
-        return (f32::INFINITY, 0);
+        return Outcome::done(f32::INFINITY, 0);
     }
+    let slack = ROUNDING * a.magnitude().max(b.magnitude());
+    // Every measurement starts from the same hint, so its figure does not
+    // depend on what was measured before (or stopped early) with `b`.
+    b.hint = 0;
     // A spread-out few vertices first, so the running maximum is near its
     // final value early and the goal below is not needlessly tight.
-    let mut max = 0.0f32;
+    let mut run = Run {
+        at: vec![(f32::NAN, u32::MAX); a.positions.len()],
+        max: 0.0,
+        bound: 0.0,
+        stack: Vec::new(),
+        // The bound is compared with `stop` before the slack is added.
+        stop: stop - slack,
+        witness: None,
+        stopped: false,
+    };
     for t in (0..a.triangles()).step_by(PRE_PASS_STRIDE) {
         if !b.holds(&a.triangle(t)) {
             let p = Vec3A::from_array(a.positions[a.indices[3 * t] as usize]);
-            max = max.max(b.upper(p, max).0);
+            let d = b.upper(p, run.max).0;
+            run.measured(p, d, slack);
+            if run.stopped {
+                return run.outcome(slack, 0);
+            }
         }
     }
-    let mut run = Run {
-        at: vec![(f32::NAN, u32::MAX); a.positions.len()],
-        max,
-        bound: max,
-        stack: Vec::new(),
-    };
+    // The pre-pass points are in `a`: the bound includes them.
+    run.bound = run.max;
     let mut clusters = 0;
     let complete = a_bvh.primitive_indices.len() == a.triangles() && !a_bvh.nodes.is_empty();
     if !complete {
         // Not every triangle is in the tree: bound them one by one.
         for t in 0..a.triangles() {
-            run.triangle(a, t, b, sampling);
+            run.triangle(a, t, b, sampling, slack, known);
+            if run.stopped {
+                break;
+            }
         }
     } else {
         let mut nodes = vec![0u32];
         while let Some(ni) = nodes.pop() {
+            if run.stopped {
+                break;
+            }
             let node = &a_bvh.nodes[ni as usize];
             let bx = node.aabb();
             let r = (bx.max - bx.min).length() * 0.5;
@@ -339,7 +428,7 @@ fn one_sided_in(
             if r < g {
                 let c = (bx.min + bx.max) * 0.5;
                 if let Some(d) = b.within(c, g - r) {
-                    run.bound = run.bound.max(d + r);
+                    run.bounded(d + r);
                     clusters += 1;
                     continue;
                 }
@@ -347,7 +436,10 @@ fn one_sided_in(
             if node.is_leaf() {
                 for k in node.first_index..node.first_index + node.prim_count {
                     let t = a_bvh.primitive_indices[k as usize] as usize;
-                    run.triangle(a, t, b, sampling);
+                    run.triangle(a, t, b, sampling, slack, known);
+                    if run.stopped {
+                        break;
+                    }
                 }
             } else {
                 nodes.push(node.first_index + 1);
@@ -355,8 +447,41 @@ fn one_sided_in(
             }
         }
     }
-    let slack = ROUNDING * a.magnitude().max(b.magnitude());
-    (run.bound + slack, clusters)
+    run.outcome(slack, clusters)
+}
+
+/// What one [`one_sided_in`] measurement found.
+#[derive(Clone, Copy, Debug)]
+struct Outcome {
+    /// The bound (rounding slack included); when `stopped`, only what was
+    /// reached, at least the stop.
+    bound: f32,
+    /// Clusters of `a` bounded whole (tests check that some are).
+    #[cfg_attr(not(test), allow(dead_code))]
+    clusters: usize,
+    /// Whether the measurement ended at its stop.
+    stopped: bool,
+    /// A point farther from `b` than the stop, and its distance.
+    witness: Option<(Vec3A, f32)>,
+}
+
+impl Outcome {
+    fn done(bound: f32, clusters: usize) -> Self {
+        Outcome {
+            bound,
+            clusters,
+            stopped: false,
+            witness: None,
+        }
+    }
+
+    fn decision(&self, limit: f32) -> Within {
+        match (self.stopped, self.witness) {
+            (false, _) if self.bound <= limit => Within::Yes(self.bound),
+            (_, Some((point, distance))) => Within::Beyond { point, distance },
+            _ => Within::Undecided,
+        }
+    }
 }
 
 /// The state of one [`one_sided`] measurement.
@@ -369,9 +494,58 @@ struct Run {
     /// The bound so far.
     bound: f32,
     stack: Vec<Piece>,
+    /// The measurement stops once the bound passes this (the caller's
+    /// stop less the rounding slack).
+    stop: f32,
+    /// The first point found farther than the stop, with its distance.
+    witness: Option<(Vec3A, f32)>,
+    stopped: bool,
 }
 
 impl Run {
+    fn outcome(&self, slack: f32, clusters: usize) -> Outcome {
+        Outcome {
+            // A stopped run's bound is at least the farthest point found.
+            bound: if self.stopped {
+                self.bound.max(self.max)
+            } else {
+                self.bound
+            } + slack,
+            clusters,
+            stopped: self.stopped,
+            witness: self.witness,
+        }
+    }
+
+    /// A piece of `a` is within `bound` of `b`.
+    fn bounded(&mut self, bound: f32) {
+        // NaN-safe: a NaN bound is kept and poisons the result (`max`
+        // alone would drop it).
+        self.bound = if bound.is_nan() || self.bound.is_nan() {
+            f32::NAN
+        } else {
+            self.bound.max(bound)
+        };
+        // A NaN bound stops too.
+        if self.bound.is_nan() || self.bound > self.stop {
+            self.stopped = true;
+        }
+    }
+
+    /// Point `p` of `a` was measured `d` from `b` (exact when above the
+    /// running maximum: see [`Nearest::upper`]).
+    fn measured(&mut self, p: Vec3A, d: f32, slack: f32) {
+        self.max = self.max.max(d);
+        if self.witness.is_none() && d - slack > self.stop + slack {
+            self.witness = Some((p, d));
+        }
+        // The bound will include `d` (the piece holding `p` is bounded by
+        // at least its distance), so it has passed the stop already.
+        if d.is_nan() || d > self.stop {
+            self.stopped = true;
+        }
+    }
+
     /// Bounds triangle `t` of `a`, splitting it where the bound is above
     /// the goal. Two bounds of a piece hold: the distance to one triangle
     /// of `b` is convex, so its largest value over the piece is at a
@@ -380,23 +554,38 @@ impl Run {
     /// to `b` is 1-Lipschitz, so the piece is within max_i d_i + L / sqrt(3).
     /// A piece above the goal is split at the midpoint of its longest edge
     /// and the midpoint measured.
-    fn triangle(&mut self, a: Surface<'_>, t: usize, b: &mut Nearest, sampling: &Sampling) {
+    fn triangle(
+        &mut self,
+        a: Surface<'_>,
+        t: usize,
+        b: &mut Nearest,
+        sampling: &Sampling,
+        slack: f32,
+        known: Option<&Known>,
+    ) {
         let corners = a.triangle(t);
         if b.holds(&corners) {
+            return;
+        }
+        if let Some(k) = known.and_then(|k| k.bound(&corners)) {
+            self.bounded(k);
             return;
         }
         let idx = &a.indices[3 * t..3 * t + 3];
         let mut d = [(0.0, 0); 3];
         for (k, &i) in idx.iter().enumerate() {
-            let m = &mut self.at[i as usize];
-            if m.0.is_nan() {
-                *m = b.upper(corners[k], self.max);
-                self.max = self.max.max(m.0);
+            if self.at[i as usize].0.is_nan() {
+                let m = b.upper(corners[k], self.max);
+                self.at[i as usize] = m;
+                self.measured(corners[k], m.0, slack);
             }
-            d[k] = *m;
+            d[k] = self.at[i as usize];
+        }
+        if self.stopped {
+            return;
         }
         let inv_sqrt3 = 1.0 / 3.0f32.sqrt();
-        let stack = &mut self.stack;
+        let mut stack = std::mem::take(&mut self.stack);
         stack.push((corners, d));
         let mut splits = 0;
         while let Some((q, d)) = stack.pop() {
@@ -445,7 +634,10 @@ impl Run {
             }
             // NaN-safe: a NaN bound is kept (and poisons the result).
             if piece.is_nan() || piece <= goal || splits >= MAX_SPLITS {
-                self.bound = self.bound.max(piece);
+                self.bounded(piece);
+                if self.stopped {
+                    break;
+                }
                 continue;
             }
             splits += 1;
@@ -453,10 +645,15 @@ impl Run {
             let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
             let m = (q[k] + q[k1]) * 0.5;
             let dm = b.upper(m, self.max);
-            self.max = self.max.max(dm.0);
+            self.measured(m, dm.0, slack);
+            if self.stopped {
+                break;
+            }
             stack.push(([q[k], m, q[k2]], [d[k], dm, d[k2]]));
             stack.push(([m, q[k1], q[k2]], [dm, d[k1], d[k2]]));
         }
+        stack.clear();
+        self.stack = stack;
     }
 }
 
@@ -485,10 +682,50 @@ pub fn symmetric(
     lod: Surface<'_>,
     sampling: &Sampling,
 ) -> f32 {
+    match symmetric_within(
+        reference,
+        reference_queries,
+        lod,
+        None,
+        sampling,
+        f32::INFINITY,
+    ) {
+        Within::Yes(bound) => bound,
+        // Only a NaN bound is not within an infinite limit.
+        _ => f32::NAN,
+    }
+}
+
+/// [`symmetric`] decided against `limit`: the cheaper way (from the LOD,
+/// usually the smaller surface) first, and the other only when the first
+/// is within the limit. `known`: triangles of the LOD already known to be
+/// within a distance of the reference.
+pub fn symmetric_within(
+    reference: Surface<'_>,
+    reference_queries: &mut Nearest,
+    lod: Surface<'_>,
+    known: Option<&Known>,
+    sampling: &Sampling,
+    limit: f32,
+) -> Within {
     let mut to_lod = Nearest::new(lod);
-    let forward = one_sided_in(reference, &reference_queries.bvh, &mut to_lod, sampling).0;
-    let backward = one_sided_in(lod, &to_lod.bvh, reference_queries, sampling).0;
-    forward.max(backward)
+    let backward = one_sided_in(lod, &to_lod.bvh, reference_queries, sampling, limit, known);
+    let backward = match backward.decision(limit) {
+        Within::Yes(b) => b,
+        no => return no,
+    };
+    let forward = one_sided_in(
+        reference,
+        &reference_queries.bvh,
+        &mut to_lod,
+        sampling,
+        limit,
+        None,
+    );
+    match forward.decision(limit) {
+        Within::Yes(f) => Within::Yes(f.max(backward)),
+        no => no,
+    }
 }
 
 /// A triangle's corners as bit patterns, sorted, so the same triangle in
@@ -600,6 +837,7 @@ mod tests {
     const S: Sampling = Sampling {
         spacing: 0.25,
         floor: 1e-3,
+        enough: 0.0,
     };
 
     fn quad(z: f32, size: f32) -> (Vec<[f32; 3]>, Vec<u32>) {
@@ -790,7 +1028,8 @@ mod tests {
             for (a, b) in [(&fine, coarse), (coarse, &fine)] {
                 let mut q = Nearest::new(surface(b));
                 let tree = Nearest::new(surface(a));
-                let (bound, whole) = one_sided_in(surface(a), &tree.bvh, &mut q, &S);
+                let o = one_sided_in(surface(a), &tree.bvh, &mut q, &S, f32::INFINITY, None);
+                let (bound, whole) = (o.bound, o.clusters);
                 clusters += whole;
                 let truth = brute(a, b);
                 assert!(bound >= truth, "case {k}: bound {bound} < sampled {truth}");
@@ -801,6 +1040,105 @@ mod tests {
             }
         }
         assert!(clusters > 0, "no cluster was bounded whole");
+    }
+
+    /// Distance from `p` to `b`, brute force over its triangles in f64.
+    fn brute_point(p: Vec3A, b: &(Vec<[f32; 3]>, Vec<u32>)) -> f64 {
+        let sb = surface(b);
+        (0..sb.triangles())
+            .map(|t| {
+                let [x, y, z] = sb.triangle(t);
+                point_triangle_sq64(p.as_dvec3(), [x.as_dvec3(), y.as_dvec3(), z.as_dvec3()])
+            })
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    }
+
+    #[test]
+    fn decisions_agree_with_brute_force_on_random_meshes() {
+        // Random bumpy sheets against coarser, shifted, holed or cut
+        // versions of themselves, both ways, decided at limits around the
+        // densely sampled distance: "within e" never has a sampled point
+        // beyond e, a witness really lies beyond e, and an undecided
+        // answer comes only where e is within the sampling's tolerance of
+        // the distance.
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand::rngs::SmallRng::seed_from_u64(17);
+        let (mut yes, mut beyond, mut undecided) = (0, 0, 0);
+        for case in 0..24 {
+            let fine_n = rng.random_range(6..20u32);
+            let coarse_n = rng.random_range(2..fine_n);
+            let lift: f32 = rng.random_range(-0.4..0.4);
+            let (hole, cut) = (rng.random_range(0..4u32), rng.random_range(6..40u32));
+            let fine = heightfield(fine_n, 0.0, |_, _| false);
+            let coarse = heightfield(coarse_n, lift, |i, j| {
+                (i == hole && j == hole) || i + j > cut * coarse_n / 20
+            });
+            for (a, b) in [(&fine, &coarse), (&coarse, &fine)] {
+                let mut q = Nearest::new(surface(b));
+                let full = one_sided(surface(a), &mut q, &S);
+                assert_eq!(
+                    one_sided_within(surface(a), &mut q, &S, f32::INFINITY),
+                    Within::Yes(full),
+                    "case {case}: an unbounded decision is the measurement"
+                );
+                let truth = brute(a, b);
+                for f in [0.3f32, 0.7, 0.95, 1.05, 1.3, 2.0] {
+                    let e = truth * f;
+                    match one_sided_within(surface(a), &mut q, &S, e) {
+                        Within::Yes(bound) => {
+                            yes += 1;
+                            assert!(bound <= e, "case {case}: yes at {bound} > {e}");
+                            assert!(truth <= bound, "case {case}: {truth} sampled, yes at {e}");
+                        }
+                        Within::Beyond { point, distance } => {
+                            beyond += 1;
+                            let d = brute_point(point, b);
+                            assert!(d > e as f64, "case {case}: witness at {d}, not beyond {e}");
+                            assert!((d - distance as f64).abs() <= 1e-4 * (1.0 + d));
+                        }
+                        Within::Undecided => {
+                            undecided += 1;
+                            assert!(
+                                e <= (1.0 + S.spacing) * truth * 1.05 + S.floor,
+                                "case {case}: undecided at {e}, sampled {truth}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            yes > 0 && beyond > 0,
+            "{yes} yes, {beyond} beyond, {undecided} undecided"
+        );
+    }
+
+    #[test]
+    fn known_triangles_are_bounded_by_what_is_known() {
+        // A sheet 0.2 above another, its triangles known to be within 0.5
+        // (a looser figure than the truth, as a previous level's error
+        // is): the bound stays a bound, and never exceeds what is known.
+        let sheet = heightfield(12, 0.0, |_, _| false);
+        let lifted = heightfield(12, 0.2, |_, _| false);
+        let mut q = Nearest::new(surface(&sheet));
+        let tree = Nearest::new(surface(&lifted));
+        let known = Known::new(surface(&lifted), 0.5);
+        let with = one_sided_in(
+            surface(&lifted),
+            &tree.bvh,
+            &mut q,
+            &S,
+            f32::INFINITY,
+            Some(&known),
+        );
+        let without = one_sided_in(surface(&lifted), &tree.bvh, &mut q, &S, f32::INFINITY, None);
+        let truth = brute(&lifted, &sheet);
+        assert!(
+            truth <= without.bound && without.bound <= with.bound,
+            "{truth} {without:?} {with:?}"
+        );
+        assert!(with.bound <= 0.5 + 1e-5, "{with:?}");
     }
 
     #[test]

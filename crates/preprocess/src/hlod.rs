@@ -114,6 +114,7 @@ impl ChainParams {
         Sampling {
             spacing: self.bound_spacing,
             floor: (self.bound_floor * diagonal) as f32,
+            enough: 0.0,
         }
     }
 
@@ -168,7 +169,7 @@ pub fn leaf_mesh(model: &dyn Source, part: &Part, origin: DVec3) -> Result<WorkM
 
 /// A leaf's chain: the mesh itself (error 0), then coarser levels, each
 /// measured against the mesh. `diagonal` is the leaf box's.
-pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
+pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams, tally: &Tally) -> Vec<Lod> {
     let mut queries = Nearest::new(mesh.surface());
     let mut lods = vec![Lod {
         mesh: mesh.clone(),
@@ -183,7 +184,7 @@ pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams) -> Vec<Lod> {
         first_budget: usize::MAX,
         keep_pieces: true,
     };
-    extend_chain(&mut lods, reference, p);
+    extend_chain(&mut lods, reference, p, tally);
     lods
 }
 
@@ -207,6 +208,7 @@ pub fn inner_lods(
     origin: DVec3,
     diagonal: f64,
     p: &ChainParams,
+    tally: &Tally,
 ) -> Vec<Lod> {
     let picked = pick_levels(children, p.merge_budget());
     let parts: Vec<&Lod> = children
@@ -242,7 +244,7 @@ pub fn inner_lods(
         first_budget: p.node_budget,
         keep_pieces: false,
     };
-    extend_chain(&mut lods, reference, p);
+    extend_chain(&mut lods, reference, p, tally);
     if lods.len() > 1 && lods[0].mesh.triangles() > p.node_budget {
         lods.remove(0);
     }
@@ -333,7 +335,7 @@ fn target_triangles(n: usize, p: &ChainParams) -> usize {
 /// otherwise or when collapse stalls even at the node's diagonal, and
 /// instead of a collapsed level measured more than [`SUSPECT_OVER_LIMIT`]
 /// times its limit off when clustering measures nearer.
-fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
+fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, tally: &Tally) {
     // Finite, so the doubling below ends (a diagonal beyond f32's range
     // would make it infinite).
     let cap = if r.diagonal.is_finite() {
@@ -397,15 +399,36 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
                 .filter(shrunk)
                 .map(|m| (m, cap))
         };
+        // The last level's triangles are within its error (less the
+        // reference's own) of the reference: those the next level keeps
+        // need no measuring.
+        let known = hausdorff::Known::new(last.mesh.surface(), r.sampling.enough);
+        let known = Some(&known);
         let measure = |r: &mut Reference<'_>, m: &WorkMesh| {
-            hausdorff::symmetric(r.mesh.surface(), r.queries, m.surface(), &r.sampling)
+            let within = hausdorff::symmetric_within(
+                r.mesh.surface(),
+                r.queries,
+                m.surface(),
+                known,
+                &r.sampling,
+                f32::INFINITY,
+            );
+            match within {
+                hausdorff::Within::Yes(e) => e,
+                // Only a NaN bound is not within an infinite limit.
+                _ => f32::NAN,
+            }
         };
+        // The level's error will be at least the last level's: bounding
+        // it tighter than that buys nothing.
+        r.sampling.enough = (last.error - r.base).max(0.0);
         let collapsed = if collapse { find(false) } else { None };
         let was_collapse = collapsed.is_some();
         let Some((mut mesh, mut e)) = collapsed.or_else(|| find(true)) else {
             break;
         };
         let mut measured = measure(&mut r, &mesh);
+        Tally::add(&tally.measured, 1);
         // Edge collapse's quadric error can miss what it moves by far: a
         // thin tube's sides do not resist sliding its end along its axis,
         // so a 17-unit rail of radius 0.03 became half as long at a limit
@@ -416,7 +439,10 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
         // against the reference, not the previous level), so later levels
         // may be compared more often than needed: time, not a wrong choice.
         // NaN-safe: a NaN or infinite measurement is suspect too.
-        let plausible = measured.is_finite() && measured <= SUSPECT_OVER_LIMIT * e;
+        // A level within the last level's error is not suspect: its error
+        // will be the last level's.
+        let plausible = measured.is_finite()
+            && (measured <= SUSPECT_OVER_LIMIT * e || measured <= r.sampling.enough);
         // An inner node's pieces are many and disjoint (a machine's bolts,
         // covers and hoses): whether pruning them (collapse) or joining
         // them (clustering) costs less differs level by level, so both
@@ -426,17 +452,11 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
         let undershoots = |m: &WorkMesh| m.triangles() < lower;
         if was_collapse && (!plausible || !r.keep_pieces || undershoots(&mesh)) {
             if let Some((alt, e_alt)) = find(true) {
-                let alt_measured = measure(&mut r, &alt);
-                let score = |e: f32, m: &WorkMesh| {
-                    let per_triangle = if r.keep_pieces {
-                        e as f64
-                    } else {
-                        e as f64 * (m.triangles() as f64).sqrt()
-                    };
-                    (undershoots(m), per_triangle)
-                };
-                let better = score(alt_measured, &alt) < score(measured, &mesh);
-                if better || !measured.is_finite() {
+                Tally::add(&tally.rivals, 1);
+                if let Some(alt_measured) =
+                    rival(&mut r, (&mesh, measured), &alt, (lower, known), tally)
+                {
+                    Tally::add(&tally.rivals_won, 1);
                     (mesh, e, measured) = (alt, e_alt, alt_measured);
                 }
             }
@@ -447,6 +467,101 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams) {
         }
         let error = (r.base + measured).max(last.error);
         lods.push(Lod { mesh, error });
+    }
+}
+
+/// Whether `alt` makes a better level than `main` (a level and its
+/// measured error) and, when it does, its measured error. The better
+/// level does not undershoot (fewer than `lower` triangles) where the
+/// other does, else has the lower error per triangle: the error itself
+/// for a leaf (its pieces all stay), the error x sqrt(triangles) for an
+/// inner node (a level of half the triangles may move surfaces 1.41x as
+/// far). `alt` is measured only as far as it takes to know: a losing
+/// rival stops at the first point found beyond the winning error, so
+/// the choice, and every stored error, is what measuring both in full
+/// would give.
+fn rival(
+    r: &mut Reference<'_>,
+    (main, measured): (&WorkMesh, f32),
+    alt: &WorkMesh,
+    (lower, known): (usize, Option<&hausdorff::Known>),
+    tally: &Tally,
+) -> Option<f32> {
+    let (u_main, u_alt) = (main.triangles() < lower, alt.triangles() < lower);
+    let per_triangle = |e: f32, m: &WorkMesh| {
+        if r.keep_pieces {
+            e as f64
+        } else {
+            e as f64 * (m.triangles() as f64).sqrt()
+        }
+    };
+    let limit = if !measured.is_finite() || (u_main && !u_alt) {
+        // Whatever it measures, `alt` wins.
+        f32::INFINITY
+    } else if u_alt && !u_main {
+        return None;
+    } else {
+        // `alt` wins below this; one ulp above it, so that a bound past
+        // the limit loses for certain whatever the f64 rounding.
+        let t = measured as f64 * (main.triangles() as f64 / alt.triangles() as f64).sqrt();
+        let t = if r.keep_pieces { measured as f64 } else { t };
+        (t as f32).next_up()
+    };
+    let within = hausdorff::symmetric_within(
+        r.mesh.surface(),
+        r.queries,
+        alt.surface(),
+        known,
+        &r.sampling,
+        limit,
+    );
+    match within {
+        hausdorff::Within::Yes(e) => {
+            let wins = !measured.is_finite()
+                || (u_main && !u_alt)
+                || per_triangle(e, alt) < per_triangle(measured, main);
+            wins.then_some(e)
+        }
+        _ if limit == f32::INFINITY => {
+            // A NaN measurement: taken as the old code took it, in place
+            // of a level that was not finite either.
+            Some(f32::NAN)
+        }
+        _ => {
+            Tally::add(&tally.rivals_stopped, 1);
+            None
+        }
+    }
+}
+
+/// Counts of the certifier's work over a run, shared by the threads
+/// building levels (`--stats`).
+#[derive(Debug, Default)]
+pub struct Tally {
+    /// Levels measured in full.
+    pub measured: std::sync::atomic::AtomicU64,
+    /// Rival levels (clustering beside edge collapse) compared.
+    pub rivals: std::sync::atomic::AtomicU64,
+    /// Rivals that won.
+    pub rivals_won: std::sync::atomic::AtomicU64,
+    /// Rivals whose measurement stopped as soon as they had lost.
+    pub rivals_stopped: std::sync::atomic::AtomicU64,
+}
+
+impl Tally {
+    fn add(counter: &std::sync::atomic::AtomicU64, n: u64) {
+        counter.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// The counts as plain numbers.
+    pub fn snapshot(&self) -> crate::stats::Certification {
+        let get = |c: &std::sync::atomic::AtomicU64| c.load(std::sync::atomic::Ordering::Relaxed);
+        crate::stats::Certification {
+            levels_measured: get(&self.measured),
+            rivals: get(&self.rivals),
+            rivals_won: get(&self.rivals_won),
+            rivals_stopped: get(&self.rivals_stopped),
+        }
     }
 }
 
@@ -766,7 +881,7 @@ mod tests {
     fn leaf_chain_halves_down_to_the_floor_with_growing_error() {
         let mesh = mesh_of(grid_object(DVec3::ZERO, 10.0, 64, 0.3));
         let full = mesh.triangles();
-        let lods = leaf_lods(mesh, 15.0, &P);
+        let lods = leaf_lods(mesh, 15.0, &P, &Tally::default());
         assert!(lods.len() >= 4, "{} levels", lods.len());
         assert_eq!(lods[0].error, 0.0);
         assert_eq!(lods[0].mesh.triangles(), full);
@@ -796,7 +911,7 @@ mod tests {
             all.normals.extend(p.normals);
             all.indices.extend(p.indices.iter().map(|i| i + base));
         }
-        let lods = leaf_lods(mesh_of(all), 25.0, &P);
+        let lods = leaf_lods(mesh_of(all), 25.0, &P, &Tally::default());
         assert!(lods.len() >= 2);
         assert!(lods.last().unwrap().mesh.triangles() < lods[0].mesh.triangles() / 2);
     }
@@ -817,7 +932,7 @@ mod tests {
         assert_eq!(mesh.triangles(), 888);
         // The leaf's box (0.5 x 17 x 0.5).
         let diagonal = 17.02;
-        let lods = leaf_lods(mesh, diagonal, &P);
+        let lods = leaf_lods(mesh, diagonal, &P, &Tally::default());
         assert!(lods.len() >= 3, "{} levels", lods.len());
         // Far below the 8.95 of the halved rails; the levels found are
         // within 0.1 (a rung's length is 0.44).
@@ -856,7 +971,7 @@ mod tests {
         let mesh = mesh_of(all);
         let n = pieces(&mesh);
         assert_eq!(n, 41);
-        let lods = leaf_lods(mesh, 21.0, &P);
+        let lods = leaf_lods(mesh, 21.0, &P, &Tally::default());
         assert!(lods.len() >= 3, "{} levels", lods.len());
         for l in &lods {
             assert_eq!(pieces(&l.mesh), n, "a level lost a piece");
@@ -875,6 +990,7 @@ mod tests {
                 mesh_of(grid_object(DVec3::ZERO, 10.0, 16, 0.3)),
                 diagonal,
                 &P,
+                &Tally::default(),
             );
             assert_eq!(lods[0].error, 0.0, "diagonal {diagonal}");
             for w in lods.windows(2) {
@@ -935,16 +1051,22 @@ mod tests {
 
     #[test]
     fn inner_hlod_error_is_at_least_every_picked_child_level() {
-        let a = leaf_lods(mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.2)), 15.0, &P);
+        let a = leaf_lods(
+            mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.2)),
+            15.0,
+            &P,
+            &Tally::default(),
+        );
         let b = leaf_lods(
             mesh_of(grid_object(DVec3::new(12.0, 0.0, 0.0), 10.0, 32, 0.5)),
             15.0,
             &P,
+            &Tally::default(),
         );
         let children = [a.as_slice(), b.as_slice()];
         let origin = DVec3::new(11.0, 0.0, 5.0);
         let picked = pick_levels(&children, P.merge_budget());
-        let lods = inner_lods(&children, None, origin, 30.0, &P);
+        let lods = inner_lods(&children, None, origin, 30.0, &P, &Tally::default());
         assert!(!lods.is_empty());
         assert!(lods[0].mesh.triangles() <= P.node_budget);
         for l in &lods {

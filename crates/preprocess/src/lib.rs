@@ -51,8 +51,11 @@ pub mod verify;
 /// the full detail below a node of at most 65,536 triangles, vanished
 /// pieces covered at the level's error limit; 9: levels made and stored
 /// unit by unit (subtrees of at most 2^16 triangles), so memory no longer
-/// grows with the model (the same levels, in another order in the file).
-pub const REVISION: u32 = 9;
+/// grows with the model (the same levels, in another order in the file);
+/// 10: a level's pieces settled once within the last level's error (its
+/// error is at least that anyway), and triangles kept from the last level
+/// bounded by it without a query (as sound, slightly different bounds).
+pub const REVISION: u32 = 10;
 
 use std::path::Path;
 use std::time::Instant;
@@ -414,6 +417,7 @@ pub(crate) fn build_role<S: LodSink>(
         bound_floor: params.bound_floor,
     };
     let keep = chain.merge_budget();
+    let tally = hlod::Tally::default();
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
     // What each done node leaves for its parent, until the parent is done.
     let mut done: Vec<Option<Done>> = vec![None; tree.len()];
@@ -463,6 +467,7 @@ pub(crate) fn build_role<S: LodSink>(
                         &parts[object as usize],
                         &tree[ni],
                         &chain,
+                        &tally,
                         keep,
                         wanted(ni),
                     ),
@@ -470,7 +475,7 @@ pub(crate) fn build_role<S: LodSink>(
                         &tree[ni],
                         &done,
                         &lowest,
-                        &chain,
+                        (&chain, &tally),
                         keep,
                         wanted(ni),
                     )),
@@ -504,6 +509,7 @@ pub(crate) fn build_role<S: LodSink>(
         }
     }
     stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
+    stats.certification = tally.snapshot();
     clock.finish(&mut stats);
 
     let nodes = tree
@@ -538,12 +544,14 @@ fn make_leaf(
     part: &Part,
     node: &hierarchy::HNode,
     chain: &ChainParams,
+    tally: &hlod::Tally,
     keep: usize,
     full_wanted: bool,
 ) -> Result<Finished, SpillError> {
     let mesh = hlod::leaf_mesh(model, part, node.bounds.center())?;
     let full = (full_wanted && mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
-    let (out, levels) = finish_chain(hlod::leaf_lods(mesh, node.bounds.diagonal(), chain), keep);
+    let lods = hlod::leaf_lods(mesh, node.bounds.diagonal(), chain, tally);
+    let (out, levels) = finish_chain(lods, keep);
     Ok((out, Done { levels, full }))
 }
 
@@ -553,7 +561,7 @@ fn make_inner(
     node: &hierarchy::HNode,
     done: &[Option<Done>],
     lowest: &[f32],
-    chain: &ChainParams,
+    (chain, tally): (&ChainParams, &hlod::Tally),
     keep: usize,
     full_wanted: bool,
 ) -> Finished {
@@ -574,6 +582,7 @@ fn make_inner(
         node.bounds.center(),
         node.bounds.diagonal(),
         chain,
+        tally,
     );
     // Never claim less error than a stored level below (the scene file's
     // rule: errors do not decrease from a node to its nearest ancestor

@@ -62,10 +62,28 @@ pub struct Stats {
     /// the memory budget (0: held in memory).
     #[serde(default)]
     pub spilled_bytes: u64,
+    /// What certifying the levels' errors took (this process's levels; a
+    /// merge of shards counts only the levels it made).
+    #[serde(default)]
+    pub certification: Certification,
     /// Peak resident memory of the process (Linux VmHWM), when known.
     pub peak_memory_bytes: Option<u64>,
     /// The thresholds in model units.
     pub resolved: Option<Resolved>,
+}
+
+/// Counts of the error certifier's work ([`crate::hlod::Tally`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Certification {
+    /// Levels whose error was measured in full.
+    pub levels_measured: u64,
+    /// Levels that had a rival (vertex clustering beside edge collapse)
+    /// measured against the same reference.
+    pub rivals: u64,
+    /// Rivals kept instead.
+    pub rivals_won: u64,
+    /// Rivals whose measurement stopped as soon as they had lost.
+    pub rivals_stopped: u64,
 }
 
 /// The raw size of a model's geometry (see [`Stats::raw_input_bytes`]).

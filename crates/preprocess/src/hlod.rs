@@ -316,6 +316,27 @@ struct Reference<'a> {
     keep_pieces: bool,
 }
 
+impl Reference<'_> {
+    /// Whether level `m` is within `limit` of the reference, both ways
+    /// ([`hausdorff::symmetric_within`]); `known`: triangles of `m`
+    /// already known to be within a distance of it.
+    fn within(
+        &mut self,
+        m: &WorkMesh,
+        known: Option<&hausdorff::Known>,
+        limit: f32,
+    ) -> hausdorff::Within {
+        hausdorff::symmetric_within(
+            self.mesh.surface(),
+            self.queries,
+            m.surface(),
+            known,
+            &self.sampling,
+            limit,
+        )
+    }
+}
+
 fn target_triangles(n: usize, p: &ChainParams) -> usize {
     ((n as f64 * p.ratio).round() as usize).clamp(1, n.saturating_sub(1).max(1))
 }
@@ -405,15 +426,7 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, tall
         let known = hausdorff::Known::new(last.mesh.surface(), r.sampling.enough);
         let known = Some(&known);
         let measure = |r: &mut Reference<'_>, m: &WorkMesh| {
-            let within = hausdorff::symmetric_within(
-                r.mesh.surface(),
-                r.queries,
-                m.surface(),
-                known,
-                &r.sampling,
-                f32::INFINITY,
-            );
-            match within {
+            match r.within(m, known, f32::INFINITY) {
                 hausdorff::Within::Yes(e) => e,
                 // Only a NaN bound is not within an infinite limit.
                 _ => f32::NAN,
@@ -488,8 +501,9 @@ fn rival(
     tally: &Tally,
 ) -> Option<f32> {
     let (u_main, u_alt) = (main.triangles() < lower, alt.triangles() < lower);
+    let keep_pieces = r.keep_pieces;
     let per_triangle = |e: f32, m: &WorkMesh| {
-        if r.keep_pieces {
+        if keep_pieces {
             e as f64
         } else {
             e as f64 * (m.triangles() as f64).sqrt()
@@ -504,18 +518,10 @@ fn rival(
         // `alt` wins below this; one ulp above it, so that a bound past
         // the limit loses for certain whatever the f64 rounding.
         let t = measured as f64 * (main.triangles() as f64 / alt.triangles() as f64).sqrt();
-        let t = if r.keep_pieces { measured as f64 } else { t };
+        let t = if keep_pieces { measured as f64 } else { t };
         (t as f32).next_up()
     };
-    let within = hausdorff::symmetric_within(
-        r.mesh.surface(),
-        r.queries,
-        alt.surface(),
-        known,
-        &r.sampling,
-        limit,
-    );
-    match within {
+    match r.within(alt, known, limit) {
         hausdorff::Within::Yes(e) => {
             let wins = !measured.is_finite()
                 || (u_main && !u_alt)

@@ -374,7 +374,15 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, tall
         if lods.len() == 1 {
             target = target.min(r.first_budget);
         }
-        let shrunk = |m: &WorkMesh| shrinks(m, n);
+        // The first level made keeps at most `first_budget` triangles
+        // even where the limit stalls above the target (an inner node's
+        // finest stored level is within the node budget).
+        let budget = if lods.len() == 1 {
+            r.first_budget
+        } else {
+            usize::MAX
+        };
+        let shrunk = |m: &WorkMesh| shrinks(m, n) && m.triangles() <= budget;
         // Welded and split into pieces once for every attempt below.
         let s = Simplifier::new(&last.mesh, r.keep_pieces);
         let collapse = lods.len() <= p.collapse_levels;
@@ -420,6 +428,9 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, tall
                 .filter(shrunk)
                 .map(|m| (m, cap))
         };
+        // The level's error will be at least the last level's: bounding
+        // it tighter than that buys nothing.
+        r.sampling.enough = (last.error - r.base).max(0.0);
         // The last level's triangles are within its error (less the
         // reference's own) of the reference: those the next level keeps
         // need no measuring.
@@ -432,9 +443,6 @@ fn extend_chain(lods: &mut Vec<Lod>, mut r: Reference<'_>, p: &ChainParams, tall
                 _ => f32::NAN,
             }
         };
-        // The level's error will be at least the last level's: bounding
-        // it tighter than that buys nothing.
-        r.sampling.enough = (last.error - r.base).max(0.0);
         let collapsed = if collapse { find(false) } else { None };
         let was_collapse = collapsed.is_some();
         let Some((mut mesh, mut e)) = collapsed.or_else(|| find(true)) else {

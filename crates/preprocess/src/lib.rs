@@ -54,8 +54,11 @@ pub mod verify;
 /// grows with the model (the same levels, in another order in the file);
 /// 10: a level's pieces settled once within the last level's error (its
 /// error is at least that anyway), and triangles kept from the last level
-/// bounded by it without a query (as sound, slightly different bounds).
-pub const REVISION: u32 = 10;
+/// bounded by it without a query (as sound, slightly different bounds);
+/// 11: those triangles bounded by the last level's own error (10 used the
+/// level before it), and an inner node's first level held to the node
+/// budget where its simplifier stalled above it.
+pub const REVISION: u32 = 11;
 
 use std::path::Path;
 use std::time::Instant;

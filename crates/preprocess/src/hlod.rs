@@ -36,10 +36,7 @@ use crate::hausdorff::{self, Nearest, Sampling, Surface};
 use crate::parts::Part;
 use crate::source::{Source, SpillError};
 
-/// A level is accepted only if it has at most this fraction of the previous
-/// level's triangles; otherwise the simplifier has stalled (e.g. on many
-/// tiny disconnected pieces that edge collapses cannot remove).
-pub(crate) const MIN_SHRINK: f64 = 0.65;
+use crate::params::MIN_SHRINK;
 
 /// Geometry being simplified: f32 positions relative to `origin`.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -449,6 +449,18 @@ fn polygon_area(poly: &[DVec3], n: DVec3) -> f64 {
 mod tests {
     use super::*;
 
+    #[test]
+    fn every_allowed_direction_count_has_directions() {
+        for n in 0..40 {
+            let allowed = crate::params::CELL_DIRECTIONS.contains(&n);
+            let dirs = cell_directions(n);
+            assert_eq!(dirs.is_some(), allowed, "{n} directions");
+            if let Some(d) = dirs {
+                assert_eq!(d.len(), n as usize);
+            }
+        }
+    }
+
     /// A box as 12 triangles with unshared vertices per face (as flat
     /// shading writes it), shifted by `at`.
     fn boxed(at: DVec3, e: DVec3) -> (Vec<DVec3>, Vec<u32>) {

@@ -4,6 +4,17 @@
 use gigawalk_scene::Aabb;
 use serde_json::{json, Map, Value};
 
+/// A level is accepted only if it has at most this fraction of the previous
+/// level's triangles; otherwise the simplifier has stalled (e.g. on many
+/// tiny disconnected pieces that edge collapses cannot remove). So
+/// `--lod-ratio` may not ask for more.
+pub(crate) const MIN_SHRINK: f64 = 0.65;
+
+/// The view-direction counts a cell tree can have
+/// ([`crate::occluders::cell_directions`]): 4, 8 or 16 around +Y; 6, 14 or
+/// 26 over the sphere.
+pub const CELL_DIRECTIONS: [u32; 6] = [4, 6, 8, 14, 16, 26];
+
 /// Every knob of the preprocess. Sizes are fractions of a model measure so
 /// that the same defaults work on a model in millimetres or in kilometres;
 /// [`Params::resolve`] turns them into model units for one model.
@@ -174,7 +185,7 @@ impl Params {
                 why: "r1 x r2-factor must be at least 1 (an aspect ratio is at least 1)",
             });
         }
-        if !(self.lod_ratio > 0.0 && self.lod_ratio <= crate::hlod::MIN_SHRINK) {
+        if !(self.lod_ratio > 0.0 && self.lod_ratio <= MIN_SHRINK) {
             return Err(ParamError {
                 name: "lod-ratio",
                 value: self.lod_ratio,
@@ -217,7 +228,7 @@ impl Params {
                 why: "must be 1 to 1024",
             });
         }
-        if crate::occluders::cell_directions(self.cell_directions).is_none() {
+        if !CELL_DIRECTIONS.contains(&self.cell_directions) {
             return Err(ParamError {
                 name: "cell-directions",
                 value: self.cell_directions as f64,

@@ -162,7 +162,7 @@ impl DemoScene {
         )?;
         drop(model);
         SceneReader::open(&scene)?;
-        std::fs::write(&stamp_file, stamp).map_err(io(&stamp_file))?;
+        gigawalk_scene::write_atomic(&stamp_file, stamp.as_bytes()).map_err(io(&stamp_file))?;
         Ok(Prepared {
             scene,
             path,

@@ -8,6 +8,7 @@
 use std::path::Path;
 use std::sync::Once;
 
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
@@ -60,6 +61,36 @@ fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
+/// Draws a plot of `size` in memory with `draw`, then writes it to `file`
+/// as PNG ([`write_png`]).
+fn plot_png(
+    file: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut rgb = vec![0; size.0 as usize * size.1 as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+        draw(&root)?;
+        root.present().map_err(err)?;
+    }
+    write_png(file, size, &rgb)
+}
+
+/// Encodes a plot drawn in memory as PNG and writes it to `file` whole
+/// or not at all (through a temporary file renamed into place): a full
+/// disk leaves no truncated image beside the report.
+fn write_png(file: &Path, size: (u32, u32), rgb: &[u8]) -> Result<(), String> {
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, size.0, size.1);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(err)?;
+    writer.write_image_data(rgb).map_err(err)?;
+    writer.finish().map_err(err)?;
+    gigawalk_scene::write_atomic(file, &bytes).map_err(err)
+}
+
 /// Rounds a positive range out to whole decades for a log axis.
 fn decades(lo: f64, hi: f64) -> (f64, f64) {
     let lo = if lo.is_finite() && lo > 0.0 { lo } else { 0.1 };
@@ -81,73 +112,76 @@ type Series = (String, Mode, Vec<(f64, f64)>);
 /// scale, warm-up frames left out.
 pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
     fonts();
-    let root = BitMapBackend::new(file, (1000, 520)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let series: Vec<Series> = replay
-        .runs
-        .iter()
-        .map(|r| {
-            let pts = measured(&r.frames)
-                .iter()
-                .filter_map(|f| f.frame_ms.map(|ms| (f.frame as f64, 1e3 / ms)))
-                .collect();
-            (r.label(), r.mode, pts)
-        })
-        .collect();
-    let all = series.iter().flat_map(|s| s.2.iter());
-    let (lo, hi) = all.fold((f64::INFINITY, 0f64), |(lo, hi), p| {
-        (lo.min(p.1), hi.max(p.1))
-    });
-    let (lo, hi) = decades(lo, hi);
-    let frames = replay.frames.max(2) as f64;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!(
-                "Frame rate along the path ({}x{})",
-                replay.options.runtime.width, replay.options.runtime.height
-            ),
-            (FAMILY, 22),
-        )
-        .margin(12)
-        .x_label_area_size(42)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..frames - 1.0, (lo..hi).log_scale())
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("frame (pose along the path)")
-        .y_desc("frames per second (log)")
-        .label_style((FAMILY, 14))
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_label_formatter(&|v| {
-            if *v >= 1.0 {
-                format!("{v:.0}")
-            } else {
-                format!("{v}")
-            }
-        })
-        .draw()
-        .map_err(err)?;
-    let mut shade = std::collections::HashMap::new();
-    for (label, mode, pts) in series {
-        let s = shade.entry(mode).or_insert(0usize);
-        let c = colour(mode, *s);
-        *s += 1;
+    plot_png(file, (1000, 520), |root| {
+        root.fill(&WHITE).map_err(err)?;
+        let series: Vec<Series> = replay
+            .runs
+            .iter()
+            .map(|r| {
+                let pts = measured(&r.frames)
+                    .iter()
+                    .filter_map(|f| f.frame_ms.map(|ms| (f.frame as f64, 1e3 / ms)))
+                    .collect();
+                (r.label(), r.mode, pts)
+            })
+            .collect();
+        let all = series.iter().flat_map(|s| s.2.iter());
+        let (lo, hi) = all.fold((f64::INFINITY, 0f64), |(lo, hi), p| {
+            (lo.min(p.1), hi.max(p.1))
+        });
+        let (lo, hi) = decades(lo, hi);
+        let frames = replay.frames.max(2) as f64;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "Frame rate along the path ({}x{})",
+                    replay.options.runtime.width, replay.options.runtime.height
+                ),
+                (FAMILY, 22),
+            )
+            .margin(12)
+            .x_label_area_size(42)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0f64..frames - 1.0, (lo..hi).log_scale())
+            .map_err(err)?;
         chart
-            .draw_series(LineSeries::new(pts, c.stroke_width(2)))
-            .map_err(err)?
-            .label(label)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
-    }
-    chart
-        .configure_series_labels()
-        .label_font((FAMILY, 15))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(err)?;
-    root.present().map_err(err)
+            .configure_mesh()
+            .x_desc("frame (pose along the path)")
+            .y_desc("frames per second (log)")
+            .label_style((FAMILY, 14))
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| {
+                if *v >= 1.0 {
+                    format!("{v:.0}")
+                } else {
+                    format!("{v}")
+                }
+            })
+            .draw()
+            .map_err(err)?;
+        let mut shade = std::collections::HashMap::new();
+        for (label, mode, pts) in series {
+            let s = shade.entry(mode).or_insert(0usize);
+            let c = colour(mode, *s);
+            *s += 1;
+            chart
+                .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+                .map_err(err)?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FAMILY, 15))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
 }
 
 /// pixel_error.png (a target frame rate): the pixel-error tolerance each
@@ -155,88 +189,91 @@ pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
 /// target on a second panel.
 pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
     fonts();
-    let root = BitMapBackend::new(file, (1000, 640)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let (top, bottom) = root.split_vertically(330);
-    let runs: Vec<_> = replay
-        .runs
-        .iter()
-        .filter(|r| r.frames.iter().any(|f| f.controller_us.is_some()))
-        .collect();
-    let frames = replay.frames.max(2) as f64;
-    let max_p = runs
-        .iter()
-        .flat_map(|r| r.frames.iter().map(|f| f.pixel_error_used))
-        .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(&top)
-        .caption("Pixel error chosen for the target frame rate", (FAMILY, 20))
-        .margin(10)
-        .x_label_area_size(30)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..frames - 1.0, 0f64..max_p * 1.1)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .y_desc("pixel error")
-        .label_style((FAMILY, 14))
-        .draw()
-        .map_err(err)?;
-    let target = replay.options.target.map_or(f64::NAN, |t| t.ms);
-    let max_ms = runs
-        .iter()
-        .flat_map(|r| r.frames.iter().filter_map(|f| f.frame_ms))
-        .fold(target * 2.0, f64::max);
-    let mut lower = ChartBuilder::on(&bottom)
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..frames - 1.0, 0f64..max_ms.min(target * 4.0))
-        .map_err(err)?;
-    lower
-        .configure_mesh()
-        .x_desc("frame (pose along the path)")
-        .y_desc(format!("frame ms (target {target:.1}, black)"))
-        .label_style((FAMILY, 14))
-        .draw()
-        .map_err(err)?;
-    lower
-        .draw_series(LineSeries::new(
-            [(0.0, target), (frames - 1.0, target)],
-            BLACK.stroke_width(1),
-        ))
-        .map_err(err)?;
-    let mut shade = std::collections::HashMap::new();
-    for r in runs {
-        let s = shade.entry(r.mode).or_insert(0usize);
-        let c = colour(r.mode, *s);
-        *s += 1;
-        let p: Vec<(f64, f64)> = r
-            .frames
+    plot_png(file, (1000, 640), |root| {
+        root.fill(&WHITE).map_err(err)?;
+        let (top, bottom) = root.split_vertically(330);
+        let runs: Vec<_> = replay
+            .runs
             .iter()
-            .map(|f| (f.frame as f64, f.pixel_error_used))
+            .filter(|r| r.frames.iter().any(|f| f.controller_us.is_some()))
             .collect();
-        chart
-            .draw_series(LineSeries::new(p, c.stroke_width(2)))
-            .map_err(err)?
-            .label(r.label())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
-        let ms: Vec<(f64, f64)> = r
-            .frames
+        let frames = replay.frames.max(2) as f64;
+        let max_p = runs
             .iter()
-            .filter_map(|f| f.frame_ms.map(|ms| (f.frame as f64, ms)))
-            .collect();
-        lower
-            .draw_series(LineSeries::new(ms, c.stroke_width(1)))
+            .flat_map(|r| r.frames.iter().map(|f| f.pixel_error_used))
+            .fold(1.0f64, f64::max);
+        let mut chart = ChartBuilder::on(&top)
+            .caption("Pixel error chosen for the target frame rate", (FAMILY, 20))
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0f64..frames - 1.0, 0f64..max_p * 1.1)
             .map_err(err)?;
-    }
-    chart
-        .configure_series_labels()
-        .label_font((FAMILY, 14))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
-    root.present().map_err(err)
+        chart
+            .configure_mesh()
+            .y_desc("pixel error")
+            .label_style((FAMILY, 14))
+            .draw()
+            .map_err(err)?;
+        let target = replay.options.target.map_or(f64::NAN, |t| t.ms);
+        let max_ms = runs
+            .iter()
+            .flat_map(|r| r.frames.iter().filter_map(|f| f.frame_ms))
+            .fold(target * 2.0, f64::max);
+        let mut lower = ChartBuilder::on(&bottom)
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0f64..frames - 1.0, 0f64..max_ms.min(target * 4.0))
+            .map_err(err)?;
+        lower
+            .configure_mesh()
+            .x_desc("frame (pose along the path)")
+            .y_desc(format!("frame ms (target {target:.1}, black)"))
+            .label_style((FAMILY, 14))
+            .draw()
+            .map_err(err)?;
+        lower
+            .draw_series(LineSeries::new(
+                [(0.0, target), (frames - 1.0, target)],
+                BLACK.stroke_width(1),
+            ))
+            .map_err(err)?;
+        let mut shade = std::collections::HashMap::new();
+        for r in runs {
+            let s = shade.entry(r.mode).or_insert(0usize);
+            let c = colour(r.mode, *s);
+            *s += 1;
+            let p: Vec<(f64, f64)> = r
+                .frames
+                .iter()
+                .map(|f| (f.frame as f64, f.pixel_error_used))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(p, c.stroke_width(2)))
+                .map_err(err)?
+                .label(r.label())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3))
+                });
+            let ms: Vec<(f64, f64)> = r
+                .frames
+                .iter()
+                .filter_map(|f| f.frame_ms.map(|ms| (f.frame as f64, ms)))
+                .collect();
+            lower
+                .draw_series(LineSeries::new(ms, c.stroke_width(1)))
+                .map_err(err)?;
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FAMILY, 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
 }
 
 /// tradeoff.png: mean frame rate against the fraction of pixels breaking
@@ -249,36 +286,36 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
     fonts();
     let with_accuracy = s.modes.iter().all(|m| m.bound_violating_fraction.is_some());
     let with_popping = with_accuracy && s.modes.iter().all(|m| m.popping.is_some());
-    let root =
-        BitMapBackend::new(file, (if with_popping { 1400 } else { 900 }, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let bound = |m: &crate::summary::ModeSummary| {
-        if with_accuracy {
-            100.0 * m.bound_violating_fraction.unwrap_or(0.0)
+    plot_png(file, (if with_popping { 1400 } else { 900 }, 560), |root| {
+        root.fill(&WHITE).map_err(err)?;
+        let bound = |m: &crate::summary::ModeSummary| {
+            if with_accuracy {
+                100.0 * m.bound_violating_fraction.unwrap_or(0.0)
+            } else {
+                m.pixel_error
+            }
+        };
+        let bound_desc = if with_accuracy {
+            "pixels breaking the pixel-error bound against the full-detail reference (%)"
         } else {
-            m.pixel_error
+            "pixel error tolerance (px)"
+        };
+        if with_popping {
+            let (left, right) = root.split_horizontally(760);
+            tradeoff_panel(s, &left, "Speed against image error", &bound, bound_desc)?;
+            let popping = |m: &crate::summary::ModeSummary| 100.0 * m.popping.unwrap_or(0.0);
+            tradeoff_panel(
+                s,
+                &right,
+                "Speed against popping",
+                &popping,
+                "pixels popping a frame (%)",
+            )?;
+        } else {
+            tradeoff_panel(s, &root, "Speed against image error", &bound, bound_desc)?;
         }
-    };
-    let bound_desc = if with_accuracy {
-        "pixels breaking the pixel-error bound against the full-detail reference (%)"
-    } else {
-        "pixel error tolerance (px)"
-    };
-    if with_popping {
-        let (left, right) = root.split_horizontally(760);
-        tradeoff_panel(s, &left, "Speed against image error", &bound, bound_desc)?;
-        let popping = |m: &crate::summary::ModeSummary| 100.0 * m.popping.unwrap_or(0.0);
-        tradeoff_panel(
-            s,
-            &right,
-            "Speed against popping",
-            &popping,
-            "pixels popping a frame (%)",
-        )?;
-    } else {
-        tradeoff_panel(s, &root, "Speed against image error", &bound, bound_desc)?;
-    }
-    root.present().map_err(err)
+        Ok(())
+    })
 }
 
 /// One panel of tradeoff.png: mean fps against `x_of`, a line per mode
@@ -384,6 +421,29 @@ mod tests {
     #[test]
     fn vendored_font_parses() {
         assert!(register_font("gigawalk-test", FontStyle::Normal, FONT).is_ok());
+    }
+
+    #[test]
+    fn plots_are_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("p.png");
+        let rgb: Vec<u8> = (0..2 * 3 * 3).map(|i| i as u8 * 10).collect();
+        write_png(&file, (2, 3), &rgb).unwrap();
+        let decoder = png::Decoder::new(std::fs::File::open(&file).unwrap());
+        let mut reader = decoder.read_info().unwrap();
+        let mut out = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut out).unwrap();
+        assert_eq!((info.width, info.height), (2, 3));
+        assert_eq!(&out[..info.buffer_size()], &rgb[..]);
+        // Nowhere to write: an error, and nothing left in the directory
+        // (no partial image, no temporary file).
+        let missing = dir.path().join("gone").join("p.png");
+        assert!(write_png(&missing, (2, 3), &rgb).is_err());
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("p.png")]);
     }
 
     #[test]

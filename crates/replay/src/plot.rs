@@ -131,7 +131,7 @@ pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
         });
         let (lo, hi) = decades(lo, hi);
         let frames = replay.frames.max(2) as f64;
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
                     "Frame rate along the path ({}x{})",
@@ -312,7 +312,7 @@ pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
                 "pixels popping a frame (%)",
             )?;
         } else {
-            tradeoff_panel(s, &root, "Speed against image error", &bound, bound_desc)?;
+            tradeoff_panel(s, root, "Speed against image error", &bound, bound_desc)?;
         }
         Ok(())
     })

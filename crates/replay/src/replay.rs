@@ -354,20 +354,16 @@ pub fn replay_on(
     // reference is rendered, not with a partial report after it.
     let occluding = opts.modes.iter().any(|m| m.traversal(0.0).occlusion);
     // A stored but corrupt OCCL or OCVC is an error naming it, not "none".
-    if occluding
-        && opts.cullers.contains(&CullMethod::Ct)
-        && !rt
-            .has_occluders()
-            .map_err(|e| ReplayError::Start(Box::new(e)))?
-    {
-        return Err(ReplayError::Options(
-            "the ct culler needs the scene's occluders, and this scene file stores none (written before they were stored): preprocess it again".into(),
-        ));
-    }
-    if occluding && opts.cullers.contains(&CullMethod::Oq) && rt.is_streaming() {
-        return Err(ReplayError::Options(
-            "the oq culler draws on RVG's device, which must hold the whole scene: drop --memory-budget or the oq culler".into(),
-        ));
+    if occluding {
+        for &c in &opts.cullers {
+            match rt.check_culler(c) {
+                Ok(()) => {}
+                Err(e @ gigawalk_runtime::RuntimeError::CullerUnavailable { .. }) => {
+                    return Err(ReplayError::Options(e.to_string()))
+                }
+                Err(e) => return Err(ReplayError::Start(Box::new(e))),
+            }
+        }
     }
     let n = opts.frames.unwrap_or(poses.len()).min(poses.len());
     if n == 0 {

@@ -15,10 +15,10 @@
 //! error closes its queues, every other stage sees that and stops, and the
 //! run returns the first error.
 
+mod cullers;
 mod occluders;
 mod options;
 mod pipeline;
-mod queries;
 mod stages;
 mod streaming;
 pub mod target;
@@ -41,7 +41,7 @@ pub use options::{
     CPU_OCCLUDER_BUDGET,
 };
 
-pub use queries::OqStats;
+pub use cullers::{Host, OqStats, Unavailable};
 pub use stages::TileFrame;
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
@@ -49,6 +49,20 @@ use gigawalk_gpu::HostGeometry;
 use gigawalk_scene::{ReadAt, SceneReader, Skeleton};
 use stages::Target;
 use streaming::{DeviceStream, Geometry, Plan};
+
+/// Milliseconds since `t`.
+pub(crate) fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The GPU's view of a cull view: camera-relative matrices, eye in f64.
+pub(crate) fn gpu_view(v: &gigawalk_cull::CullView) -> gigawalk_gpu::View {
+    gigawalk_gpu::View {
+        eye: v.camera.position,
+        view_proj: v.camera.view_projection_rel(),
+        forward: v.camera.forward().as_vec3(),
+    }
+}
 
 /// Why the runtime could not start, or why a run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -89,7 +103,10 @@ pub enum RuntimeError {
     Camera(#[from] CameraError),
     /// The loader could not read a LOD the walk needed (streaming).
     #[error("the {culler} culler cannot run here: {why}")]
-    CullerUnavailable { culler: CullMethod, why: String },
+    CullerUnavailable {
+        culler: CullMethod,
+        why: Unavailable,
+    },
     #[error("loader: {source}")]
     Load {
         source: Box<gigawalk_scene::ReadError>,
@@ -432,6 +449,21 @@ impl<'s> Runtime<'s> {
             None => Self::resident_reporting(scene, devices, progress),
             Some(bytes) => Self::streaming_reporting(scene, devices, bytes, progress),
         }
+    }
+
+    /// Whether `culler` can run on this runtime and scene: an error
+    /// ([`RuntimeError::CullerUnavailable`]) saying why not. The scene's
+    /// occluders are read (and checked) only for the culler that uses
+    /// them; a stored but corrupt section is a load error naming it.
+    pub fn check_culler(&self, culler: CullMethod) -> Result<(), RuntimeError> {
+        let host = Host {
+            device: true,
+            resident: !self.is_streaming(),
+            occluders: culler != CullMethod::Ct || self.has_occluders()?,
+        };
+        culler
+            .check(&host)
+            .map_err(|why| RuntimeError::CullerUnavailable { culler, why })
     }
 
     /// Whether the scene stores occluders for the `ct` culler: reads its

@@ -3,6 +3,8 @@
 use gigawalk_cull::tiles::{TileGrid, TileMethod};
 use gigawalk_cull::{Reduction, TraversalOptions};
 
+pub use crate::cullers::{CtOptions, CullMethod, GridOptions, OqOptions};
+
 /// How the three stages run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Schedule {
@@ -195,149 +197,6 @@ impl std::str::FromStr for Prefetching {
     }
 }
 
-/// Which occlusion culler STC asks (docs/culling.md has each one's needs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum CullMethod {
-    /// GigaWalk's hierarchical Z-buffer over OR's depth of the visible
-    /// set of frame i - lag.
-    #[default]
-    Hzb,
-    /// Hey et al.'s lazy occlusion grid over a software depth image STC
-    /// draws of the frame it traverses (no OR, no lag).
-    Grid,
-    /// Bartz et al.'s hardware occlusion queries: node boxes drawn against
-    /// the depth of what the frame drew so far, on RVG's device.
-    Oq,
-    /// Coorg and Teller's object-space culling by the scene's large convex
-    /// occluders (no rendering at all).
-    Ct,
-}
-
-impl CullMethod {
-    pub const ALL: [CullMethod; 4] = [
-        CullMethod::Hzb,
-        CullMethod::Grid,
-        CullMethod::Oq,
-        CullMethod::Ct,
-    ];
-
-    /// Whether the culler reads OR's occluder depth (OR renders nothing
-    /// for the others).
-    pub fn needs_occluder_depth(self) -> bool {
-        self == CullMethod::Hzb
-    }
-}
-
-impl std::fmt::Display for CullMethod {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            CullMethod::Hzb => "hzb",
-            CullMethod::Grid => "grid",
-            CullMethod::Oq => "oq",
-            CullMethod::Ct => "ct",
-        })
-    }
-}
-
-impl std::str::FromStr for CullMethod {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        CullMethod::ALL
-            .into_iter()
-            .find(|c| c.to_string() == s)
-            .ok_or_else(|| format!("culler {s:?} is not hzb, grid, oq or ct"))
-    }
-}
-
-/// The lazy occlusion grid's knobs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct GridOptions {
-    /// Cell size in pixels (the paper: 32).
-    pub cell: u32,
-    /// Refresh cells only when a test needs them (false: as they are
-    /// drawn over, for comparison).
-    pub lazy: bool,
-    /// Triangles STC rasterizes a frame at most, nearest items first
-    /// (u64::MAX: all). What is not rasterized occludes nothing.
-    pub triangle_budget: u64,
-    /// Bytes of triangles STC keeps on the host for rasterizing, least
-    /// recently drawn evicted first.
-    pub cache_bytes: u64,
-}
-
-impl Default for GridOptions {
-    fn default() -> Self {
-        GridOptions {
-            cell: gigawalk_cull::DEFAULT_GRID_CELL,
-            lazy: true,
-            triangle_budget: u64::MAX,
-            cache_bytes: 512 << 20,
-        }
-    }
-}
-
-/// The occlusion-query culler's knobs (Bartz et al.; docs/culling.md).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OqOptions {
-    /// Boxes queried per round trip: the popped node and the nearest
-    /// queued ones (1 = the paper: a round trip per test).
-    pub batch: u32,
-    /// Coherent (after CHC): nodes visible last frame are drawn without
-    /// waiting and queried for the next frame.
-    pub coherent: bool,
-    /// Adaptive culling (the paper's Eq. 1): a box passing fewer samples
-    /// than this is culled (approximate; 0 = off). Needs a device whose
-    /// queries count samples.
-    pub adaptive: u64,
-    /// Cost-adaptive culling (Eq. 2): after this fraction of the previous
-    /// frame's time (measured from one traversal's start to the next),
-    /// nodes get frustum culling only. `None`: no budget; `Some(0)`:
-    /// frustum culling only; the paper: 1/3.
-    pub budget: Option<f64>,
-    /// Test leaves too (the paper draws leaves without a query).
-    pub test_leaves: bool,
-}
-
-impl Default for OqOptions {
-    fn default() -> Self {
-        OqOptions {
-            batch: 32,
-            coherent: false,
-            adaptive: 0,
-            budget: None,
-            test_leaves: true,
-        }
-    }
-}
-
-/// The object-space culler's knobs (Coorg and Teller; docs/culling.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CtOptions {
-    /// Occluders a frame uses, the best by the area-angle metric (the
-    /// paper's k; 1..=64).
-    pub occluders: usize,
-    /// (node, occluder) tangent-plane pairs cached across frames (0: no
-    /// cache).
-    pub cache_pairs: usize,
-    /// Candidates from the scene's view cells when it has them (Section
-    /// 3.1); `false`: every occluder is scored each frame.
-    pub cells: bool,
-    /// Occluders reaching nearer than the near plane are clipped to it
-    /// (`false`: left out, which culls less and costs less).
-    pub clip: bool,
-}
-
-impl Default for CtOptions {
-    fn default() -> Self {
-        CtOptions {
-            occluders: 32,
-            cache_pairs: 1 << 20,
-            cells: true,
-            clip: true,
-        }
-    }
-}
-
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {
     pub schedule: Schedule,
@@ -522,22 +381,9 @@ impl RuntimeOptions {
                 });
             }
         }
-        if !(1..=1024).contains(&self.grid.cell) {
-            return Err(OptionsError::GridCell(self.grid.cell));
-        }
-        if !(1..=gigawalk_cull::MAX_FRAME_OCCLUDERS).contains(&self.ct.occluders) {
-            return Err(OptionsError::CtOccluders(self.ct.occluders));
-        }
-        if !(1..=4096).contains(&self.oq.batch) {
-            return Err(OptionsError::OqBatch(self.oq.batch));
-        }
-        if let Some(b) = self
-            .oq
-            .budget
-            .filter(|b| !(b.is_finite() && (0.0..=10.0).contains(b)))
-        {
-            return Err(OptionsError::OqBudget(b));
-        }
+        self.grid.validate()?;
+        self.oq.validate()?;
+        self.ct.validate()?;
         Ok(())
     }
 
@@ -825,26 +671,5 @@ mod prefetch_tests {
             let e = bad.parse::<Prefetching>().unwrap_err();
             assert!(e.contains("off, band, ring or both"), "{bad:?}: {e}");
         }
-    }
-}
-
-#[cfg(test)]
-mod culler_tests {
-    use super::*;
-
-    #[test]
-    fn cullers_parse_print_and_say_whether_or_renders() {
-        for c in CullMethod::ALL {
-            assert_eq!(c.to_string().parse::<CullMethod>(), Ok(c));
-        }
-        let e = "zbuf".parse::<CullMethod>().unwrap_err();
-        assert!(e.contains("hzb, grid, oq or ct"), "{e}");
-        let mut o = RuntimeOptions::default();
-        assert!(o.wants_occluder_depth());
-        o.culler = CullMethod::Grid;
-        assert!(!o.wants_occluder_depth());
-        o.culler = CullMethod::Hzb;
-        o.traversal.occlusion = false;
-        assert!(!o.wants_occluder_depth());
     }
 }

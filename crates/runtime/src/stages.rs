@@ -6,20 +6,18 @@ use std::time::Instant;
 
 use gigawalk_cull::tiles::{self, TileFrustums, TileGrid, TileMethod};
 use gigawalk_cull::{
-    reselect_lods, select_occluders, BoxTest, Camera, Containment, ConvexOccluder, CtCuller,
-    CtStats, CullReason, CullView, DrawItem, Frustum, GridCuller, GridStats, Hzb, HzbOcclusion,
-    NoOcclusion, OcclusionGrid, OcclusionTest, PlaneCache, RelBox, SoftDepth, TraversalOptions,
+    reselect_lods, select_occluders, BoxTest, Camera, Containment, CtStats, CullReason, CullView,
+    DrawItem, Frustum, GridStats, NoOcclusion, OcclusionTest, RelBox, SoftDepth, TraversalOptions,
     TraversalStats, Traverser, TriangleSource, ALL_PLANES,
 };
-use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, View, VisiblePass};
-use gigawalk_scene::occluder_cells::OccluderCells;
+use gigawalk_gpu::{DepthImage, DepthPass, DrawStyle, FrameImage, GpuContext, VisiblePass};
 use gigawalk_scene::Skeleton;
 
+use crate::cullers::OqStats;
 use crate::occluders::AdaptiveBudget;
-use crate::queries::{OqCuller, OqState, OqStats};
 use crate::streaming::{Geometry, Link, LodSource, Plan, Request, StreamStats, Use, PREFETCH_BAND};
 use crate::triangles::TriangleCache;
-use crate::{CullMethod, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::{gpu_view, ms_since, Presenter, Runtime, RuntimeError, RuntimeOptions, Stage};
 
 /// A stage's device, its geometry there, and (streaming) its end of the
 /// run's loader queues.
@@ -67,23 +65,6 @@ impl<'a> DeviceGeometry<'a> {
 
     pub fn take_stats(&self) -> StreamStats {
         self.geometry.take_stats()
-    }
-}
-
-fn setup_error(source: gigawalk_gpu::GpuError) -> RuntimeError {
-    RuntimeError::Setup { source }
-}
-
-pub(crate) fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
-}
-
-/// The GPU's view of a cull view: camera-relative matrices, eye in f64.
-pub(crate) fn gpu_view(v: &CullView) -> View {
-    View {
-        eye: v.camera.position,
-        view_proj: v.camera.view_projection_rel(),
-        forward: v.camera.forward().as_vec3(),
     }
 }
 
@@ -198,61 +179,14 @@ impl<'a> Target<'a> {
         rvg_device: usize,
         prefetch: Option<Prefetch<'a>>,
     ) -> Result<StcStage<'a>, RuntimeError> {
-        let mut stc = StcStage::new(self.skeleton, self.source, opts, prefetch);
-        if let Some(rt) = self.gpu {
-            // The HZB reads OR's depth (device 0), the grid's software
-            // depth stands in for RVG's: both leave room for the backend's
-            // depth error (GL's).
-            stc.or_depth_error = rt.devices[0].depth_error();
-            stc.grid
-                .set_absolute_slack(f64::from(rt.devices[rvg_device].depth_error()));
-        }
-        if opts.culler == CullMethod::Oq && opts.traversal.occlusion {
-            let unavailable = |why: &str| RuntimeError::CullerUnavailable {
-                culler: CullMethod::Oq,
-                why: why.to_string(),
+        let mut stc = StcStage::new(self.skeleton, opts, prefetch);
+        if opts.traversal.occlusion {
+            let setup = crate::cullers::Setup {
+                source: self.source,
+                gpu: self.gpu,
+                rvg_device,
             };
-            let Some(rt) = self.gpu else {
-                return Err(unavailable("it needs a device (none on the CPU)"));
-            };
-            let b = rvg_device;
-            let Geometry::Resident(geometry) = &rt.geometry[b] else {
-                return Err(unavailable(
-                    "it draws on RVG's device, which must hold the whole scene (no --memory-budget)",
-                ));
-            };
-            let ctx = &rt.devices[b];
-            if opts.oq.adaptive > 0
-                && gigawalk_gpu::query_counts(ctx).map_err(setup_error)?
-                    != gigawalk_gpu::QueryCounts::Exact
-            {
-                return Err(unavailable(
-                    "adaptive culling needs sample counts, and this device's occlusion queries only say zero or not",
-                ));
-            }
-            stc.oq = Some(OqState::new(ctx, geometry, opts.width, opts.height));
-        }
-        if opts.culler == CullMethod::Ct && opts.traversal.occlusion {
-            let records = self
-                .source
-                .occluders()
-                .map_err(|source| RuntimeError::Load {
-                    source: Box::new(source),
-                })?
-                .ok_or_else(|| RuntimeError::CullerUnavailable {
-                    culler: CullMethod::Ct,
-                    why: "the scene file has no occluders (written before they were stored): preprocess it again".into(),
-                })?;
-            let cells = if opts.ct.cells {
-                self.source
-                    .occluder_cells(records.len())
-                    .map_err(|source| RuntimeError::Load {
-                        source: Box::new(source),
-                    })?
-            } else {
-                None
-            };
-            stc.ct = Some(CtState::new(&records, cells, opts.ct.cache_pairs));
+            stc.culler = Some(crate::cullers::State::new(&setup, opts)?);
         }
         Ok(stc)
     }
@@ -494,47 +428,6 @@ fn item_triangles(skeleton: &Skeleton, items: &[DrawItem]) -> u64 {
         .sum()
 }
 
-/// The object-space culler's occluders and cache, kept across frames.
-pub(crate) struct CtState {
-    occluders: Vec<ConvexOccluder>,
-    areas: Vec<f64>,
-    /// Lists indexing `occluders` (not the records).
-    cells: Option<OccluderCells>,
-    cache: PlaneCache,
-}
-
-impl CtState {
-    /// Occluders that are not convex planar polygons are left out (and
-    /// from the cells' lists).
-    fn new(
-        records: &[gigawalk_scene::occluders::OccluderRecord],
-        cells: Option<OccluderCells>,
-        cache_pairs: usize,
-    ) -> Self {
-        let mut index = vec![None; records.len()];
-        let (mut occluders, mut areas) = (Vec::new(), Vec::new());
-        for (i, r) in records.iter().enumerate() {
-            if let Some(o) = ConvexOccluder::new(&r.vertices) {
-                index[i] = Some(occluders.len() as u32);
-                occluders.push(o);
-                areas.push(r.area);
-            }
-        }
-        let cells = cells.map(|mut c| {
-            for l in &mut c.lists {
-                *l = l.iter().filter_map(|&i| index[i as usize]).collect();
-            }
-            c
-        });
-        CtState {
-            occluders,
-            areas,
-            cells,
-            cache: PlaneCache::new(cache_pairs),
-        }
-    }
-}
-
 /// STC's end of the loader's request queue (streaming with prefetch).
 pub(crate) struct Prefetch<'a> {
     pub requests: crossbeam_channel::Sender<Request>,
@@ -654,19 +547,8 @@ pub(crate) struct StcStage<'a> {
     pub skeleton: &'a Skeleton,
     pub opts: &'a RuntimeOptions,
     traverser: Traverser,
-    hzb: Hzb,
-    /// OR's device's absolute depth error ([`GpuContext::depth_error`]):
-    /// its depth is lowered by this much before the HZB is built from it,
-    /// so the HZB is never nearer than the exact occluders.
-    or_depth_error: f32,
-    /// OR's depth so lowered (kept between frames).
-    lowered: Vec<f32>,
-    grid: OcclusionGrid,
-    triangles: TriangleCache<'a>,
-    /// The occlusion-query culler's device state.
-    oq: Option<OqState<'a>>,
-    /// The object-space culler's occluders and tangent-plane cache.
-    ct: Option<CtState>,
+    /// The occlusion culler's state (with occlusion on).
+    culler: Option<crate::cullers::State<'a>>,
     prefetch: Option<Prefetch<'a>>,
 }
 
@@ -765,10 +647,9 @@ impl TileFrame {
 }
 
 impl<'a> StcStage<'a> {
-    /// `source` gives the grid culler its triangles.
-    pub fn new(
+    /// Without a culler; [`Target::stc_stage`] sets it up.
+    fn new(
         skeleton: &'a Skeleton,
-        source: &'a dyn LodSource,
         opts: &'a RuntimeOptions,
         prefetch: Option<Prefetch<'a>>,
     ) -> Self {
@@ -776,13 +657,7 @@ impl<'a> StcStage<'a> {
             skeleton,
             opts,
             traverser: Traverser::new(),
-            hzb: Hzb::new(),
-            or_depth_error: 0.0,
-            lowered: Vec::new(),
-            grid: OcclusionGrid::new(opts.grid.cell, opts.grid.lazy),
-            triangles: TriangleCache::new(source, opts.grid.cache_bytes),
-            oq: None,
-            ct: None,
+            culler: None,
             prefetch,
         }
     }
@@ -805,31 +680,11 @@ impl<'a> StcStage<'a> {
             ));
         }
         check_injected(self.opts, Stage::Stc, frame)?;
-        let mut hzb_ms = 0.0;
-        // The culler, when occlusion is on; the HZB needs OR's depth (none
-        // in the startup bypass), the others cull from frame 0.
-        let culler = self.opts.traversal.occlusion.then_some(self.opts.culler);
-        let occlusion = match (culler, depth) {
-            (None, _) | (Some(CullMethod::Hzb), None) => false,
-            (Some(CullMethod::Hzb), Some(d)) => {
-                let th = Instant::now();
-                let _s = tracing::info_span!("HZB build", frame).entered();
-                let depth = if self.or_depth_error > 0.0 {
-                    let e = self.or_depth_error;
-                    self.lowered.clear();
-                    self.lowered
-                        .extend(d.depth.iter().map(|&z| (z - e).max(0.0)));
-                    &self.lowered
-                } else {
-                    &d.depth
-                };
-                self.hzb
-                    .rebuild(d.width, d.height, depth, self.opts.hzb_reduction)
-                    .map_err(|source| RuntimeError::Hzb { frame, source })?;
-                hzb_ms = ms_since(th);
-                true
-            }
-            (Some(_), _) => true,
+        // The culler, when occlusion is on, and whether it culls this
+        // frame (the HZB needs OR's depth: none in the startup bypass).
+        let (occlusion, hzb_ms) = match self.culler.as_mut() {
+            Some(c) => c.prepare(frame, depth, self.opts)?,
+            None => (false, 0.0),
         };
         let options = TraversalOptions {
             occlusion,
@@ -857,63 +712,29 @@ impl<'a> StcStage<'a> {
                 culled.push((node, why));
             }
         };
-        let (mut grid_stats, mut oq_stats, mut ct_stats) = (None, None, None);
-        macro_rules! traverse {
-            ($culler:expr) => {
+        let (stats, work) = match self.culler.as_mut().filter(|_| occlusion) {
+            Some(c) => c.cull(
+                &mut crate::cullers::Traversal {
+                    traverser: &mut self.traverser,
+                    skeleton,
+                    view,
+                    options: &options,
+                    sink: &mut sink,
+                    on_cull: &mut on_cull,
+                },
+                self.opts,
+            )?,
+            None => (
                 self.traverser.traverse_culled(
                     skeleton,
                     view,
-                    $culler,
+                    &mut BoxTest(&NoOcclusion),
                     &options,
                     &mut sink,
                     &mut on_cull,
-                )
-            };
-        }
-        let stats = match culler.filter(|_| occlusion) {
-            Some(CullMethod::Ct) => {
-                let state = self.ct.as_mut().ok_or(RuntimeError::CullerUnavailable {
-                    culler: CullMethod::Ct,
-                    why: "its occluders were not loaded".into(),
-                })?;
-                let mut c = CtCuller::new(
-                    skeleton,
-                    &state.occluders,
-                    &state.areas,
-                    state.cells.as_ref(),
-                    self.opts.ct.occluders,
-                    &mut state.cache,
-                );
-                if !self.opts.ct.clip {
-                    c = c.without_clipping();
-                }
-                let stats = traverse!(&mut c);
-                ct_stats = Some(c.stats);
-                stats
-            }
-            Some(CullMethod::Oq) => {
-                let state = self.oq.as_mut().ok_or(RuntimeError::CullerUnavailable {
-                    culler: CullMethod::Oq,
-                    why: "its device state was not set up".into(),
-                })?;
-                let mut c = OqCuller::new(state, skeleton, self.opts.oq);
-                let stats = traverse!(&mut c);
-                let (s, error) = c.end();
-                if let Some(e) = error {
-                    return Err(e);
-                }
-                oq_stats = Some(s);
-                stats
-            }
-            Some(CullMethod::Grid) => {
-                let budget = self.opts.grid.triangle_budget;
-                let mut c = GridCuller::new(&mut self.grid, skeleton, &mut self.triangles, budget);
-                let stats = traverse!(&mut c);
-                grid_stats = Some(c.grid.stats);
-                stats
-            }
-            Some(CullMethod::Hzb) => traverse!(&mut BoxTest(&HzbOcclusion::new(&self.hzb))),
-            None => traverse!(&mut BoxTest(&NoOcclusion)),
+                ),
+                crate::cullers::Work::default(),
+            ),
         };
         if let Some(p) = self.prefetch.as_ref().filter(|_| self.opts.prefetch.ring()) {
             p.margin(&mut self.traverser, skeleton, view, &options, frame);
@@ -936,9 +757,9 @@ impl<'a> StcStage<'a> {
             visible: visible.into(),
             occlusion_used: occlusion,
             hzb_ms,
-            grid: grid_stats,
-            oq: oq_stats,
-            ct: ct_stats,
+            grid: work.grid,
+            oq: work.oq,
+            ct: work.ct,
             ms: ms_since(t),
         })
     }
@@ -1117,16 +938,6 @@ mod tests {
         (skeleton, angles)
     }
 
-    struct NoLods;
-    impl LodSource for NoLods {
-        fn read_lod(&self, lod: u32) -> Result<gigawalk_scene::LodMesh, gigawalk_scene::ReadError> {
-            Err(gigawalk_scene::ReadError {
-                file: "none".into(),
-                kind: gigawalk_scene::ReadErrorKind::NoSuchLod { lod, count: 0 },
-            })
-        }
-    }
-
     #[test]
     fn prefetch_asks_for_the_ring_just_outside_the_frustum_and_nothing_else() {
         let (skeleton, angles) = ring();
@@ -1141,7 +952,7 @@ mod tests {
             plan: &plan,
             mask: 1,
         };
-        let mut stc = StcStage::new(&skeleton, &NoLods, &opts, Some(prefetch));
+        let mut stc = StcStage::new(&skeleton, &opts, Some(prefetch));
         // Looking along +x, 60 degrees both ways (aspect 1): the wide
         // frustum reaches atan(1.25 tan 30) = 35.8 degrees.
         let camera = Camera::look_at(DVec3::ZERO, DVec3::X, 60f64.to_radians(), 1.0, 0.1);
@@ -1168,7 +979,7 @@ mod tests {
         assert!(drawn.iter().all(|&n| off(angles[n as usize - 1]) < 31.0));
         // The prefetch traversal does not disturb the frame's own result.
         let mut again = Vec::new();
-        let mut plain = StcStage::new(&skeleton, &NoLods, &opts, None);
+        let mut plain = StcStage::new(&skeleton, &opts, None);
         plain
             .run(0, &view, None, None, &mut |i| again.push(i.node))
             .unwrap();

@@ -114,13 +114,6 @@ pub enum ViewError {
 /// new size (each restart costs a thread start and 2 bypass frames; the
 /// blit scales the old size meanwhile).
 const RESIZE_SETTLE: Duration = Duration::from_millis(200);
-/// Shown when occlusion queries are asked for on a streamed scene.
-const OQ_STREAMED: &str =
-    "occlusion queries need the whole scene on the device (no --memory-budget): culler left as it was";
-/// Shown when the object-space culler is asked for on a scene without
-/// occluders.
-const NO_OCCLUDERS: &str =
-    "the scene file stores no occluders (preprocess it again for the ct culler): culler left as it was";
 /// Shown when wireframe is asked for on a device without line mode.
 const WIREFRAME_UNSUPPORTED: &str =
     "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
@@ -212,17 +205,22 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     }
     let runtime = Runtime::with_budget(&scene, devices, args.memory_budget, &mut load_lines())?;
     tracing::info!("viewing {} on {device_names}", args.scene.display());
-    if settings.culler == CullMethod::Oq && runtime.is_streaming() {
-        settings.culler = CullMethod::Hzb;
-        start_message = Some((OQ_STREAMED.to_string(), Instant::now()));
-        eprintln!("{OQ_STREAMED}");
+    // Why each culler cannot run here (a stored but corrupt OCCL or OCVC
+    // ends the viewer naming it).
+    let mut unavailable = Vec::new();
+    for c in CullMethod::ALL {
+        match runtime.check_culler(c) {
+            Ok(()) => {}
+            Err(e @ gigawalk_runtime::RuntimeError::CullerUnavailable { .. }) => {
+                unavailable.push((c, format!("{e}: culler left as it was")))
+            }
+            Err(e) => return Err(e.into()),
+        }
     }
-    // A stored but corrupt OCCL or OCVC ends the viewer naming it.
-    let occluders = runtime.has_occluders()?;
-    if settings.culler == CullMethod::Ct && !occluders {
+    if let Some((_, why)) = unavailable.iter().find(|u| u.0 == settings.culler) {
         settings.culler = CullMethod::Hzb;
-        start_message = Some((NO_OCCLUDERS.to_string(), Instant::now()));
-        eprintln!("{NO_OCCLUDERS}");
+        start_message = Some((why.clone(), Instant::now()));
+        eprintln!("{why}");
     }
 
     let scripted = args.frames.map(|n| Script {
@@ -262,8 +260,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         controller,
         settings,
         wireframe_supported,
-        streaming: runtime.is_streaming(),
-        occluders,
+        unavailable,
         recorder: PathRecorder::default(),
         record_start: Instant::now(),
         last_update: Instant::now(),
@@ -501,10 +498,9 @@ struct LoopState {
     settings: Settings,
     /// Every device has line mode (wireframe).
     wireframe_supported: bool,
-    /// Geometry streamed under a memory budget (no occlusion queries).
-    streaming: bool,
-    /// The scene stores occluders (the ct culler).
-    occluders: bool,
+    /// The cullers that cannot run here, and what to show when one is
+    /// asked for.
+    unavailable: Vec<(CullMethod, String)>,
     recorder: PathRecorder,
     record_start: Instant,
     last_update: Instant,
@@ -557,14 +553,14 @@ impl LoopState {
                 Action::ToggleWalk => self.controller.toggle_walk(),
                 Action::ToggleOcclusion => self.settings.occlusion ^= true,
                 Action::CycleCuller => {
-                    self.settings.cycle_culler();
-                    if self.settings.culler == CullMethod::Oq && self.streaming {
+                    // The next culler that can run here (hzb always can).
+                    for _ in 0..CullMethod::ALL.len() {
                         self.settings.cycle_culler();
-                        self.message = Some((OQ_STREAMED.into(), now));
-                    }
-                    if self.settings.culler == CullMethod::Ct && !self.occluders {
-                        self.settings.cycle_culler();
-                        self.message = Some((NO_OCCLUDERS.into(), now));
+                        let culler = self.settings.culler;
+                        match self.unavailable.iter().find(|u| u.0 == culler) {
+                            Some((_, why)) => self.message = Some((why.clone(), now)),
+                            None => break,
+                        }
                     }
                 }
                 Action::ToggleHlod => self.settings.hlod ^= true,

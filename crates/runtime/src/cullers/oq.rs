@@ -17,8 +17,70 @@ use gigawalk_cull::{
 use gigawalk_gpu::{GpuContext, QueryBox, QueryPass, Residency};
 use gigawalk_scene::Skeleton;
 
-use crate::stages::gpu_view;
-use crate::{OqOptions, RuntimeError, Stage};
+use super::{Host, Setup, Traversal, Unavailable};
+use crate::gpu_view;
+use crate::streaming::Geometry;
+use crate::{OptionsError, RuntimeError, Stage};
+
+/// The occlusion-query culler's knobs (Bartz et al.; docs/culling.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OqOptions {
+    /// Boxes queried per round trip: the popped node and the nearest
+    /// queued ones (1 = the paper: a round trip per test).
+    pub batch: u32,
+    /// Coherent (after CHC): nodes visible last frame are drawn without
+    /// waiting and queried for the next frame.
+    pub coherent: bool,
+    /// Adaptive culling (the paper's Eq. 1): a box passing fewer samples
+    /// than this is culled (approximate; 0 = off). Needs a device whose
+    /// queries count samples.
+    pub adaptive: u64,
+    /// Cost-adaptive culling (Eq. 2): after this fraction of the previous
+    /// frame's time (measured from one traversal's start to the next),
+    /// nodes get frustum culling only. `None`: no budget; `Some(0)`:
+    /// frustum culling only; the paper: 1/3.
+    pub budget: Option<f64>,
+    /// Test leaves too (the paper draws leaves without a query).
+    pub test_leaves: bool,
+}
+
+impl Default for OqOptions {
+    fn default() -> Self {
+        OqOptions {
+            batch: 32,
+            coherent: false,
+            adaptive: 0,
+            budget: None,
+            test_leaves: true,
+        }
+    }
+}
+
+impl OqOptions {
+    pub fn validate(&self) -> Result<(), OptionsError> {
+        if !(1..=4096).contains(&self.batch) {
+            return Err(OptionsError::OqBatch(self.batch));
+        }
+        if let Some(b) = self
+            .budget
+            .filter(|b| !(b.is_finite() && (0.0..=10.0).contains(b)))
+        {
+            return Err(OptionsError::OqBudget(b));
+        }
+        Ok(())
+    }
+}
+
+/// The culler draws on RVG's device, which must hold the whole scene.
+pub(super) fn check(host: &Host) -> Result<(), Unavailable> {
+    if !host.device {
+        Err(Unavailable::NoDevice)
+    } else if !host.resident {
+        Err(Unavailable::NotResident)
+    } else {
+        Ok(())
+    }
+}
 
 /// What the occlusion queries did in a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -36,7 +98,7 @@ pub struct OqStats {
 
 /// What lives from frame to frame: the device's pass, last frame's
 /// visible nodes (coherent), the previous frame's time (budget).
-pub(crate) struct OqState<'a> {
+pub(crate) struct State<'a> {
     pub ctx: &'a GpuContext,
     pub residency: &'a dyn Residency,
     pass: QueryPass,
@@ -46,9 +108,9 @@ pub(crate) struct OqState<'a> {
     last_frame_ms: Option<f64>,
 }
 
-impl<'a> OqState<'a> {
-    pub fn new(ctx: &'a GpuContext, residency: &'a dyn Residency, w: u32, h: u32) -> Self {
-        OqState {
+impl<'a> State<'a> {
+    fn with_pass(ctx: &'a GpuContext, residency: &'a dyn Residency, w: u32, h: u32) -> Self {
+        State {
             ctx,
             residency,
             pass: QueryPass::new(ctx, w, h),
@@ -58,11 +120,48 @@ impl<'a> OqState<'a> {
             last_frame_ms: None,
         }
     }
+
+    /// The query pass on RVG's device; adaptive culling needs a device
+    /// whose queries count samples.
+    pub fn new(setup: &Setup<'a>, opts: &crate::RuntimeOptions) -> Result<Self, RuntimeError> {
+        let unavailable = |why| RuntimeError::CullerUnavailable {
+            culler: super::CullMethod::Oq,
+            why,
+        };
+        let rt = setup.gpu.ok_or(unavailable(Unavailable::NoDevice))?;
+        let b = setup.rvg_device;
+        let Geometry::Resident(geometry) = &rt.geometry[b] else {
+            return Err(unavailable(Unavailable::NotResident));
+        };
+        let ctx = &rt.devices[b];
+        if opts.oq.adaptive > 0
+            && gigawalk_gpu::query_counts(ctx).map_err(|source| RuntimeError::Setup { source })?
+                != gigawalk_gpu::QueryCounts::Exact
+        {
+            return Err(unavailable(Unavailable::NoSampleCounts));
+        }
+        Ok(Self::with_pass(ctx, geometry, opts.width, opts.height))
+    }
+
+    /// A frame's traversal with the queries; a device error ends it.
+    pub fn cull(
+        &mut self,
+        t: &mut Traversal<'_, 'a>,
+        opts: OqOptions,
+    ) -> Result<(gigawalk_cull::TraversalStats, OqStats), RuntimeError> {
+        let mut c = OqCuller::new(self, t.skeleton, opts);
+        let stats = t.run(&mut c);
+        let (s, error) = c.end();
+        match error {
+            Some(e) => Err(e),
+            None => Ok((stats, s)),
+        }
+    }
 }
 
 /// The culler for one frame.
 pub(crate) struct OqCuller<'s, 'a> {
-    state: &'s mut OqState<'a>,
+    state: &'s mut State<'a>,
     skeleton: &'a Skeleton,
     opts: OqOptions,
     /// Queued nodes in the frustum not yet queried: (distance, node, box).
@@ -96,7 +195,7 @@ fn query_box(b: &RelBox) -> QueryBox {
 }
 
 impl<'s, 'a> OqCuller<'s, 'a> {
-    pub fn new(state: &'s mut OqState<'a>, skeleton: &'a Skeleton, opts: OqOptions) -> Self {
+    pub fn new(state: &'s mut State<'a>, skeleton: &'a Skeleton, opts: OqOptions) -> Self {
         OqCuller {
             state,
             skeleton,

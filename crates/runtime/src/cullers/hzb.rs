@@ -1,0 +1,66 @@
+//! GigaWalk's hierarchical Z-buffer (Section 5.2): OR's depth of frame
+//! i - lag's visible set, reduced to a pyramid that node boxes are tested
+//! against. Needs OR's depth, so it culls nothing in the startup bypass.
+
+use std::time::Instant;
+
+use gigawalk_cull::{BoxTest, Hzb, HzbOcclusion, TraversalStats};
+use gigawalk_gpu::DepthImage;
+
+use super::{Setup, Traversal};
+use crate::ms_since;
+use crate::{RuntimeError, RuntimeOptions};
+
+/// The pyramid, rebuilt every frame from OR's depth.
+pub(crate) struct State {
+    hzb: Hzb,
+    /// OR's device's absolute depth error (`GpuContext::depth_error`):
+    /// its depth is lowered by this much before the HZB is built from it,
+    /// so the HZB is never nearer than the exact occluders (GL's depth
+    /// leaves room for it).
+    or_depth_error: f32,
+    /// OR's depth so lowered (kept between frames).
+    lowered: Vec<f32>,
+}
+
+impl State {
+    pub fn new(setup: &Setup<'_>) -> Self {
+        State {
+            hzb: Hzb::new(),
+            or_depth_error: setup.gpu.map_or(0.0, |rt| rt.devices[0].depth_error()),
+            lowered: Vec::new(),
+        }
+    }
+
+    /// Builds the HZB from OR's depth; without depth (the startup
+    /// bypass) the frame is not culled.
+    pub fn prepare(
+        &mut self,
+        frame: u64,
+        depth: Option<&DepthImage>,
+        opts: &RuntimeOptions,
+    ) -> Result<(bool, f64), RuntimeError> {
+        let Some(d) = depth else {
+            return Ok((false, 0.0));
+        };
+        let t = Instant::now();
+        let _s = tracing::info_span!("HZB build", frame).entered();
+        let depth = if self.or_depth_error > 0.0 {
+            let e = self.or_depth_error;
+            self.lowered.clear();
+            self.lowered
+                .extend(d.depth.iter().map(|&z| (z - e).max(0.0)));
+            &self.lowered
+        } else {
+            &d.depth
+        };
+        self.hzb
+            .rebuild(d.width, d.height, depth, opts.hzb_reduction)
+            .map_err(|source| RuntimeError::Hzb { frame, source })?;
+        Ok((true, ms_since(t)))
+    }
+
+    pub fn cull(&mut self, t: &mut Traversal<'_, '_>) -> TraversalStats {
+        t.run(&mut BoxTest(&HzbOcclusion::new(&self.hzb)))
+    }
+}

@@ -64,8 +64,10 @@ pub(crate) fn gpu_view(v: &gigawalk_cull::CullView) -> gigawalk_gpu::View {
     }
 }
 
-/// Why the runtime could not start, or why a run stopped early.
+/// Why the runtime could not start, or why a run stopped early (more
+/// kinds may come: `testing` builds add one).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RuntimeError {
     /// Opening the devices or loading the scene's geometry onto them,
     /// before any stage runs.

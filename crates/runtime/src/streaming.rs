@@ -484,6 +484,11 @@ impl DeviceStream {
     /// Takes `victim` (last drawn in frame `used` - 1) out of the pool;
     /// the bytes freed.
     fn evict(&mut self, plan: &Plan, used: u64, victim: u32) -> u64 {
+        // The pinned set is never evicted (it is never in the LRU).
+        assert!(
+            !plan.pinned.get(victim as usize).copied().unwrap_or(false),
+            "pinned LOD {victim} chosen for eviction"
+        );
         self.lru.remove(&(used, victim));
         let before = self.pool.used_bytes();
         self.pool.remove(victim);

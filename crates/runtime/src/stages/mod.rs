@@ -1,0 +1,248 @@
+//! The work of each stage for one frame, shared by the pipelined and the
+//! sequential schedule (so both run the same algorithms).
+
+mod cpu;
+mod or;
+mod rvg;
+mod stc;
+mod tile_frame;
+
+pub(crate) use cpu::CpuRaster;
+use or::OrRender;
+pub(crate) use or::{OrFigures, OrStage};
+use rvg::RvgRender;
+pub(crate) use rvg::RvgStage;
+pub(crate) use stc::{Prefetch, StcOutput, StcStage};
+pub use tile_frame::TileFrame;
+
+use std::sync::Mutex;
+
+use gigawalk_cull::DrawItem;
+use gigawalk_gpu::{DepthPass, GpuContext, VisiblePass};
+use gigawalk_scene::Skeleton;
+
+use crate::occluders::AdaptiveBudget;
+use crate::streaming::{Geometry, Link, LodSource, Plan, StreamStats, Use};
+use crate::{Runtime, RuntimeError, RuntimeOptions, Stage};
+/// A stage's device, its geometry there, and (streaming) its end of the
+/// run's loader queues.
+pub(crate) struct DeviceGeometry<'a> {
+    pub ctx: &'a GpuContext,
+    pub geometry: &'a Geometry,
+    pub skeleton: &'a Skeleton,
+    pub plan: Option<&'a Plan>,
+    pub link: Option<Link>,
+}
+
+impl<'a> DeviceGeometry<'a> {
+    pub fn new(rt: &'a Runtime, device: usize, link: Option<Link>) -> Self {
+        DeviceGeometry {
+            ctx: &rt.devices[device],
+            geometry: &rt.geometry[device],
+            skeleton: rt.skeleton,
+            plan: rt.plan.as_ref(),
+            link,
+        }
+    }
+
+    /// Runs `f` with what to draw for `lods` (see `Geometry::with`); an
+    /// error when the loader has stopped (its own error is the cause).
+    fn with<T>(
+        &self,
+        frame: u64,
+        lods: &[u32],
+        usage: Use,
+        f: impl FnOnce(&dyn gigawalk_gpu::Residency, &[u32]) -> T,
+    ) -> Result<T, RuntimeError> {
+        self.geometry
+            .with(
+                self.ctx,
+                self.skeleton,
+                self.plan,
+                self.link.as_ref(),
+                frame,
+                lods,
+                usage,
+                f,
+            )
+            .ok_or(RuntimeError::LoaderStopped)
+    }
+
+    pub fn take_stats(&self) -> StreamStats {
+        self.geometry.take_stats()
+    }
+}
+
+/// Absolute LOD ids (indices into `Skeleton::lods`) of draw items.
+pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
+    items
+        .iter()
+        .map(|i| skeleton.nodes[i.node as usize].first_lod + i.lod)
+        .collect()
+}
+
+/// The test hook `RuntimeOptions::inject_failure` (feature `testing`).
+#[cfg(feature = "testing")]
+pub(crate) fn check_injected(
+    opts: &RuntimeOptions,
+    stage: Stage,
+    frame: u64,
+) -> Result<(), RuntimeError> {
+    match opts.inject_failure {
+        // ">=": with asynchronous RVG, OR and STC may skip the exact frame.
+        Some((s, f)) if s == stage && frame >= f => Err(RuntimeError::Injected { stage, frame: f }),
+        _ => Ok(()),
+    }
+}
+
+/// Without the `testing` feature there is no hook: nothing to check.
+#[cfg(not(feature = "testing"))]
+pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(), RuntimeError> {
+    Ok(())
+}
+
+/// What the stages draw on: the runtime's wgpu devices, or (the
+/// `testing` feature's `run_on_cpu`) the CPU's software depth
+/// rasterizer, so the schedules can be tested without an adapter.
+#[derive(Clone, Copy)]
+pub(crate) struct Target<'a> {
+    pub skeleton: &'a Skeleton,
+    pub source: &'a dyn LodSource,
+    pub plan: Option<&'a Plan>,
+    pub(super) gpu: Option<&'a Runtime<'a>>,
+    /// How many occluders OR draws (set by the schedule).
+    pub occluders: OrBudget<'a>,
+}
+
+/// The occluder budget as OR applies it.
+#[derive(Clone, Copy)]
+pub(crate) enum OrBudget<'a> {
+    All,
+    Triangles(u64),
+    Adaptive(&'a Mutex<AdaptiveBudget>),
+}
+
+impl<'a> Target<'a> {
+    pub fn gpu(rt: &'a Runtime<'a>) -> Self {
+        Target {
+            skeleton: rt.skeleton,
+            source: rt.source,
+            plan: rt.plan.as_ref(),
+            gpu: Some(rt),
+            occluders: OrBudget::All,
+        }
+    }
+
+    /// Depth only, no colour, no streaming (see [`CpuRaster`]).
+    #[cfg_attr(not(feature = "testing"), allow(dead_code))]
+    pub fn cpu(skeleton: &'a Skeleton, source: &'a dyn LodSource) -> Self {
+        Target {
+            skeleton,
+            source,
+            plan: None,
+            gpu: None,
+            occluders: OrBudget::All,
+        }
+    }
+
+    /// The same target, OR drawing occluders by `occluders`.
+    pub fn with_occluders<'b>(self, occluders: OrBudget<'b>) -> Target<'b>
+    where
+        'a: 'b,
+    {
+        Target { occluders, ..self }
+    }
+
+    /// Whether OR's time comes out of RVG's: one device, a CPU rasterizer
+    /// (its cores are RVG's), or the sequential schedule.
+    pub fn or_shares_rvg(&self, opts: &RuntimeOptions) -> bool {
+        match self.gpu {
+            None => true,
+            Some(rt) => {
+                opts.schedule == crate::Schedule::Sequential
+                    || self.rvg_device(opts) == 0
+                    || rt.devices.iter().any(GpuContext::is_cpu)
+            }
+        }
+    }
+
+    /// The device RVG draws on: the second when there are two and the
+    /// options ask for two.
+    pub fn rvg_device(&self, opts: &RuntimeOptions) -> usize {
+        match self.gpu {
+            Some(rt) if opts.devices >= 2 && rt.devices.len() >= 2 => 1,
+            _ => 0,
+        }
+    }
+
+    /// STC, with the occlusion-query culler's device state when the
+    /// options ask for it (on RVG's device `rvg_device`, whose whole
+    /// geometry must be resident).
+    pub fn stc_stage(
+        &self,
+        opts: &'a RuntimeOptions,
+        rvg_device: usize,
+        prefetch: Option<Prefetch<'a>>,
+    ) -> Result<StcStage<'a>, RuntimeError> {
+        let mut stc = StcStage::new(self.skeleton, opts, prefetch);
+        if opts.traversal.occlusion {
+            let setup = crate::cullers::Setup {
+                source: self.source,
+                gpu: self.gpu,
+                rvg_device,
+            };
+            stc.culler = Some(crate::cullers::State::new(&setup, opts)?);
+        }
+        Ok(stc)
+    }
+
+    /// OR on device 0.
+    pub fn or_stage(&self, opts: &'a RuntimeOptions, link: Option<Link>) -> OrStage<'a> {
+        let (w, h) = opts.occluder_size();
+        let render = match self.gpu {
+            Some(rt) => {
+                let device = DeviceGeometry::new(rt, 0, link);
+                OrRender::Gpu {
+                    pass: Box::new(DepthPass::new(device.ctx, w, h)),
+                    device,
+                }
+            }
+            None => OrRender::Cpu(Box::new(CpuRaster::new(self.source, w, h))),
+        };
+        OrStage {
+            skeleton: self.skeleton,
+            opts,
+            budget: self.occluders,
+            render,
+        }
+    }
+
+    /// RVG on `device`.
+    pub fn rvg_stage(
+        &self,
+        opts: &'a RuntimeOptions,
+        device: usize,
+        link: Option<Link>,
+    ) -> RvgStage<'a> {
+        let render = match self.gpu {
+            Some(rt) => {
+                let device = DeviceGeometry::new(rt, device, link);
+                RvgRender::Gpu {
+                    pass: Box::new(VisiblePass::new(device.ctx, opts.width, opts.height)),
+                    device,
+                }
+            }
+            None => RvgRender::Cpu(Box::new(CpuRaster::new(
+                self.source,
+                opts.width,
+                opts.height,
+            ))),
+        };
+        RvgStage {
+            render,
+            opts,
+            started: None,
+            frame: 0,
+        }
+    }
+}

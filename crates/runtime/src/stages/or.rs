@@ -1,0 +1,151 @@
+//! OR: the depth of frame i - lag's visible set, its LODs re-chosen for
+//! this camera and cut to the occluder budget, drawn depth only (GigaWalk
+//! Section 5.1).
+
+use std::time::Instant;
+
+use gigawalk_cull::{reselect_lods, select_occluders, CullView, DrawItem, TraversalOptions};
+use gigawalk_gpu::{DepthImage, DepthPass};
+use gigawalk_scene::Skeleton;
+
+use super::*;
+use crate::streaming::Use;
+use crate::{gpu_view, ms_since, RuntimeError, RuntimeOptions, Stage};
+
+/// OR's drawing: a depth pass on a device, or the CPU.
+pub(super) enum OrRender<'a> {
+    Gpu {
+        device: DeviceGeometry<'a>,
+        pass: Box<DepthPass>,
+    },
+    Cpu(Box<CpuRaster<'a>>),
+}
+
+/// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
+/// camera i (Section 5.2), at the occluder resolution.
+pub(crate) struct OrStage<'a> {
+    pub(super) skeleton: &'a Skeleton,
+    pub(super) opts: &'a RuntimeOptions,
+    pub(super) budget: OrBudget<'a>,
+    pub(super) render: OrRender<'a>,
+}
+
+pub(crate) struct OrOutput {
+    pub depth: Option<DepthImage>,
+    pub figures: OrFigures,
+}
+
+/// What OR did for a frame, as the frame's report carries it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct OrFigures {
+    pub items: usize,
+    /// Occluder triangles drawn, and those before the budget.
+    pub triangles: u64,
+    pub candidates: u64,
+    /// The budget applied (`None`: all).
+    pub limit: Option<u64>,
+    pub ms: f64,
+}
+
+impl<'a> OrStage<'a> {
+    /// `occluders` is `None` during the startup bypass or with occlusion off.
+    /// `tolerance` overrides the options' pixel error for this frame.
+    pub fn run(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        tolerance: Option<f64>,
+        occluders: Option<&[DrawItem]>,
+    ) -> Result<OrOutput, RuntimeError> {
+        let _span = tracing::info_span!("OR", frame).entered();
+        let t = Instant::now();
+        check_injected(self.opts, Stage::Or, frame)?;
+        let none = |t: Instant, figures: OrFigures| OrOutput {
+            depth: None,
+            figures: OrFigures {
+                ms: ms_since(t),
+                ..figures
+            },
+        };
+        let Some(occluders) = occluders else {
+            return Ok(none(t, OrFigures::default()));
+        };
+        // The same LOD choice STC makes for this camera (conservative mode).
+        let mut items = Vec::with_capacity(occluders.len());
+        let traversal = TraversalOptions {
+            pixel_tolerance: tolerance.unwrap_or(self.opts.traversal.pixel_tolerance),
+            ..self.opts.traversal
+        };
+        reselect_lods(self.skeleton, view, &traversal, occluders, &mut |i| {
+            items.push(i)
+        });
+        let candidates = item_triangles(self.skeleton, &items);
+        let limit = match self.budget {
+            OrBudget::All => None,
+            OrBudget::Triangles(t) => Some(t),
+            OrBudget::Adaptive(c) => crate::occluders::lock(c).limit_for(frame),
+        };
+        // Streaming, all of them best first too: the pool keeps those that
+        // fit it first.
+        let streaming =
+            matches!(&self.render, OrRender::Gpu { device, .. } if device.plan.is_some());
+        let triangles = match limit {
+            Some(budget) => select_occluders(self.skeleton, view, &mut items, budget),
+            None if streaming => select_occluders(self.skeleton, view, &mut items, u64::MAX),
+            None => candidates,
+        };
+        let figures = OrFigures {
+            items: items.len(),
+            triangles,
+            candidates,
+            limit,
+            ms: 0.0,
+        };
+        if items.is_empty() {
+            // No occluder (a budget of 0, or nothing in view): an all-far
+            // HZB would cull nothing, so STC skips occlusion for this frame.
+            return Ok(none(t, figures));
+        }
+        let lods = lod_ids(self.skeleton, &items);
+        let depth = match &mut self.render {
+            OrRender::Gpu { device, pass } => {
+                let ctx = device.ctx;
+                // Streaming: resident occluders only (culling stays
+                // conservative).
+                device
+                    .with(frame, &lods, Use::Occluders, |residency, lods| {
+                        pass.render(ctx, residency, &gpu_view(view), lods)
+                    })?
+                    .map_err(|source| RuntimeError::Gpu {
+                        stage: Stage::Or,
+                        source,
+                    })?
+            }
+            OrRender::Cpu(c) => {
+                c.begin(view);
+                c.draw(&lods);
+                c.depth()
+            }
+        };
+        Ok(OrOutput {
+            depth: Some(depth),
+            figures: OrFigures {
+                ms: ms_since(t),
+                ..figures
+            },
+        })
+    }
+}
+
+/// Triangles of `items`' LODs (those the skeleton has).
+fn item_triangles(skeleton: &Skeleton, items: &[DrawItem]) -> u64 {
+    items
+        .iter()
+        .filter_map(|i| {
+            let n = skeleton.nodes.get(i.node as usize)?;
+            (i.lod < n.lod_count).then_some(())?;
+            skeleton.lods.get((n.first_lod + i.lod) as usize)
+        })
+        .map(|l| u64::from(l.triangles))
+        .sum()
+}

@@ -1,0 +1,393 @@
+//! STC: the culler's frame, then traversal (GigaWalk Algorithm 5.2),
+//! each drawn item sent to RVG as it is found; the loader's prefetch
+//! requests when streaming.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use gigawalk_cull::{
+    BoxTest, Camera, Containment, CtStats, CullReason, CullView, DrawItem, Frustum, GridStats,
+    NoOcclusion, OcclusionTest, RelBox, TraversalOptions, TraversalStats, Traverser, ALL_PLANES,
+};
+use gigawalk_gpu::DepthImage;
+use gigawalk_scene::Skeleton;
+
+use super::*;
+use crate::cullers::OqStats;
+use crate::streaming::{Plan, Request, PREFETCH_BAND};
+use crate::{ms_since, RuntimeError, RuntimeOptions, Stage};
+
+/// STC's end of the loader's request queue (streaming with prefetch).
+pub(crate) struct Prefetch<'a> {
+    pub requests: crossbeam_channel::Sender<Request>,
+    pub plan: &'a Plan,
+    /// The run's devices (bits of `Plan::held`).
+    pub mask: u8,
+}
+
+impl Prefetch<'_> {
+    /// Asks for what `item` switches to when the camera comes closer, if
+    /// its pixel error is within [`PREFETCH_BAND`] of the tolerance: the
+    /// node's next finer LOD, or for an inner node's finest HLOD its
+    /// children's coarsest LODs.
+    fn item(
+        &self,
+        skeleton: &Skeleton,
+        view: &CullView,
+        tolerance: f64,
+        frame: u64,
+        item: DrawItem,
+    ) {
+        let n = &skeleton.nodes[item.node as usize];
+        let Some(l) = skeleton.lods.get((n.first_lod + item.lod) as usize) else {
+            return;
+        };
+        let (min, max) = view.rel_f64(&n.bounds);
+        let pe = gigawalk_cull::lod::pixel_error(
+            l.error,
+            view.lod_distance(min, max),
+            view.pixels_per_radian,
+        );
+        if pe <= PREFETCH_BAND * tolerance {
+            return;
+        }
+        if item.lod > 0 {
+            self.ask(frame, n.first_lod + item.lod - 1);
+        } else {
+            for c in n.children() {
+                let c = &skeleton.nodes[c as usize];
+                if c.lod_count > 0 {
+                    self.ask(frame, c.first_lod + c.lod_count - 1);
+                }
+            }
+        }
+    }
+
+    /// Asks for `lod` unless every device of the run holds it; a full
+    /// queue drops the request (prefetching is best effort).
+    fn ask(&self, frame: u64, lod: u32) -> bool {
+        let ask = !self.plan.held_by(lod, self.mask);
+        if ask {
+            let _ = self.requests.try_send(Request {
+                lod,
+                frame: self.plan.frame(frame),
+                prefetch: true,
+            });
+        }
+        ask
+    }
+
+    /// Asks for what the view would draw in a ring around its frustum
+    /// ([`PREFETCH_MARGIN`] wider, at the view's own pixel scale), near
+    /// first: what a turn or a sideways step brings into view. Occlusion
+    /// is not tested (what a turn reveals is not known yet); subtrees
+    /// wholly inside the frustum are skipped (the frame itself asks for
+    /// what it draws there).
+    fn margin(
+        &self,
+        traverser: &mut Traverser,
+        skeleton: &Skeleton,
+        view: &CullView,
+        options: &TraversalOptions,
+        frame: u64,
+    ) {
+        let half = (view.camera.fovy * 0.5).tan() * (1.0 + PREFETCH_MARGIN);
+        let wide_camera = Camera {
+            fovy: 2.0 * half.atan(),
+            ..view.camera
+        };
+        let mut wide = CullView::new(wide_camera, view.viewport);
+        wide.pixels_per_radian = view.pixels_per_radian;
+        let mut asked = 0;
+        let mut sink = |item: DrawItem| {
+            let n = &skeleton.nodes[item.node as usize];
+            if asked < PREFETCH_MARGIN_LODS && self.ask(frame, n.first_lod + item.lod) {
+                asked += 1;
+            }
+        };
+        let ring = TraversalOptions {
+            occlusion: true,
+            ..*options
+        };
+        traverser.traverse(skeleton, &wide, &OutsideOf(&view.frustum), &ring, &mut sink);
+    }
+}
+
+/// How much wider (in the tangent of the half field of view, both ways)
+/// than the view the ring STC prefetches around the frustum is.
+pub const PREFETCH_MARGIN: f64 = 0.25;
+/// At most this many LODs of that ring are asked for a frame.
+const PREFETCH_MARGIN_LODS: usize = 256;
+
+/// "Visible" for a box not wholly inside `frustum`: a traversal with it
+/// as its occlusion test visits only the ring outside that frustum.
+struct OutsideOf<'a>(&'a Frustum);
+
+impl OcclusionTest for OutsideOf<'_> {
+    fn is_visible(&self, _: &CullView, b: &RelBox) -> bool {
+        let (min, max) = (b.min.as_dvec3(), b.max.as_dvec3());
+        self.0.test(min, max, ALL_PLANES).0 != Containment::Inside
+    }
+}
+
+/// STC: HZB from OR's depth, then traversal (Algorithm 5.2); or the lazy
+/// occlusion grid over what it draws itself.
+pub(crate) struct StcStage<'a> {
+    pub skeleton: &'a Skeleton,
+    pub opts: &'a RuntimeOptions,
+    pub(super) traverser: Traverser,
+    /// The occlusion culler's state (with occlusion on).
+    pub(super) culler: Option<crate::cullers::State<'a>>,
+    pub(super) prefetch: Option<Prefetch<'a>>,
+}
+
+/// One frame's culling result. Cheap to clone: the visible set is shared
+/// by RVG, OR's occluders of a later frame, a held frame and the report.
+#[derive(Clone)]
+pub(crate) struct StcOutput {
+    pub stats: TraversalStats,
+    pub visible: Arc<[DrawItem]>,
+    pub culled: Arc<[(u32, CullReason)]>,
+    pub occlusion_used: bool,
+    pub hzb_ms: f64,
+    /// The lazy occlusion grid's work (grid culler only).
+    pub grid: Option<GridStats>,
+    /// The occlusion queries' work (oq culler only).
+    pub oq: Option<OqStats>,
+    /// The object-space culler's work (ct culler only).
+    pub ct: Option<CtStats>,
+    /// The tiles' draw lists (a tiled display only).
+    pub tiles: Option<Arc<TileFrame>>,
+    /// The pixel-error tolerance traversal used.
+    pub tolerance: f64,
+    pub ms: f64,
+}
+
+impl<'a> StcStage<'a> {
+    /// Without a culler; [`Target::stc_stage`] sets it up.
+    pub(super) fn new(
+        skeleton: &'a Skeleton,
+        opts: &'a RuntimeOptions,
+        prefetch: Option<Prefetch<'a>>,
+    ) -> Self {
+        StcStage {
+            skeleton,
+            opts,
+            traverser: Traverser::new(),
+            culler: None,
+            prefetch,
+        }
+    }
+
+    /// Traverses, handing every item to `emit` as it is found; `tolerance`
+    /// overrides the options' pixel error for this frame.
+    pub fn run(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        tolerance: Option<f64>,
+        depth: Option<&DepthImage>,
+        emit: &mut dyn FnMut(DrawItem),
+    ) -> Result<StcOutput, RuntimeError> {
+        let _span = tracing::info_span!("STC", frame).entered();
+        let t = Instant::now();
+        if self.opts.stc_delay_ms > 0.0 {
+            std::thread::sleep(std::time::Duration::from_secs_f64(
+                self.opts.stc_delay_ms / 1e3,
+            ));
+        }
+        check_injected(self.opts, Stage::Stc, frame)?;
+        // The culler, when occlusion is on, and whether it culls this
+        // frame (the HZB needs OR's depth: none in the startup bypass).
+        let (occlusion, hzb_ms) = match self.culler.as_mut() {
+            Some(c) => c.prepare(frame, depth, self.opts)?,
+            None => (false, 0.0),
+        };
+        let options = TraversalOptions {
+            occlusion,
+            pixel_tolerance: tolerance.unwrap_or(self.opts.traversal.pixel_tolerance),
+            ..self.opts.traversal
+        };
+        let mut visible = Vec::new();
+        let tolerance = options.pixel_tolerance;
+        let band = self
+            .prefetch
+            .as_ref()
+            .filter(|_| self.opts.prefetch.band() && options.hlod && tolerance > 0.0);
+        let skeleton = self.skeleton;
+        let mut sink = |item: DrawItem| {
+            visible.push(item);
+            emit(item);
+            if let Some(p) = band {
+                p.item(skeleton, view, tolerance, frame, item);
+            }
+        };
+        let mut culled = Vec::new();
+        let record = self.opts.record_culled;
+        let mut on_cull = |node, why| {
+            if record {
+                culled.push((node, why));
+            }
+        };
+        let (stats, work) = match self.culler.as_mut().filter(|_| occlusion) {
+            Some(c) => c.cull(
+                &mut crate::cullers::Traversal {
+                    traverser: &mut self.traverser,
+                    skeleton,
+                    view,
+                    options: &options,
+                    sink: &mut sink,
+                    on_cull: &mut on_cull,
+                },
+                self.opts,
+            )?,
+            None => (
+                self.traverser.traverse_culled(
+                    skeleton,
+                    view,
+                    &mut BoxTest(&NoOcclusion),
+                    &options,
+                    &mut sink,
+                    &mut on_cull,
+                ),
+                crate::cullers::Work::default(),
+            ),
+        };
+        if let Some(p) = self.prefetch.as_ref().filter(|_| self.opts.prefetch.ring()) {
+            p.margin(&mut self.traverser, skeleton, view, &options, frame);
+        }
+        let tiles = self.opts.tiles.map(|grid| {
+            let _s = tracing::info_span!("tiles", frame).entered();
+            Arc::new(TileFrame::new(
+                skeleton,
+                view,
+                grid,
+                self.opts.tile_culling,
+                &visible,
+            ))
+        });
+        Ok(StcOutput {
+            tiles,
+            tolerance: options.pixel_tolerance,
+            stats,
+            culled: culled.into(),
+            visible: visible.into(),
+            occlusion_used: occlusion,
+            hzb_ms,
+            grid: work.grid,
+            oq: work.oq,
+            ct: work.ct,
+            ms: ms_since(t),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gigawalk_cull::Viewport;
+    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Skeleton, NO_NODE};
+    use glam::DVec3;
+
+    /// A root (no LODs) over one-LOD unit boxes every 2 degrees on a
+    /// horizontal circle of radius 40 around the origin.
+    fn ring() -> (Skeleton, Vec<f64>) {
+        let angles: Vec<f64> = (0..180).map(|i| (i * 2) as f64).collect();
+        let leaf = |a: f64| {
+            let c = DVec3::new(a.to_radians().cos(), 0.0, a.to_radians().sin()) * 40.0;
+            Aabb {
+                min: c - 0.5,
+                max: c + 0.5,
+            }
+        };
+        let mut nodes = vec![Node {
+            bounds: Aabb {
+                min: DVec3::splat(-41.0),
+                max: DVec3::splat(41.0),
+            },
+            parent: NO_NODE,
+            first_child: 1,
+            child_count: angles.len() as u32,
+            first_lod: 0,
+            lod_count: 0,
+        }];
+        let mut lods = Vec::new();
+        for (i, &a) in angles.iter().enumerate() {
+            nodes.push(Node {
+                bounds: leaf(a),
+                parent: 0,
+                first_child: 0,
+                child_count: 0,
+                first_lod: i as u32,
+                lod_count: 1,
+            });
+            lods.push(LodInfo {
+                error: 0.0,
+                triangles: 12,
+                vertices: 8,
+                origin: leaf(a).center(),
+                index_format: IndexFormat::U16,
+                uniform_colour: None,
+                offset: 0,
+                len: 0,
+                checksum: 0,
+            });
+        }
+        let skeleton = Skeleton {
+            origin: DVec3::ZERO,
+            bounds: nodes[0].bounds,
+            nodes,
+            lods,
+            provenance: Default::default(),
+        };
+        (skeleton, angles)
+    }
+
+    #[test]
+    fn prefetch_asks_for_the_ring_just_outside_the_frustum_and_nothing_else() {
+        let (skeleton, angles) = ring();
+        let plan = Plan::new(&skeleton, 1 << 30);
+        let opts = RuntimeOptions {
+            prefetch: crate::Prefetching::Ring,
+            ..Default::default()
+        };
+        let (tx, rx) = crossbeam_channel::unbounded();
+        let prefetch = Prefetch {
+            requests: tx,
+            plan: &plan,
+            mask: 1,
+        };
+        let mut stc = StcStage::new(&skeleton, &opts, Some(prefetch));
+        // Looking along +x, 60 degrees both ways (aspect 1): the wide
+        // frustum reaches atan(1.25 tan 30) = 35.8 degrees.
+        let camera = Camera::look_at(DVec3::ZERO, DVec3::X, 60f64.to_radians(), 1.0, 0.1);
+        let view = CullView::new(camera, Viewport::new(64, 64));
+        let mut drawn = Vec::new();
+        stc.run(0, &view, None, None, &mut |i| drawn.push(i.node))
+            .unwrap();
+        let asked: std::collections::BTreeSet<u32> = rx.try_iter().map(|r| r.lod).collect();
+        // A unit box at radius 40 spans +-0.72 degrees around its angle.
+        let off = |a: f64| a.min(360.0 - a);
+        for (lod, &a) in angles.iter().enumerate() {
+            let a = off(a);
+            let lod = lod as u32;
+            if (31.0..=35.0).contains(&a) {
+                assert!(asked.contains(&lod), "leaf at {a} degrees not prefetched");
+            }
+            if !(29.0..=37.0).contains(&a) {
+                assert!(!asked.contains(&lod), "leaf at {a} degrees prefetched");
+            }
+        }
+        assert!(!asked.is_empty());
+        // The frame itself drew what is inside, and nothing of the ring
+        // outside the frustum.
+        assert!(drawn.iter().all(|&n| off(angles[n as usize - 1]) < 31.0));
+        // The prefetch traversal does not disturb the frame's own result.
+        let mut again = Vec::new();
+        let mut plain = StcStage::new(&skeleton, &opts, None);
+        plain
+            .run(0, &view, None, None, &mut |i| again.push(i.node))
+            .unwrap();
+        assert_eq!(drawn, again);
+    }
+}

@@ -101,6 +101,15 @@ pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(),
     Ok(())
 }
 
+/// A stage's drawing: its pass `P` on a device, or the CPU.
+pub(super) enum Render<'a, P> {
+    Gpu {
+        device: DeviceGeometry<'a>,
+        pass: Box<P>,
+    },
+    Cpu(Box<CpuRaster<'a>>),
+}
+
 /// What the stages draw on: the runtime's wgpu devices, or (the
 /// `testing` feature's `run_on_cpu`) the CPU's software depth
 /// rasterizer, so the schedules can be tested without an adapter.

@@ -13,13 +13,7 @@ use crate::streaming::Use;
 use crate::{gpu_view, ms_since, RuntimeError, RuntimeOptions, Stage};
 
 /// OR's drawing: a depth pass on a device, or the CPU.
-pub(super) enum OrRender<'a> {
-    Gpu {
-        device: DeviceGeometry<'a>,
-        pass: Box<DepthPass>,
-    },
-    Cpu(Box<CpuRaster<'a>>),
-}
+pub(super) type OrRender<'a> = Render<'a, DepthPass>;
 
 /// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
 /// camera i (Section 5.2), at the occluder resolution.

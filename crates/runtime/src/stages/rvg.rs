@@ -10,13 +10,7 @@ use crate::streaming::{StreamStats, Use};
 use crate::{gpu_view, ms_since, Presenter, RuntimeError, RuntimeOptions, Stage};
 
 /// RVG's drawing: a visible pass on a device, or the CPU.
-pub(super) enum RvgRender<'a> {
-    Gpu {
-        device: DeviceGeometry<'a>,
-        pass: Box<VisiblePass>,
-    },
-    Cpu(Box<CpuRaster<'a>>),
-}
+pub(super) type RvgRender<'a> = Render<'a, VisiblePass>;
 
 /// RVG: draws a frame's items as they arrive.
 pub(crate) struct RvgStage<'a> {

@@ -44,9 +44,9 @@ pub enum GpuError {
 
 /// One wgpu device with its queue; a pipeline stage owns one.
 pub struct GpuContext {
-    pub device: wgpu::Device,
-    pub queue: wgpu::Queue,
-    pub info: wgpu::AdapterInfo,
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
+    pub(crate) info: wgpu::AdapterInfo,
     /// A name for messages, e.g. "A (llvmpipe, Vulkan)".
     pub name: String,
     /// The first uncaptured wgpu error, if any: wgpu reports validation
@@ -61,6 +61,27 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// The adapter's own name ("llvmpipe (LLVM 15.0.6, 256 bits)").
+    pub fn adapter_name(&self) -> &str {
+        &self.info.name
+    }
+
+    /// The largest side of a 2D texture (a viewport or depth image).
+    pub fn max_texture_side(&self) -> u32 {
+        self.device.limits().max_texture_dimension_2d
+    }
+
+    /// The largest buffer the device allocates, in bytes.
+    pub fn max_buffer_size(&self) -> u64 {
+        self.device.limits().max_buffer_size
+    }
+
+    /// Submits the work recorded so far (uploads written to the queue)
+    /// without waiting for it.
+    pub fn flush(&self) {
+        self.queue.submit([]);
+    }
+
     /// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe, WARP).
     pub fn is_cpu(&self) -> bool {
         self.info.device_type == wgpu::DeviceType::Cpu

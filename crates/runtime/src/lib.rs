@@ -36,9 +36,9 @@ pub use gigawalk_gpu::{
     Optional, QueryCounts, VisiblePass,
 };
 pub use options::{
-    CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OccluderSelection,
-    OptionsError, OqOptions, Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE,
-    CPU_OCCLUDER_BUDGET,
+    CtOptions, CullMethod, GridOptions, MemoryBudget, MemoryUnknown, OccluderBudget,
+    OccluderSelection, OptionsError, OqOptions, Prefetching, RuntimeOptions, Schedule, Stage,
+    AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
 pub use cullers::{Host, OqStats, Unavailable};
@@ -119,7 +119,7 @@ pub enum RuntimeError {
     #[error("setup: memory budget of {budget} bytes is below the minimum of {min} bytes")]
     MemoryBudget { budget: u64, min: u64 },
     #[error("setup: {0}")]
-    MemoryBudgetUnknown(String),
+    MemoryBudgetUnknown(MemoryUnknown),
 }
 
 /// The smallest memory budget [`Runtime::streaming`] takes.
@@ -405,7 +405,7 @@ impl<'s> Runtime<'s> {
             progress(done, total);
         }
         for d in &devices {
-            d.queue.submit([]);
+            d.flush();
         }
         let geometry = streams
             .into_iter()
@@ -687,7 +687,7 @@ pub fn probe_devices(
 ) -> Result<Vec<String>, RuntimeError> {
     let devices = open_devices(count, adapter)?;
     for d in &devices {
-        let max = d.device.limits().max_texture_dimension_2d;
+        let max = d.max_texture_side();
         if width > max || height > max {
             return Err(RuntimeError::Viewport {
                 width,
@@ -711,7 +711,7 @@ fn open_devices(count: usize, adapter: Option<&str>) -> Result<Vec<GpuContext>, 
 fn buffer_limit(devices: &[GpuContext]) -> u64 {
     devices
         .iter()
-        .map(|d| d.device.limits().max_buffer_size)
+        .map(|d| d.max_buffer_size())
         .min()
         .unwrap_or(1 << 28)
         .min(1 << 28)

@@ -544,19 +544,22 @@ pub enum MemoryBudget {
 /// lavapipe's devices live in host memory, so two of them take half.
 pub const AUTO_MEMORY_SHARE: f64 = 0.25;
 
+/// `--memory-budget auto` on a machine whose memory size is unknown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "memory budget auto: cannot read this machine's memory size (/proc/meminfo); give a size such as 4G"
+)]
+pub struct MemoryUnknown;
+
 impl MemoryBudget {
     /// Bytes a device may hold, `None` for all of the scene.
-    pub fn resolve(self) -> Result<Option<u64>, String> {
+    pub fn resolve(self) -> Result<Option<u64>, MemoryUnknown> {
         match self {
             MemoryBudget::All => Ok(None),
             MemoryBudget::Bytes(b) => Ok(Some(b)),
             MemoryBudget::Auto => physical_memory()
                 .map(|m| Some((m as f64 * AUTO_MEMORY_SHARE) as u64))
-                .ok_or_else(|| {
-                    "memory budget auto: cannot read this machine's memory size \
-                     (/proc/meminfo); give a size such as 4G"
-                        .to_string()
-                }),
+                .ok_or(MemoryUnknown),
         }
     }
 }

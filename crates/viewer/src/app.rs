@@ -352,7 +352,10 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
 /// "2 x llvmpipe (LLVM 15.0.6, 256 bits)": the adapters, short enough
 /// for the HUD.
 fn device_summary(devices: &[GpuContext]) -> String {
-    let mut names: Vec<String> = devices.iter().map(|d| d.info.name.clone()).collect();
+    let mut names: Vec<String> = devices
+        .iter()
+        .map(|d| d.adapter_name().to_string())
+        .collect();
     names.dedup();
     match names.as_slice() {
         [one] => format!("{} x {one}", devices.len()),

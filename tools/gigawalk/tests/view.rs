@@ -352,6 +352,11 @@ impl Drop for Viewer {
 }
 
 fn xdotool(display: &str, args: &[&str]) -> String {
+    try_xdotool(display, args).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// xdotool's output, or what it said when it failed.
+fn try_xdotool(display: &str, args: &[&str]) -> Result<String, String> {
     let out = Command::new("timeout")
         .arg(CALL_LIMIT_S)
         .arg("xdotool")
@@ -359,12 +364,13 @@ fn xdotool(display: &str, args: &[&str]) -> String {
         .env("DISPLAY", display)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "xdotool {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).trim().to_string()
+    if !out.status.success() {
+        return Err(format!(
+            "xdotool {args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
 }
 
 /// Waits up to 30 s for `file` to exist (and its writer to finish).
@@ -464,8 +470,16 @@ fn live_keys_and_mouse_drive_the_viewer() {
     let w = window.as_str();
     // Keyboard focus, as a click would give it (Xvfb runs no window manager).
     xdotool(d, &["windowfocus", "--sync", w]);
+    // A key the window cannot take (it is gone: the viewer exited) fails
+    // with what the viewer said.
+    let view_log = dir.path().join("view.log");
     let key = |k: &str| {
-        xdotool(d, &["key", "--window", w, k]);
+        if let Err(e) = try_xdotool(d, &["key", "--window", w, k]) {
+            panic!(
+                "{e}\nthe viewer's output:\n{}",
+                std::fs::read_to_string(&view_log).unwrap_or_default()
+            );
+        }
     };
     let hold = |k: &str, ms: u64| {
         xdotool(d, &["keydown", "--window", w, k]);

@@ -522,8 +522,11 @@ fn rival(
     } else {
         // `alt` wins below this; one ulp above it, so that a bound past
         // the limit loses for certain whatever the f64 rounding.
-        let t = measured as f64 * (main.triangles() as f64 / alt.triangles() as f64).sqrt();
-        let t = if keep_pieces { measured as f64 } else { t };
+        let t = if keep_pieces {
+            measured as f64
+        } else {
+            measured as f64 * (main.triangles() as f64 / alt.triangles() as f64).sqrt()
+        };
         (t as f32).next_up()
     };
     match r.within(alt, known, limit) {

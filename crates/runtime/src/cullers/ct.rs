@@ -94,9 +94,7 @@ impl State {
             cache: PlaneCache::new(cache_pairs),
         }
     }
-}
 
-impl State {
     /// The scene's occluders (and cells, when asked for).
     pub fn load(setup: &Setup<'_>, opts: &CtOptions) -> Result<Self, RuntimeError> {
         let load = |source| RuntimeError::Load {

@@ -131,31 +131,6 @@ pub(crate) struct Setup<'a> {
     pub rvg_device: usize,
 }
 
-impl Setup<'_> {
-    /// What this runtime offers `culler` (the scene's occluders are read
-    /// only for the culler that uses them).
-    pub fn host(&self, culler: CullMethod) -> Result<Host, RuntimeError> {
-        let occluders = culler != CullMethod::Ct
-            || self
-                .source
-                .occluders()
-                .map_err(|source| RuntimeError::Load {
-                    source: Box::new(source),
-                })?
-                .is_some();
-        Ok(Host {
-            device: self.gpu.is_some(),
-            resident: self.gpu.is_none_or(|rt| {
-                matches!(
-                    rt.geometry[self.rvg_device],
-                    crate::streaming::Geometry::Resident(_)
-                )
-            }),
-            occluders,
-        })
-    }
-}
-
 /// One frame's traversal, run by a culler with its own test.
 pub(crate) struct Traversal<'t, 'a> {
     pub traverser: &'t mut Traverser,
@@ -198,15 +173,10 @@ pub(crate) enum State<'a> {
 }
 
 impl<'a> State<'a> {
-    /// The state of `opts.culler`: an error naming why it cannot run here.
+    /// The state of `opts.culler`: an error naming why it cannot run here
+    /// (each culler's own setup finds that out as it takes what it needs:
+    /// oq its device's resident geometry, ct the scene's occluders).
     pub fn new(setup: &Setup<'a>, opts: &'a RuntimeOptions) -> Result<Self, RuntimeError> {
-        let unavailable = |why| RuntimeError::CullerUnavailable {
-            culler: opts.culler,
-            why,
-        };
-        opts.culler
-            .check(&setup.host(opts.culler)?)
-            .map_err(unavailable)?;
         Ok(match opts.culler {
             CullMethod::Hzb => State::Hzb(hzb::State::new(setup)),
             CullMethod::Grid => State::Grid(grid::State::new(setup, &opts.grid)),

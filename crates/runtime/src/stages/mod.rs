@@ -184,9 +184,8 @@ impl<'a> Target<'a> {
         }
     }
 
-    /// STC, with the occlusion-query culler's device state when the
-    /// options ask for it (on RVG's device `rvg_device`, whose whole
-    /// geometry must be resident).
+    /// STC, with the culler the options ask for when occlusion is on (an
+    /// occlusion-query culler on RVG's device `rvg_device`).
     pub fn stc_stage(
         &self,
         opts: &'a RuntimeOptions,

@@ -229,27 +229,18 @@ impl<'a> StcStage<'a> {
                 culled.push((node, why));
             }
         };
+        let mut traversal = crate::cullers::Traversal {
+            traverser: &mut self.traverser,
+            skeleton,
+            view,
+            options: &options,
+            sink: &mut sink,
+            on_cull: &mut on_cull,
+        };
         let (stats, work) = match self.culler.as_mut().filter(|_| occlusion) {
-            Some(c) => c.cull(
-                &mut crate::cullers::Traversal {
-                    traverser: &mut self.traverser,
-                    skeleton,
-                    view,
-                    options: &options,
-                    sink: &mut sink,
-                    on_cull: &mut on_cull,
-                },
-                self.opts,
-            )?,
+            Some(c) => c.cull(&mut traversal, self.opts)?,
             None => (
-                self.traverser.traverse_culled(
-                    skeleton,
-                    view,
-                    &mut BoxTest(&NoOcclusion),
-                    &options,
-                    &mut sink,
-                    &mut on_cull,
-                ),
+                traversal.run(&mut BoxTest(&NoOcclusion)),
                 crate::cullers::Work::default(),
             ),
         };

@@ -157,15 +157,10 @@ pub struct FrameRecord {
     pub speculative_before: u32,
     /// Milliseconds RVG waited for STC before this frame (pipelined).
     pub rvg_wait_ms: f64,
-    /// The lazy occlusion grid's work (grid culler only; in frames.csv).
+    /// What the culler did beyond traversal (its counts are in
+    /// frames.csv; none for the HZB).
     #[serde(skip)]
-    pub grid: Option<gigawalk_runtime::GridStats>,
-    /// The occlusion queries' work (oq culler only; in frames.csv).
-    #[serde(skip)]
-    pub oq: Option<gigawalk_runtime::OqStats>,
-    /// The object-space culler's work (ct culler only).
-    #[serde(skip)]
-    pub ct: Option<gigawalk_cull::CtStats>,
+    pub culler_work: Option<gigawalk_runtime::CullerWork>,
     /// A tiled display's figures (`--tiles` only; in frames.csv).
     #[serde(skip)]
     pub tiles: Option<TileFigures>,
@@ -553,9 +548,7 @@ pub fn replay_on(
                 controller_us,
                 speculative_before: std::mem::take(&mut speculative),
                 rvg_wait_ms: r.rvg_wait_ms,
-                grid: r.grid,
-                oq: r.oq,
-                ct: r.ct,
+                culler_work: r.culler_work,
                 tiles: r.tiles.as_ref().map(|t| TileFigures {
                     ms_adaptive: t.ms_adaptive,
                     ms_naive: t.ms_naive,

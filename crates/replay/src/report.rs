@@ -79,15 +79,15 @@ impl Replay {
 
     /// frames.csv: one row per frame of every run.
     pub fn csv(&self) -> String {
-        let mut s = String::from(
+        let mut s = format!(
             "mode,pixel_error,frame,pose_time_s,frame_ms,fps,latency_ms,or_ms,hzb_ms,stc_ms,rvg_ms,\
              visited,frustum_culled,occlusion_culled,drawn_nodes,drawn_triangles,occlusion_used,warmup,\
              accuracy_pixels,differing_pixels,wrongly_culled_pixels,bound_violating_pixels,\
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
-             missing_draws,culler,grid_raster_ms,grid_test_ms,grid_pixel_reads,grid_triangles,\
-             oq_queries,oq_round_trips,oq_ms,oq_untested,tile_ms_adaptive,tile_ms_naive,tile_tests,\
+             missing_draws,culler,{}tile_ms_adaptive,tile_ms_naive,tile_tests,\
              max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms,\
              bound_exceeding_pixels,bound_exceeding_fraction,occluder_triangles,occluder_limit\n",
+            csv_counters().map(|(_, _, k)| format!("{},", k.name)).collect::<String>(),
         );
         for run in &self.runs {
             for f in &run.frames {
@@ -96,7 +96,7 @@ impl Replay {
                 let a = f.accuracy.as_ref();
                 let _ = writeln!(
                     s,
-                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{:.3},{},{},{},{}",
+                    "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}{},{},{},{},{},{:.4},{},{},{:.3},{},{},{},{}",
                     run.mode,
                     run.pixel_error,
                     f.frame,
@@ -130,14 +130,7 @@ impl Replay {
                     f.substituted_draws,
                     f.missing_draws,
                     run.culler.map_or(String::new(), |c| c.to_string()),
-                    opt(f.grid.map(|g| g.raster_ms), 3),
-                    opt(f.grid.map(|g| g.test_ms), 3),
-                    f.grid.map_or(String::new(), |g| g.pixel_reads.to_string()),
-                    f.grid.map_or(String::new(), |g| g.triangles_drawn.to_string()),
-                    f.oq.map_or(String::new(), |q| q.queries.to_string()),
-                    f.oq.map_or(String::new(), |q| q.round_trips.to_string()),
-                    opt(f.oq.map(|q| q.ms), 3),
-                    f.oq.map_or(String::new(), |q| (q.over_budget + q.coherent).to_string()),
+                    culler_cells(f.culler_work.as_ref()),
                     opt(f.tiles.map(|t| t.ms_adaptive), 4),
                     opt(f.tiles.map(|t| t.ms_naive), 4),
                     f.tiles.map_or(String::new(), |t| t.tests.to_string()),
@@ -156,6 +149,40 @@ impl Replay {
         }
         s
     }
+}
+
+/// Every culler's counts that frames.csv has a column for, in the
+/// registry's order: the culler, the count's index in its counts, the
+/// count.
+fn csv_counters() -> impl Iterator<
+    Item = (
+        gigawalk_runtime::CullMethod,
+        usize,
+        &'static gigawalk_runtime::Counter,
+    ),
+> {
+    gigawalk_runtime::CullMethod::ALL.into_iter().flat_map(|c| {
+        c.counters()
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| k.csv)
+            .map(move |(i, k)| (c, i, k))
+    })
+}
+
+/// A frame's cells of those columns, each followed by a comma; empty
+/// cells for the counts of cullers that did not run.
+fn culler_cells(work: Option<&gigawalk_runtime::CullerWork>) -> String {
+    let counts = work.map(|w| (w.culler(), w.counts()));
+    let mut s = String::new();
+    for (c, i, k) in csv_counters() {
+        if let Some((_, v)) = counts.as_ref().filter(|(w, _)| *w == c) {
+            let d = k.decimals;
+            let _ = write!(s, "{:.d$}", v[i]);
+        }
+        s.push(',');
+    }
+    s
 }
 
 /// summary.md.
@@ -206,15 +233,11 @@ pub fn markdown(s: &Summary) -> String {
     m += &s.table();
     let _ = writeln!(m, "\n## Stages (medians) and nodes (means)\n");
     m += &s.stage_table();
-    let grid = s.grid_table();
-    if !grid.is_empty() {
-        let _ = writeln!(m, "\n## Lazy occlusion grid\n");
-        m += &grid;
-    }
-    let oq = s.oq_table();
-    if !oq.is_empty() {
-        let _ = writeln!(m, "\n## Occlusion queries\n");
-        m += &oq;
+    for c in gigawalk_runtime::CullMethod::ALL {
+        if let Some((title, table)) = s.culler_table(c) {
+            let _ = writeln!(m, "\n## {title}\n");
+            m += &table;
+        }
     }
     let popping: Vec<String> = s
         .modes

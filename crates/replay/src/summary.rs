@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use gigawalk_runtime::{Column, CullMethod, Pool, Setting};
+
 use crate::accuracy::Accuracy;
 use crate::mode::Mode;
 use crate::replay::{FrameRecord, Replay, RunRecord};
@@ -42,23 +44,10 @@ pub struct Summary {
     #[serde(default)]
     pub unsettled_reference_frames: usize,
     pub seconds: f64,
-    /// The lazy occlusion grid's cell size and update rule (null without a
-    /// grid run).
-    #[serde(default)]
-    pub grid_cell: Option<u32>,
-    #[serde(default)]
-    pub grid_lazy: Option<bool>,
-    /// The occlusion-query culler's settings (null without an oq run).
-    #[serde(default)]
-    pub oq_batch: Option<u32>,
-    #[serde(default)]
-    pub oq_coherent: Option<bool>,
-    #[serde(default)]
-    pub oq_adaptive: Option<u64>,
-    #[serde(default)]
-    pub oq_budget: Option<f64>,
-    #[serde(default)]
-    pub oq_test_leaves: Option<bool>,
+    /// Every culler's settings (`grid_cell`, `oq_batch`, ...: each
+    /// culler's file names its own), null for a culler no run used.
+    #[serde(flatten)]
+    pub culler_settings: CullerSettings,
     pub modes: Vec<ModeSummary>,
 }
 
@@ -101,43 +90,11 @@ pub struct ModeSummary {
     pub median_hzb_ms: f64,
     pub median_stc_ms: f64,
     pub median_rvg_ms: f64,
-    /// The lazy occlusion grid (grid culler only): median ms STC spent
-    /// rasterizing and answering box tests, mean depth pixels read a
-    /// frame, mean triangles rasterized a frame.
-    #[serde(default)]
-    pub median_grid_raster_ms: Option<f64>,
-    #[serde(default)]
-    pub median_grid_test_ms: Option<f64>,
-    #[serde(default)]
-    pub mean_grid_pixel_reads: Option<f64>,
-    #[serde(default)]
-    pub mean_grid_triangles: Option<f64>,
-    /// The occlusion queries (oq culler only): mean boxes queried and
-    /// round trips a frame, median ms in round trips, mean nodes passed
-    /// untested (over the time budget, or coherent).
-    #[serde(default)]
-    pub mean_oq_queries: Option<f64>,
-    #[serde(default)]
-    pub mean_oq_round_trips: Option<f64>,
-    #[serde(default)]
-    pub median_oq_ms: Option<f64>,
-    #[serde(default)]
-    pub mean_oq_untested: Option<f64>,
-    /// The object-space culler (ct only): mean nodes tested and (node,
-    /// occluder) classifications a frame, and the share of tangent planes
-    /// found in the cache.
-    #[serde(default)]
-    pub mean_ct_nodes_tested: Option<f64>,
-    #[serde(default)]
-    pub mean_ct_pair_tests: Option<f64>,
-    #[serde(default)]
-    pub ct_cache_hit_fraction: Option<f64>,
-    /// ...mean candidates scored a frame (the view cell's list, or every
-    /// occluder), and mean chosen occluders clipped to the near plane.
-    #[serde(default)]
-    pub mean_ct_candidates: Option<f64>,
-    #[serde(default)]
-    pub mean_ct_clipped: Option<f64>,
+    /// Every culler's figures of the run (`median_grid_raster_ms`,
+    /// `mean_oq_queries`, ...: each culler's file names and pools its
+    /// own), null for the cullers the run did not use.
+    #[serde(flatten)]
+    pub culler_figures: CullerFigures,
     /// A tiled display (`--tiles`): the grid ("4x4") and how items were
     /// sent to tiles; the median milliseconds of the adaptive and the
     /// naive method on the same frames (both run every frame); triangles
@@ -301,45 +258,17 @@ fn summarise(
     }
     let has_acc = accuracy_frames > 0;
     let med = |f: fn(&FrameRecord) -> f64| median(&m.iter().map(|x| f(x)).collect::<Vec<_>>());
-    let grid: Vec<gigawalk_runtime::GridStats> = m.iter().filter_map(|f| f.grid).collect();
-    let grid_fig = |f: fn(&gigawalk_runtime::GridStats) -> f64, med: bool| {
-        let v: Vec<f64> = grid.iter().map(f).collect();
-        (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
-    };
-    let oq: Vec<gigawalk_runtime::OqStats> = m.iter().filter_map(|f| f.oq).collect();
-    let ct: Vec<gigawalk_cull::CtStats> = m.iter().filter_map(|f| f.ct).collect();
     let tl: Vec<crate::replay::TileFigures> = m.iter().filter_map(|f| f.tiles).collect();
     let us: Vec<f64> = m.iter().filter_map(|f| f.controller_us).collect();
     let tile_fig = |f: fn(&crate::replay::TileFigures) -> f64, med: bool| {
         let v: Vec<f64> = tl.iter().map(f).collect();
         (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
     };
-    let oq_fig = |f: fn(&gigawalk_runtime::OqStats) -> f64, med: bool| {
-        let v: Vec<f64> = oq.iter().map(f).collect();
-        (!v.is_empty()).then(|| if med { median(&v) } else { mean(v.into_iter()) })
-    };
     ModeSummary {
         name: run.mode.name().into(),
         pixel_error: run.pixel_error,
         culler: run.culler.map(|c| c.to_string()),
-        median_grid_raster_ms: grid_fig(|g| g.raster_ms, true),
-        median_grid_test_ms: grid_fig(|g| g.test_ms, true),
-        mean_grid_pixel_reads: grid_fig(|g| g.pixel_reads as f64, false),
-        mean_grid_triangles: grid_fig(|g| g.triangles_drawn as f64, false),
-        mean_oq_queries: oq_fig(|q| q.queries as f64, false),
-        mean_oq_round_trips: oq_fig(|q| q.round_trips as f64, false),
-        median_oq_ms: oq_fig(|q| q.ms, true),
-        mean_oq_untested: oq_fig(|q| (q.over_budget + q.coherent) as f64, false),
-        mean_ct_nodes_tested: (!ct.is_empty())
-            .then(|| mean(ct.iter().map(|c| c.nodes_tested as f64))),
-        mean_ct_pair_tests: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.pair_tests as f64))),
-        ct_cache_hit_fraction: (!ct.is_empty()).then(|| {
-            let hits: u64 = ct.iter().map(|c| c.cache_hits).sum();
-            let all: u64 = ct.iter().map(|c| c.cache_hits + c.cache_misses).sum();
-            hits as f64 / all.max(1) as f64
-        }),
-        mean_ct_candidates: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.candidates as f64))),
-        mean_ct_clipped: (!ct.is_empty()).then(|| mean(ct.iter().map(|c| c.clipped as f64))),
+        culler_figures: CullerFigures::of(&m),
         tiles: tile_opts.map(|(g, _)| g.to_string()),
         target_fps: target_ms.filter(|_| run.target).map(|ms| 1e3 / ms),
         speculative_frames: run.frames.iter().map(|f| f.speculative_before as u64).sum(),
@@ -411,6 +340,139 @@ fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
+/// Every culler's figures of a run, in the registry's order, written as
+/// fields of the run's object in summary.json (null where the run did not
+/// use the culler, or measured no frame of it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CullerFigures(pub Vec<(String, Option<f64>)>);
+
+impl CullerFigures {
+    /// Pooled over the measured frames `m`.
+    fn of(m: &[&FrameRecord]) -> Self {
+        let mut out = Vec::new();
+        for c in CullMethod::ALL {
+            let works: Vec<Vec<f64>> = m
+                .iter()
+                .filter_map(|f| f.culler_work)
+                .filter(|w| w.culler() == c)
+                .map(|w| w.counts())
+                .collect();
+            let counts = |name: &str| {
+                let i = c
+                    .counters()
+                    .iter()
+                    .position(|k| k.name == name)
+                    .expect("a figure pools its own culler's counts");
+                works.iter().map(move |w| w[i])
+            };
+            for f in c.figures() {
+                let v = (!works.is_empty()).then(|| match f.pool {
+                    Pool::Mean(n) => mean(counts(n)),
+                    Pool::Median(n) => median(&counts(n).collect::<Vec<_>>()),
+                    Pool::Share { part, whole } => {
+                        counts(part).sum::<f64>() / counts(whole).sum::<f64>().max(1.0)
+                    }
+                });
+                out.push((f.key.to_string(), v));
+            }
+        }
+        CullerFigures(out)
+    }
+
+    /// The figure named `key` (None: unknown, or null).
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.0.iter().find(|(k, _)| k == key).and_then(|(_, v)| *v)
+    }
+}
+
+/// Every culler's settings, in the registry's order, written as fields
+/// of summary.json's top object.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CullerSettings(pub Vec<(String, Setting)>);
+
+impl CullerSettings {
+    /// The setting named `name` ([`Setting::Unset`] when unknown).
+    pub fn get(&self, name: &str) -> Setting {
+        self.0
+            .iter()
+            .find(|(k, _)| k == name)
+            .map_or(Setting::Unset, |(_, v)| *v)
+    }
+}
+
+impl Serialize for CullerFigures {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+impl Serialize for CullerSettings {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            match *v {
+                Setting::Whole(n) => m.serialize_entry(k, &n)?,
+                Setting::Number(x) => m.serialize_entry(k, &x)?,
+                Setting::Flag(b) => m.serialize_entry(k, &b)?,
+                _ => m.serialize_entry(k, &())?,
+            }
+        }
+        m.end()
+    }
+}
+
+/// The fields of a flattened object that `names` lists, in that order
+/// (other fields belong to the enclosing struct, or to nobody).
+fn named_fields<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    names: impl Iterator<Item = &'static str>,
+) -> Result<Vec<(String, serde_json::Value)>, D::Error> {
+    let mut all = std::collections::BTreeMap::<String, serde_json::Value>::deserialize(d)?;
+    Ok(names
+        .map(|n| (n.to_string(), all.remove(n).unwrap_or_default()))
+        .collect())
+}
+
+impl<'de> Deserialize<'de> for CullerFigures {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let keys = CullMethod::ALL
+            .into_iter()
+            .flat_map(|c| c.figures().iter().map(|f| f.key));
+        let fields = named_fields(d, keys)?;
+        Ok(CullerFigures(
+            fields.into_iter().map(|(k, v)| (k, v.as_f64())).collect(),
+        ))
+    }
+}
+
+impl<'de> Deserialize<'de> for CullerSettings {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let defaults = gigawalk_runtime::CullerOptions::default();
+        let names: Vec<&'static str> = CullMethod::ALL
+            .into_iter()
+            .flat_map(|c| c.settings(&defaults).into_iter().map(|(k, _)| k))
+            .collect();
+        let fields = named_fields(d, names.into_iter())?;
+        Ok(CullerSettings(
+            fields
+                .into_iter()
+                .map(|(k, v)| {
+                    let s = match v {
+                        serde_json::Value::Bool(b) => Setting::Flag(b),
+                        serde_json::Value::Number(n) => match n.as_u64() {
+                            Some(w) => Setting::Whole(w),
+                            None => n.as_f64().map_or(Setting::Unset, Setting::Number),
+                        },
+                        _ => Setting::Unset,
+                    };
+                    (k, s)
+                })
+                .collect(),
+        ))
+    }
+}
+
 impl Replay {
     /// The report's figures.
     pub fn summary(&self) -> Summary {
@@ -433,14 +495,6 @@ impl Replay {
             }
         }
         let r = &self.options.runtime;
-        let grid = self
-            .runs
-            .iter()
-            .any(|r| r.culler == Some(gigawalk_runtime::CullMethod::Grid));
-        let oq = self
-            .runs
-            .iter()
-            .any(|r| r.culler == Some(gigawalk_runtime::CullMethod::Oq));
         Summary {
             scene: self.scene.clone(),
             path: self.path.clone(),
@@ -471,13 +525,17 @@ impl Replay {
             memory_budget: self.memory_budget,
             unsettled_reference_frames: self.unsettled_reference_frames,
             seconds: self.seconds,
-            grid_cell: grid.then_some(r.grid.cell),
-            grid_lazy: grid.then_some(r.grid.lazy),
-            oq_batch: oq.then_some(r.oq.batch),
-            oq_coherent: oq.then_some(r.oq.coherent),
-            oq_adaptive: oq.then_some(r.oq.adaptive),
-            oq_budget: r.oq.budget.filter(|_| oq),
-            oq_test_leaves: oq.then_some(r.oq.test_leaves),
+            culler_settings: CullerSettings(
+                CullMethod::ALL
+                    .into_iter()
+                    .flat_map(|c| {
+                        let ran = self.runs.iter().any(|run| run.culler == Some(c));
+                        c.settings(&r.cullers).into_iter().map(move |(k, v)| {
+                            (k.to_string(), if ran { v } else { Setting::Unset })
+                        })
+                    })
+                    .collect(),
+            ),
             modes,
         }
     }
@@ -566,47 +624,63 @@ impl Summary {
         }
     }
 
-    /// The lazy occlusion grid's table of summary.md (empty without a
-    /// grid run).
-    pub fn grid_table(&self) -> String {
+    /// `culler`'s table of summary.md (its title and text; empty without
+    /// a run of the culler, or for a culler without a table).
+    pub fn culler_table(&self, culler: CullMethod) -> Option<(&'static str, String)> {
+        let t = culler.table()?;
         let runs: Vec<&ModeSummary> = self
             .modes
             .iter()
-            .filter(|m| m.median_grid_raster_ms.is_some())
+            .filter(|m| {
+                culler
+                    .figures()
+                    .iter()
+                    .any(|f| m.culler_figures.get(f.key).is_some())
+            })
             .collect();
         if runs.is_empty() {
-            return String::new();
+            return None;
         }
+        let setting = |name: &str| self.culler_settings.get(name);
         let mut s = format!(
-            "Cells of {} pixels, {} updates.\n\n\
-             | mode | pixel error | STC ms | rasterize ms | grid tests ms | depth pixels read | triangles rasterized | occlusion-culled |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|\n",
-            self.grid_cell.unwrap_or(0),
-            if self.grid_lazy.unwrap_or(true) {
-                "lazy"
-            } else {
-                "eager"
-            },
+            "{}\n\n| mode | pixel error | {} |\n|---|---:|{}\n",
+            (t.preamble)(&setting),
+            t.columns
+                .iter()
+                .map(|c| c.header())
+                .collect::<Vec<_>>()
+                .join(" | "),
+            "---:|".repeat(t.columns.len()),
         );
-        let o = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| num(x, d));
         for m in runs {
+            let cells: Vec<String> = t
+                .columns
+                .iter()
+                .map(|c| match *c {
+                    Column::StcMs => num(m.median_stc_ms, 2),
+                    Column::Figure { key, decimals, .. } => {
+                        m.culler_figures
+                            .get(key)
+                            .map_or("-".into(), |x| match decimals {
+                                Some(d) => num(x, d),
+                                None => thousands(x),
+                            })
+                    }
+                    Column::OcclusionCulled => thousands(m.mean_occlusion_culled),
+                    Column::Triangles => thousands(m.mean_triangles),
+                    _ => "-".into(),
+                })
+                .collect();
             s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} |\n",
                 self.mode_cell(m),
                 m.pixel_error,
-                num(m.median_stc_ms, 2),
-                o(m.median_grid_raster_ms, 2),
-                o(m.median_grid_test_ms, 2),
-                m.mean_grid_pixel_reads.map_or("-".into(), thousands),
-                m.mean_grid_triangles.map_or("-".into(), thousands),
-                thousands(m.mean_occlusion_culled),
+                cells.join(" | ")
             );
         }
-        s
+        Some((t.title, s))
     }
 
-    /// The occlusion queries' table of summary.md (empty without an oq
-    /// run).
     /// The tiled-display table (empty without tiles).
     pub fn tile_table(&self) -> String {
         let runs: Vec<&ModeSummary> = self.modes.iter().filter(|m| m.tiles.is_some()).collect();
@@ -630,50 +704,6 @@ impl Summary {
                 o(m.cull_ms_naive, 3),
                 m.max_tile_triangles.map_or("-".into(), thousands),
                 m.mean_tile_triangles.map_or("-".into(), thousands),
-                thousands(m.mean_triangles),
-            );
-        }
-        s
-    }
-
-    pub fn oq_table(&self) -> String {
-        let runs: Vec<&ModeSummary> = self
-            .modes
-            .iter()
-            .filter(|m| m.mean_oq_queries.is_some())
-            .collect();
-        if runs.is_empty() {
-            return String::new();
-        }
-        let budget = match self.oq_budget {
-            Some(b) => format!("{b} of the last frame"),
-            None => "none".into(),
-        };
-        let mut s = format!(
-            "Batches of {} boxes a round trip, coherent {}, adaptive threshold {} samples, time budget {budget}, leaves {}.\n\n\
-             | mode | pixel error | STC ms | queries | round trips | ms in round trips | passed untested | occlusion-culled | triangles |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-            self.oq_batch.unwrap_or(0),
-            if self.oq_coherent.unwrap_or(false) { "on" } else { "off" },
-            self.oq_adaptive.unwrap_or(0),
-            if self.oq_test_leaves.unwrap_or(true) {
-                "tested"
-            } else {
-                "drawn untested (the paper)"
-            },
-        );
-        let o = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| num(x, d));
-        for m in runs {
-            s += &format!(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                self.mode_cell(m),
-                m.pixel_error,
-                num(m.median_stc_ms, 2),
-                m.mean_oq_queries.map_or("-".into(), thousands),
-                o(m.mean_oq_round_trips, 1),
-                o(m.median_oq_ms, 2),
-                m.mean_oq_untested.map_or("-".into(), thousands),
-                thousands(m.mean_occlusion_culled),
                 thousands(m.mean_triangles),
             );
         }
@@ -772,9 +802,7 @@ mod tests {
             controller_us: None,
             speculative_before: 0,
             rvg_wait_ms: 0.0,
-            grid: None,
-            oq: None,
-            ct: None,
+            culler_work: None,
             tiles: None,
             resident_bytes: 0,
             loaded_bytes: 0,
@@ -863,6 +891,70 @@ mod tests {
         let s = replay(16, 10, vec![frame(0, 5, true)]).summary();
         assert_eq!(s.modes[0].triangles_per_pixel, None);
         assert_eq!(cell(&s.table(), "triangles / px"), "-");
+    }
+
+    #[test]
+    fn culler_figures_pool_by_name_print_in_the_tables_and_read_back() {
+        use gigawalk_runtime::{CullerWork, OqStats};
+        let oq = |f: u64, queries: u64, ms: f64| FrameRecord {
+            culler_work: Some(CullerWork::Oq(OqStats {
+                queries,
+                round_trips: 2,
+                ms,
+                over_budget: 1,
+                coherent: 1,
+            })),
+            ..frame(f, 100, f == 0)
+        };
+        let mut r = replay(
+            16,
+            10,
+            vec![oq(0, 999, 9.0), oq(1, 10, 1.0), oq(2, 20, 3.0)],
+        );
+        r.runs[0].mode = Mode::Occ;
+        r.runs[0].culler = Some(CullMethod::Oq);
+        r.options.runtime.cullers.oq.budget = Some(0.25);
+        let s = r.summary();
+        let f = &s.modes[0].culler_figures;
+        // The warm-up frame is left out of the means and medians.
+        assert_eq!(f.get("mean_oq_queries"), Some(15.0));
+        assert_eq!(f.get("median_oq_ms"), Some(2.0));
+        assert_eq!(f.get("mean_oq_untested"), Some(2.0));
+        assert_eq!(f.get("median_grid_raster_ms"), None);
+        assert_eq!(s.culler_settings.get("oq_batch"), Setting::Whole(32));
+        assert_eq!(s.culler_settings.get("grid_cell"), Setting::Unset);
+        let (title, table) = s.culler_table(CullMethod::Oq).unwrap();
+        assert_eq!(title, "Occlusion queries");
+        assert!(table.starts_with("Batches of 32 boxes"), "{table}");
+        assert!(
+            table.contains("time budget 0.25 of the last frame"),
+            "{table}"
+        );
+        let rows: String = table.lines().skip(2).collect::<Vec<_>>().join("\n");
+        assert_eq!(cell(&rows, "queries"), "15");
+        assert_eq!(cell(&rows, "ms in round trips"), "2.00");
+        assert!(s.culler_table(CullMethod::Grid).is_none());
+        // In summary.json every culler's figures and settings are fields,
+        // null for the cullers no run used, and they read back.
+        let json = serde_json::to_value(&s).unwrap();
+        assert_eq!(json["modes"][0]["mean_oq_queries"], 15.0);
+        assert!(json["modes"][0]["median_grid_raster_ms"].is_null());
+        assert!(json["modes"][0]["mean_ct_candidates"].is_null());
+        assert_eq!(json["oq_budget"], 0.25);
+        assert_eq!(json["oq_coherent"], false);
+        assert!(json["grid_lazy"].is_null());
+        let back: Summary = serde_json::from_value(json).unwrap();
+        assert_eq!(back.modes[0].culler_figures, *f);
+        assert_eq!(back.culler_settings, s.culler_settings);
+        // frames.csv: the oq columns filled, the grid's empty.
+        let csv = r.csv();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let row: Vec<&str> = csv.lines().nth(2).unwrap().split(',').collect();
+        assert_eq!(header.len(), row.len());
+        let at = |c: &str| row[header.iter().position(|h| *h == c).unwrap()];
+        assert_eq!(at("oq_queries"), "10");
+        assert_eq!(at("oq_ms"), "1.000");
+        assert_eq!(at("grid_raster_ms"), "");
     }
 
     #[test]

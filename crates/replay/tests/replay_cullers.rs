@@ -6,13 +6,32 @@
 
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_procgen::{generate, Generated, Kind};
+use gigawalk_replay::FrameRecord;
 use gigawalk_replay::{replay_on, Mode, NoProgress, ReplayOptions};
-use gigawalk_runtime::{CullMethod, Runtime, RuntimeOptions, Schedule};
+use gigawalk_runtime::{
+    CullMethod, CullerWork, GridStats, OqStats, Runtime, RuntimeOptions, Schedule,
+};
 use gigawalk_scene::SceneReader;
 
 const TRIANGLES: u64 = 30_000;
 const W: u32 = 256;
 const H: u32 = 144;
+
+/// A grid run's frame's work.
+fn grid(f: &FrameRecord) -> GridStats {
+    match f.culler_work {
+        Some(CullerWork::Grid(g)) => g,
+        w => panic!("grid runs report the grid's work, not {w:?}"),
+    }
+}
+
+/// An oq run's frame's work.
+fn oq(f: &FrameRecord) -> OqStats {
+    match f.culler_work {
+        Some(CullerWork::Oq(q)) => q,
+        w => panic!("oq runs report the queries, not {w:?}"),
+    }
+}
 
 /// A generated scene of `kind`, preprocessed into `dir`, and its walk.
 fn scene(dir: &std::path::Path, kind: Kind, seed: u64, poses: usize) -> (SceneReader, Generated) {
@@ -87,14 +106,14 @@ fn every_culler_draws_the_reference_image_at_pixel_error_0() {
             }
             for run in r.runs.iter().filter(|r| r.culler == Some(CullMethod::Oq)) {
                 for f in &run.frames {
-                    let q = f.oq.expect("oq runs report the queries");
+                    let q = oq(f);
                     assert!(f.occlusion_used, "queries cull from frame 0");
                     assert!(q.round_trips > 0 && q.queries >= q.round_trips, "{q:?}");
                 }
             }
             for run in r.runs.iter().filter(|r| r.culler == Some(CullMethod::Grid)) {
                 for f in &run.frames {
-                    let g = f.grid.expect("grid runs report the grid's work");
+                    let g = grid(f);
                     assert!(f.occlusion_used, "the grid culls from frame 0");
                     assert!(g.tests > 0 && g.triangles_drawn > 0, "{g:?}");
                     grid_culled += f.occlusion_culled;
@@ -121,8 +140,8 @@ fn the_lazy_grid_culls_as_the_eager_one_with_fewer_depth_reads() {
         let mut opts = options(&[CullMethod::Grid], Schedule::Sequential, 20);
         opts.modes = vec![Mode::Occ];
         opts.accuracy_every = 0;
-        opts.runtime.grid.lazy = lazy;
-        opts.runtime.grid.cell = 8;
+        opts.runtime.cullers.grid.lazy = lazy;
+        opts.runtime.cullers.grid.cell = 8;
         let r = replay_on(
             &rt,
             "c.gwk",
@@ -136,7 +155,7 @@ fn the_lazy_grid_culls_as_the_eager_one_with_fewer_depth_reads() {
     }
     let (lazy, eager) = (&runs[0], &runs[1]);
     let reads = |r: &gigawalk_replay::RunRecord| -> u64 {
-        r.frames.iter().map(|f| f.grid.unwrap().pixel_reads).sum()
+        r.frames.iter().map(|f| grid(f).pixel_reads).sum()
     };
     for (a, b) in lazy.frames.iter().zip(&eager.frames) {
         assert_eq!(a.occlusion_culled, b.occlusion_culled, "frame {}", a.frame);
@@ -179,21 +198,20 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
     // The paper (a round trip per test, leaves untested), batched, and
     // coherent: all conservative.
     let (paper, ps) = replay(&|o| {
-        o.oq.batch = 1;
-        o.oq.test_leaves = false;
+        o.cullers.oq.batch = 1;
+        o.cullers.oq.test_leaves = false;
     });
-    let (batched, bs) = replay(&|o| o.oq.batch = 64);
-    let (coherent, cs) = replay(&|o| o.oq.coherent = true);
+    let (batched, bs) = replay(&|o| o.cullers.oq.batch = 64);
+    let (coherent, cs) = replay(&|o| o.cullers.oq.coherent = true);
     for (name, m) in [("paper", &ps), ("batched", &bs), ("coherent", &cs)] {
         assert_eq!(m.wrongly_culled_pixels, Some(0), "{name}");
         assert_eq!(m.differing_pixels_fraction, Some(0.0), "{name}");
     }
     let trips = |r: &gigawalk_replay::RunRecord| -> u64 {
-        r.frames.iter().map(|f| f.oq.unwrap().round_trips).sum()
+        r.frames.iter().map(|f| oq(f).round_trips).sum()
     };
-    let queries = |r: &gigawalk_replay::RunRecord| -> u64 {
-        r.frames.iter().map(|f| f.oq.unwrap().queries).sum()
-    };
+    let queries =
+        |r: &gigawalk_replay::RunRecord| -> u64 { r.frames.iter().map(|f| oq(f).queries).sum() };
     // One query per round trip as written; batches need fewer trips.
     assert_eq!(trips(&paper), queries(&paper));
     assert!(
@@ -203,23 +221,23 @@ fn occlusion_query_variants_coherent_batched_budgeted_and_adaptive() {
         trips(&paper)
     );
     // Coherent: visible nodes of the last frame are not waited for.
-    let passed: u64 = coherent.frames.iter().map(|f| f.oq.unwrap().coherent).sum();
+    let passed: u64 = coherent.frames.iter().map(|f| oq(f).coherent).sum();
     assert!(passed > 0);
     // A budget of 0: frustum culling only, and every frame finishes.
-    let (zero, _) = replay(&|o| o.oq.budget = Some(0.0));
+    let (zero, _) = replay(&|o| o.cullers.oq.budget = Some(0.0));
     assert_eq!(zero.frames.len(), 20);
     assert!(zero.frames.iter().all(|f| f.occlusion_culled == 0));
-    assert!(zero.frames.iter().all(|f| f.oq.unwrap().queries == 0));
+    assert!(zero.frames.iter().all(|f| oq(f).queries == 0));
     // Adaptive culling culls more than conservative queries (approximate:
     // what it costs is in the accuracy figures). It needs queries that
     // count samples (GL's say only zero or not, and the runtime refuses).
     if gigawalk_gpu::query_counts(rt.device(1)).unwrap() != gigawalk_gpu::QueryCounts::Exact {
-        let e = try_replay(&|o| o.oq.adaptive = 400)
+        let e = try_replay(&|o| o.cullers.oq.adaptive = 400)
             .expect_err("adaptive culling refused without sample counts");
         assert!(e.to_string().contains("sample counts"), "{e}");
         return;
     }
-    let (adaptive, _) = replay(&|o| o.oq.adaptive = 400);
+    let (adaptive, _) = replay(&|o| o.cullers.oq.adaptive = 400);
     let tris = |r: &gigawalk_replay::RunRecord| -> u64 {
         r.frames.iter().map(|f| f.drawn_triangles).sum()
     };
@@ -274,7 +292,10 @@ fn a_tiled_replay_matches_the_single_view_reference_and_reports_its_tiles() {
             assert_eq!(m.differing_pixels_fraction, Some(0.0), "{what}");
             if m.culler.as_deref() == Some("ct") {
                 // The scene's view cells list the candidates.
-                assert!(m.mean_ct_candidates.unwrap() <= 32.0, "{what}");
+                assert!(
+                    m.culler_figures.get("mean_ct_candidates").unwrap() <= 32.0,
+                    "{what}"
+                );
             }
         }
         let csv = r.csv();

@@ -29,19 +29,23 @@ use std::time::Instant;
 
 pub use gigawalk_cull::tiles::{TileGrid, TileMethod};
 pub use gigawalk_cull::{
-    Camera, CullReason, DrawItem, GridStats, Reduction, TraversalOptions, TraversalStats, Viewport,
+    Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
 };
 pub use gigawalk_gpu::{
     chosen_adapter, list_adapters, AdapterReport, DrawStyle, FrameImage, GpuContext, GpuError,
     Optional, QueryCounts, VisiblePass,
 };
 pub use options::{
-    CtOptions, CullMethod, GridOptions, MemoryBudget, MemoryUnknown, OccluderBudget,
-    OccluderSelection, OptionsError, OqOptions, Prefetching, RuntimeOptions, Schedule, Stage,
-    AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
+    MemoryBudget, MemoryUnknown, OccluderBudget, OccluderSelection, OptionsError, Prefetching,
+    RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
-pub use cullers::{Host, OqStats, Unavailable};
+// Every culler's public types (its options, flags and stats) and the
+// registry's: the culler files are the only ones naming a culler.
+pub use cullers::ct::*;
+pub use cullers::grid::*;
+pub use cullers::oq::*;
+pub use cullers::*;
 pub use stages::TileFrame;
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
@@ -234,12 +238,9 @@ pub struct FrameReport {
     pub occluder_limit: Option<u64>,
     pub or_ms: f64,
     pub hzb_ms: f64,
-    /// The lazy occlusion grid's work this frame (grid culler only).
-    pub grid: Option<GridStats>,
-    /// The occlusion queries' work this frame (oq culler only).
-    pub oq: Option<OqStats>,
-    /// The object-space culler's work this frame (ct culler only).
-    pub ct: Option<gigawalk_cull::CtStats>,
+    /// What the culler did this frame beyond traversal (typed, and as
+    /// named counts; none for the HZB).
+    pub culler_work: Option<CullerWork>,
     /// The tiles' lists and what making them cost (tiled display only).
     pub tiles: Option<Arc<TileFrame>>,
     /// The pixel-error tolerance the frame was culled with (the options',
@@ -461,7 +462,7 @@ impl<'s> Runtime<'s> {
         let host = Host {
             device: true,
             resident: !self.is_streaming(),
-            occluders: culler != CullMethod::Ct || self.has_occluders()?,
+            occluders: !culler.reads_occluders() || self.has_occluders()?,
         };
         culler
             .check(&host)

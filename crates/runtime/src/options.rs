@@ -3,7 +3,7 @@
 use gigawalk_cull::tiles::{TileGrid, TileMethod};
 use gigawalk_cull::{Reduction, TraversalOptions};
 
-pub use crate::cullers::{CtOptions, CullMethod, GridOptions, OqOptions};
+pub use crate::cullers::{CullMethod, CullerOptions, CullerOptionsError};
 
 /// How the three stages run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -246,9 +246,8 @@ pub struct RuntimeOptions {
     pub prefetch: Prefetching,
     /// The occlusion culler (with `traversal.occlusion`).
     pub culler: CullMethod,
-    pub grid: GridOptions,
-    pub oq: OqOptions,
-    pub ct: CtOptions,
+    /// Every culler's own options.
+    pub cullers: CullerOptions,
     /// A tiled display (Nirnimesh, Harish and Narayanan): the viewport
     /// split into `cols x rows` tiles, each drawn from its own list under
     /// its own scissor rectangle; `None`: one view.
@@ -294,14 +293,8 @@ pub enum OptionsError {
     StcDelay(f64),
     #[error("chunk must be at least 1")]
     Chunk,
-    #[error("grid cell {0} must be 1..=1024 pixels")]
-    GridCell(u32),
-    #[error("object-space occluders a frame {0} must be 1..=64")]
-    CtOccluders(usize),
-    #[error("occlusion-query batch {0} must be 1..=4096 (a query set's size)")]
-    OqBatch(u32),
-    #[error("occlusion-query budget {0} must be a fraction in [0, 10]")]
-    OqBudget(f64),
+    #[error(transparent)]
+    Culler(#[from] CullerOptionsError),
 }
 
 impl Default for RuntimeOptions {
@@ -322,9 +315,7 @@ impl Default for RuntimeOptions {
             stc_delay_ms: 0.0,
             prefetch: Prefetching::Off,
             culler: CullMethod::Hzb,
-            grid: GridOptions::default(),
-            oq: OqOptions::default(),
-            ct: CtOptions::default(),
+            cullers: CullerOptions::default(),
             tiles: None,
             tile_culling: TileMethod::Adaptive,
             record_culled: false,
@@ -381,9 +372,7 @@ impl RuntimeOptions {
                 });
             }
         }
-        self.grid.validate()?;
-        self.oq.validate()?;
-        self.ct.validate()?;
+        self.cullers.validate()?;
         Ok(())
     }
 
@@ -433,27 +422,6 @@ mod tests {
         );
         check(&|o| o.devices = 3, OptionsError::Devices(3), "devices 3");
         check(&|o| o.chunk = 0, OptionsError::Chunk, "chunk");
-        check(&|o| o.oq.batch = 0, OptionsError::OqBatch(0), "batch 0");
-        check(
-            &|o| o.ct.occluders = 65,
-            OptionsError::CtOccluders(65),
-            "a frame 65",
-        );
-        check(
-            &|o| o.oq.budget = Some(-1.0),
-            OptionsError::OqBudget(-1.0),
-            "budget -1",
-        );
-        check(
-            &|o| o.grid.cell = 0,
-            OptionsError::GridCell(0),
-            "grid cell 0",
-        );
-        check(
-            &|o| o.grid.cell = 4096,
-            OptionsError::GridCell(4096),
-            "grid cell 4096",
-        );
         check(
             &|o| o.hzb_reduction = Reduction::NthFarthest(5),
             OptionsError::NthFarthest(5),

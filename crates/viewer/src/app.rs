@@ -777,6 +777,7 @@ impl Presenter for ViewerPresenter<'_> {
                 )
             }),
             pixel_error: report.pixel_error,
+            culler_work: report.culler_work,
         };
         let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
         if let Some(script) = &self.script {

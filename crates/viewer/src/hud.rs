@@ -61,6 +61,8 @@ pub struct FrameNumbers {
     pub tiles: Option<(String, u64, f64, f64)>,
     /// The pixel error the frame was culled with.
     pub pixel_error: f64,
+    /// What the culler did beyond traversal (none for the HZB).
+    pub culler_work: Option<gigawalk_runtime::CullerWork>,
 }
 
 /// The viewer's state the HUD shows besides the frame's numbers.
@@ -124,6 +126,9 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
             s.target_fps, n.pixel_error
         ));
     }
+    if let Some(w) = &n.culler_work {
+        lines.push(culler_line(w));
+    }
     if let Some((grid, busiest, adaptive, naive)) = &n.tiles {
         lines.push(format!(
             "tiles {grid}: busiest {} tris; to tiles {adaptive:.2} ms adaptive, {naive:.2} ms naive",
@@ -174,6 +179,32 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
     }
     lines.push(format!("{}   H: help", v.devices));
     lines
+}
+
+/// The culler's counts a frame, named as it names them without its own
+/// prefix: "grid: raster ms 1.200, pixel reads 12,345, ...".
+fn culler_line(w: &gigawalk_runtime::CullerWork) -> String {
+    let c = w.culler();
+    let prefix = format!("{c}_");
+    let counts: Vec<String> = c
+        .counters()
+        .iter()
+        .zip(w.counts())
+        .map(|(k, v)| {
+            let name = k
+                .name
+                .strip_prefix(&prefix)
+                .unwrap_or(k.name)
+                .replace('_', " ");
+            let d = k.decimals;
+            if d == 0 {
+                format!("{name} {}", group(v.max(0.0) as u64))
+            } else {
+                format!("{name} {v:.d$}")
+            }
+        })
+        .collect();
+    format!("{c}: {}", counts.join(", "))
 }
 
 /// 1234567 -> "1,234,567": counts of millions read at a glance.
@@ -234,6 +265,14 @@ mod tests {
                 substituted: 5,
                 ..Default::default()
             },
+            culler_work: Some(gigawalk_runtime::CullerWork::Oq(
+                gigawalk_runtime::OqStats {
+                    queries: 1234,
+                    round_trips: 40,
+                    ms: 1.5,
+                    ..Default::default()
+                },
+            )),
             ..Default::default()
         };
         let s = Settings {
@@ -257,6 +296,7 @@ mod tests {
             "REC",
             "startup bypass",
             "occluders <= 30,000 tris",
+            "oq: queries 1,234, round trips 40, ms 1.500, untested 0",
         ] {
             assert!(text.contains(want), "{want:?} missing from\n{text}");
         }

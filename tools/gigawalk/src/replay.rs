@@ -9,8 +9,8 @@ use std::time::Instant;
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
 use gigawalk_runtime::{
-    CtOptions, CullMethod, GridOptions, MemoryBudget, OccluderBudget, OqOptions, Prefetching,
-    Reduction, RuntimeOptions, Schedule, TileGrid, TileMethod,
+    CullMethod, CullerArgs, MemoryBudget, OccluderBudget, Prefetching, Reduction, RuntimeOptions,
+    Schedule, TileGrid, TileMethod,
 };
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
@@ -121,42 +121,10 @@ pub struct RuntimeArgs {
     /// Tiled display: how culled items are sent to tiles: adaptive (the paper's object and frustum hierarchies together), naive (every item against every tile's frustum), object-hierarchy, frustum-hierarchy or binning (screen rectangles); adaptive and naive are both timed every frame
     #[arg(long, value_name = "METHOD", default_value = "adaptive")]
     tile_culling: TileMethod,
-    /// Lazy occlusion grid: cell size in pixels (1-1024; the paper's 32)
-    #[arg(long, default_value_t = GridOptions::default().cell)]
-    grid_cell: u32,
-    /// Lazy occlusion grid: refresh cells as they are drawn over instead of when a test needs them (same culling, more depth reads; for comparison)
-    #[arg(long)]
-    grid_eager: bool,
-    /// Lazy occlusion grid: triangles STC rasterizes a frame at most, nearest first (all, or a count such as 200k); what is not rasterized occludes nothing
-    #[arg(long, value_name = "all|TRIANGLES", default_value = "all")]
-    grid_budget: OccluderBudget,
-    /// Occlusion queries: boxes per round trip to the device, the node being tested and the nearest queued ones (1-4096; 1 = the paper: one round trip per test)
-    #[arg(long, default_value_t = OqOptions::default().batch)]
-    oq_batch: u32,
-    /// Occlusion queries, coherent (after CHC): nodes visible last frame are drawn without waiting and queried for the next frame
-    #[arg(long)]
-    oq_coherent: bool,
-    /// Occlusion queries, adaptive (the paper's Eq. 1; approximate): cull boxes passing fewer than N samples (0 = off; needs a device that counts samples)
-    #[arg(long, default_value_t = 0)]
-    oq_adaptive: u64,
-    /// Occlusion queries, cost-adaptive (Eq. 2): stop querying after this fraction of the previous frame's time (the paper: 0.33; 0 = frustum culling only; absent = no budget)
-    #[arg(long)]
-    oq_budget: Option<f64>,
-    /// Occlusion queries: draw leaves without testing them, as the paper does
-    #[arg(long)]
-    oq_untested_leaves: bool,
-    /// Large occluders (ct): occluders a frame, the best by the paper's area-angle metric (1-64; the paper's k)
-    #[arg(long, default_value_t = CtOptions::default().occluders)]
-    ct_occluders: usize,
-    /// Large occluders (ct): (node, occluder) tangent-plane pairs cached across frames (0 = no cache)
-    #[arg(long, default_value_t = CtOptions::default().cache_pairs)]
-    ct_cache: usize,
-    /// Large occluders (ct): score every stored occluder each frame instead of the eye's view cell's list (the scene's OCVC section)
-    #[arg(long)]
-    ct_all_occluders: bool,
-    /// Large occluders (ct): leave out occluders that reach nearer than the near plane instead of clipping them to it (culls less; their planes are not cached)
-    #[arg(long)]
-    ct_no_clip: bool,
+    /// Every culler's flags (`--grid-*`, `--oq-*`, `--ct-*`), from the
+    /// runtime's culler files.
+    #[command(flatten)]
+    cullers: CullerArgs,
 }
 
 impl RuntimeArgs {
@@ -190,28 +158,7 @@ impl RuntimeArgs {
             speculative_rvg: self.speculative_rvg,
             stc_delay_ms: self.stc_delay_ms,
             tile_culling: self.tile_culling,
-            grid: GridOptions {
-                cell: self.grid_cell,
-                lazy: !self.grid_eager,
-                triangle_budget: match self.grid_budget {
-                    OccluderBudget::Triangles(t) => t,
-                    _ => u64::MAX,
-                },
-                ..GridOptions::default()
-            },
-            ct: CtOptions {
-                occluders: self.ct_occluders,
-                cache_pairs: self.ct_cache,
-                cells: !self.ct_all_occluders,
-                clip: !self.ct_no_clip,
-            },
-            oq: OqOptions {
-                batch: self.oq_batch,
-                coherent: self.oq_coherent,
-                adaptive: self.oq_adaptive,
-                budget: self.oq_budget,
-                test_leaves: !self.oq_untested_leaves,
-            },
+            cullers: self.cullers.options(),
             ..RuntimeOptions::default()
         }
     }

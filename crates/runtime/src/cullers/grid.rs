@@ -2,11 +2,13 @@
 //! software depth image of its own and tests node boxes against a grid of
 //! cells over it, refreshed only where a test needs them. No OR, no lag.
 
-use gigawalk_cull::{GridCuller, GridStats, OcclusionGrid, TraversalStats};
+pub use gigawalk_cull::GridStats;
+use gigawalk_cull::{GridCuller, OcclusionGrid, TraversalStats};
 
-use super::{Setup, Traversal};
+use super::figures::{Column, Counter, Figure, Pool, Setting, Table};
+use super::{CullerOptionsError, Setup, Traversal};
 use crate::triangles::TriangleCache;
-use crate::OptionsError;
+use crate::OccluderBudget;
 
 /// The lazy occlusion grid's knobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,13 +38,155 @@ impl Default for GridOptions {
 }
 
 impl GridOptions {
-    pub fn validate(&self) -> Result<(), OptionsError> {
+    pub fn validate(&self) -> Result<(), CullerOptionsError> {
         if !(1..=1024).contains(&self.cell) {
-            return Err(OptionsError::GridCell(self.cell));
+            return Err(CullerOptionsError::GridCell(self.cell));
         }
         Ok(())
     }
+
+    /// The settings a replay's summary records.
+    pub(super) fn settings(&self) -> Vec<(&'static str, Setting)> {
+        vec![
+            ("grid_cell", Setting::Whole(u64::from(self.cell))),
+            ("grid_lazy", Setting::Flag(self.lazy)),
+        ]
+    }
 }
+
+/// The grid's command-line flags (`gigawalk replay`, `demo`).
+#[derive(Clone, Debug, clap::Args)]
+pub struct GridArgs {
+    /// Lazy occlusion grid: cell size in pixels (1-1024; the paper's 32)
+    #[arg(long, default_value_t = GridOptions::default().cell)]
+    grid_cell: u32,
+    /// Lazy occlusion grid: refresh cells as they are drawn over instead of when a test needs them (same culling, more depth reads; for comparison)
+    #[arg(long)]
+    grid_eager: bool,
+    /// Lazy occlusion grid: triangles STC rasterizes a frame at most, nearest first (all, or a count such as 200k); what is not rasterized occludes nothing
+    #[arg(long, value_name = "all|TRIANGLES", default_value = "all", value_parser = parse_budget)]
+    grid_budget: OccluderBudget,
+}
+
+/// `all` or a triangle count (not `auto` or `adaptive`, which only OR's
+/// occluder budget knows).
+fn parse_budget(s: &str) -> Result<OccluderBudget, String> {
+    match s.parse()? {
+        b @ (OccluderBudget::All | OccluderBudget::Triangles(_)) => Ok(b),
+        _ => Err(format!(
+            "grid budget {s:?} is not all or a triangle count (e.g. 200000, 200k)"
+        )),
+    }
+}
+
+impl GridArgs {
+    pub fn options(&self) -> GridOptions {
+        GridOptions {
+            cell: self.grid_cell,
+            lazy: !self.grid_eager,
+            triangle_budget: match self.grid_budget {
+                OccluderBudget::Triangles(t) => t,
+                _ => u64::MAX,
+            },
+            ..GridOptions::default()
+        }
+    }
+}
+
+/// The grid's counts a frame.
+pub(super) const COUNTERS: &[Counter] = &[
+    Counter {
+        name: "grid_raster_ms",
+        decimals: 3,
+        csv: true,
+    },
+    Counter {
+        name: "grid_test_ms",
+        decimals: 3,
+        csv: true,
+    },
+    Counter {
+        name: "grid_pixel_reads",
+        decimals: 0,
+        csv: true,
+    },
+    Counter {
+        name: "grid_triangles",
+        decimals: 0,
+        csv: true,
+    },
+];
+
+/// `s` in the order of [`COUNTERS`].
+pub(super) fn counts(s: &GridStats) -> Vec<f64> {
+    vec![
+        s.raster_ms,
+        s.test_ms,
+        s.pixel_reads as f64,
+        s.triangles_drawn as f64,
+    ]
+}
+
+/// The grid's figures of a run: median ms STC spent rasterizing and
+/// answering box tests, mean depth pixels read a frame, mean triangles
+/// rasterized a frame.
+pub(super) const FIGURES: &[Figure] = &[
+    Figure {
+        key: "median_grid_raster_ms",
+        pool: Pool::Median("grid_raster_ms"),
+    },
+    Figure {
+        key: "median_grid_test_ms",
+        pool: Pool::Median("grid_test_ms"),
+    },
+    Figure {
+        key: "mean_grid_pixel_reads",
+        pool: Pool::Mean("grid_pixel_reads"),
+    },
+    Figure {
+        key: "mean_grid_triangles",
+        pool: Pool::Mean("grid_triangles"),
+    },
+];
+
+pub(super) const TABLE: Table = Table {
+    title: "Lazy occlusion grid",
+    preamble: |setting| {
+        format!(
+            "Cells of {} pixels, {} updates.",
+            setting("grid_cell").whole().unwrap_or(0),
+            if setting("grid_lazy").flag().unwrap_or(true) {
+                "lazy"
+            } else {
+                "eager"
+            },
+        )
+    },
+    columns: &[
+        Column::StcMs,
+        Column::Figure {
+            header: "rasterize ms",
+            key: "median_grid_raster_ms",
+            decimals: Some(2),
+        },
+        Column::Figure {
+            header: "grid tests ms",
+            key: "median_grid_test_ms",
+            decimals: Some(2),
+        },
+        Column::Figure {
+            header: "depth pixels read",
+            key: "mean_grid_pixel_reads",
+            decimals: None,
+        },
+        Column::Figure {
+            header: "triangles rasterized",
+            key: "mean_grid_triangles",
+            decimals: None,
+        },
+        Column::OcclusionCulled,
+    ],
+};
 
 /// The grid and the host-side triangles it rasterizes.
 pub(crate) struct State<'a> {

@@ -1,12 +1,16 @@
 //! The occlusion cullers STC can ask (docs/culling.md), one file each.
-//! A culler's file owns its options and their checks, whether it can run
-//! on a given runtime ([`Unavailable`]), its state from frame to frame and
-//! a frame's culling; [`CullMethod::ALL`] lists them, and [`State`] is the
+//! A culler's file owns its options, their checks and command-line flags,
+//! whether it can run on a given runtime ([`Unavailable`]), its state from
+//! frame to frame, a frame's culling, and what it reports: its counts a
+//! frame, its figures of a run and its table ([`figures`]). This file is
+//! the registry: [`CullMethod::ALL`] lists the cullers, and the types here
+//! ([`CullerOptions`], [`CullerArgs`], [`CullerWork`], [`State`]) are the
 //! one place that dispatches on which runs. Adding a culler is its
-//! algorithm (in gigawalk-cull), its file here, its line in
-//! [`CullMethod`] and [`State`], and its docs and tests.
+//! algorithm (in gigawalk-cull), its file here, its lines in this file,
+//! and its docs and tests; nothing outside this module names a culler.
 
 pub mod ct;
+pub mod figures;
 pub mod grid;
 pub mod hzb;
 pub mod oq;
@@ -21,9 +25,10 @@ use gigawalk_scene::Skeleton;
 use crate::streaming::LodSource;
 use crate::{Runtime, RuntimeError, RuntimeOptions};
 
-pub use ct::CtOptions;
-pub use grid::GridOptions;
-pub use oq::{OqOptions, OqStats};
+pub use ct::{CtArgs, CtOptions};
+pub use figures::{Column, Counter, Figure, Pool, Setting, Table};
+pub use grid::{GridArgs, GridOptions};
+pub use oq::{OqArgs, OqOptions, OqStats};
 
 /// Which occlusion culler STC asks (docs/culling.md has each one's needs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -55,6 +60,145 @@ impl CullMethod {
     /// for the others).
     pub fn needs_occluder_depth(self) -> bool {
         self == CullMethod::Hzb
+    }
+
+    /// Whether the culler reads the scene's stored occluders (OCCL).
+    pub fn reads_occluders(self) -> bool {
+        self == CullMethod::Ct
+    }
+
+    /// The counts the culler keeps each frame ([`CullerWork::counts`]).
+    pub fn counters(self) -> &'static [Counter] {
+        match self {
+            CullMethod::Hzb => &[],
+            CullMethod::Grid => grid::COUNTERS,
+            CullMethod::Oq => oq::COUNTERS,
+            CullMethod::Ct => ct::COUNTERS,
+        }
+    }
+
+    /// The figures a run's summary pools from those counts.
+    pub fn figures(self) -> &'static [Figure] {
+        match self {
+            CullMethod::Hzb => &[],
+            CullMethod::Grid => grid::FIGURES,
+            CullMethod::Oq => oq::FIGURES,
+            CullMethod::Ct => ct::FIGURES,
+        }
+    }
+
+    /// The culler's table in a replay's summary.md, if it has one.
+    pub fn table(self) -> Option<&'static Table> {
+        match self {
+            CullMethod::Grid => Some(&grid::TABLE),
+            CullMethod::Oq => Some(&oq::TABLE),
+            CullMethod::Hzb | CullMethod::Ct => None,
+        }
+    }
+
+    /// The culler's settings in `opts`, named as a replay's summary
+    /// records them.
+    pub fn settings(self, opts: &CullerOptions) -> Vec<(&'static str, Setting)> {
+        match self {
+            CullMethod::Hzb => Vec::new(),
+            CullMethod::Grid => opts.grid.settings(),
+            CullMethod::Oq => opts.oq.settings(),
+            CullMethod::Ct => opts.ct.settings(),
+        }
+    }
+}
+
+/// Every culler's options (the HZB's are the runtime's own:
+/// `RuntimeOptions::hzb_reduction`, the occluder budget and lag).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CullerOptions {
+    pub grid: GridOptions,
+    pub oq: OqOptions,
+    pub ct: CtOptions,
+}
+
+impl CullerOptions {
+    /// Checks every culler's options (not only the running one's: a bad
+    /// value is an error whichever culler runs).
+    pub fn validate(&self) -> Result<(), CullerOptionsError> {
+        self.grid.validate()?;
+        self.oq.validate()?;
+        self.ct.validate()
+    }
+}
+
+/// A culler's option out of its range, named with its value.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CullerOptionsError {
+    #[error("grid cell {0} must be 1..=1024 pixels")]
+    GridCell(u32),
+    #[error("object-space occluders a frame {0} must be 1..=64")]
+    CtOccluders(usize),
+    #[error("occlusion-query batch {0} must be 1..=4096 (a query set's size)")]
+    OqBatch(u32),
+    #[error("occlusion-query budget {0} must be a fraction in [0, 10]")]
+    OqBudget(f64),
+}
+
+/// Every culler's command-line flags, for a CLI to flatten.
+#[derive(Clone, Debug, clap::Args)]
+pub struct CullerArgs {
+    #[command(flatten)]
+    grid: GridArgs,
+    #[command(flatten)]
+    oq: OqArgs,
+    #[command(flatten)]
+    ct: CtArgs,
+}
+
+impl CullerArgs {
+    pub fn options(&self) -> CullerOptions {
+        CullerOptions {
+            grid: self.grid.options(),
+            oq: self.oq.options(),
+            ct: self.ct.options(),
+        }
+    }
+}
+
+/// What the running culler did in a frame, beyond traversal's own counts
+/// (none for the HZB): typed, and as named counts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum CullerWork {
+    Grid(GridStats),
+    Oq(OqStats),
+    Ct(CtStats),
+}
+
+impl CullerWork {
+    pub fn culler(&self) -> CullMethod {
+        match self {
+            CullerWork::Grid(_) => CullMethod::Grid,
+            CullerWork::Oq(_) => CullMethod::Oq,
+            CullerWork::Ct(_) => CullMethod::Ct,
+        }
+    }
+
+    /// The frame's counts, in the order of the culler's
+    /// [`CullMethod::counters`].
+    pub fn counts(&self) -> Vec<f64> {
+        match self {
+            CullerWork::Grid(s) => grid::counts(s),
+            CullerWork::Oq(s) => oq::counts(s),
+            CullerWork::Ct(s) => ct::counts(s),
+        }
+    }
+
+    /// The count named `name`, if this culler keeps it.
+    pub fn count(&self, name: &str) -> Option<f64> {
+        let i = self
+            .culler()
+            .counters()
+            .iter()
+            .position(|c| c.name == name)?;
+        Some(self.counts()[i])
     }
 }
 
@@ -155,14 +299,6 @@ impl Traversal<'_, '_> {
     }
 }
 
-/// What a culler did in a frame, beyond traversal's own counts.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Work {
-    pub grid: Option<GridStats>,
-    pub oq: Option<OqStats>,
-    pub ct: Option<CtStats>,
-}
-
 /// The running culler's state from frame to frame (the query pass boxed:
 /// it is twice the next largest).
 pub(crate) enum State<'a> {
@@ -179,9 +315,9 @@ impl<'a> State<'a> {
     pub fn new(setup: &Setup<'a>, opts: &'a RuntimeOptions) -> Result<Self, RuntimeError> {
         Ok(match opts.culler {
             CullMethod::Hzb => State::Hzb(hzb::State::new(setup)),
-            CullMethod::Grid => State::Grid(grid::State::new(setup, &opts.grid)),
+            CullMethod::Grid => State::Grid(grid::State::new(setup, &opts.cullers.grid)),
             CullMethod::Oq => State::Oq(Box::new(oq::State::new(setup, opts)?)),
-            CullMethod::Ct => State::Ct(ct::State::load(setup, &opts.ct)?),
+            CullMethod::Ct => State::Ct(ct::State::load(setup, &opts.cullers.ct)?),
         })
     }
 
@@ -205,27 +341,23 @@ impl<'a> State<'a> {
         &mut self,
         t: &mut Traversal<'_, 'a>,
         opts: &RuntimeOptions,
-    ) -> Result<(TraversalStats, Work), RuntimeError> {
-        let mut work = Work::default();
-        let stats = match self {
-            State::Hzb(s) => s.cull(t),
+    ) -> Result<(TraversalStats, Option<CullerWork>), RuntimeError> {
+        let o = &opts.cullers;
+        Ok(match self {
+            State::Hzb(s) => (s.cull(t), None),
             State::Grid(s) => {
-                let (stats, g) = s.cull(t, &opts.grid);
-                work.grid = Some(g);
-                stats
+                let (stats, g) = s.cull(t, &o.grid);
+                (stats, Some(CullerWork::Grid(g)))
             }
             State::Oq(s) => {
-                let (stats, q) = s.cull(t, opts.oq)?;
-                work.oq = Some(q);
-                stats
+                let (stats, q) = s.cull(t, o.oq)?;
+                (stats, Some(CullerWork::Oq(q)))
             }
             State::Ct(s) => {
-                let (stats, c) = s.cull(t, &opts.ct);
-                work.ct = Some(c);
-                stats
+                let (stats, c) = s.cull(t, &o.ct);
+                (stats, Some(CullerWork::Ct(c)))
             }
-        };
-        Ok((stats, work))
+        })
     }
 }
 
@@ -247,6 +379,99 @@ mod tests {
         o.culler = CullMethod::Hzb;
         o.traversal.occlusion = false;
         assert!(!o.wants_occluder_depth());
+    }
+
+    #[test]
+    fn bad_culler_options_are_typed_errors_naming_the_option() {
+        use crate::OptionsError;
+        let check =
+            |edit: &dyn Fn(&mut CullerOptions), expected: CullerOptionsError, text: &str| {
+                let mut o = RuntimeOptions::default();
+                edit(&mut o.cullers);
+                let e = o.validate().unwrap_err();
+                assert_eq!(e, OptionsError::Culler(expected));
+                assert!(e.to_string().contains(text), "{e}");
+            };
+        check(
+            &|o| o.oq.batch = 0,
+            CullerOptionsError::OqBatch(0),
+            "batch 0",
+        );
+        check(
+            &|o| o.ct.occluders = 65,
+            CullerOptionsError::CtOccluders(65),
+            "a frame 65",
+        );
+        check(
+            &|o| o.oq.budget = Some(-1.0),
+            CullerOptionsError::OqBudget(-1.0),
+            "budget -1",
+        );
+        check(
+            &|o| o.grid.cell = 0,
+            CullerOptionsError::GridCell(0),
+            "grid cell 0",
+        );
+        check(
+            &|o| o.grid.cell = 4096,
+            CullerOptionsError::GridCell(4096),
+            "grid cell 4096",
+        );
+    }
+
+    #[test]
+    fn every_culler_names_its_counts_figures_and_columns_once() {
+        let mut names = std::collections::HashSet::new();
+        for c in CullMethod::ALL {
+            let counters = c.counters();
+            for k in counters {
+                assert!(names.insert(k.name), "{c}: count {} twice", k.name);
+            }
+            let known = |n: &str| counters.iter().any(|k| k.name == n);
+            for f in c.figures() {
+                assert!(names.insert(f.key), "{c}: figure {} twice", f.key);
+                match f.pool {
+                    Pool::Mean(n) | Pool::Median(n) => assert!(known(n), "{c}: {n}"),
+                    Pool::Share { part, whole } => assert!(known(part) && known(whole), "{c}"),
+                }
+            }
+            for (name, _) in c.settings(&CullerOptions::default()) {
+                assert!(names.insert(name), "{c}: setting {name} twice");
+            }
+            if let Some(t) = c.table() {
+                for col in t.columns {
+                    if let Column::Figure { key, .. } = col {
+                        assert!(c.figures().iter().any(|f| f.key == *key), "{c}: {key}");
+                    }
+                }
+                assert!(!(t.preamble)(&|_| Setting::Unset).is_empty());
+            }
+        }
+    }
+
+    #[test]
+    fn a_frames_work_gives_its_counts_by_name() {
+        let w = CullerWork::Oq(OqStats {
+            queries: 7,
+            round_trips: 2,
+            over_budget: 1,
+            coherent: 3,
+            ms: 0.5,
+        });
+        assert_eq!(w.culler(), CullMethod::Oq);
+        assert_eq!(w.counts().len(), CullMethod::Oq.counters().len());
+        assert_eq!(w.count("oq_queries"), Some(7.0));
+        assert_eq!(w.count("oq_untested"), Some(4.0));
+        assert_eq!(w.count("grid_raster_ms"), None);
+        let g = CullerWork::Grid(GridStats::default());
+        assert_eq!(g.counts().len(), CullMethod::Grid.counters().len());
+        let c = CullerWork::Ct(CtStats {
+            cache_hits: 3,
+            cache_misses: 1,
+            ..Default::default()
+        });
+        assert_eq!(c.counts().len(), CullMethod::Ct.counters().len());
+        assert_eq!(c.count("ct_cache_lookups"), Some(4.0));
     }
 
     #[test]

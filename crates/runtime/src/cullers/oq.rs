@@ -17,10 +17,11 @@ use gigawalk_cull::{
 use gigawalk_gpu::{GpuContext, QueryBox, QueryPass, Residency};
 use gigawalk_scene::Skeleton;
 
-use super::{Host, Setup, Traversal, Unavailable};
+use super::figures::{Column, Counter, Figure, Pool, Setting, Table};
+use super::{CullerOptionsError, Host, Setup, Traversal, Unavailable};
 use crate::gpu_view;
 use crate::streaming::Geometry;
-use crate::{OptionsError, RuntimeError, Stage};
+use crate::{RuntimeError, Stage};
 
 /// The occlusion-query culler's knobs (Bartz et al.; docs/culling.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,19 +58,171 @@ impl Default for OqOptions {
 }
 
 impl OqOptions {
-    pub fn validate(&self) -> Result<(), OptionsError> {
+    pub fn validate(&self) -> Result<(), CullerOptionsError> {
         if !(1..=4096).contains(&self.batch) {
-            return Err(OptionsError::OqBatch(self.batch));
+            return Err(CullerOptionsError::OqBatch(self.batch));
         }
         if let Some(b) = self
             .budget
             .filter(|b| !(b.is_finite() && (0.0..=10.0).contains(b)))
         {
-            return Err(OptionsError::OqBudget(b));
+            return Err(CullerOptionsError::OqBudget(b));
         }
         Ok(())
     }
+
+    /// The settings a replay's summary records.
+    pub(super) fn settings(&self) -> Vec<(&'static str, Setting)> {
+        vec![
+            ("oq_batch", Setting::Whole(u64::from(self.batch))),
+            ("oq_coherent", Setting::Flag(self.coherent)),
+            ("oq_adaptive", Setting::Whole(self.adaptive)),
+            (
+                "oq_budget",
+                self.budget.map_or(Setting::Unset, Setting::Number),
+            ),
+            ("oq_test_leaves", Setting::Flag(self.test_leaves)),
+        ]
+    }
 }
+
+/// The occlusion queries' command-line flags (`gigawalk replay`, `demo`).
+#[derive(Clone, Debug, clap::Args)]
+pub struct OqArgs {
+    /// Occlusion queries: boxes per round trip to the device, the node being tested and the nearest queued ones (1-4096; 1 = the paper: one round trip per test)
+    #[arg(long, default_value_t = OqOptions::default().batch)]
+    oq_batch: u32,
+    /// Occlusion queries, coherent (after CHC): nodes visible last frame are drawn without waiting and queried for the next frame
+    #[arg(long)]
+    oq_coherent: bool,
+    /// Occlusion queries, adaptive (the paper's Eq. 1; approximate): cull boxes passing fewer than N samples (0 = off; needs a device that counts samples)
+    #[arg(long, default_value_t = 0)]
+    oq_adaptive: u64,
+    /// Occlusion queries, cost-adaptive (Eq. 2): stop querying after this fraction of the previous frame's time (the paper: 0.33; 0 = frustum culling only; absent = no budget)
+    #[arg(long)]
+    oq_budget: Option<f64>,
+    /// Occlusion queries: draw leaves without testing them, as the paper does
+    #[arg(long)]
+    oq_untested_leaves: bool,
+}
+
+impl OqArgs {
+    pub fn options(&self) -> OqOptions {
+        OqOptions {
+            batch: self.oq_batch,
+            coherent: self.oq_coherent,
+            adaptive: self.oq_adaptive,
+            budget: self.oq_budget,
+            test_leaves: !self.oq_untested_leaves,
+        }
+    }
+}
+
+/// The queries' counts a frame ("untested": passed as visible without a
+/// test, over the time budget or coherent).
+pub(super) const COUNTERS: &[Counter] = &[
+    Counter {
+        name: "oq_queries",
+        decimals: 0,
+        csv: true,
+    },
+    Counter {
+        name: "oq_round_trips",
+        decimals: 0,
+        csv: true,
+    },
+    Counter {
+        name: "oq_ms",
+        decimals: 3,
+        csv: true,
+    },
+    Counter {
+        name: "oq_untested",
+        decimals: 0,
+        csv: true,
+    },
+];
+
+/// `s` in the order of [`COUNTERS`].
+pub(super) fn counts(s: &OqStats) -> Vec<f64> {
+    vec![
+        s.queries as f64,
+        s.round_trips as f64,
+        s.ms,
+        (s.over_budget + s.coherent) as f64,
+    ]
+}
+
+/// The queries' figures of a run: mean boxes queried and round trips a
+/// frame, median ms in round trips, mean nodes passed untested.
+pub(super) const FIGURES: &[Figure] = &[
+    Figure {
+        key: "mean_oq_queries",
+        pool: Pool::Mean("oq_queries"),
+    },
+    Figure {
+        key: "mean_oq_round_trips",
+        pool: Pool::Mean("oq_round_trips"),
+    },
+    Figure {
+        key: "median_oq_ms",
+        pool: Pool::Median("oq_ms"),
+    },
+    Figure {
+        key: "mean_oq_untested",
+        pool: Pool::Mean("oq_untested"),
+    },
+];
+
+pub(super) const TABLE: Table = Table {
+    title: "Occlusion queries",
+    preamble: |setting| {
+        let budget = match setting("oq_budget").number() {
+            Some(b) => format!("{b} of the last frame"),
+            None => "none".into(),
+        };
+        format!(
+            "Batches of {} boxes a round trip, coherent {}, adaptive threshold {} samples, time budget {budget}, leaves {}.",
+            setting("oq_batch").whole().unwrap_or(0),
+            if setting("oq_coherent").flag().unwrap_or(false) {
+                "on"
+            } else {
+                "off"
+            },
+            setting("oq_adaptive").whole().unwrap_or(0),
+            if setting("oq_test_leaves").flag().unwrap_or(true) {
+                "tested"
+            } else {
+                "drawn untested (the paper)"
+            },
+        )
+    },
+    columns: &[
+        Column::StcMs,
+        Column::Figure {
+            header: "queries",
+            key: "mean_oq_queries",
+            decimals: None,
+        },
+        Column::Figure {
+            header: "round trips",
+            key: "mean_oq_round_trips",
+            decimals: Some(1),
+        },
+        Column::Figure {
+            header: "ms in round trips",
+            key: "median_oq_ms",
+            decimals: Some(2),
+        },
+        Column::Figure {
+            header: "passed untested",
+            key: "mean_oq_untested",
+            decimals: None,
+        },
+        Column::OcclusionCulled,
+        Column::Triangles,
+    ],
+};
 
 /// The culler draws on RVG's device, which must hold the whole scene.
 pub(super) fn check(host: &Host) -> Result<(), Unavailable> {
@@ -134,7 +287,7 @@ impl<'a> State<'a> {
             return Err(unavailable(Unavailable::NotResident));
         };
         let ctx = &rt.devices[b];
-        if opts.oq.adaptive > 0
+        if opts.cullers.oq.adaptive > 0
             && gigawalk_gpu::query_counts(ctx).map_err(|source| RuntimeError::Setup { source })?
                 != gigawalk_gpu::QueryCounts::Exact
         {

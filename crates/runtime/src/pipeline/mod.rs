@@ -181,9 +181,7 @@ pub(super) fn report(
         occluder_limit: end.or.limit,
         or_ms: end.or.ms,
         hzb_ms: end.stc.hzb_ms,
-        grid: end.stc.grid,
-        oq: end.stc.oq,
-        ct: end.stc.ct,
+        culler_work: end.stc.culler_work,
         tiles: end.stc.tiles.clone(),
         pixel_error: end.stc.tolerance,
         speculative: false,
@@ -448,9 +446,7 @@ impl Frozen {
         Some(StcOutput {
             ms: 0.0,
             hzb_ms: 0.0,
-            grid: None,
-            oq: None,
-            ct: None,
+            culler_work: None,
             ..last.clone()
         })
     }

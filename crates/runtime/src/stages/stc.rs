@@ -6,14 +6,14 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use gigawalk_cull::{
-    BoxTest, Camera, Containment, CtStats, CullReason, CullView, DrawItem, Frustum, GridStats,
-    NoOcclusion, OcclusionTest, RelBox, TraversalOptions, TraversalStats, Traverser, ALL_PLANES,
+    BoxTest, Camera, Containment, CullReason, CullView, DrawItem, Frustum, NoOcclusion,
+    OcclusionTest, RelBox, TraversalOptions, TraversalStats, Traverser, ALL_PLANES,
 };
 use gigawalk_gpu::DepthImage;
 use gigawalk_scene::Skeleton;
 
 use super::*;
-use crate::cullers::OqStats;
+use crate::cullers::CullerWork;
 use crate::streaming::{Plan, Request, PREFETCH_BAND};
 use crate::{ms_since, RuntimeError, RuntimeOptions, Stage};
 
@@ -150,12 +150,8 @@ pub(crate) struct StcOutput {
     pub culled: Arc<[(u32, CullReason)]>,
     pub occlusion_used: bool,
     pub hzb_ms: f64,
-    /// The lazy occlusion grid's work (grid culler only).
-    pub grid: Option<GridStats>,
-    /// The occlusion queries' work (oq culler only).
-    pub oq: Option<OqStats>,
-    /// The object-space culler's work (ct culler only).
-    pub ct: Option<CtStats>,
+    /// What the culler did beyond traversal (none for the HZB).
+    pub culler_work: Option<CullerWork>,
     /// The tiles' draw lists (a tiled display only).
     pub tiles: Option<Arc<TileFrame>>,
     /// The pixel-error tolerance traversal used.
@@ -239,10 +235,7 @@ impl<'a> StcStage<'a> {
         };
         let (stats, work) = match self.culler.as_mut().filter(|_| occlusion) {
             Some(c) => c.cull(&mut traversal, self.opts)?,
-            None => (
-                traversal.run(&mut BoxTest(&NoOcclusion)),
-                crate::cullers::Work::default(),
-            ),
+            None => (traversal.run(&mut BoxTest(&NoOcclusion)), None),
         };
         if let Some(p) = self.prefetch.as_ref().filter(|_| self.opts.prefetch.ring()) {
             p.margin(&mut self.traverser, skeleton, view, &options, frame);
@@ -265,9 +258,7 @@ impl<'a> StcStage<'a> {
             visible: visible.into(),
             occlusion_used: occlusion,
             hzb_ms,
-            grid: work.grid,
-            oq: work.oq,
-            ct: work.ct,
+            culler_work: work,
             ms: ms_since(t),
         })
     }

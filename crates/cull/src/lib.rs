@@ -30,6 +30,8 @@
 //! This crate knows nothing about GPUs and starts no threads of its own
 //! (HZB building uses rayon's pool inside the call).
 
+#![forbid(unsafe_code)]
+
 mod camera;
 mod ct;
 mod culler;

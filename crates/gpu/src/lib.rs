@@ -12,6 +12,8 @@
 //! plane, 0 at infinity; clear to 0, keep the greater); images read back
 //! row-major with row 0 at the top.
 
+#![forbid(unsafe_code)]
+
 mod capabilities;
 mod context;
 mod overlay;

@@ -14,6 +14,8 @@
 //! [`ImportError`] naming the file, the mesh/primitive or group, and the
 //! index; bad input never panics.
 
+#![forbid(unsafe_code)]
+
 mod error;
 mod glb;
 mod gltf_extensions;

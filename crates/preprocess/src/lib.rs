@@ -19,6 +19,8 @@
 //! Results depend only on the model and parameters, never on the number
 //! of threads.
 
+#![forbid(unsafe_code)]
+
 pub mod cluster;
 pub mod hausdorff;
 pub mod hierarchy;

@@ -7,6 +7,8 @@
 //! written file reproduces exactly. The same arguments give byte-identical
 //! files: a fixed PRNG ([`rng`]), no hash maps, no time stamps.
 
+#![forbid(unsafe_code)]
+
 mod city;
 mod forest;
 mod glb;

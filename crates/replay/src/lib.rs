@@ -12,6 +12,8 @@
 //! no threads of its own ([`bound_violations`] uses rayon's pool inside
 //! the call, after each run, like the cull crate's HZB build).
 
+#![forbid(unsafe_code)]
+
 mod accuracy;
 pub mod demo;
 pub mod gpu_run;

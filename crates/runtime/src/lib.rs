@@ -15,6 +15,8 @@
 //! error closes its queues, every other stage sees that and stops, and the
 //! run returns the first error.
 
+#![forbid(unsafe_code)]
+
 mod cullers;
 mod occluders;
 mod options;

@@ -13,6 +13,8 @@
 //!
 //! This crate knows nothing about GPUs or threads.
 
+#![forbid(unsafe_code)]
+
 mod aabb;
 mod atomic;
 mod error;

@@ -11,6 +11,8 @@
 //!
 //! Everything but [`run`] works without a window, so it is unit-tested.
 
+#![forbid(unsafe_code)]
+
 mod app;
 mod boxes;
 mod controller;

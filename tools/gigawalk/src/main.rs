@@ -1,6 +1,8 @@
 //! The `gigawalk` command line: argument parsing, progress and error
 //! printing only. Every subcommand's logic lives in a crate.
 
+#![forbid(unsafe_code)]
+
 /// `println!` for results on standard output, as an expression of type
 /// `anyhow::Result<()>`: use it with `?`. A reader that stops early
 /// (`gigawalk info scene.gwk | head`) closes the pipe; that comes back as

@@ -223,3 +223,37 @@ impl<'a> State<'a> {
         (stats, c.grid.stats)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser as _;
+
+    use super::*;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        grid: GridArgs,
+    }
+
+    fn budget(arg: &str) -> Result<u64, String> {
+        Cli::try_parse_from(["x", "--grid-budget", arg])
+            .map(|c| c.grid.options().triangle_budget)
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn the_grid_budget_is_all_or_a_triangle_count() {
+        assert_eq!(budget("all"), Ok(u64::MAX));
+        assert_eq!(budget("200000"), Ok(200_000));
+        assert_eq!(budget("200k"), Ok(200_000));
+        // OR's own budgets mean nothing to the grid: refused, not read as all.
+        for arg in ["auto", "adaptive"] {
+            let e = budget(arg).unwrap_err();
+            assert!(e.contains("is not all or a triangle count"), "{arg}: {e}");
+        }
+        assert!(budget("lots").is_err());
+        let o = Cli::try_parse_from(["x"]).unwrap().grid.options();
+        assert_eq!(o, GridOptions::default());
+    }
+}

@@ -19,7 +19,8 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthImage, DrawStyle};
 
-use crate::stages::{lod_ids, OrFigures, Prefetch, RvgStage, StcOutput, Target};
+use crate::stages::{lod_ids, OrFigures, RvgStage, StcOutput, Target};
+use crate::streaming::Prefetch;
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
 };

@@ -12,12 +12,14 @@ use or::OrRender;
 pub(crate) use or::{OrFigures, OrStage};
 use rvg::RvgRender;
 pub(crate) use rvg::RvgStage;
-pub(crate) use stc::{Prefetch, StcOutput, StcStage};
+pub(crate) use stc::{StcOutput, StcStage};
 pub use tile_frame::TileFrame;
 
 use std::sync::Mutex;
 
 use gigawalk_cull::DrawItem;
+
+use crate::streaming::Prefetch;
 use gigawalk_gpu::{DepthPass, GpuContext, VisiblePass};
 use gigawalk_scene::Skeleton;
 

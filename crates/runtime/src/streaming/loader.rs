@@ -1,0 +1,194 @@
+//! The loader thread: reads the LODs the stages ask for, demands before
+//! prefetches and newest frame first, and hands each to every device.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crossbeam_channel::{Receiver, Sender};
+use gigawalk_gpu::DecodedLod;
+
+use super::{Loaded, LodSource, Plan, Request, STALE_FRAMES};
+use crate::RuntimeError;
+
+/// The loader (the fourth stage): reads requested LODs, newest frame's
+/// first (prefetches only when no LOD a frame had to stand in for is
+/// waiting), skipping those every device of the run (`mask`) holds, and
+/// hands each to every device. Requests more than
+/// [`STALE_FRAMES`] older than the newest frame asked for are dropped
+/// (the camera has moved on; they are asked again if still needed). Ends
+/// when RVG's request queue closes, or every device's inbox has; a read
+/// error ends it with that error, and the stages see their inboxes close
+/// and stop.
+pub(crate) fn loader(
+    source: &dyn LodSource,
+    requests: Receiver<Request>,
+    prefetches: Receiver<Request>,
+    mut devices: Vec<Sender<Loaded>>,
+    plan: &Plan,
+    mask: u8,
+) -> Result<(), RuntimeError> {
+    // The newest frame any request came from.
+    let mut newest = 0u64;
+    // Pending requests: LOD -> (demand, frame, arrival); one per LOD, its
+    // newest, a demand outranking a prefetch.
+    let mut pending: HashMap<u32, (bool, u64, u64)> = HashMap::new();
+    let mut arrivals = 0u64;
+    let mut add = |pending: &mut HashMap<u32, (bool, u64, u64)>, r: Request| {
+        let e = pending
+            .entry(r.lod)
+            .or_insert((!r.prefetch, r.frame, arrivals));
+        e.0 |= !r.prefetch;
+        e.1 = e.1.max(r.frame);
+        arrivals += 1;
+    };
+    let mut prefetching = true;
+    loop {
+        if pending.is_empty() {
+            // Idle: wait for either queue (prefetches only while STC or OR runs).
+            if prefetching {
+                crossbeam_channel::select! {
+                    recv(requests) -> r => match r {
+                        Ok(r) => add(&mut pending, r),
+                        Err(_) => return Ok(()),
+                    },
+                    recv(prefetches) -> r => match r {
+                        Ok(r) => add(&mut pending, r),
+                        Err(_) => prefetching = false,
+                    },
+                }
+            } else {
+                match requests.recv() {
+                    Ok(r) => add(&mut pending, r),
+                    Err(_) => return Ok(()),
+                }
+            }
+        }
+        for r in requests.try_iter().chain(prefetches.try_iter()) {
+            add(&mut pending, r);
+        }
+        newest = pending.values().map(|p| p.1).fold(newest, u64::max);
+        pending.retain(|&lod, p| p.1 + STALE_FRAMES >= newest && !plan.held_by(lod, mask));
+        // Demands first, then the newest frame's first request (STC's
+        // order: near before far).
+        let Some((&lod, _)) = pending.iter().max_by_key(|(_, &(demand, frame, arrival))| {
+            (demand, frame, std::cmp::Reverse(arrival))
+        }) else {
+            continue;
+        };
+        pending.remove(&lod);
+        let mesh = source.read_lod(lod).map_err(|source| RuntimeError::Load {
+            source: Box::new(source),
+        })?;
+        let loaded: Loaded = Arc::new((lod, DecodedLod::new(&mesh)));
+        // A stage that has finished (OR at the end of the cameras) closes
+        // its inbox; the others still take loads.
+        devices.retain(|d| d.send(loaded.clone()).is_ok());
+        if devices.is_empty() {
+            return Ok(());
+        }
+    }
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crossbeam_channel::{bounded, unbounded};
+    use gigawalk_scene::{Colours, LodMesh, ReadError};
+
+    /// Hands out a one-triangle LOD for any id; `bad` is unreadable.
+    struct Fake {
+        bad: u32,
+    }
+
+    impl LodSource for Fake {
+        fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
+            if lod == self.bad {
+                return Err(ReadError {
+                    file: "fake.gwk".into(),
+                    kind: gigawalk_scene::ReadErrorKind::NoSuchLod { lod, count: 0 },
+                });
+            }
+            Ok(LodMesh {
+                origin: glam::DVec3::splat(lod as f64),
+                positions: vec![[0.0; 3]; 3],
+                normals: vec![[0.0, 0.0, 1.0]; 3],
+                colours: Colours::Uniform([1, 2, 3, 255]),
+                indices: vec![0, 1, 2],
+            })
+        }
+    }
+
+    fn plan(lods: usize) -> Plan {
+        Plan::unowned(lods)
+    }
+
+    fn req(lod: u32, frame: u64, prefetch: bool) -> Request {
+        Request {
+            lod,
+            frame,
+            prefetch,
+        }
+    }
+
+    /// Runs the loader over requests queued before it starts; the LODs it
+    /// hands out, in order.
+    fn load(plan: &Plan, demands: &[Request], prefetches: &[Request]) -> Vec<u32> {
+        let (rtx, rrx) = unbounded();
+        let (ptx, prx) = unbounded();
+        for r in demands {
+            rtx.send(*r).unwrap();
+        }
+        for r in prefetches {
+            ptx.send(*r).unwrap();
+        }
+        drop((rtx, ptx));
+        let (dtx, drx) = bounded(64);
+        loader(&Fake { bad: u32::MAX }, rrx, prx, vec![dtx], plan, 1).unwrap();
+        drx.try_iter().map(|l| l.0).collect()
+    }
+
+    /// A root over three leaves; leaf 1 has a fine LOD 1 (40 triangles)
+    /// and a coarse LOD 2 (20), leaves 2 and 3 one LOD each (3, 4: 40).
+    /// Only the root's one-triangle LOD 0 is pinned under budgets of 70 to
+    #[test]
+    fn loader_serves_demands_first_newest_frame_first_and_skips_stale_and_held() {
+        let p = plan(16);
+        p.set_held(9, 0, true);
+        let order = load(
+            &p,
+            &[
+                req(1, 4, false),
+                req(2, 5, false),
+                req(3, 5, false),
+                req(7, 1, false), // the camera moved on: dropped
+                req(9, 5, false), // already on the device
+                req(2, 5, false), // asked twice, loaded once
+            ],
+            &[req(5, 5, true), req(3, 5, true), req(6, 4, true)],
+        );
+        assert_eq!(order, vec![2, 3, 1, 5, 6]);
+    }
+
+    #[test]
+    fn a_read_error_ends_the_loader_with_it() {
+        let p = plan(4);
+        let (rtx, rrx) = unbounded();
+        let (_ptx, prx) = unbounded::<Request>();
+        rtx.send(req(2, 0, false)).unwrap();
+        let (dtx, _drx) = bounded(4);
+        let e = loader(&Fake { bad: 2 }, rrx, prx, vec![dtx], &p, 1).unwrap_err();
+        assert!(matches!(e, RuntimeError::Load { .. }), "{e}");
+        assert!(e.to_string().contains("fake.gwk"), "{e}");
+    }
+
+    #[test]
+    fn the_loader_ends_when_every_device_is_gone() {
+        let p = plan(4);
+        let (rtx, rrx) = unbounded();
+        let (_ptx, prx) = unbounded::<Request>();
+        rtx.send(req(1, 0, false)).unwrap();
+        let (dtx, drx) = bounded(4);
+        drop(drx);
+        loader(&Fake { bad: u32::MAX }, rrx, prx, vec![dtx], &p, 1).unwrap();
+        drop(rtx);
+    }
+}

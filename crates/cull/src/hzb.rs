@@ -32,6 +32,7 @@ pub enum Reduction {
 
 /// Why an HZB could not be built.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum HzbError {
     #[error("depth image is empty ({width}x{height})")]
     Empty { width: u32, height: u32 },

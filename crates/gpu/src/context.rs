@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex};
 
 /// Why the GPU side failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum GpuError {
     /// No adapter qualifies: `seen` names each adapter found and what it
     /// lacks, or the backends tried when there was none.

@@ -13,9 +13,10 @@ pub const BLIT_WGSL: &str = include_str!("../../../shaders/blit.wgsl");
 
 /// Why a window could not get a GPU surface.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum WindowError {
     #[error("cannot create a GPU surface for the window: {0}")]
-    Surface(String),
+    Surface(#[source] wgpu::CreateSurfaceError),
     #[error("no GPU adapter can present to the window (adapters: {adapters})")]
     NoPresentableAdapter { adapters: String },
     #[error(transparent)]
@@ -46,7 +47,7 @@ where
     let surface = c
         .instance
         .create_surface(window)
-        .map_err(|e| WindowError::Surface(e.to_string()))?;
+        .map_err(WindowError::Surface)?;
     let Some(best) = c.usable.iter().find(|a| a.is_surface_supported(&surface)) else {
         let names: Vec<String> = c
             .usable

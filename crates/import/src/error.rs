@@ -5,6 +5,7 @@
 /// `mesh "Pipe" (mesh 3) primitive 0` for glTF and `group "valve" (line 12)`
 /// for OBJ.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ImportError {
     #[error("{file}: cannot read: {source}")]
     Io {

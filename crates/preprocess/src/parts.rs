@@ -76,6 +76,7 @@ pub struct Part {
 
 /// Why a model cannot be preprocessed.
 #[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
 pub enum InputError {
     #[error("object {index} ({name}): index count {count} is not a multiple of 3")]
     IndexCount {

@@ -45,6 +45,7 @@ pub const DEFAULT_HEIGHT: u32 = 360;
 
 /// Why the demo scene could not be prepared.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DemoError {
     #[error("{file}: {source}")]
     Io {

@@ -20,6 +20,7 @@ pub const FORMAT: &str = "gigawalk-gpu-run 1";
 /// unreadable output is not one of these: it is recorded in the step's
 /// `note`, since a failed step must not lose the others' figures.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum GpuRunError {
     #[error("{file}: cannot read: {source}")]
     Read {

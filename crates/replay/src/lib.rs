@@ -28,8 +28,8 @@ pub use accuracy::{
 };
 pub use mode::{runs, Mode};
 pub use replay::{
-    probe_devices, replay, replay_on, FrameRecord, NoProgress, Progress, Replay, ReplayError,
-    ReplayOptions, RunRecord, TargetFps, TileFigures,
+    probe_devices, replay, replay_on, BadOption, FrameRecord, NoProgress, Progress, Replay,
+    ReplayError, ReplayOptions, RunRecord, TargetFps, TileFigures,
 };
 pub use report::{markdown, ReportError, Written};
 pub use summary::{median, percentile, ModeSummary, Summary};

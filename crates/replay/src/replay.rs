@@ -87,11 +87,34 @@ impl Default for ReplayOptions {
     }
 }
 
+/// A replay option that cannot be used.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BadOption {
+    #[error("no modes given")]
+    NoModes,
+    #[error("no pixel errors given")]
+    NoPixelErrors,
+    #[error("no cullers given")]
+    NoCullers,
+    #[error("pixel error {0} must be a finite number >= 0")]
+    PixelError(f64),
+    #[error("near plane {0} must be a finite number > 0")]
+    Near(f64),
+    #[error("frames must be at least 1")]
+    NoFrames,
+}
+
 /// Why a replay could not run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReplayError {
     #[error("bad replay option: {0}")]
-    Options(String),
+    Options(#[source] BadOption),
+    /// A culler asked for that this scene or runtime cannot run
+    /// ([`RuntimeError::CullerUnavailable`]).
+    #[error("bad replay option: {0}")]
+    Culler(#[source] Box<RuntimeError>),
     #[error("bad runtime option: {0}")]
     RuntimeOptions(#[source] gigawalk_runtime::OptionsError),
     #[error("the camera path has no poses")]
@@ -354,7 +377,7 @@ pub fn replay_on(
             match rt.check_culler(c) {
                 Ok(()) => {}
                 Err(e @ gigawalk_runtime::RuntimeError::CullerUnavailable { .. }) => {
-                    return Err(ReplayError::Options(e.to_string()))
+                    return Err(ReplayError::Culler(Box::new(e)))
                 }
                 Err(e) => return Err(ReplayError::Start(Box::new(e))),
             }
@@ -678,30 +701,81 @@ impl CameraSource for Settle {
 }
 
 fn validate(opts: &ReplayOptions) -> Result<(), ReplayError> {
-    let bad = |m: String| Err(ReplayError::Options(m));
+    let bad = |b: BadOption| Err(ReplayError::Options(b));
     if opts.modes.is_empty() {
-        return bad("no modes given".into());
+        return bad(BadOption::NoModes);
     }
     if opts.pixel_errors.is_empty() {
-        return bad("no pixel errors given".into());
+        return bad(BadOption::NoPixelErrors);
     }
     if opts.cullers.is_empty() {
-        return bad("no cullers given".into());
+        return bad(BadOption::NoCullers);
     }
     if let Some(e) = opts
         .pixel_errors
         .iter()
         .find(|e| !(e.is_finite() && **e >= 0.0))
     {
-        return bad(format!("pixel error {e} must be a finite number >= 0"));
+        return bad(BadOption::PixelError(*e));
     }
     if let Some(near) = opts.near {
         if !(near > 0.0 && near.is_finite()) {
-            return bad(format!("near plane {near} must be a finite number > 0"));
+            return bad(BadOption::Near(near));
         }
     }
     if opts.frames == Some(0) {
-        return bad("frames must be at least 1".into());
+        return bad(BadOption::NoFrames);
     }
     opts.runtime.validate().map_err(ReplayError::RuntimeOptions)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_options_are_typed_and_say_what_is_wrong() {
+        let with = |f: &dyn Fn(&mut ReplayOptions)| {
+            let mut o = ReplayOptions::default();
+            f(&mut o);
+            validate(&o)
+        };
+        assert!(with(&|_| {}).is_ok());
+        let cases: [(&dyn Fn(&mut ReplayOptions), BadOption, &str); 6] = [
+            (&|o| o.modes.clear(), BadOption::NoModes, "no modes given"),
+            (
+                &|o| o.pixel_errors.clear(),
+                BadOption::NoPixelErrors,
+                "no pixel errors",
+            ),
+            (&|o| o.cullers.clear(), BadOption::NoCullers, "no cullers"),
+            (
+                &|o| o.pixel_errors = vec![1.0, -2.0],
+                BadOption::PixelError(-2.0),
+                "pixel error -2 must be",
+            ),
+            (
+                &|o| o.near = Some(0.0),
+                BadOption::Near(0.0),
+                "near plane 0 must",
+            ),
+            (
+                &|o| o.frames = Some(0),
+                BadOption::NoFrames,
+                "frames must be at least 1",
+            ),
+        ];
+        for (f, want, text) in cases {
+            let e = with(f).unwrap_err();
+            let msg = e.to_string();
+            assert!(matches!(&e, ReplayError::Options(b) if *b == want), "{e:?}");
+            assert!(
+                msg.starts_with("bad replay option: ") && msg.contains(text),
+                "{msg}"
+            );
+        }
+        // NaN pixel errors are refused too (NaN != NaN, so by message).
+        let e = with(&|o| o.pixel_errors = vec![f64::NAN]).unwrap_err();
+        assert!(e.to_string().contains("pixel error NaN"), "{e}");
+    }
 }

@@ -10,6 +10,7 @@ use crate::summary::Summary;
 
 /// Why a report could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReportError {
     #[error("{file}: cannot write: {source}")]
     Io {

@@ -133,6 +133,7 @@ pub const MIN_MEMORY_BUDGET: u64 = 1 << 16;
 
 /// Why a [`CameraSource`] gave no camera for a frame.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CameraError {
     #[error("frame {frame}: camera {camera:?} is not valid (non-finite position, bad orientation or field of view)")]
     Invalid { frame: u64, camera: Camera },

@@ -266,6 +266,7 @@ pub struct RuntimeOptions {
 
 /// A runtime option out of its range, named with its value.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum OptionsError {
     #[error("viewport {width}x{height} must be 1..=16384 on each side")]
     Viewport { width: u32, height: u32 },

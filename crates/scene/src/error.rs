@@ -13,6 +13,7 @@ pub struct ReadError {
 }
 
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReadErrorKind {
     #[error("cannot read: {0}")]
     Io(#[from] io::Error),
@@ -56,6 +57,7 @@ pub enum ReadErrorKind {
 /// Why a scene file could not be written. Nothing at the destination path
 /// changes when writing fails.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum WriteError {
     #[error("{path}: cannot write: {source}")]
     Io { path: String, source: io::Error },

@@ -35,6 +35,7 @@ pub struct CameraPath {
 
 /// Why a path file could not be read or parsed. Line numbers are 1-based.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PathReadError {
     #[error("{file}: cannot read camera path: {source}")]
     Io {
@@ -50,6 +51,7 @@ pub enum PathReadError {
 
 /// A malformed line in a path file.
 #[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
 pub enum PathParseError {
     #[error("line {line}: expected 9 numbers (t x y z qx qy qz qw fovy_deg), found {found}")]
     FieldCount { line: usize, found: usize },
@@ -79,6 +81,7 @@ pub enum PathParseError {
 
 /// Why a path could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PathWriteError {
     #[error("{file}: cannot write camera path: {source}")]
     Io {

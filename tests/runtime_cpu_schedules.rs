@@ -11,8 +11,8 @@ use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_runtime::{
-    run_on_cpu, CameraList, CameraRequest, CullMethod, FrameReport, OccluderBudget, RuntimeError,
-    RuntimeOptions, Schedule, Stage,
+    run_on_cpu, CameraList, CameraRequest, CullMethod, FailureHook, FrameReport, OccluderBudget,
+    RuntimeError, RuntimeOptions, Schedule, Stage,
 };
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::SceneReader;
@@ -236,7 +236,7 @@ fn a_failing_stage_ends_every_cpu_schedule_with_its_error() {
         for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
             let mut o = options(schedule, true, CullMethod::Hzb);
             o.async_rvg = async_rvg;
-            o.inject_failure = Some((stage, 5));
+            o.inject_failure = FailureHook::at(stage, 5);
             // Asynchronous RVG does not wait for OR and STC once it has a
             // set: on a loaded machine it could draw the whole walk before
             // they reach frame 5, so it gets a walk long enough not to.

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use gigawalk_cull::{Camera, TraversalOptions};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_runtime::{
-    CameraError, CameraList, CameraRequest, DrawStyle, FrameReport, OccluderBudget,
+    CameraError, CameraList, CameraRequest, DrawStyle, FailureHook, FrameReport, OccluderBudget,
     OccluderSelection, Runtime, RuntimeError, RuntimeOptions, Schedule, Stage, CPU_OCCLUDER_BUDGET,
 };
 use gigawalk_scene::SceneReader;
@@ -234,7 +234,7 @@ fn a_failure_in_any_stage_stops_the_run() {
         for schedule in [Schedule::Pipelined, Schedule::Sequential] {
             for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
                 let mut o = options(schedule, true, true, 1.0);
-                o.inject_failure = Some((stage, 5));
+                o.inject_failure = FailureHook::at(stage, 5);
                 let t = Instant::now();
                 let mut seen = 0;
                 let mut cams = walk(1000, DVec3::ZERO, false);
@@ -364,7 +364,7 @@ fn async_rvg_renders_every_camera() {
         }
         // Failures stop the asynchronous schedule too.
         for stage in [Stage::Or, Stage::Stc, Stage::Rvg] {
-            o.inject_failure = Some((stage, 3));
+            o.inject_failure = FailureHook::at(stage, 3);
             let e = run(rt, &o, walk(1000, DVec3::ZERO, false)).unwrap_err();
             assert!(
                 matches!(e, RuntimeError::Injected { stage: s, .. } if s == stage),
@@ -372,7 +372,7 @@ fn async_rvg_renders_every_camera() {
             );
         }
         o.schedule = Schedule::Sequential;
-        o.inject_failure = None;
+        o.inject_failure = FailureHook::default();
         assert!(run(rt, &o, walk(3, DVec3::ZERO, false))
             .unwrap_err()
             .to_string()

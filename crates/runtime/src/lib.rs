@@ -38,8 +38,8 @@ pub use gigawalk_gpu::{
     Optional, QueryCounts, VisiblePass,
 };
 pub use options::{
-    MemoryBudget, MemoryUnknown, OccluderBudget, OccluderSelection, OptionsError, Prefetching,
-    RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
+    FailureHook, MemoryBudget, MemoryUnknown, OccluderBudget, OccluderSelection, OptionsError,
+    Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
 };
 
 // Every culler's public types (its options, flags and stats) and the
@@ -97,7 +97,7 @@ pub enum RuntimeError {
     },
     #[error("bad runtime option: {0}")]
     Options(#[from] OptionsError),
-    #[cfg(feature = "testing")]
+    /// Only from [`RuntimeOptions::inject_failure`] (feature `testing`).
     #[error("{stage}: injected failure at frame {frame}")]
     Injected { stage: Stage, frame: u64 },
     #[error("{stage} stage panicked: {message}")]

@@ -258,10 +258,37 @@ pub struct RuntimeOptions {
     /// Fill `FrameReport::culled` with every culled node (for the viewer's
     /// box overlay); off by default since big scenes cull many nodes.
     pub record_culled: bool,
-    /// Test hook (feature `testing`): make a stage fail at a frame, to
-    /// check that any stage's error stops every stage.
+    /// Test hook: make a stage fail at a frame, to check that any
+    /// stage's error stops every stage. Only the `testing` feature can
+    /// set one ([`FailureHook::at`]); the field exists either way, so the
+    /// feature never changes this struct for other crates.
+    #[doc(hidden)]
+    pub inject_failure: FailureHook,
+}
+
+/// A stage made to fail from a frame on (see
+/// [`RuntimeOptions::inject_failure`]); none by default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FailureHook(Option<(Stage, u64)>);
+
+impl FailureHook {
+    /// `stage` fails at `frame` (or the first frame after it that it
+    /// runs: with asynchronous RVG, OR and STC may skip the exact frame).
     #[cfg(feature = "testing")]
-    pub inject_failure: Option<(Stage, u64)>,
+    pub fn at(stage: Stage, frame: u64) -> Self {
+        FailureHook(Some((stage, frame)))
+    }
+
+    /// The injected error, when `stage` is the one to fail and its frame
+    /// has come.
+    pub(crate) fn check(self, stage: Stage, frame: u64) -> Result<(), crate::RuntimeError> {
+        match self.0 {
+            Some((s, f)) if s == stage && frame >= f => {
+                Err(crate::RuntimeError::Injected { stage, frame: f })
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 /// A runtime option out of its range, named with its value.
@@ -320,8 +347,7 @@ impl Default for RuntimeOptions {
             tiles: None,
             tile_culling: TileMethod::Adaptive,
             record_culled: false,
-            #[cfg(feature = "testing")]
-            inject_failure: None,
+            inject_failure: FailureHook::default(),
         }
     }
 }

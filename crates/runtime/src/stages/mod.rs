@@ -83,24 +83,14 @@ pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
         .collect()
 }
 
-/// The test hook `RuntimeOptions::inject_failure` (feature `testing`).
-#[cfg(feature = "testing")]
+/// The test hook [`RuntimeOptions::inject_failure`]: the injected error
+/// when `stage` is to fail by `frame`.
 pub(crate) fn check_injected(
     opts: &RuntimeOptions,
     stage: Stage,
     frame: u64,
 ) -> Result<(), RuntimeError> {
-    match opts.inject_failure {
-        // ">=": with asynchronous RVG, OR and STC may skip the exact frame.
-        Some((s, f)) if s == stage && frame >= f => Err(RuntimeError::Injected { stage, frame: f }),
-        _ => Ok(()),
-    }
-}
-
-/// Without the `testing` feature there is no hook: nothing to check.
-#[cfg(not(feature = "testing"))]
-pub(crate) fn check_injected(_: &RuntimeOptions, _: Stage, _: u64) -> Result<(), RuntimeError> {
-    Ok(())
+    opts.inject_failure.check(stage, frame)
 }
 
 /// A stage's drawing: its pass `P` on a device, or the CPU.

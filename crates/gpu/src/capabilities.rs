@@ -8,7 +8,7 @@
 //! requests), and the texture formats in [`REQUIRED_FORMATS`].
 //! Optional, each with what happens without it ([`Optional`]): depth
 //! texture copies (without them depth is read back through a small pass
-//! that draws it into a colour target, `DepthCopy` in passes.rs), line
+//! that draws it into a colour target, `DepthCopy` in passes/readback.rs), line
 //! polygon mode (wireframe) and index values beyond 2^24 (larger LODs).
 //! Whether occlusion queries count samples (only `oq`'s adaptive culling
 //! needs it) takes a device to find out: [`crate::query_counts`].

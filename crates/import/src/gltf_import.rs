@@ -4,8 +4,10 @@
 //! The `gltf` crate parses and validates the document, but it stores node
 //! transforms as f32, which loses centimetres 10^7 units from the origin; so
 //! node transforms are read again as f64 from the raw JSON. Accessors are
-//! read here, with every offset bounds-checked, rather than with the crate's
-//! reader, so that a lying file gives an error instead of a panic.
+//! read by hand (`gltf_accessors`), with every offset bounds-checked, rather
+//! than with the crate's reader, so that a lying file gives an error instead
+//! of a panic; buffers are loaded and meshopt views decoded in
+//! `gltf_buffers`.
 //!
 //! Compressed files from gltfpack and friends: integer positions and normals
 //! (KHR_mesh_quantization) go through the same accessor reader, which
@@ -17,16 +19,15 @@
 use std::borrow::Cow;
 use std::path::Path;
 
-use base64::Engine as _;
 use glam::{DMat3, DMat4, DQuat, DVec3};
-use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::Semantic;
 use serde::Deserialize;
 
 use crate::error::ImportError;
+use crate::gltf_accessors::{bad_accessor, read_floats, read_indices};
+use crate::gltf_buffers::{load_data, Buffer, BufferData};
 use crate::gltf_extensions;
-use crate::meshopt_views;
 use crate::model::{ImportStats, Model, Object};
 use crate::triangles::{finish, RawObject};
 
@@ -59,106 +60,30 @@ struct RawNode {
 /// objects this importer reads itself.
 #[derive(Deserialize)]
 #[serde(rename_all = "camelCase")]
-struct RawRoot {
+pub(crate) struct RawRoot {
     #[serde(default)]
     nodes: Vec<RawNode>,
     #[serde(default)]
     extensions_required: Vec<String>,
     #[serde(default)]
-    buffers: Vec<RawExtensible>,
+    pub(crate) buffers: Vec<RawExtensible>,
     #[serde(default)]
-    buffer_views: Vec<RawExtensible>,
+    pub(crate) buffer_views: Vec<RawExtensible>,
     #[serde(default)]
     meshes: Vec<RawMesh>,
 }
 
 /// Any object, for its `extensions`.
 #[derive(Deserialize)]
-struct RawExtensible {
+pub(crate) struct RawExtensible {
     #[serde(default)]
-    extensions: serde_json::Map<String, serde_json::Value>,
+    pub(crate) extensions: serde_json::Map<String, serde_json::Value>,
 }
 
 #[derive(Deserialize)]
 struct RawMesh {
     #[serde(default)]
     primitives: Vec<RawExtensible>,
-}
-
-/// A buffer's bytes: in memory, or a range of a file read a piece at a
-/// time.
-enum Buffer<'a> {
-    Bytes(Cow<'a, [u8]>),
-    File {
-        file: std::fs::File,
-        at: u64,
-        len: usize,
-    },
-}
-
-impl Buffer<'_> {
-    fn len(&self) -> usize {
-        match self {
-            Buffer::Bytes(b) => b.len(),
-            Buffer::File { len, .. } => *len,
-        }
-    }
-
-    /// `n` bytes from `start` (in range: `start + n <= len`).
-    fn range(&self, start: usize, n: usize) -> std::io::Result<Cow<'_, [u8]>> {
-        match self {
-            Buffer::Bytes(b) => Ok(Cow::Borrowed(&b[start..start + n])),
-            Buffer::File { file, at, .. } => {
-                use std::os::unix::fs::FileExt as _;
-                let mut out = vec![0u8; n];
-                file.read_exact_at(&mut out, at + start as u64)?;
-                Ok(Cow::Owned(out))
-            }
-        }
-    }
-
-    /// All of it in memory.
-    fn into_bytes(self) -> std::io::Result<Cow<'static, [u8]>> {
-        match self {
-            Buffer::Bytes(b) => Ok(Cow::Owned(b.into_owned())),
-            f @ Buffer::File { .. } => Ok(Cow::Owned(f.range(0, f.len())?.into_owned())),
-        }
-    }
-}
-
-/// The file's bytes as accessors see them: buffers (a meshopt fallback
-/// buffer is empty) and decoded meshopt buffer views, which take the place
-/// of their view's bytes.
-struct BufferData<'a> {
-    buffers: Vec<Buffer<'a>>,
-    decoded: Vec<Option<Vec<u8>>>,
-}
-
-impl BufferData<'_> {
-    /// The length of a buffer view's bytes, `None` when they run past its
-    /// buffer.
-    fn view_len(&self, view: &gltf::buffer::View) -> Option<usize> {
-        if let Some(Some(bytes)) = self.decoded.get(view.index()) {
-            return Some(bytes.len());
-        }
-        let buffer = &self.buffers[view.buffer().index()];
-        let end = view.offset().checked_add(view.length())?;
-        (end <= buffer.len()).then_some(view.length())
-    }
-
-    /// `n` bytes from `start` of a view ([`BufferData::view_len`] said
-    /// they are in range).
-    fn view_range(
-        &self,
-        view: &gltf::buffer::View,
-        start: usize,
-        n: usize,
-    ) -> std::io::Result<Cow<'_, [u8]>> {
-        if let Some(Some(bytes)) = self.decoded.get(view.index()) {
-            return Ok(Cow::Borrowed(&bytes[start..start + n]));
-        }
-        self.buffers[view.buffer().index()].range(view.offset() + start, n)
-    }
 }
 
 /// At most this many validation messages go into an error: a fuzzed file can
@@ -384,195 +309,6 @@ fn check_draco_primitives(
     Ok(())
 }
 
-/// Loads the buffers, then decodes every meshopt-compressed view that a
-/// mesh primitive reads (views only animations read are left alone).
-fn load_data<'a>(
-    doc: &gltf::Document,
-    raw: &RawRoot,
-    blob: Option<Buffer<'a>>,
-    file: &str,
-    base_dir: Option<&Path>,
-) -> Result<BufferData<'a>, ImportError> {
-    let mut buffers = load_buffers(doc, raw, blob, file, base_dir)?;
-    let mut decoded: Vec<Option<Vec<u8>>> = vec![None; doc.views().len()];
-    let compressed = doc
-        .meshes()
-        .flat_map(|m| m.primitives().collect::<Vec<_>>())
-        .any(|p| {
-            p.attributes()
-                .map(|(_, a)| a)
-                .chain(p.indices())
-                .filter_map(|a| a.view())
-                .any(|v| meshopt_views::find(&raw.buffer_views[v.index()].extensions).is_some())
-        });
-    if !compressed {
-        return Ok(BufferData { buffers, decoded });
-    }
-    // A compressed view decodes whole, from its buffer in memory.
-    for b in &mut buffers {
-        if matches!(b, Buffer::File { .. }) {
-            let whole = std::mem::replace(b, Buffer::Bytes(Cow::Borrowed(&[])));
-            *b = Buffer::Bytes(whole.into_bytes().map_err(|source| ImportError::Io {
-                file: file.to_owned(),
-                source,
-            })?);
-        }
-    }
-    let sources: Vec<&[u8]> = buffers
-        .iter()
-        .map(|b| match b {
-            Buffer::Bytes(b) => &b[..],
-            Buffer::File { .. } => &[][..],
-        })
-        .collect();
-    for mesh in doc.meshes() {
-        for prim in mesh.primitives() {
-            let accessors = prim.attributes().map(|(_, a)| a).chain(prim.indices());
-            for view in accessors.filter_map(|a| a.view()) {
-                let vi = view.index();
-                if decoded[vi].is_some() {
-                    continue;
-                }
-                if let Some((extension, params)) =
-                    meshopt_views::find(&raw.buffer_views[vi].extensions)
-                {
-                    decoded[vi] = Some(meshopt_views::decode_view(
-                        extension,
-                        params,
-                        vi,
-                        view.length(),
-                        &sources,
-                        file,
-                    )?);
-                }
-            }
-        }
-    }
-    Ok(BufferData { buffers, decoded })
-}
-
-/// A buffer whose bytes nobody reads: tagged as a meshopt fallback, or
-/// with no URI (and not the GLB BIN chunk) and read only through
-/// meshopt-compressed views. gltfpack writes one with no data at all.
-fn is_placeholder(
-    doc: &gltf::Document,
-    raw: &RawRoot,
-    buffer: &gltf::Buffer,
-    has_blob: bool,
-) -> bool {
-    if meshopt_views::is_fallback_buffer(&raw.buffers[buffer.index()].extensions) {
-        return true;
-    }
-    let no_uri = matches!(buffer.source(), gltf::buffer::Source::Bin);
-    if !no_uri || (buffer.index() == 0 && has_blob) {
-        return false;
-    }
-    let mut views = doc
-        .views()
-        .filter(|v| v.buffer().index() == buffer.index())
-        .peekable();
-    views.peek().is_some()
-        && views.all(|v| meshopt_views::find(&raw.buffer_views[v.index()].extensions).is_some())
-}
-
-fn load_buffers<'a>(
-    doc: &gltf::Document,
-    raw: &RawRoot,
-    mut blob: Option<Buffer<'a>>,
-    file: &str,
-    base_dir: Option<&Path>,
-) -> Result<Vec<Buffer<'a>>, ImportError> {
-    let mut out = Vec::new();
-    let has_blob = blob.is_some();
-    for buffer in doc.buffers() {
-        if is_placeholder(doc, raw, &buffer, has_blob) {
-            out.push(Buffer::Bytes(Cow::Borrowed(&[][..])));
-            continue;
-        }
-        let missing = |uri: &str, reason: String| ImportError::MissingBuffer {
-            file: file.to_owned(),
-            buffer: buffer.index(),
-            uri: uri.to_owned(),
-            reason,
-        };
-        let data: Buffer = match buffer.source() {
-            // glTF allows one buffer to be the BIN chunk (buffer 0).
-            gltf::buffer::Source::Bin => match blob.take() {
-                Some(b) => b,
-                None => return Err(missing("GLB BIN chunk", "the file has no BIN chunk".into())),
-            },
-            gltf::buffer::Source::Uri(uri) => {
-                if let Some(rest) = uri.strip_prefix("data:") {
-                    let (_, payload) = rest.split_once(";base64,").ok_or_else(|| {
-                        missing("data: URI", "only base64 data URIs are supported".into())
-                    })?;
-                    let decoded = base64::engine::general_purpose::STANDARD
-                        .decode(payload)
-                        .map_err(|e| missing("data: URI", format!("bad base64: {e}")))?;
-                    Buffer::Bytes(Cow::Owned(decoded))
-                } else if uri.contains("://") {
-                    return Err(missing(
-                        uri,
-                        "only relative file URIs and data: URIs are supported".into(),
-                    ));
-                } else {
-                    let Some(dir) = base_dir else {
-                        return Err(missing(
-                            uri,
-                            "external buffers need a file path, not bytes".into(),
-                        ));
-                    };
-                    // Read in place, an accessor at a time.
-                    let path = dir.join(percent_decode(uri));
-                    let cannot = |e: std::io::Error| {
-                        missing(uri, format!("cannot read {}: {e}", path.display()))
-                    };
-                    let f = std::fs::File::open(&path).map_err(cannot)?;
-                    let meta = f.metadata().map_err(cannot)?;
-                    if meta.is_dir() {
-                        return Err(missing(uri, format!("{} is a directory", path.display())));
-                    }
-                    Buffer::File {
-                        file: f,
-                        at: 0,
-                        len: usize::try_from(meta.len()).unwrap_or(usize::MAX),
-                    }
-                }
-            }
-        };
-        if data.len() < buffer.length() {
-            return Err(ImportError::BufferTooShort {
-                file: file.to_owned(),
-                buffer: buffer.index(),
-                declared: buffer.length(),
-                actual: data.len(),
-            });
-        }
-        out.push(data);
-    }
-    Ok(out)
-}
-
-/// `%XX` escapes in relative URIs (spaces in file names are common).
-fn percent_decode(uri: &str) -> String {
-    let b = uri.as_bytes();
-    let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
-                out.push(h * 16 + l);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
 fn object_label(node: &gltf::Node, mesh: &gltf::Mesh, prim: usize) -> String {
     let node_name = node
         .name()
@@ -756,167 +492,6 @@ fn to_triangle_list(mode: Mode, s: &[u32]) -> Vec<u32> {
     }
 }
 
-fn bad_accessor(
-    file: &str,
-    object: &str,
-    acc: &gltf::Accessor,
-    semantic: &'static str,
-    reason: String,
-) -> ImportError {
-    ImportError::BadAccessor {
-        file: file.to_owned(),
-        object: object.to_owned(),
-        accessor: acc.index(),
-        semantic,
-        reason,
-    }
-}
-
-/// The bytes of an accessor's elements, bounds-checked: `(data, stride,
-/// element size)` with `data[k * stride..][..element size]` in range for
-/// every element `k < count`.
-fn accessor_bytes<'b>(
-    acc: &gltf::Accessor,
-    data: &'b BufferData,
-    file: &str,
-    object: &str,
-    semantic: &'static str,
-) -> Result<(Cow<'b, [u8]>, usize, usize), ImportError> {
-    let bad = |reason: String| bad_accessor(file, object, acc, semantic, reason);
-    if acc.sparse().is_some() {
-        return Err(bad("sparse accessors are not supported".into()));
-    }
-    let view = acc
-        .view()
-        .ok_or_else(|| bad("no bufferView (all-zero accessors are not supported)".into()))?;
-    let view_len = data.view_len(&view).ok_or_else(|| {
-        bad(format!(
-            "bufferView {} runs past the end of its buffer",
-            view.index()
-        ))
-    })?;
-    let elem = acc.data_type().size() * acc.dimensions().multiplicity();
-    let stride = view.stride().unwrap_or(elem);
-    if stride < elem {
-        return Err(bad(format!(
-            "byteStride {stride} is smaller than an element ({elem} bytes)"
-        )));
-    }
-    let count = acc.count();
-    if count == 0 {
-        return Ok((Cow::Borrowed(&[]), stride, elem));
-    }
-    let needed = (count - 1)
-        .checked_mul(stride)
-        .and_then(|x| x.checked_add(elem))
-        .and_then(|x| x.checked_add(acc.offset()));
-    match needed {
-        Some(end) if end <= view_len => {
-            let bytes = data
-                .view_range(&view, acc.offset(), end - acc.offset())
-                .map_err(|source| ImportError::Io {
-                    file: file.to_owned(),
-                    source,
-                })?;
-            Ok((bytes, stride, elem))
-        }
-        _ => Err(bad(format!(
-            "{count} elements at offset {} do not fit in bufferView {} ({view_len} bytes)",
-            acc.offset(),
-            view.index(),
-        ))),
-    }
-}
-
-/// Reads a float (or normalised integer) accessor of `dims` components per
-/// element into a flat f32 list.
-fn read_floats(
-    acc: &gltf::Accessor,
-    dims: usize,
-    data: &BufferData,
-    file: &str,
-    object: &str,
-    semantic: &'static str,
-) -> Result<Vec<f32>, ImportError> {
-    if acc.dimensions().multiplicity() != dims
-        || matches!(
-            acc.dimensions(),
-            Dimensions::Mat2 | Dimensions::Mat3 | Dimensions::Mat4
-        )
-    {
-        return Err(bad_accessor(
-            file,
-            object,
-            acc,
-            semantic,
-            format!("expected {dims} components, found {:?}", acc.dimensions()),
-        ));
-    }
-    let (bytes, stride, elem) = accessor_bytes(acc, data, file, object, semantic)?;
-    let count = acc.count();
-    let dt = acc.data_type();
-    let cs = dt.size();
-    let norm = acc.normalized();
-    let mut out = Vec::with_capacity(count * dims);
-    for k in 0..count {
-        let e = &bytes[k * stride..k * stride + elem];
-        for c in 0..dims {
-            let b = &e[c * cs..(c + 1) * cs];
-            // Normalised integers map to [0, 1] or [-1, 1] (glTF 2.0 spec, 3.11).
-            let v = match dt {
-                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-                DataType::U8 if norm => b[0] as f32 / 255.0,
-                DataType::U8 => b[0] as f32,
-                DataType::I8 if norm => (b[0] as i8 as f32 / 127.0).max(-1.0),
-                DataType::I8 => b[0] as i8 as f32,
-                DataType::U16 if norm => u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
-                DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as f32,
-                DataType::I16 if norm => {
-                    (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0)
-                }
-                DataType::I16 => i16::from_le_bytes([b[0], b[1]]) as f32,
-                DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
-            };
-            out.push(v);
-        }
-    }
-    Ok(out)
-}
-
-fn read_indices(
-    acc: &gltf::Accessor,
-    data: &BufferData,
-    file: &str,
-    object: &str,
-) -> Result<Vec<u32>, ImportError> {
-    if acc.dimensions() != Dimensions::Scalar
-        || !matches!(
-            acc.data_type(),
-            DataType::U8 | DataType::U16 | DataType::U32
-        )
-    {
-        return Err(bad_accessor(
-            file,
-            object,
-            acc,
-            "indices",
-            "must be unsigned integer scalars".into(),
-        ));
-    }
-    let (bytes, stride, _) = accessor_bytes(acc, data, file, object, "indices")?;
-    let count = acc.count();
-    let mut out = Vec::with_capacity(count);
-    for k in 0..count {
-        let b = &bytes[k * stride..];
-        out.push(match acc.data_type() {
-            DataType::U8 => b[0] as u32,
-            DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,
-            _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-        });
-    }
-    Ok(out)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -941,12 +516,5 @@ mod tests {
     fn too_short_strip_is_empty() {
         assert!(to_triangle_list(Mode::TriangleStrip, &[0, 1]).is_empty());
         assert!(to_triangle_list(Mode::TriangleFan, &[]).is_empty());
-    }
-
-    #[test]
-    fn percent_escapes_decode() {
-        assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
-        assert_eq!(percent_decode("50%"), "50%");
-        assert_eq!(percent_decode("x%2"), "x%2");
     }
 }

@@ -18,6 +18,8 @@
 
 mod error;
 mod glb;
+mod gltf_accessors;
+mod gltf_buffers;
 mod gltf_extensions;
 mod gltf_import;
 mod meshopt_views;

@@ -9,6 +9,17 @@
 //! input produced through one mutex. Toggles that change the runtime's
 //! options end the run and start a new one (a thread start and the 2-frame
 //! startup bypass, invisible in a viewer).
+//!
+//! Here: the arguments, the errors, and [`run`], which opens the scene, the
+//! devices and the window and restarts the runtime when a toggle or a
+//! resize needs it. Input is collected in `window` and applied between
+//! frames in `frame_loop`; the runtime's camera source and presenter are
+//! `camera_source` and `presenter`.
+
+mod camera_source;
+mod frame_loop;
+mod presenter;
+mod window;
 
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -16,32 +27,25 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gigawalk_cull::Camera;
-use gigawalk_gpu::{
-    open_devices_for_window, GpuContext, GpuError, OverlayFrame, OverlayText, VisiblePass,
-    WindowError, WindowSurface,
-};
+use gigawalk_gpu::{open_devices_for_window, GpuContext, WindowError};
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
-use gigawalk_runtime::{
-    CameraError, CameraRequest, CameraSource, CullMethod, CullReason, DrawStyle, FrameReport,
-    OccluderBudget, OccluderSelection, Presenter, Runtime, RuntimeError, RuntimeOptions,
-};
+use gigawalk_runtime::{CullMethod, OccluderBudget, Runtime, RuntimeError, RuntimeOptions};
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
-use gigawalk_scene::{SceneReader, Skeleton};
-use winit::application::ApplicationHandler;
+use gigawalk_scene::SceneReader;
 use winit::dpi::PhysicalSize;
-use winit::event::{ElementState, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, EventLoop};
-use winit::keyboard::PhysicalKey;
+use winit::event_loop::EventLoop;
 use winit::platform::pump_events::{EventLoopExtPumpEvents, PumpStatus};
-use winit::window::{Window, WindowId};
 
-use crate::boxes::{overlay_boxes, CullSets};
+use crate::boxes::CullSets;
 use crate::controller::FlyController;
-use crate::controls::{self, Action, Does, Movement};
-use crate::hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
-use crate::image::{write_png, ScreenshotError};
+use crate::hud::{FrameClock, ViewerState};
+use crate::image::ScreenshotError;
 use crate::recorder::{next_free_name, PathRecorder};
 use crate::settings::Settings;
+use camera_source::LiveSource;
+use frame_loop::LoopState;
+use presenter::ViewerPresenter;
+use window::App;
 
 /// Everything `gigawalk view` takes.
 #[derive(Clone, Debug)]
@@ -93,7 +97,7 @@ pub enum ViewError {
     #[error("{0}: the camera path has no poses")]
     EmptyPath(PathBuf),
     #[error("cannot open a window (no display? set DISPLAY, or run under Xvfb): {0}")]
-    Display(String),
+    Display(#[source] DisplayError),
     #[error(transparent)]
     Window(#[from] WindowError),
     #[error(transparent)]
@@ -110,21 +114,27 @@ pub enum ViewError {
     TooFewFrames { wanted: u64, rendered: u64 },
 }
 
+/// Why no window could be opened ([`ViewError::Display`]).
+#[derive(Debug, thiserror::Error)]
+pub enum DisplayError {
+    /// winit could not start its event loop (no display to connect to).
+    #[error(transparent)]
+    EventLoop(#[from] winit::error::EventLoopError),
+    /// The window system refused the window.
+    #[error(transparent)]
+    Window(#[from] winit::error::OsError),
+    /// The event loop ended, with this code, before the window was made.
+    #[error("event loop exited ({0})")]
+    Exited(i32),
+    /// The first pumps of the event loop did not create the window.
+    #[error("the window was not created within 10 s")]
+    Timeout,
+}
+
 /// How long a resize must be still before the pipeline restarts at the
 /// new size (each restart costs a thread start and 2 bypass frames; the
 /// blit scales the old size meanwhile).
 const RESIZE_SETTLE: Duration = Duration::from_millis(200);
-/// Shown when wireframe is asked for on a device without line mode.
-const WIREFRAME_UNSUPPORTED: &str =
-    "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
-/// How long HUD messages (screenshot written, path saved) stay up.
-const MESSAGE_TIME: Duration = Duration::from_secs(4);
-/// While minimised, the camera source waits this long per frame so a
-/// hidden window does not spin the pipeline at full speed.
-const MINIMISED_WAIT: Duration = Duration::from_millis(50);
-/// HUD text is drawn 2x on windows at least this tall (8-pixel glyphs are
-/// hard to read on large screens), else 1x.
-const HUD_2X_MIN_HEIGHT: u32 = 600;
 
 /// Opens the scene and the window and runs until the window closes (or,
 /// scripted, until the last frame).
@@ -159,7 +169,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         .near
         .unwrap_or_else(|| gigawalk_cull::default_near(&skeleton.bounds));
 
-    let mut event_loop = EventLoop::new().map_err(|e| ViewError::Display(e.to_string()))?;
+    let mut event_loop = EventLoop::new().map_err(|e| ViewError::Display(e.into()))?;
     let mut app = App {
         title: format!("gigawalk view {}", args.scene.display()),
         size: PhysicalSize::new(args.width.max(1), args.height.max(1)),
@@ -180,16 +190,16 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         if let PumpStatus::Exit(code) =
             event_loop.pump_app_events(Some(Duration::from_millis(10)), &mut app)
         {
-            return Err(ViewError::Display(format!("event loop exited ({code})")));
+            return Err(ViewError::Display(DisplayError::Exited(code)));
         }
     }
     if let Some(e) = app.error.take() {
-        return Err(ViewError::Display(e));
+        return Err(ViewError::Display(e.into()));
     }
     let window = app
         .window
         .clone()
-        .ok_or_else(|| ViewError::Display("the window was not created within 10 s".into()))?;
+        .ok_or(ViewError::Display(DisplayError::Timeout))?;
     let (devices, surface) =
         open_devices_for_window(args.devices, args.adapter.as_deref(), window.clone())?;
     let device_names = device_summary(&devices);
@@ -398,463 +408,6 @@ struct Shared {
     error: Option<ViewError>,
     /// The next frame's pixel error while a target frame rate is held.
     target_tolerance: Option<f64>,
-}
-
-/// The window's side of the event loop: collects input for the frame loop.
-struct App {
-    title: String,
-    size: PhysicalSize<u32>,
-    window: Option<Arc<Window>>,
-    error: Option<String>,
-    held: HashSet<Movement>,
-    /// Drag-to-look is on while any mouse button is held.
-    drag: Option<u32>,
-    cursor: Option<(f64, f64)>,
-    actions: Vec<Action>,
-    scroll: f64,
-    look: (f64, f64),
-    /// When the window last changed size.
-    resized: Option<Instant>,
-    close: bool,
-}
-
-impl ApplicationHandler for App {
-    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.window.is_some() {
-            return;
-        }
-        let attrs = Window::default_attributes()
-            .with_title(self.title.clone())
-            .with_inner_size(self.size);
-        match event_loop.create_window(attrs) {
-            Ok(w) => {
-                let s = w.inner_size();
-                if s.width > 0 && s.height > 0 {
-                    self.size = s;
-                }
-                self.window = Some(Arc::new(w));
-            }
-            Err(e) => self.error = Some(e.to_string()),
-        }
-    }
-
-    fn window_event(&mut self, _: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
-        match event {
-            WindowEvent::CloseRequested | WindowEvent::Destroyed => self.close = true,
-            WindowEvent::Resized(s) if s != self.size => {
-                self.size = s;
-                self.resized = Some(Instant::now());
-            }
-            WindowEvent::Focused(false) => {
-                self.held.clear();
-                self.drag = None;
-            }
-            WindowEvent::KeyboardInput { event, .. } => {
-                let PhysicalKey::Code(code) = event.physical_key else {
-                    return;
-                };
-                match controls::lookup(code) {
-                    Some(Does::Move(m)) => {
-                        if event.state == ElementState::Pressed {
-                            self.held.insert(*m);
-                        } else {
-                            self.held.remove(m);
-                        }
-                    }
-                    Some(Does::Act(a)) if event.state == ElementState::Pressed && !event.repeat => {
-                        self.actions.push(*a)
-                    }
-                    _ => {}
-                }
-            }
-            WindowEvent::MouseInput { state, .. } => {
-                let held = self.drag.unwrap_or(0);
-                self.drag = match state {
-                    ElementState::Pressed => Some(held + 1),
-                    ElementState::Released => held.checked_sub(1).filter(|&n| n > 0),
-                };
-            }
-            WindowEvent::CursorMoved { position, .. } => {
-                let p = (position.x, position.y);
-                if let (Some(_), Some(c)) = (self.drag, self.cursor) {
-                    self.look.0 += p.0 - c.0;
-                    self.look.1 += p.1 - c.1;
-                }
-                self.cursor = Some(p);
-            }
-            WindowEvent::CursorLeft { .. } => self.cursor = None,
-            WindowEvent::MouseWheel { delta, .. } => {
-                self.scroll += match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y as f64,
-                    // Touchpads: ~50 pixels a notch, as browsers count.
-                    MouseScrollDelta::PixelDelta(p) => p.y / 50.0,
-                };
-            }
-            _ => {}
-        }
-    }
-}
-
-/// The frame loop's own state (this thread).
-struct LoopState {
-    controller: FlyController,
-    settings: Settings,
-    /// Every device has line mode (wireframe).
-    wireframe_supported: bool,
-    /// The cullers that cannot run here, and what to show when one is
-    /// asked for.
-    unavailable: Vec<(CullMethod, String)>,
-    recorder: PathRecorder,
-    record_start: Instant,
-    last_update: Instant,
-    message: Option<(String, Instant)>,
-    devices: String,
-    occluder_budget: OccluderSelection,
-    out_dir: PathBuf,
-    near: f64,
-    rendered: u64,
-    /// The target-frame-rate controller while K holds a frame rate, and
-    /// when the last frame finished.
-    target: Option<FrameRateController>,
-    last_finish: Option<Instant>,
-}
-
-impl LoopState {
-    /// Feeds a finished frame to the target-frame-rate controller and
-    /// publishes the tolerance for the next camera.
-    fn target_update(&mut self, report: &gigawalk_runtime::FrameReport, shared: &Mutex<Shared>) {
-        let ms = self
-            .last_finish
-            .map(|t| (report.finished_at - t).as_secs_f64() * 1e3);
-        self.last_finish = Some(report.finished_at);
-        let tolerance = match (&mut self.target, ms) {
-            (Some(c), Some(ms)) if !report.speculative => {
-                Some(c.update(ms, report.stats.drawn_triangles, report.pixel_error))
-            }
-            (Some(c), _) => Some(c.tolerance()),
-            (None, _) => None,
-        };
-        if let Ok(mut s) = shared.lock() {
-            s.target_tolerance = tolerance;
-        }
-    }
-
-    /// Applies the input since the last frame and publishes the next
-    /// camera and what the HUD shows; false to end the run (quit).
-    fn after_frame(
-        &mut self,
-        app: &mut App,
-        shared: &Mutex<Shared>,
-        render: PhysicalSize<u32>,
-        scripted: bool,
-    ) -> bool {
-        let now = Instant::now();
-        let mut capture = None;
-        for a in std::mem::take(&mut app.actions) {
-            match a {
-                Action::Quit => app.close = true,
-                Action::ToggleWalk => self.controller.toggle_walk(),
-                Action::ToggleOcclusion => self.settings.occlusion ^= true,
-                Action::CycleCuller => {
-                    // The next culler that can run here (hzb always can).
-                    for _ in 0..CullMethod::ALL.len() {
-                        self.settings.cycle_culler();
-                        let culler = self.settings.culler;
-                        match self.unavailable.iter().find(|u| u.0 == culler) {
-                            Some((_, why)) => self.message = Some((why.clone(), now)),
-                            None => break,
-                        }
-                    }
-                }
-                Action::ToggleHlod => self.settings.hlod ^= true,
-                Action::PixelErrorUp => self.settings.step_pixel_error(true),
-                Action::PixelErrorDown => self.settings.step_pixel_error(false),
-                Action::ToggleAsync => self.settings.async_rvg ^= true,
-                Action::ToggleTarget => {
-                    self.settings.target ^= true;
-                    self.target = self.settings.target.then(|| {
-                        FrameRateController::new(
-                            1e3 / self.settings.target_fps,
-                            self.settings.pixel_error.max(MIN_TOLERANCE),
-                            16.0,
-                        )
-                    });
-                }
-                Action::ToggleWireframe if self.wireframe_supported => {
-                    self.settings.wireframe ^= true
-                }
-                Action::ToggleWireframe => self.message = Some((WIREFRAME_UNSUPPORTED.into(), now)),
-                Action::ToggleBoxes => self.settings.boxes ^= true,
-                Action::ToggleFreeze => self.settings.frozen ^= true,
-                Action::ToggleHud => self.settings.hud ^= true,
-                Action::ToggleHelp => self.settings.help ^= true,
-                Action::Screenshot => {
-                    capture = Some(next_free_name(&self.out_dir, "gigawalk-view", "png"))
-                }
-                Action::ToggleRecord => self.toggle_record(now),
-            }
-        }
-        if !scripted {
-            let (dx, dy) = std::mem::take(&mut app.look);
-            self.controller.look(dx, dy);
-            self.controller.scroll(std::mem::take(&mut app.scroll));
-            self.controller
-                .update((now - self.last_update).as_secs_f64(), &app.held);
-        }
-        self.last_update = now;
-        let camera = self.controller.camera(aspect(render), self.near);
-        self.recorder
-            .push((now - self.record_start).as_secs_f64(), &camera);
-        let mut s = shared.lock().expect("viewer state");
-        if let Some(m) = s.message.take() {
-            self.message = Some((m, now));
-        }
-        if self
-            .message
-            .as_ref()
-            .is_some_and(|(_, t)| now - *t > MESSAGE_TIME)
-        {
-            self.message = None;
-        }
-        s.viewer = ViewerState {
-            walking: self.controller.walking(),
-            speed: self.controller.speed,
-            recording: self
-                .recorder
-                .is_recording()
-                .then(|| self.recorder.pose_count()),
-            devices: self.devices.clone(),
-            message: self.message.as_ref().map(|(m, _)| m.clone()),
-            occluder_budget: self.occluder_budget,
-        };
-        s.camera = camera;
-        s.frozen = self.settings.frozen;
-        s.settings = self.settings.clone();
-        s.window_size = (app.size.width, app.size.height);
-        if capture.is_some() {
-            s.capture = capture;
-        }
-        s.quit = app.close;
-        !app.close
-    }
-
-    fn toggle_record(&mut self, now: Instant) {
-        if let Some(path) = self.recorder.stop() {
-            let file = next_free_name(&self.out_dir, "gigawalk-view", "path");
-            let text = match path.write(&file) {
-                Ok(()) => format!(
-                    "path written: {} ({} poses)",
-                    file.display(),
-                    path.poses.len()
-                ),
-                Err(e) => format!("path NOT written: {e}"),
-            };
-            eprintln!("{text}");
-            self.message = Some((text, now));
-        } else {
-            self.recorder.start();
-            self.record_start = now;
-        }
-    }
-}
-
-/// Cameras for the runtime (OR thread): the live controller's, or the
-/// script's.
-struct LiveSource {
-    shared: Arc<Mutex<Shared>>,
-    script: Option<Script>,
-    sent: u64,
-    near: f64,
-}
-
-impl CameraSource for LiveSource {
-    fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        let (camera, frozen, style, quit, minimised, pixel_error) = {
-            let s = self.shared.lock().map_err(|_| CameraError::Source {
-                frame,
-                source: "the window's state is poisoned: its thread panicked".into(),
-            })?;
-            (
-                s.camera,
-                s.frozen,
-                if s.settings.wireframe {
-                    DrawStyle::Wireframe
-                } else {
-                    DrawStyle::Shaded
-                },
-                s.quit,
-                s.window_size.0 == 0 || s.window_size.1 == 0,
-                s.target_tolerance.filter(|_| s.settings.target),
-            )
-        };
-        if quit {
-            return Ok(None);
-        }
-        if let Some(script) = &self.script {
-            if self.sent >= script.frames {
-                return Ok(None);
-            }
-            let i = self.sent as usize;
-            self.sent += 1;
-            let camera = match script.poses.get(i).or(script.poses.last()) {
-                Some(p) => Camera {
-                    position: p.position,
-                    orientation: p.orientation,
-                    fovy: p.fovy,
-                    near: self.near,
-                    ..camera
-                },
-                None => camera,
-            };
-            return Ok(Some(CameraRequest {
-                camera,
-                read_back: false,
-                hold_culling: false,
-                style,
-                pixel_error,
-            }));
-        }
-        if minimised {
-            std::thread::sleep(MINIMISED_WAIT);
-        }
-        Ok(Some(CameraRequest {
-            camera,
-            read_back: false,
-            hold_culling: frozen,
-            style,
-            pixel_error,
-        }))
-    }
-}
-
-/// Shows frames in the window (RVG thread).
-struct ViewerPresenter<'s> {
-    surface: WindowSurface,
-    shared: Arc<Mutex<Shared>>,
-    skeleton: &'s Skeleton,
-    /// The last culled frame's sets, shown while culling is frozen.
-    culled_sets: CullSets,
-    script: Option<Script>,
-    clock: FrameClock,
-}
-
-impl Presenter for ViewerPresenter<'_> {
-    fn present(
-        &mut self,
-        ctx: &GpuContext,
-        pass: &VisiblePass,
-        report: &FrameReport,
-    ) -> Result<(), GpuError> {
-        let (settings, viewer, size, mut capture) = {
-            let mut s = self.shared.lock().expect("viewer state");
-            (
-                s.settings.clone(),
-                s.viewer.clone(),
-                s.window_size,
-                s.capture.take(),
-            )
-        };
-        // The HUD shows this frame's own numbers (the frame loop only
-        // hears of it after it is presented).
-        self.clock.tick(report.finished_at);
-        let numbers = FrameNumbers {
-            frame: report.frame,
-            or_ms: report.or_ms,
-            hzb_ms: report.hzb_ms,
-            stc_ms: report.stc_ms,
-            rvg_ms: report.rvg_ms,
-            latency_ms: report.latency_ms(),
-            occlusion_used: report.occlusion_used,
-            occluder_triangles: report.occluder_triangles,
-            stats: report.stats,
-            streaming: report.streaming,
-            tiles: report.tiles.as_ref().map(|t| {
-                (
-                    t.grid.to_string(),
-                    t.max_triangles,
-                    t.ms_adaptive,
-                    t.ms_naive,
-                )
-            }),
-            pixel_error: report.pixel_error,
-            culler_work: report.culler_work,
-        };
-        let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
-        if let Some(script) = &self.script {
-            if report.frame + 1 >= script.frames {
-                capture = script.screenshot.clone();
-            }
-        }
-        // A frame that reused an older visible set (frozen, or async RVG
-        // ahead of STC) keeps the boxes of the frame that culled it.
-        if !report.reused_visible_set || self.culled_sets.drawn.is_empty() {
-            self.culled_sets = cull_sets(report);
-        }
-        let mut overlay = OverlayFrame {
-            view_proj: report.camera.view_projection_rel(),
-            ..Default::default()
-        };
-        if settings.boxes || settings.frozen {
-            overlay.boxes = overlay_boxes(self.skeleton, &self.culled_sets, report.camera.position);
-        }
-        let (w, h) = pass.size();
-        let scale = if h >= HUD_2X_MIN_HEIGHT { 2 } else { 1 };
-        let glyph = (8 * scale) as f32;
-        if settings.hud && !hud.is_empty() {
-            overlay.text.push(OverlayText {
-                x: glyph,
-                y: glyph,
-                scale,
-                lines: hud,
-                colour: [1.0, 1.0, 0.85, 1.0],
-                background: [0.0, 0.0, 0.0, 0.55],
-            });
-        }
-        if settings.help {
-            let lines: Vec<String> = std::iter::once("gigawalk view: controls".to_string())
-                .chain(std::iter::once(String::new()))
-                .chain(controls::help_lines())
-                .collect();
-            let cols = lines.iter().map(|l| l.len()).max().unwrap_or(0) as f32;
-            overlay.text.push(OverlayText {
-                x: (w as f32 - cols * glyph - glyph).max(glyph),
-                y: glyph,
-                scale,
-                lines,
-                colour: [0.85, 0.95, 1.0, 1.0],
-                background: [0.0, 0.02, 0.08, 0.75],
-            });
-        }
-        let shown = self
-            .surface
-            .present(ctx, pass, &overlay, size, capture.is_some())?;
-        if let (Some(file), Some((w, h, rgba))) = (capture, shown.capture) {
-            let mut s = self.shared.lock().expect("viewer state");
-            match write_png(&file, w, h, &rgba) {
-                Ok(()) => {
-                    eprintln!("screenshot: {}", file.display());
-                    s.message = Some(format!("screenshot: {}", file.display()));
-                }
-                Err(e) if self.script.is_some() => s.error = Some(e.into()),
-                Err(e) => s.message = Some(format!("screenshot failed: {e}")),
-            }
-        }
-        Ok(())
-    }
-}
-
-fn cull_sets(report: &FrameReport) -> CullSets {
-    let mut sets = CullSets {
-        drawn: report.visible.iter().map(|d| d.node).collect(),
-        ..Default::default()
-    };
-    for &(node, why) in report.culled.iter() {
-        match why {
-            CullReason::Frustum => sets.frustum_culled.push(node),
-            CullReason::Occlusion => sets.occlusion_culled.push(node),
-        }
-    }
-    sets
 }
 
 /// Loading progress for the terminal: a line a second while the LODs the

@@ -22,7 +22,7 @@ mod image;
 mod recorder;
 mod settings;
 
-pub use app::{run, ViewArgs, ViewError};
+pub use app::{run, DisplayError, ViewArgs, ViewError};
 pub use boxes::{overlay_boxes, CullSets};
 pub use controller::{FlyController, EYE_HEIGHT};
 pub use hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};

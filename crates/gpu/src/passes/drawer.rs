@@ -1,0 +1,155 @@
+//! The draw loop both passes (and the query pass's depth prepass) share:
+//! a uniform buffer with the frame's view, a per-draw instance buffer with
+//! each LOD's origin relative to the eye, and the recording of one indexed
+//! draw per LOD, rebinding geometry buffers only when they change.
+
+use glam::Vec3;
+
+use crate::passes::View;
+use crate::residency::{LodRange, Residency};
+use crate::shader_types::{DrawInstance, FrameUniforms};
+use crate::GpuContext;
+
+/// Uniforms, per-draw instance data and the draw loop shared by both passes.
+pub(crate) struct Drawer {
+    uniforms: wgpu::Buffer,
+    pub(crate) bind_group: wgpu::BindGroup,
+    pub(crate) layout: wgpu::PipelineLayout,
+    instances: wgpu::Buffer,
+    /// Instances already used this frame (chunks append).
+    used: u64,
+    /// Written to `FrameUniforms::params.z` (what shaders that read it
+    /// move toward the eye in depth).
+    pub(crate) depth_bias: f32,
+}
+
+impl Drawer {
+    pub(crate) fn new(ctx: &GpuContext, label: &str) -> Drawer {
+        let d = &ctx.device;
+        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let uniforms = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout: &bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            }],
+        });
+        let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        Drawer {
+            uniforms,
+            bind_group,
+            layout,
+            instances: instance_buffer(ctx, 1024),
+            used: 0,
+            depth_bias: 0.0,
+        }
+    }
+
+    /// `unlit`: draw the object colour without lighting (wireframe).
+    pub(crate) fn begin(&mut self, ctx: &GpuContext, view: &View, unlit: bool) {
+        let u = FrameUniforms {
+            view_proj: view.view_proj.to_cols_array_2d(),
+            light_dir: view
+                .forward
+                .normalize_or(Vec3::NEG_Z)
+                .extend(0.0)
+                .to_array(),
+            params: [0.25, if unlit { 1.0 } else { 0.0 }, self.depth_bias, 0.0],
+        };
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        self.used = 0;
+    }
+
+    /// Writes this chunk's instance data; returns the draws with their instance index.
+    pub(crate) fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &View,
+        residency: &dyn Residency,
+        lods: &[u32],
+    ) -> Vec<(LodRange, u32)> {
+        let draws: Vec<LodRange> = lods.iter().filter_map(|&l| residency.range(l)).collect();
+        let size = std::mem::size_of::<DrawInstance>() as u64;
+        let needed = self.used + draws.len() as u64;
+        if needed * size > self.instances.size() {
+            // Earlier chunks keep the old buffer alive until they finish.
+            self.instances = instance_buffer(ctx, needed.next_power_of_two().max(1024));
+            self.used = 0;
+        }
+        let data: Vec<DrawInstance> = draws
+            .iter()
+            .map(|r| DrawInstance {
+                offset: (r.origin - view.eye).as_vec3().extend(0.0).to_array(),
+            })
+            .collect();
+        ctx.queue.write_buffer(
+            &self.instances,
+            self.used * size,
+            bytemuck::cast_slice(&data),
+        );
+        let first = self.used as u32;
+        self.used += draws.len() as u64;
+        draws
+            .into_iter()
+            .enumerate()
+            .map(|(i, r)| (r, first + i as u32))
+            .collect()
+    }
+
+    pub(crate) fn record(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        residency: &dyn Residency,
+        draws: &[(LodRange, u32)],
+    ) {
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(1, self.instances.slice(..));
+        let mut bound = None;
+        for (r, instance) in draws {
+            if bound != Some(r.buffer) {
+                let (v, i) = residency.buffers(r.buffer);
+                pass.set_vertex_buffer(0, v.slice(..));
+                pass.set_index_buffer(i.slice(..), wgpu::IndexFormat::Uint32);
+                bound = Some(r.buffer);
+            }
+            pass.draw_indexed(
+                r.first_index..r.first_index + r.index_count,
+                r.base_vertex,
+                *instance..*instance + 1,
+            );
+        }
+    }
+}
+
+fn instance_buffer(ctx: &GpuContext, count: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("draw instances"),
+        size: count * std::mem::size_of::<DrawInstance>() as u64,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}

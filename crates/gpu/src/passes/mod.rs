@@ -1,0 +1,116 @@
+//! The two render passes: OR (depth of the occluders, read back for the
+//! HZB) and RVG (colour + depth of the visible set, to an offscreen target
+//! or a window). Both draw a list of LODs camera-relatively.
+//!
+//! Here: what the passes and their callers share (the camera [`View`], the
+//! read-back images, the target formats and conventions) and the render
+//! target helpers. The passes themselves are in `depth` (OR) and `visible`
+//! (RVG); `drawer` holds the draw loop both use, `pipelines` the pipeline
+//! builders, and `readback` the copy of a texture back to the host.
+
+mod depth;
+mod drawer;
+mod pipelines;
+mod readback;
+mod visible;
+
+use glam::{DVec3, Mat4, Vec3};
+
+use crate::GpuContext;
+
+pub use depth::DepthPass;
+pub(crate) use drawer::Drawer;
+pub(crate) use pipelines::{fullscreen_pipeline, pipeline};
+pub(crate) use readback::{device_error, map_and_wait, ReadBack};
+pub use visible::VisiblePass;
+
+/// What a pass needs to know about the camera. `view_proj` has no
+/// translation: positions are made camera-relative per draw, in f64.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub eye: DVec3,
+    pub view_proj: Mat4,
+    /// Direction the camera looks (the head light's direction).
+    pub forward: Vec3,
+}
+
+/// A depth image as read back: row-major, row 0 at the top, reversed-Z
+/// (1 at the near plane, 0 = nothing drawn / infinitely far).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthImage {
+    pub width: u32,
+    pub height: u32,
+    pub depth: Vec<f32>,
+}
+
+/// A colour image (sRGB RGBA8, row 0 at the top) with its depth.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameImage {
+    pub colour: Vec<u8>,
+    pub depth: DepthImage,
+}
+
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Where depth is copied, bit for bit, to be read back on adapters that
+/// cannot copy a depth texture to a buffer (GL): integer formats are
+/// renderable everywhere, 32-bit floats not on every GLES.
+pub(crate) const DEPTH_COPY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub const DEPTH_COPY_WGSL: &str = include_str!("../../../../shaders/depth_copy.wgsl");
+pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// How RVG draws triangles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrawStyle {
+    /// Filled, lit by the head light.
+    #[default]
+    Shaded,
+    /// Triangle edges only, in the object's unlit colour. Needs the
+    /// adapter's `POLYGON_MODE_LINE` ([`GpuContext::supports_wireframe`]);
+    /// without it RVG draws `Shaded` and logs a warning once.
+    Wireframe,
+}
+
+/// Reversed-Z: clear to 0 (infinitely far), keep the greater depth.
+pub(crate) const DEPTH_COMPARE: wgpu::CompareFunction = wgpu::CompareFunction::GreaterEqual;
+
+pub(crate) fn target(
+    ctx: &GpuContext,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+pub(crate) fn depth_attachment(
+    view: &wgpu::TextureView,
+    clear: bool,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: if clear {
+                wgpu::LoadOp::Clear(0.0)
+            } else {
+                wgpu::LoadOp::Load
+            },
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    }
+}

@@ -1,0 +1,112 @@
+//! Pipeline builders: the scene pipeline that draws LODs through a
+//! [`Drawer`]'s layout (OR, RVG, the query prepass) and the fullscreen
+//! pipeline that draws one triangle (the blit to a window, the depth copy).
+
+use crate::passes::{Drawer, DEPTH_COMPARE, DEPTH_FORMAT};
+use crate::shader_types;
+use crate::GpuContext;
+
+pub(crate) fn pipeline(
+    ctx: &GpuContext,
+    drawer: &Drawer,
+    label: &str,
+    wgsl: &str,
+    colour: Option<wgpu::TextureFormat>,
+    polygon_mode: wgpu::PolygonMode,
+) -> wgpu::RenderPipeline {
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(shader_types::shader_source(wgsl).into()),
+        });
+    let targets = [colour.map(|format| wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
+    ctx.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&drawer.layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[
+                    Some(shader_types::vertex_layout()),
+                    Some(shader_types::instance_layout()),
+                ],
+            },
+            primitive: wgpu::PrimitiveState {
+                // No culling: imported winding is not trusted, and OR must
+                // write every occluder's depth.
+                cull_mode: None,
+                polygon_mode,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(DEPTH_COMPARE),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: colour.map(|_| wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// A pipeline that draws one fullscreen triangle (`vs_main`, no vertex
+/// buffers) with `wgsl`'s `fs_main` into one `format` target, reading bind
+/// group 0 of `layout`: the blit to a window, the depth copy.
+pub(crate) fn fullscreen_pipeline(
+    ctx: &GpuContext,
+    label: &str,
+    wgsl: &str,
+    layout: &wgpu::BindGroupLayout,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    let d = &ctx.device;
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    });
+    let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

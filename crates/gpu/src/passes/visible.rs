@@ -1,0 +1,213 @@
+//! RVG: the visible set's colour and depth, drawn in chunks as the list
+//! arrives, with an optional wireframe pipeline and a scissor for tiles.
+
+use crate::passes::{
+    depth_attachment, device_error, pipeline, target, DrawStyle, Drawer, FrameImage, ReadBack,
+    View, COLOUR_FORMAT, DEPTH_FORMAT,
+};
+use crate::residency::{LodRange, Residency};
+use crate::shader_types;
+use crate::{GpuContext, GpuError};
+
+/// RVG: draws the visible list in chunks as it arrives, to an offscreen
+/// colour target (or a caller-provided view, e.g. a window's surface).
+pub struct VisiblePass {
+    drawer: Drawer,
+    pipeline: wgpu::RenderPipeline,
+    /// The line-mode pipeline, where the device supports it.
+    wire_pipeline: Option<wgpu::RenderPipeline>,
+    style: DrawStyle,
+    warned_no_wireframe: bool,
+    colour: wgpu::Texture,
+    depth: wgpu::Texture,
+    colour_readback: ReadBack,
+    depth_readback: ReadBack,
+    width: u32,
+    height: u32,
+    /// Whether the current frame's targets have been cleared yet.
+    cleared: bool,
+    view: Option<View>,
+    /// Where later draws of the frame may write (a tile), `[x, y, w, h]`.
+    scissor: Option<[u32; 4]>,
+}
+
+/// Background colour (linear): a dark blue-grey, so black geometry shows.
+const BACKGROUND: wgpu::Color = wgpu::Color {
+    r: 0.02,
+    g: 0.025,
+    b: 0.035,
+    a: 1.0,
+};
+
+impl VisiblePass {
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> VisiblePass {
+        let (width, height) = (width.max(1), height.max(1));
+        let drawer = Drawer::new(ctx, "visible");
+        let visible = |label, mode| {
+            pipeline(
+                ctx,
+                &drawer,
+                label,
+                shader_types::VISIBLE_WGSL,
+                Some(COLOUR_FORMAT),
+                mode,
+            )
+        };
+        let pipeline = visible("visible", wgpu::PolygonMode::Fill);
+        let wire_pipeline = ctx
+            .supports_wireframe()
+            .then(|| visible("visible wireframe", wgpu::PolygonMode::Line));
+        VisiblePass {
+            wire_pipeline,
+            style: DrawStyle::Shaded,
+            warned_no_wireframe: false,
+            colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
+            depth: target(ctx, "visible depth", width, height, DEPTH_FORMAT),
+            colour_readback: ReadBack::default(),
+            depth_readback: ReadBack::default(),
+            drawer,
+            pipeline,
+            width,
+            height,
+            cleared: false,
+            scissor: None,
+            view: None,
+        }
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The offscreen colour target (`COLOUR_FORMAT`), for presenting and
+    /// overlays once a frame is finished.
+    pub fn colour_texture(&self) -> &wgpu::Texture {
+        &self.colour
+    }
+
+    /// The depth target (`DEPTH_FORMAT`, reversed-Z), for overlays that
+    /// depth-test against the frame.
+    pub fn depth_texture(&self) -> &wgpu::Texture {
+        &self.depth
+    }
+
+    /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
+    pub fn begin(&mut self, ctx: &GpuContext, view: &View, style: DrawStyle) {
+        self.style = match style {
+            DrawStyle::Wireframe if self.wire_pipeline.is_none() => {
+                if !self.warned_no_wireframe {
+                    tracing::warn!(
+                        "{}: no POLYGON_MODE_LINE, drawing shaded instead of wireframe",
+                        ctx.name
+                    );
+                    self.warned_no_wireframe = true;
+                }
+                DrawStyle::Shaded
+            }
+            s => s,
+        };
+        self.drawer
+            .begin(ctx, view, self.style == DrawStyle::Wireframe);
+        self.cleared = false;
+        self.view = Some(*view);
+        self.scissor = None;
+    }
+
+    /// Later draws of this frame write only pixels in `[x, y, w, h]` (a
+    /// tile of a tiled display; clamped to the targets), or anywhere. The
+    /// first draw still clears the whole targets.
+    pub fn set_scissor(&mut self, rect: Option<[u32; 4]>) {
+        self.scissor = rect;
+    }
+
+    /// Draws one chunk of the frame's visible LODs and submits it, so the
+    /// GPU works while the rest of the list is still being culled.
+    pub fn draw(&mut self, ctx: &GpuContext, residency: &dyn Residency, lods: &[u32]) {
+        let view = self.view.expect("VisiblePass::begin before draw");
+        let draws = self.drawer.prepare(ctx, &view, residency, lods);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let cv = self.colour.create_view(&Default::default());
+            let dv = self.depth.create_view(&Default::default());
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("visible"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &cv,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: if self.cleared {
+                            wgpu::LoadOp::Load
+                        } else {
+                            wgpu::LoadOp::Clear(BACKGROUND)
+                        },
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(depth_attachment(&dv, !self.cleared)),
+                ..Default::default()
+            });
+            let pipeline = match (self.style, &self.wire_pipeline) {
+                (DrawStyle::Wireframe, Some(wire)) => wire,
+                _ => &self.pipeline,
+            };
+            pass.set_pipeline(pipeline);
+            if let Some([x, y, w, h]) = self.scissor {
+                let (tw, th) = (self.width, self.height);
+                let (x, y) = (x.min(tw), y.min(th));
+                pass.set_scissor_rect(x, y, w.min(tw - x), h.min(th - y));
+            }
+            self.drawer.record(&mut pass, residency, &draws);
+        }
+        self.cleared = true;
+        ctx.queue.submit([enc.finish()]);
+    }
+
+    /// Ends the frame: waits until the GPU is done and optionally reads
+    /// back colour and depth.
+    pub fn finish(
+        &mut self,
+        ctx: &GpuContext,
+        read_back: bool,
+    ) -> Result<Option<FrameImage>, GpuError> {
+        if !self.cleared {
+            // An empty frame still clears its targets.
+            self.draw(ctx, &NoGeometry, &[]);
+        }
+        self.view = None;
+        if !read_back {
+            ctx.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| device_error(ctx, e))?;
+            ctx.check()?;
+            return Ok(None);
+        }
+        self.read_back(ctx).map(Some)
+    }
+
+    /// Reads back the last finished frame's colour and depth.
+    pub fn read_back(&mut self, ctx: &GpuContext) -> Result<FrameImage, GpuError> {
+        let colour = self.colour_readback.read(
+            ctx,
+            &self.colour,
+            self.width,
+            self.height,
+            4,
+            wgpu::TextureAspect::All,
+        )?;
+        let depth = self
+            .depth_readback
+            .depth(ctx, &self.depth, self.width, self.height)?;
+        Ok(FrameImage { colour, depth })
+    }
+}
+
+struct NoGeometry;
+impl Residency for NoGeometry {
+    fn range(&self, _: u32) -> Option<LodRange> {
+        None
+    }
+    fn buffers(&self, _: u32) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        unreachable!("no geometry is ever bound")
+    }
+}

@@ -1,0 +1,149 @@
+//! The runtime's presenter (RVG thread): shows each finished frame in the
+//! window with the HUD, the help text and node boxes drawn on top, and
+//! writes the screenshots asked for.
+
+use std::sync::{Arc, Mutex};
+
+use gigawalk_gpu::{GpuContext, GpuError, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
+use gigawalk_runtime::{CullReason, FrameReport, Presenter};
+use gigawalk_scene::Skeleton;
+
+use super::{Script, Shared};
+use crate::boxes::{overlay_boxes, CullSets};
+use crate::controls;
+use crate::hud::{hud_lines, FrameClock, FrameNumbers};
+use crate::image::write_png;
+
+/// HUD text is drawn 2x on windows at least this tall (8-pixel glyphs are
+/// hard to read on large screens), else 1x.
+const HUD_2X_MIN_HEIGHT: u32 = 600;
+
+/// Shows frames in the window (RVG thread).
+pub(super) struct ViewerPresenter<'s> {
+    pub(super) surface: WindowSurface,
+    pub(super) shared: Arc<Mutex<Shared>>,
+    pub(super) skeleton: &'s Skeleton,
+    /// The last culled frame's sets, shown while culling is frozen.
+    pub(super) culled_sets: CullSets,
+    pub(super) script: Option<Script>,
+    pub(super) clock: FrameClock,
+}
+
+impl Presenter for ViewerPresenter<'_> {
+    fn present(
+        &mut self,
+        ctx: &GpuContext,
+        pass: &VisiblePass,
+        report: &FrameReport,
+    ) -> Result<(), GpuError> {
+        let (settings, viewer, size, mut capture) = {
+            let mut s = self.shared.lock().expect("viewer state");
+            (
+                s.settings.clone(),
+                s.viewer.clone(),
+                s.window_size,
+                s.capture.take(),
+            )
+        };
+        // The HUD shows this frame's own numbers (the frame loop only
+        // hears of it after it is presented).
+        self.clock.tick(report.finished_at);
+        let numbers = FrameNumbers {
+            frame: report.frame,
+            or_ms: report.or_ms,
+            hzb_ms: report.hzb_ms,
+            stc_ms: report.stc_ms,
+            rvg_ms: report.rvg_ms,
+            latency_ms: report.latency_ms(),
+            occlusion_used: report.occlusion_used,
+            occluder_triangles: report.occluder_triangles,
+            stats: report.stats,
+            streaming: report.streaming,
+            tiles: report.tiles.as_ref().map(|t| {
+                (
+                    t.grid.to_string(),
+                    t.max_triangles,
+                    t.ms_adaptive,
+                    t.ms_naive,
+                )
+            }),
+            pixel_error: report.pixel_error,
+            culler_work: report.culler_work,
+        };
+        let hud = hud_lines(self.clock.fps(), &numbers, &settings, &viewer);
+        if let Some(script) = &self.script {
+            if report.frame + 1 >= script.frames {
+                capture = script.screenshot.clone();
+            }
+        }
+        // A frame that reused an older visible set (frozen, or async RVG
+        // ahead of STC) keeps the boxes of the frame that culled it.
+        if !report.reused_visible_set || self.culled_sets.drawn.is_empty() {
+            self.culled_sets = cull_sets(report);
+        }
+        let mut overlay = OverlayFrame {
+            view_proj: report.camera.view_projection_rel(),
+            ..Default::default()
+        };
+        if settings.boxes || settings.frozen {
+            overlay.boxes = overlay_boxes(self.skeleton, &self.culled_sets, report.camera.position);
+        }
+        let (w, h) = pass.size();
+        let scale = if h >= HUD_2X_MIN_HEIGHT { 2 } else { 1 };
+        let glyph = (8 * scale) as f32;
+        if settings.hud && !hud.is_empty() {
+            overlay.text.push(OverlayText {
+                x: glyph,
+                y: glyph,
+                scale,
+                lines: hud,
+                colour: [1.0, 1.0, 0.85, 1.0],
+                background: [0.0, 0.0, 0.0, 0.55],
+            });
+        }
+        if settings.help {
+            let lines: Vec<String> = std::iter::once("gigawalk view: controls".to_string())
+                .chain(std::iter::once(String::new()))
+                .chain(controls::help_lines())
+                .collect();
+            let cols = lines.iter().map(|l| l.len()).max().unwrap_or(0) as f32;
+            overlay.text.push(OverlayText {
+                x: (w as f32 - cols * glyph - glyph).max(glyph),
+                y: glyph,
+                scale,
+                lines,
+                colour: [0.85, 0.95, 1.0, 1.0],
+                background: [0.0, 0.02, 0.08, 0.75],
+            });
+        }
+        let shown = self
+            .surface
+            .present(ctx, pass, &overlay, size, capture.is_some())?;
+        if let (Some(file), Some((w, h, rgba))) = (capture, shown.capture) {
+            let mut s = self.shared.lock().expect("viewer state");
+            match write_png(&file, w, h, &rgba) {
+                Ok(()) => {
+                    eprintln!("screenshot: {}", file.display());
+                    s.message = Some(format!("screenshot: {}", file.display()));
+                }
+                Err(e) if self.script.is_some() => s.error = Some(e.into()),
+                Err(e) => s.message = Some(format!("screenshot failed: {e}")),
+            }
+        }
+        Ok(())
+    }
+}
+
+fn cull_sets(report: &FrameReport) -> CullSets {
+    let mut sets = CullSets {
+        drawn: report.visible.iter().map(|d| d.node).collect(),
+        ..Default::default()
+    };
+    for &(node, why) in report.culled.iter() {
+        match why {
+            CullReason::Frustum => sets.frustum_culled.push(node),
+            CullReason::Occlusion => sets.occlusion_culled.push(node),
+        }
+    }
+    sets
+}

@@ -149,8 +149,10 @@ pub enum PreprocessError {
     Input(#[from] InputError),
     #[error("cannot write the scene file")]
     Write(#[source] Box<dyn std::error::Error + Send + Sync>),
-    #[error("a shard's output: {0}")]
-    Shard(String),
+    /// A merge could not read back a node's levels from a shard file
+    /// that had passed its checks.
+    #[error("a shard's output: node {node}: {reason}")]
+    Shard { node: u32, reason: String },
 }
 
 /// The hierarchy and the run's statistics; the LODs are in the sink.
@@ -697,8 +699,12 @@ fn take(role: &mut Role, ni: usize) -> Result<Option<Finished>, PreprocessError>
     let Some((file, range)) = given.lods.remove(&(ni as u32)) else {
         return Ok(None);
     };
-    let lods = shards::read_node_lods(&mut given.files[file], range)
-        .map_err(|why| PreprocessError::Shard(format!("node {ni}: {why}")))?;
+    let lods = shards::read_node_lods(&mut given.files[file], range).map_err(|reason| {
+        PreprocessError::Shard {
+            node: ni as u32,
+            reason,
+        }
+    })?;
     let done = given.done.remove(&(ni as u32)).unwrap_or(Done {
         levels: Vec::new(),
         full: None,

@@ -1,0 +1,419 @@
+//! LODs and HLODs (GigaWalk Section 4.3), simplified with meshoptimizer,
+//! with measured errors.
+//!
+//! A leaf gets a chain of static LODs of its own geometry; an inner node
+//! a chain of HLODs made from the union of its children's levels, cut at
+//! a matching error so the union holds about twice the node's triangle
+//! budget. Both chains are made the same way ([`extend_chain`]): each
+//! level is the first simplification of the previous one, at doubling
+//! error limits, that keeps at most 65% of its triangles, and never far
+//! below the level's target. Edge collapse (which prunes small pieces)
+//! and vertex clustering (which joins disjoint pieces, as the paper's
+//! GAPS does) are both tried where the pieces are many, and the lower
+//! error per triangle kept; pieces that vanished where nothing is left
+//! near them are stood for by about a triangle per cell of the error.
+//! So a machine's thousands of bolts, covers and hoses aggregate into
+//! blobs, a node's finest HLOD stands for its children near the error
+//! where they would be drawn, and switching from a node to its children
+//! multiplies the triangles drawn by a small factor (`gigawalk info`
+//! reports the distribution).
+//!
+//! Every level's error is measured ([`crate::hausdorff`]): an upper bound
+//! on the two-sided Hausdorff distance to the full-detail surface it
+//! stands for, non-decreasing along a chain and never below the errors of
+//! the child levels an HLOD was built from. Below a node of at most
+//! 65,536 triangles that surface itself is the reference; above, the
+//! union of the children's levels, plus their errors (the triangle
+//! inequality), which compounds with every level of the tree.
+//!
+//! In parts: `chain` makes a chain's levels one after another and
+//! certifies each, `simplify` makes one simplification step; this file
+//! holds the meshes, a leaf's and an inner node's chains, and which
+//! levels an inner node stores.
+
+use gigawalk_import::Object;
+use gigawalk_scene::{Colours, LodMesh};
+use glam::DVec3;
+
+use crate::hausdorff::{Nearest, Sampling, Surface};
+use crate::parts::Part;
+use crate::source::{Source, SpillError};
+
+mod chain;
+mod simplify;
+
+pub use chain::Tally;
+use chain::{extend_chain, Reference};
+
+/// Geometry being simplified: f32 positions relative to `origin`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WorkMesh {
+    pub origin: DVec3,
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    /// sRGB-encoded RGBA8, one per vertex.
+    pub colours: Vec<[u8; 4]>,
+    pub indices: Vec<u32>,
+}
+
+impl WorkMesh {
+    pub fn triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// The scene file's form: one uniform colour when every vertex agrees.
+    pub fn to_lod_mesh(&self) -> LodMesh {
+        let colours = match self.colours.first() {
+            Some(&c) if self.colours.iter().all(|&x| x == c) => Colours::Uniform(c),
+            _ => Colours::PerVertex(self.colours.clone()),
+        };
+        LodMesh {
+            origin: self.origin,
+            positions: self.positions.clone(),
+            normals: self.normals.clone(),
+            colours,
+            indices: self.indices.clone(),
+        }
+    }
+
+    /// The triangle surface, for error measurement.
+    pub fn surface(&self) -> Surface<'_> {
+        Surface {
+            positions: &self.positions,
+            indices: &self.indices,
+        }
+    }
+}
+
+/// One level of detail and its error: an upper bound, in model units, on
+/// the Hausdorff distance between this level's surface and the
+/// full-detail surface it stands for (see [`crate::hausdorff`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lod {
+    pub mesh: WorkMesh,
+    pub error: f32,
+}
+
+/// How LOD chains are cut and measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChainParams {
+    /// Target triangles of a level as a fraction of the previous level's.
+    pub ratio: f64,
+    /// Stop once a level has at most this many triangles.
+    pub floor: usize,
+    /// Levels 1..=collapse_levels of a leaf use edge collapse, the rest sloppy.
+    pub collapse_levels: usize,
+    /// Triangles of an inner node's finest HLOD (at most).
+    pub node_budget: usize,
+    /// Cover of the error measurement's samples as a fraction of the
+    /// distance found ([`Sampling::spacing`]).
+    pub bound_spacing: f32,
+    /// The finest sample cover aimed for, as a fraction of the node's box
+    /// diagonal ([`Sampling::floor`]).
+    pub bound_floor: f64,
+}
+
+impl ChainParams {
+    fn sampling(&self, diagonal: f64) -> Sampling {
+        Sampling {
+            spacing: self.bound_spacing,
+            floor: (self.bound_floor * diagonal) as f32,
+            enough: 0.0,
+        }
+    }
+
+    /// Most triangles an inner node's merged children may have: its
+    /// finest HLOD is one simplification step (by `ratio`) below them.
+    pub fn merge_budget(&self) -> usize {
+        ((self.node_budget as f64 / self.ratio).round() as usize).max(self.node_budget)
+    }
+}
+
+/// The full-detail mesh of a final object, relative to `origin`, with
+/// only the vertices its triangles use.
+pub fn leaf_mesh(model: &dyn Source, part: &Part, origin: DVec3) -> Result<WorkMesh, SpillError> {
+    let mut m = WorkMesh {
+        origin,
+        ..Default::default()
+    };
+    m.indices.reserve(3 * part.triangles);
+    let mut used: Vec<u32> = Vec::new();
+    for piece in &part.pieces {
+        let o = model.object(piece.object)?;
+        let o: &Object = &o;
+        used.clear();
+        for t in piece.triangles.iter() {
+            used.extend_from_slice(&o.indices[3 * t as usize..3 * t as usize + 3]);
+        }
+        used.sort_unstable();
+        used.dedup();
+        let base = m.positions.len() as u32;
+        let uniform = srgb8(o.colour);
+        for &v in &used {
+            let v = v as usize;
+            m.positions
+                .push((o.positions[v] - origin).as_vec3().to_array());
+            m.normals.push(o.normals[v].to_array());
+            m.colours.push(match &o.vertex_colours {
+                Some(c) => srgb8(c[v]),
+                None => uniform,
+            });
+        }
+        for t in piece.triangles.iter() {
+            for &v in &o.indices[3 * t as usize..3 * t as usize + 3] {
+                let local = used
+                    .binary_search(&v)
+                    .expect("`used` holds every index of these triangles");
+                m.indices.push(base + local as u32);
+            }
+        }
+    }
+    Ok(m)
+}
+
+/// A leaf's chain: the mesh itself (error 0), then coarser levels, each
+/// measured against the mesh. `diagonal` is the leaf box's.
+pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams, tally: &Tally) -> Vec<Lod> {
+    let mut queries = Nearest::new(mesh.surface());
+    let mut lods = vec![Lod {
+        mesh: mesh.clone(),
+        error: 0.0,
+    }];
+    let reference = Reference {
+        mesh: &mesh,
+        queries: &mut queries,
+        base: 0.0,
+        sampling: p.sampling(diagonal),
+        diagonal: diagonal as f32,
+        first_budget: usize::MAX,
+        keep_pieces: true,
+    };
+    extend_chain(&mut lods, reference, p, tally);
+    lods
+}
+
+/// An inner node's HLOD chain (GigaWalk Section 4.3), re-expressed
+/// relative to `origin`. `children` are the children's chains (finest
+/// first, errors non-decreasing; a chain may have lost levels too fine for
+/// any parent). Each child contributes the coarsest of its levels whose
+/// error is within a threshold common to all children, the smallest
+/// threshold whose merged triangles fit [`ChainParams::merge_budget`], so
+/// the children are cut at a matching error. The union is the chain's
+/// level 0 (stored only within [`ChainParams::node_budget`]); the levels
+/// below it are made as a leaf's are, the first within the budget. Each
+/// level's error is its measured distance to `original` (the full detail
+/// below the node) when given, else the largest error of the picked child
+/// levels plus its measured distance to the union (by the triangle
+/// inequality, a bound on its distance to the original); never below any
+/// picked child's.
+pub fn inner_lods(
+    children: &[&[Lod]],
+    original: Option<&WorkMesh>,
+    origin: DVec3,
+    diagonal: f64,
+    p: &ChainParams,
+    tally: &Tally,
+) -> Vec<Lod> {
+    let picked = pick_levels(children, p.merge_budget());
+    let parts: Vec<&Lod> = children
+        .iter()
+        .zip(&picked)
+        .filter_map(|(c, &k)| c.get(k))
+        .collect();
+    let meshes: Vec<&WorkMesh> = parts.iter().map(|l| &l.mesh).collect();
+    let merged = merge(&meshes, origin);
+    let base = parts.iter().map(|l| l.error).fold(0.0f32, f32::max);
+    // Measured against the full detail where the node keeps it: the
+    // bound is then the distance itself, not the picked levels' errors
+    // plus the distance to them, which compounds up the tree (each
+    // level's own distance added onto its children's).
+    let (reference_mesh, reference_base) = match original {
+        Some(o) => (o, 0.0),
+        None => (&merged, base),
+    };
+    let mut queries = Nearest::new(reference_mesh.surface());
+    // The union itself is level 0 of the chain the levels are made from;
+    // it is kept only when it is within the budget, or when nothing
+    // coarser could be made.
+    let mut lods = vec![Lod {
+        mesh: merged.clone(),
+        error: base,
+    }];
+    let reference = Reference {
+        mesh: reference_mesh,
+        queries: &mut queries,
+        base: reference_base,
+        sampling: p.sampling(diagonal),
+        diagonal: diagonal as f32,
+        first_budget: p.node_budget,
+        keep_pieces: false,
+    };
+    extend_chain(&mut lods, reference, p, tally);
+    if lods.len() > 1 && lods[0].mesh.triangles() > p.node_budget {
+        lods.remove(0);
+    }
+    lods
+}
+
+/// The levels of an inner node's chain worth storing: from the first
+/// whose triangles are below what its children would draw instead at the
+/// same error (each child's coarsest level within that error, or its
+/// finest). Traversal draws a node's coarsest acceptable level as soon as
+/// one is acceptable; a finer level that costs more than refining would
+/// make a tolerance draw more triangles than full detail. The levels after
+/// the first worth storing are coarser still and stay.
+pub fn worth_drawing(lods: &[Lod], children: &[&[Lod]]) -> std::ops::Range<usize> {
+    let refine = |e: f32| -> usize {
+        children
+            .iter()
+            .map(|c| {
+                let k = c.iter().rposition(|l| l.error <= e).unwrap_or(0);
+                c.get(k).map_or(0, |l| l.mesh.triangles())
+            })
+            .sum()
+    };
+    let first = lods
+        .iter()
+        .position(|l| l.mesh.triangles() < refine(l.error))
+        .unwrap_or(lods.len());
+    first..lods.len()
+}
+
+/// For each child chain, the index of the level to merge: the coarsest
+/// level with error <= E, for the smallest E (among the chains' errors)
+/// whose total triangles fit `budget`; the coarsest levels when nothing fits.
+pub fn pick_levels(children: &[&[Lod]], budget: usize) -> Vec<usize> {
+    let level = |c: &[Lod], e: f32| c.iter().rposition(|l| l.error <= e).unwrap_or(0);
+    let total = |e: f32| -> usize {
+        children
+            .iter()
+            .map(|c| c.get(level(c, e)).map_or(0, |l| l.mesh.triangles()))
+            .sum()
+    };
+    let mut errors: Vec<f32> = children
+        .iter()
+        .flat_map(|c| c.iter().map(|l| l.error))
+        .collect();
+    errors.sort_by(f32::total_cmp);
+    errors.dedup();
+    // `total` does not grow with E: the first fitting E is found by bisection.
+    let at = errors.partition_point(|&e| total(e) > budget);
+    match errors.get(at).or(errors.last()) {
+        Some(&e) => children.iter().map(|c| level(c, e)).collect(),
+        None => vec![0; children.len()],
+    }
+}
+
+/// The union of `meshes`, relative to `origin`.
+pub fn merge(meshes: &[&WorkMesh], origin: DVec3) -> WorkMesh {
+    let mut m = WorkMesh {
+        origin,
+        ..Default::default()
+    };
+    for c in meshes {
+        let base = m.positions.len() as u32;
+        let shift = c.origin - origin;
+        m.positions.extend(c.positions.iter().map(|p| {
+            (shift + glam::Vec3::from_array(*p).as_dvec3())
+                .as_vec3()
+                .to_array()
+        }));
+        m.normals.extend_from_slice(&c.normals);
+        m.colours.extend_from_slice(&c.colours);
+        m.indices.extend(c.indices.iter().map(|&i| base + i));
+    }
+    m
+}
+
+/// Linear RGBA in 0..=1 to sRGB-encoded RGBA8 (alpha stays linear).
+pub fn srgb8(c: [f32; 4]) -> [u8; 4] {
+    let enc = |x: f32| {
+        let x = if x.is_finite() {
+            x.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let s = if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round() as u8
+    };
+    let a = if c[3].is_finite() {
+        c[3].clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    [enc(c[0]), enc(c[1]), enc(c[2]), (a * 255.0).round() as u8]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parts::initial_parts;
+    use crate::test_models::grid_object;
+    use gigawalk_import::Model;
+
+    pub(super) const P: ChainParams = ChainParams {
+        ratio: 0.5,
+        floor: 64,
+        collapse_levels: 1,
+        node_budget: 256,
+        bound_spacing: 0.25,
+        bound_floor: 1e-3,
+    };
+
+    pub(super) fn mesh_of(o: gigawalk_import::Object) -> WorkMesh {
+        let m = Model {
+            objects: vec![o],
+            ..Default::default()
+        };
+        let (parts, _) = initial_parts(&m).unwrap();
+        leaf_mesh(&m, &parts[0], parts[0].bounds.center()).unwrap()
+    }
+
+    #[test]
+    fn srgb_endpoints_and_midpoint() {
+        assert_eq!(srgb8([0.0, 1.0, 0.5, 0.5]), [0, 255, 188, 128]);
+        assert_eq!(srgb8([f32::NAN, -1.0, 2.0, 1.0]), [0, 0, 255, 255]);
+    }
+
+    #[test]
+    fn inner_hlod_error_is_at_least_every_picked_child_level() {
+        let a = leaf_lods(
+            mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.2)),
+            15.0,
+            &P,
+            &Tally::default(),
+        );
+        let b = leaf_lods(
+            mesh_of(grid_object(DVec3::new(12.0, 0.0, 0.0), 10.0, 32, 0.5)),
+            15.0,
+            &P,
+            &Tally::default(),
+        );
+        let children = [a.as_slice(), b.as_slice()];
+        let origin = DVec3::new(11.0, 0.0, 5.0);
+        let picked = pick_levels(&children, P.merge_budget());
+        let lods = inner_lods(&children, None, origin, 30.0, &P, &Tally::default());
+        assert!(!lods.is_empty());
+        assert!(lods[0].mesh.triangles() <= P.node_budget);
+        for l in &lods {
+            assert!(l.error >= a[picked[0]].error && l.error >= b[picked[1]].error);
+            assert_eq!(l.mesh.origin, origin);
+        }
+        for w in lods.windows(2) {
+            assert!(w[1].error >= w[0].error);
+        }
+    }
+
+    #[test]
+    fn uniform_colour_is_detected() {
+        let m = mesh_of(grid_object(DVec3::ZERO, 1.0, 4, 0.0));
+        assert!(matches!(m.to_lod_mesh().colours, Colours::Uniform(_)));
+        let mut m2 = m.clone();
+        m2.colours[0] = [1, 2, 3, 4];
+        assert!(matches!(m2.to_lod_mesh().colours, Colours::PerVertex(_)));
+    }
+}

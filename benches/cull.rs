@@ -90,13 +90,8 @@ fn hierarchy(mut boxes: Vec<Aabb>) -> Skeleton {
         }
     }
     let bounds = nodes[0].bounds;
-    Skeleton {
-        origin: bounds.center(),
-        bounds,
-        nodes,
-        lods,
-        provenance: Provenance::default(),
-    }
+    Skeleton::new(bounds.center(), bounds, nodes, lods, Provenance::default())
+        .expect("a valid skeleton")
 }
 
 /// A street-level camera at the city's edge looking diagonally across it.
@@ -115,7 +110,7 @@ fn realistic_hzb(skeleton: &Skeleton, view: &CullView) -> Hzb {
     let (w, h) = (view.viewport.width, view.viewport.height);
     let mut img = DepthImage::new(w, h);
     let vp = view.camera.view_projection_rel_f64();
-    for n in skeleton.nodes.iter().filter(|n| n.is_leaf()) {
+    for n in skeleton.nodes().iter().filter(|n| n.is_leaf()) {
         let (min, max) = view.rel_f64(&n.bounds);
         if view.frustum.test(min, max, ALL_PLANES).0 != gigawalk_cull::Containment::Outside {
             img.draw_box(&vp, view.camera.position, &n.bounds);
@@ -134,14 +129,14 @@ fn cull(c: &mut Criterion) {
     // Box tests on every node's box: real sizes, from whole-city to one
     // building, so every HZB level is exercised.
     let boxes: Vec<RelBox> = skeleton
-        .nodes
+        .nodes()
         .iter()
         .map(|n| view.rel_box(&n.bounds))
         .collect();
     let visible = boxes.iter().filter(|b| test.is_visible(&view, b)).count();
     eprintln!(
         "{} nodes; HZB test: {visible} of {} node boxes visible",
-        skeleton.nodes.len(),
+        skeleton.nodes().len(),
         boxes.len()
     );
     let mut g = c.benchmark_group("box_test");
@@ -155,7 +150,7 @@ fn cull(c: &mut Criterion) {
         })
     });
     let rel: Vec<(DVec3, DVec3)> = skeleton
-        .nodes
+        .nodes()
         .iter()
         .map(|n| view.rel_f64(&n.bounds))
         .collect();

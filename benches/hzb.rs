@@ -4,23 +4,22 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use gigawalk_cull::{Hzb, Reduction};
+use gigawalk_testkit::XorShift32;
 
 /// A depth image with structure (near/far bands and noise) so no branch or
 /// min is trivially predictable; the build cost does not depend on content.
 fn depth_image(w: u32, h: u32) -> Vec<f32> {
-    let mut state = 0x9E37_79B9u32;
+    let mut rng = XorShift32::new(0x9E37_79B9);
     (0..w * h)
         .map(|i| {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
+            let noise = rng.next_u32();
             let (x, y) = (i % w, i / w);
             let band = if (x / 97 + y / 61) % 3 == 0 {
                 0.0
             } else {
                 0.05
             };
-            band + (state >> 8) as f32 / (1u32 << 24) as f32 * 0.01
+            band + (noise >> 8) as f32 / (1u32 << 24) as f32 * 0.01
         })
         .collect()
 }

@@ -75,7 +75,7 @@ fn main() {
     let scene = SceneReader::open(&scene_path).unwrap();
     let path = CameraPath::read(&path_path).unwrap();
     let rt = Runtime::new(&scene, 2).expect("this bench needs a GPU adapter (lavapipe is fine)");
-    let near = default_near(&scene.skeleton().bounds);
+    let near = default_near(&scene.skeleton().bounds());
     let cameras: Vec<CameraRequest> = path
         .poses
         .iter()

@@ -213,13 +213,8 @@ fn flat_skeleton(boxes: &[Aabb], scale: f64) -> Skeleton {
         let e = 0.001 * (1 + i % 7) as f64 * scale;
         lods.extend([lod(0.0, 1000), lod(e, 100), lod(10.0 * e, 10)]);
     }
-    Skeleton {
-        origin: bounds.center(),
-        bounds,
-        nodes,
-        lods,
-        provenance: Provenance::default(),
-    }
+    Skeleton::new(bounds.center(), bounds, nodes, lods, Provenance::default())
+        .expect("a valid skeleton")
 }
 
 fn traverse_scene(s: &Scene, scale: f64) -> Vec<DrawItem> {

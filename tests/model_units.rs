@@ -74,7 +74,7 @@ fn render(
     preprocess(model, &Params::default(), &file, "plant", &NoProgress).unwrap();
     let scene = SceneReader::open(&file).unwrap();
     let rt = Runtime::with_devices(&scene, devices).unwrap();
-    let near = near.unwrap_or_else(|| default_near(&scene.skeleton().bounds));
+    let near = near.unwrap_or_else(|| default_near(&scene.skeleton().bounds()));
     let mut source = CameraList {
         cameras: poses
             .iter()

@@ -32,10 +32,10 @@ fn check(kind: Kind, triangles: u64) {
         max_aspect: r.r2,
         at: SplitAt::CentreOfMass,
     };
-    let errors: Vec<f32> = sk.lods.iter().map(|l| l.error).collect();
+    let errors: Vec<f32> = sk.lods().iter().map(|l| l.error).collect();
     let v = verify(
         &model,
-        &sk.nodes,
+        sk.nodes(),
         &errors,
         &mut |i| reader.read_lod(i).unwrap(),
         Some(&rule),
@@ -49,9 +49,9 @@ fn check(kind: Kind, triangles: u64) {
     // LOD, and points on the LOD within it of the original. Every tenth
     // node (the root included), 300 random points per surface plus every
     // vertex, to keep the debug build's brute force to seconds.
-    let nodes: Vec<u32> = (0..sk.nodes.len() as u32).step_by(10).collect();
+    let nodes: Vec<u32> = (0..sk.nodes().len() as u32).step_by(10).collect();
     let b = check_error_bounds(
-        &sk.nodes,
+        sk.nodes(),
         &errors,
         &mut |i| reader.read_lod(i).unwrap(),
         Some(&nodes),

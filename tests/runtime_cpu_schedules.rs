@@ -29,7 +29,7 @@ fn city(dir: &std::path::Path) -> (SceneReader, Vec<Pose>) {
 }
 
 fn cameras(scene: &SceneReader, poses: &[Pose]) -> CameraList {
-    let near = default_near(&scene.skeleton().bounds);
+    let near = default_near(&scene.skeleton().bounds());
     CameraList {
         cameras: poses
             .iter()

@@ -118,7 +118,7 @@ fn a_corrupted_lod_found_while_loading_is_a_setup_error() {
     write_boxes_scene(&path, &street(20, DVec3::ZERO));
     // Opening reads only the skeleton; the damage is found when the
     // runtime loads the geometry.
-    let lods = SceneReader::open(&path).unwrap().skeleton().lods.clone();
+    let lods = SceneReader::open(&path).unwrap().skeleton().lods().to_vec();
     let at = lods[lods.len() / 2].offset as usize + 5;
     let mut bytes = std::fs::read(&path).unwrap();
     bytes[at] ^= 0x5a;

@@ -49,7 +49,7 @@ fn options(schedule: Schedule, devices: usize, pixel_error: f64) -> RuntimeOptio
 }
 
 fn cameras(scene: &SceneReader, poses: &[Pose]) -> CameraList {
-    let near = default_near(&scene.skeleton().bounds);
+    let near = default_near(&scene.skeleton().bounds());
     CameraList {
         cameras: poses
             .iter()
@@ -301,10 +301,14 @@ fn a_corrupted_lod_found_by_the_loader_ends_the_run_with_its_name() {
         let lod = first[0]
             .visible
             .iter()
-            .map(|i| sk.nodes[i.node as usize].first_lod + i.lod)
+            .map(|i| sk.nodes()[i.node as usize].first_lod + i.lod)
             .find(|l| !pinned.contains(l))
             .expect("a LOD to stream");
-        (lod, sk.lods[lod as usize].offset, sk.lods[lod as usize].len)
+        (
+            lod,
+            sk.lods()[lod as usize].offset,
+            sk.lods()[lod as usize].len,
+        )
     };
     let mut bytes = std::fs::read(&file).unwrap();
     let at = (victim.1 + victim.2 / 2) as usize;

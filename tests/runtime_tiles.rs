@@ -28,7 +28,7 @@ fn scene(kind: Kind, dir: &std::path::Path) -> (SceneReader, Vec<CameraRequest>)
     let file = dir.join("scene.gwk");
     preprocess(&model, &Params::default(), &file, kind.name(), &NoProgress).unwrap();
     let scene = SceneReader::open(&file).unwrap();
-    let near = default_near(&scene.skeleton().bounds);
+    let near = default_near(&scene.skeleton().bounds());
     let cameras = g
         .path
         .poses

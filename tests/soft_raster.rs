@@ -32,7 +32,7 @@ fn software_depth_is_never_nearer_than_the_gpus_and_matches_it_closely() {
         let slack = f64::from(d[0].depth_error());
         let rt = Runtime::with_devices(&scene, d).unwrap();
         let sk = scene.skeleton();
-        let near = default_near(&sk.bounds);
+        let near = default_near(&sk.bounds());
         let cameras: Vec<Camera> = g
             .path
             .poses
@@ -68,7 +68,7 @@ fn software_depth_is_never_nearer_than_the_gpus_and_matches_it_closely() {
             soft.set_absolute_slack(slack);
             soft.reset(w, h);
             for item in r.visible.iter() {
-                let lod = sk.nodes[item.node as usize].first_lod + item.lod;
+                let lod = sk.nodes()[item.node as usize].first_lod + item.lod;
                 let m = scene.read_lod(lod).unwrap();
                 soft.draw_mesh(
                     &view_proj,

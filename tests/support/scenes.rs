@@ -4,10 +4,8 @@
 
 use std::path::Path;
 
-use gigawalk_scene::{
-    Aabb, Colours, IndexFormat, LodInfo, LodMesh, Node, Provenance, SceneWriter, NO_NODE,
-};
-use glam::{DVec3, Vec3};
+use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, SceneWriter, NO_NODE};
+use glam::DVec3;
 
 /// A LOD record with only an error and a triangle count (no geometry,
 /// no vertices), for skeletons that are culled but never drawn.
@@ -25,31 +23,7 @@ pub fn bare_lod(error: f32, triangles: u32) -> LodInfo {
     }
 }
 
-/// A closed box mesh of `b` (12 triangles), positions relative to `b.min`.
-pub fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {
-    let e = b.extent().as_vec3();
-    let corner = |i: u32| {
-        Vec3::new(
-            if i & 1 != 0 { e.x } else { 0.0 },
-            if i & 2 != 0 { e.y } else { 0.0 },
-            if i & 4 != 0 { e.z } else { 0.0 },
-        )
-    };
-    #[rustfmt::skip]
-    let indices = vec![
-        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-        2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5,
-    ];
-    LodMesh {
-        origin: b.min,
-        positions: (0..8).map(|i| corner(i).to_array()).collect(),
-        normals: (0..8)
-            .map(|i| (corner(i) - e * 0.5).normalize_or(Vec3::Y).to_array())
-            .collect(),
-        colours: Colours::Uniform(colour),
-        indices,
-    }
-}
+pub use gigawalk_testkit::box_mesh;
 
 /// Writes a scene of the given boxes. Leaves are the boxes (one LOD, error
 /// 0); inner nodes get their union box as HLOD with error = its diagonal.

@@ -43,14 +43,14 @@ fn main() -> Result<(), Box<dyn Error>> {
     let tolerance: f64 = arg(&args, 5, 1.0)?;
     let every: usize = arg::<usize>(&args, 6, 5)?.max(1);
     let sk = scene.skeleton();
-    let mut depth = vec![0usize; sk.nodes.len()];
-    for i in 1..sk.nodes.len() {
-        let parent = sk.nodes[i].parent as usize;
+    let mut depth = vec![0usize; sk.nodes().len()];
+    for i in 1..sk.nodes().len() {
+        let parent = sk.nodes()[i].parent as usize;
         if parent < i {
             depth[i] = depth[parent] + 1;
         }
     }
-    let near = default_near(&sk.bounds);
+    let near = default_near(&sk.bounds());
     let options = TraversalOptions {
         occlusion: false,
         hlod: true,
@@ -81,8 +81,8 @@ fn main() -> Result<(), Box<dyn Error>> {
         items.clear();
         traverser.traverse(sk, &view, &NoOcclusion, &options, &mut |it| items.push(it));
         for it in &items {
-            let n = &sk.nodes[it.node as usize];
-            let Some(l) = sk.lods.get(n.first_lod as usize + it.lod as usize) else {
+            let n = &sk.nodes()[it.node as usize];
+            let Some(l) = sk.lods().get(n.first_lod as usize + it.lod as usize) else {
                 continue;
             };
             let t = l.triangles as u64;
@@ -101,7 +101,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             slack[bucket] += t;
             if it.lod + 1 == n.lod_count {
                 slack_coarsest[bucket] += t;
-            } else if let Some(c) = sk.lods.get(n.first_lod as usize + it.lod as usize + 1) {
+            } else if let Some(c) = sk.lods().get(n.first_lod as usize + it.lod as usize + 1) {
                 let r = pixel_error(c.error, distance, view.pixels_per_radian) / tolerance;
                 let b = [1.5, 2.0, 4.0, 8.0].iter().filter(|&&x| r > x).count();
                 next[b] += t;

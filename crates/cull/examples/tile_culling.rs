@@ -51,11 +51,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let tolerance: f64 = arg(&args, 5, 1.0)?;
     let poses: usize = arg::<usize>(&args, 6, 24)?.max(1);
     let viewport = Viewport::new(w, h);
-    let near = default_near(&sk.bounds);
+    let near = default_near(&sk.bounds());
     let cameras: Vec<Camera> = match args.get(2).map(String::as_str) {
         None | Some("orbit") => {
-            let c = sk.bounds.center();
-            let r = 0.8 * sk.bounds.diagonal();
+            let c = sk.bounds().center();
+            let r = 0.8 * sk.bounds().diagonal();
             (0..poses)
                 .map(|i| {
                     let a = i as f64 / poses as f64 * std::f64::consts::TAU;
@@ -118,7 +118,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         w,
         h,
         item_count as f64 / cameras.len() as f64,
-        sk.nodes.len()
+        sk.nodes().len()
     );
     let names: Vec<&str> = TileMethod::ALL.iter().map(|m| m.name()).collect();
     println!(

@@ -218,9 +218,7 @@ impl<'a> CtCuller<'a> {
         if edges.is_empty() {
             return false;
         }
-        let Some(n) = self.skeleton.nodes.get(node as usize) else {
-            return false;
-        };
+        let n = self.skeleton.node(node);
         let planes: Vec<TangentPlanes> = stored
             .iter()
             .map(|&i| match self.cache.planes.get(&(node, i)) {
@@ -238,7 +236,7 @@ impl<'a> CtCuller<'a> {
 
     /// How the frame's `c`-th occluder hides `node`.
     fn classify(&mut self, node: u32, c: usize) -> Option<Occlusion> {
-        let n = self.skeleton.nodes.get(node as usize)?;
+        let n = self.skeleton.node(node);
         let occ = match &self.chosen[c] {
             Chosen::Clipped(o) => {
                 self.stats.cache_misses += 1;
@@ -467,7 +465,7 @@ mod tests {
             leaves(&mut |n| {
                 let hidden = chosen
                     .iter()
-                    .any(|o| occlusion(o, &sk.nodes[n as usize].bounds, eye) == Occlusion::Full);
+                    .any(|o| occlusion(o, &sk.nodes()[n as usize].bounds, eye) == Occlusion::Full);
                 if !hidden {
                     flat.push(n);
                 }
@@ -540,7 +538,7 @@ mod tests {
         let sk = tree(&[far, near]);
         let (drawn, stats) = culled(&sk, &[wall], &[20.0], None, &view);
         assert_eq!(stats.clipped, 1);
-        let leaf = |b: &Aabb| sk.nodes.iter().position(|n| n.bounds == *b).unwrap() as u32;
+        let leaf = |b: &Aabb| sk.nodes().iter().position(|n| n.bounds == *b).unwrap() as u32;
         assert_eq!(
             drawn,
             vec![leaf(&near)],
@@ -595,7 +593,7 @@ mod tests {
             let (without, _) = culled(&sk, &occ, &areas, None, &view);
             assert_eq!(with, without, "step {step}");
             assert_eq!(s.candidates, occ.len() as u64);
-            culled_any |= s.nodes_tested > 0 && with.len() < sk.nodes.len() / 2;
+            culled_any |= s.nodes_tested > 0 && with.len() < sk.nodes().len() / 2;
             // An eye in the empty cell has no occluders.
             let away = CullView::new(
                 Camera::look_at(

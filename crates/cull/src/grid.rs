@@ -297,16 +297,12 @@ impl Culler for GridCuller<'_> {
 
     fn drawn(&mut self, _: &CullView, item: DrawItem) {
         let t = Instant::now();
-        let lod = self
-            .skeleton
-            .nodes
-            .get(item.node as usize)
-            .map(|n| n.first_lod + item.lod);
-        let info = lod.and_then(|l| self.skeleton.lods.get(l as usize));
-        let tris = info.map_or(0, |l| l.triangles as u64);
-        let mesh = lod
-            .filter(|_| self.used.saturating_add(tris) <= self.budget)
-            .and_then(|l| self.source.lod_triangles(l));
+        // Traversal's items name the skeleton's own nodes and LODs.
+        let lod = self.skeleton.node(item.node).first_lod + item.lod;
+        let tris = self.skeleton.lod(lod).triangles as u64;
+        let mesh = (self.used.saturating_add(tris) <= self.budget)
+            .then(|| self.source.lod_triangles(lod))
+            .flatten();
         match mesh {
             Some(m) => {
                 self.used += tris;
@@ -409,10 +405,10 @@ mod tests {
             min: DVec3::new(-100.0, -100.0, -10.0),
             max: DVec3::new(100.0, 100.0, -10.0),
         };
-        let skeleton = Skeleton {
-            origin: DVec3::ZERO,
+        let skeleton = Skeleton::new(
+            DVec3::ZERO,
             bounds,
-            nodes: vec![Node {
+            vec![Node {
                 bounds,
                 parent: NO_NODE,
                 first_child: 0,
@@ -420,9 +416,10 @@ mod tests {
                 first_lod: 0,
                 lod_count: 1,
             }],
-            lods: vec![crate::test_rng::lod(0.0, 2)],
-            provenance: Default::default(),
-        };
+            vec![crate::test_rng::lod(0.0, 2)],
+            Default::default(),
+        )
+        .expect("a valid skeleton");
         let view = CullView::new(
             crate::Camera::look_at(DVec3::ZERO, DVec3::NEG_Z, 90f64.to_radians(), 1.5, 0.5),
             crate::Viewport::new(33, 22),

@@ -58,13 +58,14 @@ pub(crate) fn tree(leaves: &[Aabb], arity: usize) -> Skeleton {
         nodes[p].child_count += 1;
     }
     let lods = (0..nodes.len()).map(|_| lod(0.0, 12)).collect();
-    Skeleton {
-        origin: DVec3::ZERO,
-        bounds: nodes[0].bounds,
+    Skeleton::new(
+        DVec3::ZERO,
+        nodes[0].bounds,
         nodes,
         lods,
-        provenance: Default::default(),
-    }
+        Default::default(),
+    )
+    .expect("a valid skeleton")
 }
 
 pub(crate) struct Lcg(pub u64);

@@ -297,7 +297,7 @@ struct ItemTree {
 
 impl ItemTree {
     fn new(skeleton: &Skeleton, items: &[DrawItem]) -> Self {
-        let n = skeleton.nodes.len();
+        let n = skeleton.nodes().len();
         let mut item = vec![u32::MAX; n];
         let mut on = vec![false; n];
         for (i, it) in items.iter().enumerate() {
@@ -308,7 +308,7 @@ impl ItemTree {
             let mut at = it.node;
             while (at as usize) < n && !on[at as usize] {
                 on[at as usize] = true;
-                at = skeleton.nodes[at as usize].parent;
+                at = skeleton.nodes()[at as usize].parent;
             }
         }
         let mut range = vec![(0u32, 0u32); n];
@@ -326,7 +326,7 @@ impl ItemTree {
                     order.push(item[at as usize]);
                 }
                 stack.push((at, true));
-                let nd = &skeleton.nodes[at as usize];
+                let nd = &skeleton.nodes()[at as usize];
                 for c in (nd.first_child..nd.first_child + nd.child_count).rev() {
                     if on.get(c as usize) == Some(&true) {
                         stack.push((c, false));
@@ -347,7 +347,7 @@ impl ItemTree {
     }
 
     fn children<'s>(&'s self, skeleton: &'s Skeleton, node: u32) -> impl Iterator<Item = u32> + 's {
-        let n = &skeleton.nodes[node as usize];
+        let n = &skeleton.nodes()[node as usize];
         (n.first_child..n.first_child + n.child_count).filter(|&c| self.on(c))
     }
 
@@ -369,7 +369,7 @@ pub fn assign(
     let m = tiles.grid.count();
     let mut lists = vec![Vec::new(); m];
     let mut tests = 0u64;
-    let rel = |node: u32| view.rel_f64(&skeleton.nodes[node as usize].bounds);
+    let rel = |node: u32| view.rel_f64(&skeleton.nodes()[node as usize].bounds);
     match method {
         TileMethod::Naive => {
             for (i, it) in items.iter().enumerate() {
@@ -481,7 +481,7 @@ pub fn assign(
             let ys: Vec<f64> = (0..rows).map(|r| tiles.ndc[r * cols][3]).collect();
             for (i, it) in items.iter().enumerate() {
                 tests += 1;
-                let b = view.rel_box(&skeleton.nodes[it.node as usize].bounds);
+                let b = view.rel_box(&skeleton.nodes()[it.node as usize].bounds);
                 let (c0, c1, r0, r1) = match view.project_box(&b) {
                     BoxProjection::CrossesNear => (0, cols - 1, 0, rows - 1),
                     BoxProjection::Screen {
@@ -578,12 +578,12 @@ mod tests {
             // Every leaf is an item (as traversal at full detail would
             // draw, frustum culling aside); some cases draw inner nodes.
             let items: Vec<DrawItem> = sk
-                .nodes
+                .nodes()
                 .iter()
                 .enumerate()
                 .filter(|(i, n)| {
                     if case % 3 == 0 {
-                        n.parent != NO_NODE && sk.nodes[n.parent as usize].parent == NO_NODE
+                        n.parent != NO_NODE && sk.nodes()[n.parent as usize].parent == NO_NODE
                     } else {
                         n.child_count == 0 && *i > 0
                     }
@@ -594,7 +594,7 @@ mod tests {
                 })
                 // What traversal would emit: in the view's frustum.
                 .filter(|it| {
-                    let (lo, hi) = view.rel_f64(&sk.nodes[it.node as usize].bounds);
+                    let (lo, hi) = view.rel_f64(&sk.nodes()[it.node as usize].bounds);
                     view.frustum.test(lo, hi, ALL_PLANES).0 != Containment::Outside
                 })
                 .collect();
@@ -608,7 +608,7 @@ mod tests {
                 let naive = &got[0].lists;
                 for (t, naive_t) in naive.iter().enumerate() {
                     for (i, it) in items.iter().enumerate() {
-                        let b = sk.nodes[it.node as usize].bounds;
+                        let b = sk.nodes()[it.node as usize].bounds;
                         let i = i as u32;
                         let exact = meets(&view, &b, tiles.ndc[t]);
                         let (lo, hi) = view.rel_f64(&b);

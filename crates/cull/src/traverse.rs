@@ -114,7 +114,6 @@ impl Ord for Entry {
 enum Choice {
     Draw(u32),
     Refine,
-    Skip,
 }
 
 /// The one LOD rule, shared by traversal and re-selection so both pick the
@@ -130,14 +129,12 @@ fn choose(
     view: &CullView,
     o: &TraversalOptions,
 ) -> Choice {
-    let n = &skeleton.nodes[node as usize];
-    let lods = skeleton.lods.get(n.lods()).unwrap_or(&[]);
+    let n = skeleton.node(node);
+    // In the table, and at least one for a leaf: the skeleton is valid.
+    let lods = &skeleton.lods()[n.lods()];
     let full_detail = o.pixel_tolerance.is_nan() || o.pixel_tolerance <= 0.0;
     let distance = || view.lod_distance(min, max);
     if n.is_leaf() {
-        if lods.is_empty() {
-            return Choice::Skip;
-        }
         if full_detail {
             return Choice::Draw(0);
         }
@@ -172,9 +169,6 @@ impl Traverser {
     /// or occluded; emitted with its LOD when that LOD's pixel error is
     /// acceptable (always for a leaf, at its finest when nothing is);
     /// otherwise its children are queued.
-    ///
-    /// A malformed skeleton (child or LOD ranges out of bounds, children
-    /// not after their parent) never panics: the bad references are skipped.
     pub fn traverse<O, S>(
         &mut self,
         skeleton: &Skeleton,
@@ -237,9 +231,6 @@ impl Traverser {
     {
         let mut stats = TraversalStats::default();
         self.heap.clear();
-        if skeleton.nodes.is_empty() {
-            return stats;
-        }
         let occlusion = options.occlusion;
         // Contexts by index; a node's children share their parent's.
         let mut contexts: Vec<K::Ctx> = vec![K::Ctx::default()];
@@ -253,7 +244,7 @@ impl Traverser {
                      mask: PlaneMask,
                      test: bool,
                      ctx: u32| {
-            let (min, max) = view.rel_f64(&skeleton.nodes[node as usize].bounds);
+            let (min, max) = view.rel_f64(&skeleton.node(node).bounds);
             if K::HEARS_QUEUED && occlusion && test {
                 let b = crate::RelBox::from_f64(min, max);
                 culler.queued(view, node, &b, &contexts[ctx as usize]);
@@ -276,7 +267,7 @@ impl Traverser {
         }) = self.heap.pop()
         {
             stats.visited += 1;
-            let n = &skeleton.nodes[node as usize];
+            let n = skeleton.node(node);
             let (min, max) = view.rel_f64(&n.bounds);
             let (containment, child_mask) = if mask == 0 {
                 (Containment::Inside, 0)
@@ -309,8 +300,7 @@ impl Traverser {
             match choose(skeleton, node, (min, max), view, options) {
                 Choice::Draw(lod) => {
                     stats.drawn_nodes += 1;
-                    let l = skeleton.lods.get(n.first_lod as usize + lod as usize);
-                    stats.drawn_triangles += l.map_or(0, |l| l.triangles as u64);
+                    stats.drawn_triangles += skeleton.lod(n.first_lod + lod).triangles as u64;
                     let item = DrawItem { node, lod };
                     sink.draw(item);
                     if occlusion {
@@ -319,20 +309,17 @@ impl Traverser {
                 }
                 Choice::Refine => {
                     for child in n.children() {
-                        if child > node && (child as usize) < skeleton.nodes.len() {
-                            queue(
-                                &mut self.heap,
-                                culler,
-                                &contexts,
-                                child,
-                                child_mask,
-                                child_test,
-                                child_ctx,
-                            );
-                        }
+                        queue(
+                            &mut self.heap,
+                            culler,
+                            &contexts,
+                            child,
+                            child_mask,
+                            child_test,
+                            child_ctx,
+                        );
                     }
                 }
-                Choice::Skip => {}
             }
         }
         stats
@@ -375,12 +362,12 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
     let mut count = 0;
     let mut stack = Vec::new();
     for item in items {
-        if (item.node as usize) >= skeleton.nodes.len() {
+        if (item.node as usize) >= skeleton.nodes().len() {
             continue;
         }
         stack.push(item.node);
         while let Some(node) = stack.pop() {
-            let n = &skeleton.nodes[node as usize];
+            let n = skeleton.node(node);
             let (min, max) = view.rel_f64(&n.bounds);
             if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
                 continue;
@@ -390,11 +377,7 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
                     count += 1;
                     sink.draw(DrawItem { node, lod });
                 }
-                Choice::Refine => stack.extend(
-                    n.children()
-                        .filter(|&c| c > node && (c as usize) < skeleton.nodes.len()),
-                ),
-                Choice::Skip => {}
+                Choice::Refine => stack.extend(n.children()),
             }
         }
     }
@@ -417,18 +400,18 @@ pub fn select_occluders(
     max_triangles: u64,
 ) -> u64 {
     let triangles = |i: &DrawItem| -> Option<u64> {
-        let n = skeleton.nodes.get(i.node as usize)?;
+        let n = skeleton.nodes().get(i.node as usize)?;
         if i.lod >= n.lod_count {
             return None;
         }
-        let lod = skeleton.lods.get((n.first_lod + i.lod) as usize)?;
+        let lod = skeleton.lods().get((n.first_lod + i.lod) as usize)?;
         Some(lod.triangles.max(1) as u64)
     };
     let mut ranked: Vec<(f64, u64, DrawItem)> = items
         .iter()
         .filter_map(|&i| {
             let t = triangles(&i)?;
-            let (min, max) = view.rel_f64(&skeleton.nodes[i.node as usize].bounds);
+            let (min, max) = view.rel_f64(&skeleton.nodes()[i.node as usize].bounds);
             let e = max - min;
             let area = e.x * e.y + e.y * e.z + e.z * e.x;
             let d = crate::lod::distance_to_rel_box(min, max);
@@ -502,13 +485,8 @@ mod tests {
             }
         }
         let bounds = nodes.first().map_or(Aabb::EMPTY, |n: &Node| n.bounds);
-        Skeleton {
-            origin: DVec3::ZERO,
-            bounds,
-            nodes,
-            lods,
-            provenance: Provenance::default(),
-        }
+        Skeleton::new(DVec3::ZERO, bounds, nodes, lods, Provenance::default())
+            .expect("a valid skeleton")
     }
 
     /// 90 degree square view from `eye` down -Z, 100x100 pixels: pixel error
@@ -561,17 +539,6 @@ mod tests {
         );
         assert_eq!(culled, [(0, CullReason::Frustum)]);
         assert_eq!(stats.frustum_culled, 1);
-    }
-
-    #[test]
-    fn empty_skeleton_visits_nothing() {
-        let (items, stats) = run(
-            &tree(vec![]),
-            &view_from([0.0; 3]),
-            TraversalOptions::default(),
-        );
-        assert!(items.is_empty());
-        assert_eq!(stats, TraversalStats::default());
     }
 
     #[test]
@@ -722,23 +689,6 @@ mod tests {
     }
 
     #[test]
-    fn malformed_skeleton_does_not_panic() {
-        let mut s = two_leaves();
-        s.nodes[0].child_count = 7; // children past the end
-        s.nodes[1].lod_count = 99; // LODs past the end
-        s.nodes[2].first_child = 0; // a cycle back to the root
-        s.nodes[2].child_count = 1;
-        let o = TraversalOptions {
-            pixel_tolerance: 0.5,
-            ..Default::default()
-        };
-        // Root refines; node 1 has no readable LOD; node 2 (now inner) draws
-        // its HLOD and its "child" is ignored.
-        let (items, _) = run(&s, &view_from([0.0; 3]), o);
-        assert_eq!(items, [DrawItem { node: 2, lod: 1 }]);
-    }
-
-    #[test]
     fn reselect_keeps_acceptable_and_expands_closer() {
         let s = two_leaves();
         let far = view_from([0.0, 0.0, 90.0]);
@@ -827,11 +777,12 @@ mod tests {
         // Far from the origin: the same ranking (boxes are camera-relative).
         let shift = DVec3::new(3.0e7, -1.0e7, 2.0e7);
         let far = {
-            let mut f = occluder_scene();
-            for n in &mut f.nodes {
+            let (origin, bounds, mut nodes, lods, provenance) = occluder_scene().into_parts();
+            for n in &mut nodes {
                 n.bounds = Aabb::new(n.bounds.min + shift, n.bounds.max + shift);
             }
-            f
+            let bounds = Aabb::new(bounds.min + shift, bounds.max + shift);
+            Skeleton::new(origin + shift, bounds, nodes, lods, provenance).unwrap()
         };
         let v = view_from((shift + DVec3::new(0.0, 0.0, 0.0)).to_array());
         let mut items = vec![

@@ -110,7 +110,7 @@ impl HostGeometry {
         max_chunk_bytes: u64,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, GpuError> {
-        let lods = scene.skeleton().lods.len();
+        let lods = scene.skeleton().lods().len();
         let mut chunks = vec![Chunk::default()];
         let mut ranges = Vec::with_capacity(lods);
         let vsize = std::mem::size_of::<GpuVertex>() as u64;

@@ -7,7 +7,8 @@ use gigawalk_gpu::{
     devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, HostGeometry,
     ResidentGeometry, View, VisiblePass,
 };
-use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
+use gigawalk_scene::{Aabb, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
+use gigawalk_testkit::box_mesh;
 use glam::{DVec3, Vec3};
 
 /// A red 2x2x1 box 5 units ahead on -Z, and a green 6x6x1 box 20 ahead and
@@ -58,28 +59,6 @@ fn upload_scene(ctx: &GpuContext, shift: DVec3) -> ResidentGeometry {
         .unwrap()
         .upload(ctx)
         .unwrap()
-}
-
-fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {
-    let e = b.extent().as_vec3();
-    let corner = |i: u32| {
-        Vec3::new(
-            if i & 1 != 0 { e.x } else { 0.0 },
-            if i & 2 != 0 { e.y } else { 0.0 },
-            if i & 4 != 0 { e.z } else { 0.0 },
-        )
-    };
-    #[rustfmt::skip]
-    let indices = vec![0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5];
-    LodMesh {
-        origin: b.min,
-        positions: (0..8).map(|i| corner(i).to_array()).collect(),
-        normals: (0..8)
-            .map(|i| (corner(i) - e * 0.5).normalize().to_array())
-            .collect(),
-        colours: Colours::Uniform(colour),
-        indices,
-    }
 }
 
 fn view(shift: DVec3, w: u32, h: u32) -> View {

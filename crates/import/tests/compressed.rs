@@ -5,6 +5,7 @@
 //! data is an error naming the buffer view, never a panic.
 
 use gigawalk_import::{import_glb_bytes, Model};
+use gigawalk_testkit::XorShift;
 use glam::{DQuat, DVec3, Vec3};
 use serde_json::{json, Value};
 
@@ -507,13 +508,8 @@ fn bad_header_byte_is_an_error() {
 #[test]
 fn corrupt_compressed_bytes_never_panic() {
     let (json, bin) = split_glb(&quantized_meshopt_glb(&grid()));
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
+    let mut rng = XorShift::new(0x9E37_79B9_7F4A_7C15);
+    let mut next = move || rng.next_u64();
     for _ in 0..2000 {
         let mut bin = bin.clone();
         for _ in 0..1 + next() % 4 {

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use gigawalk_import::{import, import_glb_bytes, import_obj_str, ImportError, Model};
+use gigawalk_testkit::XorShift;
 use glam::{DVec3, Vec3};
 
 fn data(name: &str) -> PathBuf {
@@ -267,13 +268,8 @@ fn garbage_bytes_are_errors_not_panics() {
 /// a model or an error, never a panic.
 #[test]
 fn mutated_fixtures_never_panic() {
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
+    let mut rng = XorShift::new(0x2545_F491_4F6C_DD1D);
+    let mut next = move || rng.next_u64();
     let glb = std::fs::read(data("cube.glb")).unwrap();
     let gltf = std::fs::read(data("modes.gltf")).unwrap();
     let obj = std::fs::read(data("two_groups.obj")).unwrap();

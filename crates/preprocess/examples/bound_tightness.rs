@@ -19,11 +19,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let samples: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(400);
     let reader = SceneReader::open(std::path::Path::new(&path))?;
     let sk = reader.skeleton();
-    let errors: Vec<f32> = sk.lods.iter().map(|l| l.error).collect();
+    let errors: Vec<f32> = sk.lods().iter().map(|l| l.error).collect();
     // (inner?, level) -> ratios.
     let mut ratios: std::collections::BTreeMap<(bool, usize), Vec<f64>> = Default::default();
-    for ni in (0..sk.nodes.len()).step_by(stride.max(1)) {
-        let node = &sk.nodes[ni];
+    for ni in (0..sk.nodes().len()).step_by(stride.max(1)) {
+        let node = &sk.nodes()[ni];
         for (k, l) in node.lods().enumerate() {
             let (inner, level) = (!node.is_leaf(), k);
             if !inner && level == 0 {
@@ -36,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut only = vec![f32::INFINITY; errors.len()];
             only[l] = errors[l];
             let b = check_error_bounds(
-                &sk.nodes,
+                sk.nodes(),
                 &only,
                 &mut |i| reader.read_lod(i).expect("a stored LOD"),
                 Some(&[ni as u32]),

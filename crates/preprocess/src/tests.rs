@@ -145,12 +145,12 @@ fn scene_file_round_trips_and_verifies() {
     let reader = SceneReader::open(&path).unwrap();
     let sk = reader.skeleton();
     assert_eq!(sk.finest_triangles(), stats.triangles);
-    assert_eq!(sk.provenance.source, "small_plant");
-    assert_eq!(sk.provenance.parameters["t1"], 500);
-    let errors: Vec<f32> = sk.lods.iter().map(|l| l.error).collect();
+    assert_eq!(sk.provenance().source, "small_plant");
+    assert_eq!(sk.provenance().parameters["t1"], 500);
+    let errors: Vec<f32> = sk.lods().iter().map(|l| l.error).collect();
     verify(
         &model,
-        &sk.nodes,
+        sk.nodes(),
         &errors,
         &mut |i| reader.read_lod(i).unwrap(),
         None,

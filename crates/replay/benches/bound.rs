@@ -8,20 +8,10 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use gigawalk_gpu::DepthImage;
 use gigawalk_replay::bound_violations;
+use gigawalk_testkit::XorShift32;
 
 const W: u32 = 1920;
 const H: u32 = 1080;
-
-/// Deterministic xorshift, so every run times the same images.
-struct Rng(u32);
-impl Rng {
-    fn next(&mut self, n: u32) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0 % n
-    }
-}
 
 /// A depth image of `boxes` screen rectangles at random depths over
 /// background, the nearest winning (reversed-Z: larger is nearer), each
@@ -31,12 +21,13 @@ impl Rng {
 fn scene(seed: u32, shift: u32, drop_every: usize, moves: u32) -> DepthImage {
     let (w, h) = (W as i64, H as i64);
     let mut depth = vec![0f32; (W * H) as usize];
-    let mut rng = Rng(seed);
-    let mut jitter = Rng(moves.max(1));
+    // Deterministic xorshift, so every run times the same images.
+    let mut rng = XorShift32::new(seed);
+    let mut jitter = XorShift32::new(moves.max(1));
     for b in 0..3000usize {
-        let (x, y) = (rng.next(W) as i64, rng.next(H) as i64);
-        let (bw, bh) = (4 + rng.next(160) as i64, 4 + rng.next(120) as i64);
-        let d = 0.01 + rng.next(1000) as f32 * 1e-3;
+        let (x, y) = (rng.below(W) as i64, rng.below(H) as i64);
+        let (bw, bh) = (4 + rng.below(160) as i64, 4 + rng.below(120) as i64);
+        let d = 0.01 + rng.below(1000) as f32 * 1e-3;
         if drop_every > 0 && b % drop_every == 0 {
             continue;
         }
@@ -44,7 +35,7 @@ fn scene(seed: u32, shift: u32, drop_every: usize, moves: u32) -> DepthImage {
             if shift == 0 {
                 0
             } else {
-                jitter.next(2 * shift + 1) as i64 - shift as i64
+                jitter.below(2 * shift + 1) as i64 - shift as i64
             }
         };
         // Moved edges can cross on a small rectangle: then it is empty.

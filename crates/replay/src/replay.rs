@@ -391,7 +391,7 @@ pub fn replay_on(
     let k = opts.accuracy_every;
     let near = opts
         .near
-        .unwrap_or_else(|| default_near(&rt.skeleton().bounds));
+        .unwrap_or_else(|| default_near(&rt.skeleton().bounds()));
     let cameras: Vec<CameraRequest> = poses[..n]
         .iter()
         .enumerate()
@@ -741,7 +741,8 @@ mod tests {
             validate(&o)
         };
         assert!(with(&|_| {}).is_ok());
-        let cases: [(&dyn Fn(&mut ReplayOptions), BadOption, &str); 6] = [
+        type Case<'a> = (&'a dyn Fn(&mut ReplayOptions), BadOption, &'a str);
+        let cases: [Case; 6] = [
             (&|o| o.modes.clear(), BadOption::NoModes, "no modes given"),
             (
                 &|o| o.pixel_errors.clear(),

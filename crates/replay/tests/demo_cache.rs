@@ -22,7 +22,7 @@ fn demo_cache_is_built_once_and_reused() {
         .unwrap();
     assert!(a.built);
     let scene = SceneReader::open(&a.scene).unwrap();
-    assert!(scene.skeleton().nodes.len() > 1);
+    assert!(scene.skeleton().nodes().len() > 1);
     let path = gigawalk_scene::path::CameraPath::read(&a.path).unwrap();
     assert_eq!(path.poses.len(), 8);
 

@@ -27,7 +27,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let budget: u64 = a[3].parse()?;
     let frames: usize = a[4].parse::<usize>()?.min(path.poses.len());
     let (w, h) = (640, 360);
-    let near = default_near(&scene.skeleton().bounds);
+    let near = default_near(&scene.skeleton().bounds());
     let cams = || CameraList {
         cameras: path.poses[..frames]
             .iter()

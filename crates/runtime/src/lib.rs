@@ -659,7 +659,7 @@ fn check_device_count(count: usize) -> Result<(), RuntimeError> {
 /// a buffer) keeps that within 2^24 too.
 fn check_index_range(skeleton: &Skeleton, devices: &[GpuContext]) -> Result<(), RuntimeError> {
     let Some((lod, most)) = (0..)
-        .zip(&skeleton.lods)
+        .zip(skeleton.lods())
         .max_by_key(|(_, l)| l.vertices)
         .map(|(k, l)| (k, l.vertices as u64))
     else {

@@ -38,6 +38,6 @@ pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};
 pub use read::{ReadAt, SceneReader, SectionInfo};
-pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};
+pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE};
 pub use stats::{DepthLevels, NodeSwitch, SceneStats, SwitchFactors};
 pub use write::{SceneWriter, WriteSummary};

@@ -95,7 +95,6 @@ pub struct SceneReader<R = File> {
     src: R,
     file: String,
     skeleton: Skeleton,
-    lod_owner: Vec<u32>,
     sections: Vec<SectionInfo>,
     geometry: TocEntry,
     /// Optional sections (known to this reader or not), read on demand.
@@ -200,13 +199,13 @@ impl<R: ReadAt> SceneReader<R> {
     }
 
     fn read_lod_kind(&self, lod: u32) -> Result<LodMesh, ReadErrorKind> {
-        let count = self.skeleton.lods.len() as u32;
+        let count = self.skeleton.lods().len() as u32;
         let info = *self
             .skeleton
-            .lods
+            .lods()
             .get(lod as usize)
             .ok_or(ReadErrorKind::NoSuchLod { lod, count })?;
-        let node = self.lod_owner[lod as usize];
+        let node = self.skeleton.owner(lod);
         let err = |detail: String| ReadErrorKind::Lod {
             lod,
             node,
@@ -243,7 +242,7 @@ impl<R: ReadAt> SceneReader<R> {
                 indices[i]
             )));
         }
-        let bounds = self.skeleton.nodes[node as usize].bounds;
+        let bounds = self.skeleton.node(node).bounds;
         for (i, p) in positions.iter().enumerate() {
             let w = info.origin + Vec3::from(*p).as_dvec3();
             if !bounds.contains_point(w) {
@@ -296,7 +295,7 @@ impl<R: ReadAt> SceneReader<R> {
         }
         let occluders = self.occluders()?.map_or(0, |o| o.len());
         self.occluder_cells(occluders)?;
-        for lod in 0..self.skeleton.lods.len() as u32 {
+        for lod in 0..self.skeleton.lods().len() as u32 {
             self.read_lod(lod)?;
         }
         Ok(())
@@ -533,27 +532,19 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
         }
         lods.push(l);
     }
-    let skeleton = Skeleton {
-        origin: scene.origin,
-        bounds: scene.bounds,
-        nodes,
-        lods,
-        provenance,
+    let layout = Layout {
+        nodes_at: nodes_e.offset,
+        lods_at: lods_e.offset,
+        geometry_at: geometry.offset,
+        geometry_len: geometry.len,
     };
-    let lod_owner = validate(
-        &skeleton,
-        &Layout {
-            nodes_at: nodes_e.offset,
-            lods_at: lods_e.offset,
-            geometry_at: geometry.offset,
-            geometry_len: geometry.len,
-        },
-    )?;
+    let skeleton = Skeleton::new(scene.origin, scene.bounds, nodes, lods, provenance)
+        .map_err(|e| e.located(&layout))?;
+    validate(&skeleton, &layout)?;
     Ok(SceneReader {
         src,
         file: name.to_string(),
         skeleton,
-        lod_owner,
         sections: toc
             .iter()
             .map(|e| SectionInfo {

@@ -5,6 +5,7 @@ use std::ops::Range;
 
 use glam::DVec3;
 
+pub use crate::validate::SkeletonError;
 use crate::Aabb;
 
 /// Marks "no node": the root's parent.
@@ -97,17 +98,109 @@ pub struct Provenance {
 
 /// Everything a reader loads when it opens a scene: bounds, origin,
 /// hierarchy, LOD table and provenance.
+///
+/// Valid by construction: [`Skeleton::new`] is the only way to make one,
+/// and it checks every invariant of docs/scene-format.md that does not
+/// depend on where the geometry lies in a file (the reader checks those
+/// too). So code that walks a skeleton may index it without checking:
+/// node 0 is the root; a node's parent is an earlier node and lists it
+/// among its children; its children are later nodes and its LODs are in
+/// the table; each LOD belongs to exactly one node; boxes are finite and
+/// nest; errors do not decrease from a node's finest LOD to its coarsest,
+/// nor from child to parent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Skeleton {
-    /// A point near the scene's centre, for camera-relative work.
-    pub origin: DVec3,
-    pub bounds: Aabb,
-    pub nodes: Vec<Node>,
-    pub lods: Vec<LodInfo>,
-    pub provenance: Provenance,
+    origin: DVec3,
+    bounds: Aabb,
+    nodes: Vec<Node>,
+    lods: Vec<LodInfo>,
+    provenance: Provenance,
+    /// The node each LOD belongs to.
+    owner: Vec<u32>,
 }
 
 impl Skeleton {
+    /// A skeleton from its parts, when they are valid (see [`Skeleton`]);
+    /// otherwise what is wrong and where.
+    pub fn new(
+        origin: DVec3,
+        bounds: Aabb,
+        nodes: Vec<Node>,
+        lods: Vec<LodInfo>,
+        provenance: Provenance,
+    ) -> Result<Skeleton, SkeletonError> {
+        let owner = crate::validate::check_tree(origin, &bounds, &nodes, &lods)?;
+        Ok(Skeleton {
+            origin,
+            bounds,
+            nodes,
+            lods,
+            provenance,
+            owner,
+        })
+    }
+
+    /// The parts [`Skeleton::new`] took, to change and check again.
+    pub fn into_parts(self) -> (DVec3, Aabb, Vec<Node>, Vec<LodInfo>, Provenance) {
+        (
+            self.origin,
+            self.bounds,
+            self.nodes,
+            self.lods,
+            self.provenance,
+        )
+    }
+
+    /// A point near the scene's centre, for camera-relative work.
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+
+    /// Contains every node's box.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The hierarchy, root first; children after their parent.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// The LOD table; each node's LODs are a contiguous run, finest first.
+    pub fn lods(&self) -> &[LodInfo] {
+        &self.lods
+    }
+
+    pub fn provenance(&self) -> &Provenance {
+        &self.provenance
+    }
+
+    /// Node `i` (an index from this skeleton: a child, a parent, a draw
+    /// item's node).
+    pub fn node(&self, i: u32) -> &Node {
+        debug_assert!(
+            (i as usize) < self.nodes.len(),
+            "node {i} of {}",
+            self.nodes.len()
+        );
+        &self.nodes[i as usize]
+    }
+
+    /// LOD `i` of the table.
+    pub fn lod(&self, i: u32) -> &LodInfo {
+        debug_assert!(
+            (i as usize) < self.lods.len(),
+            "LOD {i} of {}",
+            self.lods.len()
+        );
+        &self.lods[i as usize]
+    }
+
+    /// The node LOD `lod` belongs to.
+    pub fn owner(&self, lod: u32) -> u32 {
+        self.owner[lod as usize]
+    }
+
     pub fn root(&self) -> &Node {
         &self.nodes[0]
     }
@@ -144,5 +237,99 @@ impl Skeleton {
             .filter_map(|i| self.node_lods(i).first())
             .map(|l| l.triangles as u64)
             .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lod(error: f32) -> LodInfo {
+        LodInfo {
+            error,
+            triangles: 1,
+            vertices: 3,
+            origin: DVec3::ZERO,
+            index_format: IndexFormat::U16,
+            uniform_colour: None,
+            offset: 0,
+            len: 0,
+            checksum: 0,
+        }
+    }
+
+    /// A root over two leaves, each with two LODs; the root has one.
+    fn parts() -> (Vec<Node>, Vec<LodInfo>) {
+        let b = |x: f64| Aabb::new(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 1.0, 1.0, 1.0));
+        let node = |bounds, parent, first_child, child_count, first_lod, lod_count| Node {
+            bounds,
+            parent,
+            first_child,
+            child_count,
+            first_lod,
+            lod_count,
+        };
+        let root = Aabb::new(DVec3::ZERO, DVec3::new(3.0, 1.0, 1.0));
+        (
+            vec![
+                node(root, NO_NODE, 1, 2, 4, 1),
+                node(b(0.0), 0, 0, 0, 0, 2),
+                node(b(2.0), 0, 0, 0, 2, 2),
+            ],
+            vec![lod(0.0), lod(0.5), lod(0.0), lod(0.5), lod(1.0)],
+        )
+    }
+
+    fn make(nodes: Vec<Node>, lods: Vec<LodInfo>) -> Result<Skeleton, SkeletonError> {
+        let bounds = Aabb::new(DVec3::ZERO, DVec3::new(3.0, 1.0, 1.0));
+        Skeleton::new(DVec3::ZERO, bounds, nodes, lods, Provenance::default())
+    }
+
+    #[test]
+    fn a_valid_skeleton_is_made_and_indexed() {
+        let (nodes, lods) = parts();
+        let s = make(nodes.clone(), lods.clone()).unwrap();
+        assert_eq!(s.nodes(), &nodes[..]);
+        assert_eq!(s.lods(), &lods[..]);
+        assert_eq!(s.node(2).first_lod, 2);
+        assert_eq!((s.owner(0), s.owner(3), s.owner(4)), (1, 2, 0));
+        assert_eq!(s.lod(4).error, 1.0);
+        let (o, b, n, l, p) = s.clone().into_parts();
+        assert_eq!(Skeleton::new(o, b, n, l, p).unwrap(), s);
+    }
+
+    #[test]
+    fn malformed_parts_are_refused_with_where_and_why() {
+        // What code walking a skeleton would otherwise have to check.
+        type Break = fn(&mut Vec<Node>, &mut Vec<LodInfo>);
+        let cases: [(Break, &str); 9] = [
+            (|n, _| n.clear(), "scene: the scene has no nodes"),
+            (|n, _| n[0].child_count = 7, "node 0: children 1..8"),
+            (|n, _| n[1].lod_count = 99, "node 1: LODs 0..99 are beyond"),
+            (
+                |n, _| {
+                    n[2].first_child = 0;
+                    n[2].child_count = 1;
+                },
+                "node 2: children 0..1 must be later nodes",
+            ),
+            (|n, _| n[0].parent = 0, "node 0: the root has a parent"),
+            (
+                |n, _| n[2].parent = 1,
+                "node 2: is a child of 0 but names parent 1",
+            ),
+            (|n, _| n[1].first_lod = 2, "LOD 2 already belongs to node 1"),
+            (
+                |_, l| l.push(lod(0.0)),
+                "LOD 5 of node 4294967295: belongs to no node",
+            ),
+            (|_, l| l[1].error = -1.0, "LOD 1 of node 1: error -1"),
+        ];
+        for (f, want) in cases {
+            let (mut nodes, mut lods) = parts();
+            f(&mut nodes, &mut lods);
+            let e = make(nodes, lods).unwrap_err().to_string();
+            assert!(e.contains(want), "{e} (wanted {want})");
+        }
     }
 }

@@ -130,8 +130,8 @@ impl SwitchFactors {
 /// Every node's tree depth, root = 0. Children have larger indices than
 /// their parent (validated), so one forward pass does.
 fn node_depths(s: &crate::Skeleton) -> Vec<usize> {
-    let mut depth = vec![0usize; s.nodes.len()];
-    for (i, n) in s.nodes.iter().enumerate() {
+    let mut depth = vec![0usize; s.nodes().len()];
+    for (i, n) in s.nodes().iter().enumerate() {
         if n.parent != NO_NODE {
             depth[i] = depth[n.parent as usize] + 1;
         }
@@ -145,9 +145,9 @@ fn node_depths(s: &crate::Skeleton) -> Vec<usize> {
 /// root that is its children, so the whole pass is linear in the nodes.
 fn node_switches(s: &crate::Skeleton, depth: &[usize]) -> Vec<Option<NodeSwitch>> {
     let mut stack = Vec::new();
-    (0..s.nodes.len())
+    (0..s.nodes().len())
         .map(|i| {
-            let n = &s.nodes[i];
+            let n = &s.nodes()[i];
             if n.is_leaf() {
                 return None;
             }
@@ -233,10 +233,10 @@ fn triangles_within(
         let lods = s.node_lods(n);
         match lods.iter().rev().find(|l| l.error <= error) {
             Some(l) => total += u64::from(l.triangles),
-            None if s.nodes[n as usize].is_leaf() => {
+            None if s.nodes()[n as usize].is_leaf() => {
                 total += lods.first().map_or(0, |l| u64::from(l.triangles));
             }
-            None => stack.extend(s.nodes[n as usize].children()),
+            None => stack.extend(s.nodes()[n as usize].children()),
         }
     }
     total
@@ -246,7 +246,7 @@ impl SceneStats {
     pub fn of<R: crate::ReadAt>(r: &SceneReader<R>) -> SceneStats {
         let s = r.skeleton();
         let max_lods = s
-            .nodes
+            .nodes()
             .iter()
             .map(|n| n.lod_count as usize)
             .max()
@@ -278,11 +278,11 @@ impl SceneStats {
             let inner: Vec<usize> = at
                 .iter()
                 .copied()
-                .filter(|&i| !s.nodes[i].is_leaf())
+                .filter(|&i| !s.nodes()[i].is_leaf())
                 .collect();
             let mut counts: Vec<usize> = inner
                 .iter()
-                .map(|&i| s.nodes[i].lod_count as usize)
+                .map(|&i| s.nodes()[i].lod_count as usize)
                 .collect();
             let mut tris: Vec<u64> = inner
                 .iter()
@@ -295,7 +295,7 @@ impl SceneStats {
             let mut errs: Vec<f64> = inner
                 .iter()
                 .filter_map(|&i| {
-                    let diag = s.nodes[i].bounds.diagonal();
+                    let diag = s.nodes()[i].bounds.diagonal();
                     let l = s.node_lods(i as u32).first()?;
                     (diag > 0.0).then(|| l.error as f64 / diag)
                 })
@@ -315,7 +315,7 @@ impl SceneStats {
         }
         let switch_factors = summarise_switches(&switches);
         let triangles = s.finest_triangles();
-        let diagonal = s.bounds.diagonal();
+        let diagonal = s.bounds().diagonal();
         let mut stack = Vec::new();
         let triangles_at_error = (1..=16)
             .map(|k| {
@@ -328,7 +328,7 @@ impl SceneStats {
         SceneStats {
             format_version: format!("{major}.{minor}"),
             file_bytes: r.file_len(),
-            nodes: s.nodes.len(),
+            nodes: s.nodes().len(),
             leaves: s.leaves().count(),
             depth: s.depth(),
             max_lods_per_node: max_lods,
@@ -339,16 +339,16 @@ impl SceneStats {
             hlod_levels_per_depth: levels_per_depth,
             switch_factors,
             triangles_at_error,
-            bounds_min: s.bounds.min.to_array(),
-            bounds_max: s.bounds.max.to_array(),
-            origin: s.origin.to_array(),
+            bounds_min: s.bounds().min.to_array(),
+            bounds_max: s.bounds().max.to_array(),
+            origin: s.origin().to_array(),
             sections: r
                 .sections()
                 .iter()
                 .map(|x| (x.name.clone(), x.len))
                 .collect(),
             bytes_per_triangle: r.file_len() as f64 / triangles.max(1) as f64,
-            provenance: s.provenance.clone(),
+            provenance: s.provenance().clone(),
         }
     }
 }
@@ -404,13 +404,14 @@ mod tests {
             let p = nodes[i].parent as usize;
             nodes[p].bounds = nodes[p].bounds.union(&nodes[i].bounds);
         }
-        Skeleton {
-            origin: DVec3::ZERO,
-            bounds: nodes[0].bounds,
+        Skeleton::new(
+            DVec3::ZERO,
+            nodes[0].bounds,
             nodes,
             lods,
-            provenance: Default::default(),
-        }
+            Default::default(),
+        )
+        .expect("a valid skeleton")
     }
 
     /// Root (100 triangles at error 4) over an inner node with two levels,
@@ -426,8 +427,8 @@ mod tests {
             (1, 1.0, &[(8, 0.0), (4, 1.0)]),
             (2, 2.0, &[(6, 0.0)]),
             (2, 3.0, &[(6, 0.0), (3, 5.0)]),
-            // No level within its parent's 0.5: draws its finest.
-            (3, 4.0, &[(20, 0.7), (10, 1.0)]),
+            // Only its finest level is within its parent's 0.5.
+            (3, 4.0, &[(20, 0.5), (10, 1.0)]),
         ])
     }
 

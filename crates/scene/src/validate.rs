@@ -1,9 +1,13 @@
-//! Structural validation of a skeleton, shared by the reader (before any
-//! use) and the writer (before the file is renamed into place).
+//! Structural validation of a skeleton: what every [`Skeleton`] holds
+//! (`check_tree`, run by [`Skeleton::new`]), and where its geometry lies
+//! in a file (`validate`, run by the reader before any use and the
+//! writer before the file is renamed into place).
+
+use glam::DVec3;
 
 use crate::error::ReadErrorKind;
 use crate::format::{geometry_len, LOD_LEN, NODE_LEN};
-use crate::{Skeleton, NO_NODE};
+use crate::{Aabb, LodInfo, Node, Skeleton, NO_NODE};
 
 /// Where the skeleton's records and the geometry live in the file, so that
 /// errors can name byte offsets.
@@ -15,41 +19,78 @@ pub struct Layout {
     pub geometry_len: u64,
 }
 
-/// Checks every invariant of docs/scene-format.md that does not need the
-/// geometry bytes. Returns the owning node of every LOD.
-pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
-    let n_nodes = s.nodes.len() as u64;
-    let n_lods = s.lods.len() as u64;
-    let node_err = |i: usize, detail: String| ReadErrorKind::Node {
+/// Why parts do not make a [`Skeleton`]: the scene record, a node or a
+/// LOD, and what is wrong with it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SkeletonError {
+    #[error("scene: {0}")]
+    Scene(String),
+    #[error("node {node}: {detail}")]
+    Node { node: u32, detail: String },
+    #[error("LOD {lod} of node {node}: {detail}")]
+    Lod { lod: u32, node: u32, detail: String },
+}
+
+impl SkeletonError {
+    /// The same flaw, located in a file laid out as `at`.
+    pub(crate) fn located(self, at: &Layout) -> ReadErrorKind {
+        match self {
+            SkeletonError::Scene(detail) => ReadErrorKind::Corrupt {
+                section: "SCNE".into(),
+                offset: 0,
+                detail,
+            },
+            SkeletonError::Node { node, detail } => ReadErrorKind::Node {
+                node,
+                offset: at.nodes_at + node as u64 * NODE_LEN as u64,
+                detail,
+            },
+            SkeletonError::Lod { lod, node, detail } => ReadErrorKind::Lod {
+                lod,
+                node,
+                offset: at.lods_at + lod as u64 * LOD_LEN as u64,
+                detail,
+            },
+        }
+    }
+}
+
+/// Checks every invariant of docs/scene-format.md that holds wherever the
+/// geometry lies (see [`Skeleton`]). Returns the owning node of every LOD.
+pub(crate) fn check_tree(
+    origin: DVec3,
+    bounds: &Aabb,
+    nodes: &[Node],
+    lods: &[LodInfo],
+) -> Result<Vec<u32>, SkeletonError> {
+    let n_nodes = nodes.len() as u64;
+    let n_lods = lods.len() as u64;
+    let node_err = |i: usize, detail: String| SkeletonError::Node {
         node: i as u32,
-        offset: at.nodes_at + i as u64 * NODE_LEN as u64,
         detail,
     };
-    let scene_err = |detail: String| ReadErrorKind::Corrupt {
-        section: "SCNE".into(),
-        offset: 0,
-        detail,
-    };
-    if s.nodes.is_empty() {
+    let scene_err = SkeletonError::Scene;
+    if nodes.is_empty() {
         return Err(scene_err("the scene has no nodes".into()));
     }
-    if !s.origin.is_finite() {
-        return Err(scene_err(format!("origin {} is not finite", s.origin)));
+    if !origin.is_finite() {
+        return Err(scene_err(format!("origin {} is not finite", origin)));
     }
-    if !s.bounds.is_valid() {
+    if !bounds.is_valid() {
         return Err(scene_err(format!(
             "bounds {:?} are not a finite box",
-            s.bounds
+            bounds
         )));
     }
-    if !s.bounds.contains_box(&s.nodes[0].bounds) {
+    if !bounds.contains_box(&nodes[0].bounds) {
         return Err(scene_err(
             "scene bounds do not contain the root's box".into(),
         ));
     }
 
-    let mut lod_owner = vec![NO_NODE; s.lods.len()];
-    for (i, n) in s.nodes.iter().enumerate() {
+    let mut lod_owner = vec![NO_NODE; lods.len()];
+    for (i, n) in nodes.iter().enumerate() {
         if !n.bounds.is_valid() {
             return Err(node_err(
                 i,
@@ -68,7 +109,7 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
                     format!("parent {} must be an earlier node", n.parent as i64),
                 ));
             }
-            if !s.nodes[p].children().contains(&(i as u32)) {
+            if !nodes[p].children().contains(&(i as u32)) {
                 return Err(node_err(
                     i,
                     format!("is not among the children of its parent {p}"),
@@ -87,7 +128,7 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
                 ));
             }
             for c in n.children() {
-                let child = &s.nodes[c as usize];
+                let child = &nodes[c as usize];
                 if child.parent as usize != i {
                     return Err(node_err(
                         c as usize,
@@ -125,15 +166,13 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
         }
     }
 
-    let geom_end = at.geometry_at + at.geometry_len;
     // Finest error of the nearest ancestor that has LODs (inf if none).
-    let mut bound = vec![f32::INFINITY; s.nodes.len()];
-    for (li, l) in s.lods.iter().enumerate() {
+    let mut bound = vec![f32::INFINITY; nodes.len()];
+    for (li, l) in lods.iter().enumerate() {
         let node = lod_owner[li];
-        let lod_err = |detail: String| ReadErrorKind::Lod {
+        let lod_err = |detail: String| SkeletonError::Lod {
             lod: li as u32,
             node,
-            offset: at.lods_at + li as u64 * LOD_LEN as u64,
             detail,
         };
         if node == NO_NODE {
@@ -148,6 +187,51 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
         if !l.origin.is_finite() {
             return Err(lod_err(format!("origin {} is not finite", l.origin)));
         }
+    }
+    for (i, n) in nodes.iter().enumerate() {
+        let own = &lods[n.lods()];
+        for w in own.windows(2) {
+            if w[1].error < w[0].error {
+                return Err(node_err(
+                    i,
+                    format!(
+                        "LOD errors must not decrease from finest to coarsest ({} then {})",
+                        w[0].error, w[1].error
+                    ),
+                ));
+            }
+        }
+        let inherited = if i == 0 {
+            f32::INFINITY
+        } else {
+            bound[n.parent as usize]
+        };
+        bound[i] = match own.first() {
+            Some(finest) if finest.error > inherited => {
+                return Err(node_err(i, format!(
+                    "finest LOD error {} exceeds its ancestor's {inherited}: errors must not decrease from child to parent",
+                    finest.error
+                )))
+            }
+            Some(finest) => finest.error,
+            None => inherited,
+        };
+    }
+    Ok(lod_owner)
+}
+
+/// Checks what a file adds to a valid skeleton: each LOD has geometry,
+/// its length matches its counts, and it lies inside the GEOM section
+/// `at` names.
+pub fn validate(s: &Skeleton, at: &Layout) -> Result<(), ReadErrorKind> {
+    let geom_end = at.geometry_at + at.geometry_len;
+    for (li, l) in s.lods().iter().enumerate() {
+        let lod_err = |detail: String| ReadErrorKind::Lod {
+            lod: li as u32,
+            node: s.owner(li as u32),
+            offset: at.lods_at + li as u64 * LOD_LEN as u64,
+            detail,
+        };
         if l.triangles == 0 || l.vertices == 0 {
             return Err(lod_err("has no triangles or no vertices".into()));
         }
@@ -167,34 +251,5 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<Vec<u32>, ReadErrorKind> {
             )));
         }
     }
-    for (i, n) in s.nodes.iter().enumerate() {
-        let lods = &s.lods[n.lods()];
-        for w in lods.windows(2) {
-            if w[1].error < w[0].error {
-                return Err(node_err(
-                    i,
-                    format!(
-                        "LOD errors must not decrease from finest to coarsest ({} then {})",
-                        w[0].error, w[1].error
-                    ),
-                ));
-            }
-        }
-        let inherited = if i == 0 {
-            f32::INFINITY
-        } else {
-            bound[n.parent as usize]
-        };
-        bound[i] = match lods.first() {
-            Some(finest) if finest.error > inherited => {
-                return Err(node_err(i, format!(
-                    "finest LOD error {} exceeds its ancestor's {inherited}: errors must not decrease from child to parent",
-                    finest.error
-                )))
-            }
-            Some(finest) => finest.error,
-            None => inherited,
-        };
-    }
-    Ok(lod_owner)
+    Ok(())
 }

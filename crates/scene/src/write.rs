@@ -111,17 +111,12 @@ impl SceneWriter {
         let geometry_at = format::HEADER_LEN as u64;
         let geometry_len = self.pos - geometry_at;
         let bounds = nodes.first().map(|n| n.bounds).unwrap_or(Aabb::EMPTY);
-        let skeleton = Skeleton {
-            origin: if bounds.is_valid() {
-                bounds.center()
-            } else {
-                DVec3::ZERO
-            },
-            bounds,
-            nodes,
-            lods: std::mem::take(&mut self.lods),
-            provenance,
+        let origin = if bounds.is_valid() {
+            bounds.center()
+        } else {
+            DVec3::ZERO
         };
+        let lods = std::mem::take(&mut self.lods);
 
         let mut toc = vec![TocEntry {
             tag: format::TAG_GEOMETRY,
@@ -135,25 +130,19 @@ impl SceneWriter {
         let mut p = Put::default();
         format::encode_scene(
             &mut p,
-            skeleton.origin,
-            &skeleton.bounds,
-            skeleton.nodes.len() as u32,
-            skeleton.lods.len() as u32,
+            origin,
+            &bounds,
+            nodes.len() as u32,
+            lods.len() as u32,
         );
         sections.push((format::TAG_SCENE, p.0));
         let mut p = Put::default();
-        skeleton
-            .nodes
-            .iter()
-            .for_each(|n| format::encode_node(&mut p, n));
+        nodes.iter().for_each(|n| format::encode_node(&mut p, n));
         sections.push((format::TAG_NODES, p.0));
         let mut p = Put::default();
-        skeleton
-            .lods
-            .iter()
-            .for_each(|l| format::encode_lod(&mut p, l));
+        lods.iter().for_each(|l| format::encode_lod(&mut p, l));
         sections.push((format::TAG_LODS, p.0));
-        let meta = serde_json::to_vec_pretty(&skeleton.provenance).expect("provenance serialises");
+        let meta = serde_json::to_vec_pretty(&provenance).expect("provenance serialises");
         sections.push((format::TAG_META, meta));
 
         let flagged = sections
@@ -184,6 +173,8 @@ impl SceneWriter {
             geometry_at,
             geometry_len,
         };
+        let skeleton = Skeleton::new(origin, bounds, nodes, lods, provenance)
+            .map_err(|e| WriteError::Invalid(e.located(&layout)))?;
         validate(&skeleton, &layout).map_err(WriteError::Invalid)?;
 
         self.pad_to_alignment()?;
@@ -221,8 +212,8 @@ impl SceneWriter {
         }
         Ok(WriteSummary {
             bytes,
-            nodes: skeleton.nodes.len(),
-            lods: skeleton.lods.len(),
+            nodes: skeleton.nodes().len(),
+            lods: skeleton.lods().len(),
             sections: toc
                 .iter()
                 .map(|e| (format::section_name(e.tag), e.len))

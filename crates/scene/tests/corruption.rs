@@ -7,6 +7,7 @@
 mod common;
 
 use gigawalk_scene::{ReadError, SceneReader};
+use gigawalk_testkit::XorShift;
 use proptest::prelude::*;
 
 fn scene_bytes() -> Vec<u8> {
@@ -27,8 +28,8 @@ fn scene_bytes() -> Vec<u8> {
 fn exercise(bytes: Vec<u8>) -> Result<(), ReadError> {
     let r = SceneReader::from_source(bytes, "damaged.gwk")?;
     let s = r.skeleton();
-    assert!(!s.nodes.is_empty());
-    for l in 0..s.lods.len() as u32 {
+    assert!(!s.nodes().is_empty());
+    for l in 0..s.lods().len() as u32 {
         r.read_lod(l)?;
     }
     r.verify()
@@ -112,13 +113,8 @@ proptest! {
 #[test]
 fn field_damage_with_fixed_checksums_is_an_error_or_a_valid_scene() {
     let bytes = scene_bytes();
-    let mut rng = 0x9e3779b97f4a7c15u64;
-    let mut next = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 7;
-        rng ^= rng << 17;
-        rng
-    };
+    let mut rng = XorShift::new(0x9e3779b97f4a7c15);
+    let mut next = move || rng.next_u64();
     let mut errors = 0;
     for _ in 0..3000 {
         let mut b = bytes.clone();

@@ -62,7 +62,7 @@ fn open_reads_no_geometry() {
 
     // Reading one LOD touches exactly that LOD's bytes.
     src.reads.borrow_mut().clear();
-    let lod = r.skeleton().lods[7];
+    let lod = r.skeleton().lods()[7];
     r.read_lod(7).unwrap();
     assert_eq!(
         *src.reads.borrow(),

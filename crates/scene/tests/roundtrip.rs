@@ -16,10 +16,10 @@ fn check_round_trip(spec: &TreeSpec) -> SceneReader {
     let summary = write_tree(&path, spec);
     let r = SceneReader::open(&path).unwrap();
     let s = r.skeleton();
-    assert_eq!(s.nodes.len(), spec.parents.len());
-    assert_eq!(summary.nodes, s.nodes.len());
+    assert_eq!(s.nodes().len(), spec.parents.len());
+    assert_eq!(summary.nodes, s.nodes().len());
     assert_eq!(summary.bytes, std::fs::metadata(&path).unwrap().len());
-    for (i, n) in s.nodes.iter().enumerate() {
+    for (i, n) in s.nodes().iter().enumerate() {
         assert_eq!(n.parent, spec.parents[i]);
         assert_eq!(n.is_leaf(), spec.leaf_boxes[i].is_some());
         if let Some(b) = spec.leaf_boxes[i] {
@@ -39,8 +39,11 @@ fn check_round_trip(spec: &TreeSpec) -> SceneReader {
             );
         }
     }
-    assert_eq!(s.provenance.source, "hand-built");
-    assert_eq!(s.provenance.parameters["nodes"], spec.parents.len() as u64);
+    assert_eq!(s.provenance().source, "hand-built");
+    assert_eq!(
+        s.provenance().parameters["nodes"],
+        spec.parents.len() as u64
+    );
     r.verify().unwrap();
     r
 }
@@ -154,7 +157,7 @@ fn far_from_origin_keeps_precision() {
         // f32 world coordinates would be off by up to 0.5 here.
         assert!(d < 1e-7, "position error {d}");
     }
-    assert!((r.skeleton().origin - bounds.center()).length() < 1e-9);
+    assert!((r.skeleton().origin() - bounds.center()).length() < 1e-9);
     assert_eq!(back.colours, mesh.colours);
     assert_eq!(back.indices, mesh.indices);
 }
@@ -196,11 +199,11 @@ fn big_mesh_uses_32_bit_indices_and_small_uses_16() {
     w.finish(vec![node], Provenance::default()).unwrap();
     let r = SceneReader::open(&path).unwrap();
     assert_eq!(
-        r.skeleton().lods[0].index_format,
+        r.skeleton().lods()[0].index_format,
         gigawalk_scene::IndexFormat::U32
     );
     assert_eq!(
-        r.skeleton().lods[1].index_format,
+        r.skeleton().lods()[1].index_format,
         gigawalk_scene::IndexFormat::U16
     );
     assert_eq!(r.read_lod(0).unwrap().indices, mesh.indices);

@@ -23,7 +23,7 @@ fn leaf_floor_and_switch_factors_of_a_written_scene() {
     let w = f.worst.as_ref().unwrap();
     assert_eq!((w.node, w.depth, w.triangles), (0, 0, 12));
     assert_eq!((w.error, w.children_triangles), (2.0, 36));
-    assert_eq!(w.diagonal, r.skeleton().nodes[0].bounds.diagonal());
+    assert_eq!(w.diagonal, r.skeleton().nodes()[0].bounds.diagonal());
     assert_eq!(s.hlod_levels_per_depth[0].switch_factor_max, 3.0);
 
     // A chain: each inner node's error covers its child's coarsest level,

@@ -160,14 +160,14 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     let controller = match &path {
         Some(p) => {
             let q = p.poses[0];
-            FlyController::from_pose(q.position, q.orientation, q.fovy, &skeleton.bounds)
+            FlyController::from_pose(q.position, q.orientation, q.fovy, &skeleton.bounds())
         }
-        None => FlyController::overview(&skeleton.bounds, fovy),
+        None => FlyController::overview(&skeleton.bounds(), fovy),
     }
     .with_units(args.metres_per_unit);
     let near = args
         .near
-        .unwrap_or_else(|| gigawalk_cull::default_near(&skeleton.bounds));
+        .unwrap_or_else(|| gigawalk_cull::default_near(&skeleton.bounds()));
 
     let mut event_loop = EventLoop::new().map_err(|e| ViewError::Display(e.into()))?;
     let mut app = App {

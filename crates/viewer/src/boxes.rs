@@ -38,7 +38,7 @@ pub fn overlay_boxes(skeleton: &Skeleton, sets: &CullSets, eye: DVec3) -> Vec<Ov
             if out.len() >= MAX_BOXES {
                 return out;
             }
-            let Some(node) = skeleton.nodes.get(n as usize) else {
+            let Some(node) = skeleton.nodes().get(n as usize) else {
                 continue;
             };
             let b = node.bounds;
@@ -59,24 +59,42 @@ pub fn overlay_boxes(skeleton: &Skeleton, sets: &CullSets, eye: DVec3) -> Vec<Ov
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gigawalk_scene::{Aabb, Node, Provenance};
+    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, NO_NODE};
 
+    /// A root (0..3 along x) over unit boxes at x = 1 and 2.
     fn skeleton() -> Skeleton {
-        let node = |x: f64| Node {
-            bounds: Aabb::new(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 1.0, 1.0, 1.0)),
-            parent: 0,
-            first_child: 0,
-            child_count: 0,
-            first_lod: 0,
-            lod_count: 0,
-        };
-        Skeleton {
+        let node =
+            |x: f64, size: f64, parent, first_child, child_count, first_lod, lod_count| Node {
+                bounds: Aabb::new(DVec3::new(x, 0.0, 0.0), DVec3::new(x + size, 1.0, 1.0)),
+                parent,
+                first_child,
+                child_count,
+                first_lod,
+                lod_count,
+            };
+        let lod = LodInfo {
+            error: 0.0,
+            triangles: 1,
+            vertices: 3,
             origin: DVec3::ZERO,
-            bounds: Aabb::new(DVec3::ZERO, DVec3::new(3.0, 1.0, 1.0)),
-            nodes: vec![node(0.0), node(1.0), node(2.0)],
-            lods: vec![],
-            provenance: Provenance::default(),
-        }
+            index_format: IndexFormat::U16,
+            uniform_colour: None,
+            offset: 0,
+            len: 0,
+            checksum: 0,
+        };
+        Skeleton::new(
+            DVec3::ZERO,
+            Aabb::new(DVec3::ZERO, DVec3::new(3.0, 1.0, 1.0)),
+            vec![
+                node(0.0, 3.0, NO_NODE, 1, 2, 0, 0),
+                node(1.0, 1.0, 0, 0, 0, 0, 1),
+                node(2.0, 1.0, 0, 0, 0, 1, 1),
+            ],
+            vec![lod, lod],
+            Provenance::default(),
+        )
+        .expect("a valid skeleton")
     }
 
     #[test]
@@ -93,6 +111,6 @@ mod tests {
         assert_eq!(b[2].colour, FRUSTUM_CULLED);
         // Camera-relative, far from the origin, still exact to a unit.
         assert_eq!(b[0].min.x, -1e7);
-        assert_eq!(b[0].max.x - b[0].min.x, 1.0);
+        assert_eq!(b[0].max.x - b[0].min.x, 3.0);
     }
 }

@@ -371,7 +371,7 @@ fn preprocess_with_stdout_closed_still_writes_every_file() {
 fn succeeds_with_stdout_closed(args: &[&str]) {
     let (reader, writer) = std::io::pipe().unwrap();
     drop(reader);
-    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+    let out = Command::new(common::BIN)
         .args(args)
         .stdout(writer)
         .stderr(std::process::Stdio::piped())

@@ -4,6 +4,8 @@
 use std::path::Path;
 use std::process::Command;
 
+use gigawalk_testkit::cli;
+
 mod common;
 use common::{gigawalk, s};
 
@@ -283,7 +285,7 @@ fn a_split_build_killed_midway_resumes_with_the_same_bytes_and_stale_temporaries
         "6k",
     ];
     // SIGKILL once the first shard is written: nothing cleans up.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+    let mut child = Command::new(common::BIN)
         .args(args)
         .stderr(std::process::Stdio::null())
         .spawn()
@@ -335,17 +337,13 @@ fn one_thread_build(d: &Path, glb: &Path, budget: &str) -> (Vec<u8>, std::path::
     let stem = glb.file_stem().unwrap().to_str().unwrap();
     let out = d.join(format!("{stem}-{budget}.gwk"));
     let stats = d.join(format!("{stem}-{budget}.json"));
-    let run = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(["preprocess", s(glb), "-o", s(&out), "--stats", s(&stats)])
-        .args(["--memory-budget", budget])
-        .env("RAYON_NUM_THREADS", "1")
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    cli::output(
+        Command::new(common::BIN)
+            .args(["preprocess", s(glb), "-o", s(&out), "--stats", s(&stats)])
+            .args(["--memory-budget", budget])
+            .env("RAYON_NUM_THREADS", "1"),
+    )
+    .assert_success();
     (std::fs::read(&out).unwrap(), stats)
 }
 

@@ -172,8 +172,8 @@ fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report()
     {
         let scene = gigawalk_scene::SceneReader::open(&gwk).unwrap();
         let sk = scene.skeleton();
-        for n in sk.nodes.iter().filter(|n| n.is_leaf() && n.lod_count > 1) {
-            let l = &sk.lods[n.first_lod as usize];
+        for n in sk.nodes().iter().filter(|n| n.is_leaf() && n.lod_count > 1) {
+            let l = &sk.lods()[n.first_lod as usize];
             bytes[(l.offset + l.len / 2) as usize] ^= 0x5a;
         }
     }

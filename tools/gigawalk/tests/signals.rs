@@ -7,21 +7,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::OnceLock;
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{gigawalk_ok, s};
 
+/// `gigawalk` to spawn: these tests signal it while it runs.
 fn gigawalk() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-}
-
-fn run_ok(args: &[&str]) {
-    let out = gigawalk().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    Command::new(common::BIN)
 }
 
 /// The hidden temporary files of unfinished writes in `dir`.
@@ -68,7 +59,7 @@ fn plant() -> &'static Path {
         std::fs::create_dir_all(&dir).unwrap();
         let glb = dir.join("plant-300k.glb");
         if !glb.is_file() {
-            run_ok(&["generate", "plant", "--triangles", "300k", "-o", s(&glb)]);
+            gigawalk_ok(&["generate", "plant", "--triangles", "300k", "-o", s(&glb)]);
         }
         glb
     })
@@ -136,7 +127,7 @@ fn sigint_during_replay_keeps_the_report_of_what_was_measured() {
     let dir = tempfile::tempdir().unwrap();
     let p = |n: &str| dir.path().join(n);
     let poses = "5000";
-    run_ok(&[
+    gigawalk_ok(&[
         "generate",
         "plant",
         "--triangles",
@@ -148,7 +139,7 @@ fn sigint_during_replay_keeps_the_report_of_what_was_measured() {
         "--poses",
         poses,
     ]);
-    run_ok(&["preprocess", s(&p("p.glb")), "-o", s(&p("p.gwk"))]);
+    gigawalk_ok(&["preprocess", s(&p("p.glb")), "-o", s(&p("p.gwk"))]);
     let mut child = gigawalk()
         .args(["replay", s(&p("p.gwk")), "--path", s(&p("p.path"))])
         .args([

@@ -2,24 +2,9 @@
 //! RVG run on their own threads and overlap in time (the paper's Figure 6).
 
 use std::collections::HashMap;
-use std::path::Path;
-use std::process::Command;
 
-fn gigawalk(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{gigawalk_ok, s};
 
 #[test]
 fn replay_trace_shows_the_stages_overlapping() {
@@ -28,7 +13,7 @@ fn replay_trace_shows_the_stages_overlapping() {
     }
     let dir = tempfile::tempdir().unwrap();
     let p = |n: &str| dir.path().join(n);
-    gigawalk(&[
+    gigawalk_ok(&[
         "generate",
         "plant",
         "--triangles",
@@ -42,8 +27,8 @@ fn replay_trace_shows_the_stages_overlapping() {
         "--poses",
         "30",
     ]);
-    gigawalk(&["preprocess", s(&p("p.glb")), "-o", s(&p("p.gwk"))]);
-    gigawalk(&[
+    gigawalk_ok(&["preprocess", s(&p("p.glb")), "-o", s(&p("p.gwk"))]);
+    gigawalk_ok(&[
         "--trace",
         s(&p("trace.json")),
         "replay",

@@ -11,29 +11,25 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use gigawalk_testkit::cli;
+
+mod common;
+use common::s;
+
 /// Longest a scripted `gigawalk` or `xdotool` call may take before the test
 /// fails instead of hanging CI (coreutils `timeout` kills it).
 const CALL_LIMIT_S: &str = "300";
 
+/// Runs `gigawalk args` under `timeout`, on X display `display` if one is
+/// given: whether it succeeded, its stdout and its stderr.
 fn gigawalk(args: &[&str], display: Option<&str>) -> (bool, String, String) {
     let mut cmd = Command::new("timeout");
-    cmd.arg(CALL_LIMIT_S)
-        .arg(env!("CARGO_BIN_EXE_gigawalk"))
-        .args(args);
+    cmd.arg(CALL_LIMIT_S).arg(common::BIN).args(args);
     if let Some(d) = display {
         // Only X11 under Xvfb: a Wayland session variable would win otherwise.
         cmd.env("DISPLAY", d).env_remove("WAYLAND_DISPLAY");
     }
-    let out = cmd.output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+    cli::output(&mut cmd).into_parts()
 }
 
 fn required() -> bool {
@@ -422,7 +418,7 @@ fn live_keys_and_mouse_drive_the_viewer() {
     std::fs::create_dir(&out).unwrap();
     let log = std::fs::File::create(dir.path().join("view.log")).unwrap();
     let mut viewer = Viewer(
-        Command::new(env!("CARGO_BIN_EXE_gigawalk"))
+        Command::new(common::BIN)
             .args(["view", s(&gwk), "--path", s(&path), "--no-hud"])
             .args(["--width", "480", "--height", "300", "--out-dir", s(&out)])
             .env("DISPLAY", d)

@@ -393,7 +393,7 @@ impl<'s, 'a> OqCuller<'s, 'a> {
 
     fn is_leaf(&self, node: u32) -> bool {
         self.skeleton
-            .nodes
+            .nodes()
             .get(node as usize)
             .is_none_or(|n| n.is_leaf())
     }
@@ -514,8 +514,7 @@ impl Culler for OqCuller<'_, '_> {
     }
 
     fn drawn(&mut self, _: &CullView, item: DrawItem) {
-        if let Some(n) = self.skeleton.nodes.get(item.node as usize) {
-            self.state.pass.draw(&[n.first_lod + item.lod]);
-        }
+        let n = self.skeleton.node(item.node);
+        self.state.pass.draw(&[n.first_lod + item.lod]);
     }
 }

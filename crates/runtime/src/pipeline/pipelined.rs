@@ -177,7 +177,7 @@ fn stc_thread(
                 let mut closed = false;
                 let (view, tol) = (&m.sample.view, m.sample.tolerance);
                 let s = stc.run(frame, view, tol, m.depth.as_ref(), &mut |item| {
-                    chunk.push(t.skeleton.nodes[item.node as usize].first_lod + item.lod);
+                    chunk.push(t.skeleton.nodes()[item.node as usize].first_lod + item.lod);
                     if chunk.len() == opts.chunk && !closed {
                         let full = std::mem::replace(&mut chunk, Vec::with_capacity(opts.chunk));
                         closed = out.send(StcToRvg::Items(full)).is_err();

@@ -79,7 +79,7 @@ impl<'a> DeviceGeometry<'a> {
 pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
     items
         .iter()
-        .map(|i| skeleton.nodes[i.node as usize].first_lod + i.lod)
+        .map(|i| skeleton.nodes()[i.node as usize].first_lod + i.lod)
         .collect()
 }
 

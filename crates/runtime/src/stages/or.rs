@@ -131,15 +131,17 @@ impl<'a> OrStage<'a> {
     }
 }
 
-/// Triangles of `items`' LODs (those the skeleton has).
+/// Triangles of `items`' LODs (an earlier frame's traversal of this
+/// skeleton chose them).
 fn item_triangles(skeleton: &Skeleton, items: &[DrawItem]) -> u64 {
     items
         .iter()
-        .filter_map(|i| {
-            let n = skeleton.nodes.get(i.node as usize)?;
-            (i.lod < n.lod_count).then_some(())?;
-            skeleton.lods.get((n.first_lod + i.lod) as usize)
+        .map(|i| {
+            u64::from(
+                skeleton
+                    .lod(skeleton.node(i.node).first_lod + i.lod)
+                    .triangles,
+            )
         })
-        .map(|l| u64::from(l.triangles))
         .sum()
 }

@@ -202,13 +202,14 @@ mod tests {
                 checksum: 0,
             });
         }
-        let skeleton = Skeleton {
-            origin: DVec3::ZERO,
-            bounds: nodes[0].bounds,
+        let skeleton = Skeleton::new(
+            DVec3::ZERO,
+            nodes[0].bounds,
             nodes,
             lods,
-            provenance: Default::default(),
-        };
+            Default::default(),
+        )
+        .expect("a valid skeleton");
         (skeleton, angles)
     }
 

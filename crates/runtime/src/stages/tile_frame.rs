@@ -58,9 +58,9 @@ impl TileFrame {
                 l.iter()
                     .map(|&i| {
                         let it = visible[i as usize];
-                        let lod = skeleton.nodes[it.node as usize].first_lod + it.lod;
+                        let lod = skeleton.nodes()[it.node as usize].first_lod + it.lod;
                         skeleton
-                            .lods
+                            .lods()
                             .get(lod as usize)
                             .map_or(0, |l| l.triangles as u64)
                     })

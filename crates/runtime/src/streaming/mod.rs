@@ -116,7 +116,7 @@ fn lod_bytes(l: &LodInfo) -> (u64, u64) {
 /// Device bytes the whole scene would take resident: (vertex, index).
 pub(crate) fn scene_bytes(skeleton: &Skeleton) -> (u64, u64) {
     skeleton
-        .lods
+        .lods()
         .iter()
         .map(lod_bytes)
         .fold((0, 0), |(v, i), (lv, li)| (v + lv, i + li))

@@ -1,5 +1,5 @@
 //! What streaming needs of the scene, shared by every device and the
-//! loader: each LOD's node, the pinned set, which device holds which LOD,
+//! loader: the pinned set, which device holds which LOD,
 //! and the frame clock that spans runs.
 
 use std::collections::VecDeque;
@@ -11,8 +11,6 @@ use super::{lod_bytes, PINNED_MAX, PINNED_SHARE, STALE_FRAMES};
 
 /// What streaming needs of the scene, shared by the devices.
 pub(crate) struct Plan {
-    /// The node each LOD belongs to.
-    pub(super) owner: Vec<u32>,
     pub(super) pinned: Vec<bool>,
     /// Per LOD, a bit per device holding it (device i: bit i), so that
     /// STC and the loader skip what every device of a run already has.
@@ -27,26 +25,16 @@ pub(crate) struct Plan {
 
 impl Plan {
     pub fn new(skeleton: &Skeleton, budget: u64) -> Plan {
-        let mut owner = vec![0; skeleton.lods.len()];
-        for (n, node) in skeleton.nodes.iter().enumerate() {
-            for l in node.lods() {
-                if let Some(o) = owner.get_mut(l) {
-                    *o = n as u32;
-                }
-            }
-        }
         // Breadth first from the root: each node's coarsest LOD, while the
         // pinned set stays within its share of the budget.
-        let mut pinned = vec![false; skeleton.lods.len()];
+        let mut pinned = vec![false; skeleton.lods().len()];
         let limit = ((budget as f64 * PINNED_SHARE) as u64).min(PINNED_MAX);
         let mut bytes = 0u64;
         let mut queue = VecDeque::from([0u32]);
         while let Some(n) = queue.pop_front() {
-            let Some(node) = skeleton.nodes.get(n as usize) else {
-                continue;
-            };
+            let node = skeleton.node(n);
             if let Some(l) = node.lods().last() {
-                let (v, i) = lod_bytes(&skeleton.lods[l]);
+                let (v, i) = lod_bytes(&skeleton.lods()[l]);
                 let b = v + i;
                 if bytes + b > limit {
                     break;
@@ -57,8 +45,9 @@ impl Plan {
             queue.extend(node.children());
         }
         Plan {
-            owner,
-            held: (0..skeleton.lods.len()).map(|_| AtomicU8::new(0)).collect(),
+            held: (0..skeleton.lods().len())
+                .map(|_| AtomicU8::new(0))
+                .collect(),
             pinned,
             base: AtomicU64::new(0),
             seen: AtomicU64::new(0),
@@ -113,7 +102,6 @@ impl Plan {
     /// A plan for `lods` LODs of one node, none pinned, held by no device.
     pub(super) fn unowned(lods: usize) -> Plan {
         Plan {
-            owner: vec![0; lods],
             pinned: vec![false; lods],
             held: (0..lods).map(|_| AtomicU8::new(0)).collect(),
             base: AtomicU64::new(0),

@@ -49,9 +49,9 @@ impl DeviceStream {
         plan: &Plan,
         max_buffer: u64,
     ) -> Result<Self, RuntimeError> {
-        let pool = GeometryPool::new(ctx, skeleton.lods.len(), plan.budget, max_buffer)
+        let pool = GeometryPool::new(ctx, skeleton.lods().len(), plan.budget, max_buffer)
             .map_err(|source| RuntimeError::Setup { source })?;
-        let n = skeleton.lods.len();
+        let n = skeleton.lods().len();
         Ok(DeviceStream {
             device,
             pool,
@@ -273,7 +273,7 @@ impl DeviceStream {
             let l = lod as usize;
             let keep = usage == Use::Visible || plan.pinned.get(l).copied().unwrap_or(false) || {
                 let bytes = match self.pool.bytes_of(lod) {
-                    0 => skeleton.lods.get(l).map_or(0, |i| {
+                    0 => skeleton.lods().get(l).map_or(0, |i| {
                         let (v, i) = lod_bytes(i);
                         v + i
                     }),
@@ -313,7 +313,7 @@ impl DeviceStream {
             if usage == Use::Occluders {
                 continue;
             }
-            match self.stand_in(skeleton, plan, lod) {
+            match self.stand_in(skeleton, lod) {
                 StandIn::Draw(s) => {
                     self.stats.substituted += 1;
                     self.touch(plan, s, frame, false);
@@ -376,14 +376,9 @@ mod tests {
                 checksum: 0,
             })
             .collect();
-        let skeleton = Skeleton {
-            origin: glam::DVec3::ZERO,
-            bounds: unit,
-            nodes,
-            lods,
-            provenance: Default::default(),
-        };
-        let (v, i) = lod_bytes(&skeleton.lods[0]);
+        let skeleton = Skeleton::new(glam::DVec3::ZERO, unit, nodes, lods, Default::default())
+            .expect("a valid skeleton");
+        let (v, i) = lod_bytes(&skeleton.lods()[0]);
         (skeleton, meshes, v + i)
     }
 

@@ -32,8 +32,8 @@ impl Prefetch<'_> {
         frame: u64,
         item: DrawItem,
     ) {
-        let n = &skeleton.nodes[item.node as usize];
-        let Some(l) = skeleton.lods.get((n.first_lod + item.lod) as usize) else {
+        let n = &skeleton.nodes()[item.node as usize];
+        let Some(l) = skeleton.lods().get((n.first_lod + item.lod) as usize) else {
             return;
         };
         let (min, max) = view.rel_f64(&n.bounds);
@@ -49,7 +49,7 @@ impl Prefetch<'_> {
             self.ask(frame, n.first_lod + item.lod - 1);
         } else {
             for c in n.children() {
-                let c = &skeleton.nodes[c as usize];
+                let c = &skeleton.nodes()[c as usize];
                 if c.lod_count > 0 {
                     self.ask(frame, c.first_lod + c.lod_count - 1);
                 }
@@ -94,7 +94,7 @@ impl Prefetch<'_> {
         wide.pixels_per_radian = view.pixels_per_radian;
         let mut asked = 0;
         let mut sink = |item: DrawItem| {
-            let n = &skeleton.nodes[item.node as usize];
+            let n = &skeleton.nodes()[item.node as usize];
             if asked < PREFETCH_MARGIN_LODS && self.ask(frame, n.first_lod + item.lod) {
                 asked += 1;
             }

@@ -3,27 +3,21 @@
 
 use gigawalk_scene::Skeleton;
 
-use super::{DeviceStream, Plan};
+use super::DeviceStream;
 
 impl DeviceStream {
     /// The finest resident LOD coarser than `lod` of its node, else the
     /// finest resident LOD of the nearest ancestor, drawn once a frame
     /// however many of its descendants it stands in for.
-    pub(super) fn stand_in(&mut self, skeleton: &Skeleton, plan: &Plan, lod: u32) -> StandIn {
-        let Some(&(mut node)) = plan.owner.get(lod as usize) else {
-            return StandIn::None;
-        };
-        let n = &skeleton.nodes[node as usize];
+    pub(super) fn stand_in(&mut self, skeleton: &Skeleton, lod: u32) -> StandIn {
+        let mut node = skeleton.owner(lod);
+        let n = skeleton.node(node);
         if let Some(l) = (lod + 1..n.first_lod + n.lod_count).find(|&l| self.pool.contains(l)) {
             return StandIn::Draw(l);
         }
         while node != 0 {
-            let parent = skeleton.nodes[node as usize].parent;
-            if parent >= node {
-                return StandIn::None; // malformed: children come after their parent
-            }
-            node = parent;
-            let p = &skeleton.nodes[node as usize];
+            node = skeleton.node(node).parent;
+            let p = skeleton.node(node);
             if let Some(l) = p.lods().map(|l| l as u32).find(|&l| self.pool.contains(l)) {
                 return if self.standins.insert(l) {
                     StandIn::Draw(l)

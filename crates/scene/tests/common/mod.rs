@@ -4,44 +4,9 @@
 
 use std::path::Path;
 
-use gigawalk_scene::{
-    Aabb, Colours, LodMesh, Node, Provenance, SceneWriter, WriteSummary, NO_NODE,
-};
+use gigawalk_scene::{Aabb, Node, Provenance, SceneWriter, WriteSummary, NO_NODE};
+pub use gigawalk_testkit::box_mesh;
 use glam::DVec3;
-
-/// A closed box mesh (8 vertices, 12 triangles) spanning `b`, positions
-/// relative to `b.min` so far-away boxes keep their precision.
-pub fn box_mesh(b: &Aabb, colour: [u8; 4]) -> LodMesh {
-    let e = b.extent().as_vec3();
-    let positions: Vec<[f32; 3]> = (0..8)
-        .map(|i| {
-            [
-                if i & 1 != 0 { e.x } else { 0.0 },
-                if i & 2 != 0 { e.y } else { 0.0 },
-                if i & 4 != 0 { e.z } else { 0.0 },
-            ]
-        })
-        .collect();
-    let normals = positions
-        .iter()
-        .map(|p| {
-            let v = glam::Vec3::from(*p) - e * 0.5;
-            v.normalize_or(glam::Vec3::Z).to_array()
-        })
-        .collect();
-    #[rustfmt::skip]
-    let indices = vec![
-        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-        2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5,
-    ];
-    LodMesh {
-        origin: b.min,
-        positions,
-        normals,
-        colours: Colours::Uniform(colour),
-        indices,
-    }
-}
 
 /// A tree described by each node's parent (parents before children, node 0
 /// the root, children of one parent consecutive) and each leaf's box. Inner

@@ -428,22 +428,36 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
     })
 }
 
-/// For tests that need a GPU (feature `testing`): opens `count` devices, or
-/// returns `None` after a loud message when no adapter qualifies, unless the
-/// environment variable `GIGAWALK_REQUIRE_ADAPTER` is set (CI sets it), in
-/// which case a missing adapter panics so the test fails.
+/// For tests that need a GPU (feature `testing`): opens `count` devices,
+/// or `None` after [`skip_test`] when no adapter qualifies.
 #[cfg(feature = "testing")]
 pub fn devices_or_skip(count: usize, test: &str) -> Option<Vec<GpuContext>> {
     match open_devices(count) {
         Ok(d) => Some(d),
-        Err(GpuError::NoAdapter { .. })
-            if std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none() =>
-        {
-            eprintln!("\n!!! SKIPPING {test}: no usable GPU adapter (install mesa-vulkan-drivers to run it) !!!\n");
+        Err(GpuError::NoAdapter { .. }) => {
+            skip_test(
+                test,
+                "no usable GPU adapter (install mesa-vulkan-drivers to run it)",
+            );
             None
         }
         Err(e) => panic!("{test}: {e}"),
     }
+}
+
+/// For tests (feature `testing`): `test` cannot run on this machine
+/// because of `why` (no adapter, no X server). Prints one `SKIP` line on
+/// stderr, which `cargo test` shows; with the environment variable
+/// `GIGAWALK_REQUIRE_ADAPTER` set (CI sets it) it panics instead, so that
+/// a machine that should run every test fails rather than passes
+/// untested.
+#[cfg(feature = "testing")]
+pub fn skip_test(test: &str, why: &str) {
+    assert!(
+        std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none(),
+        "{test}: GIGAWALK_REQUIRE_ADAPTER is set but {why}"
+    );
+    eprintln!("\n!!! SKIP {test}: {why} !!!\n");
 }
 
 #[cfg(test)]

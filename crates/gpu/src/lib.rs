@@ -26,11 +26,11 @@ pub mod shader_types;
 pub use capabilities::{
     list_adapters, AdapterReport, Optional, HOW_TO_GET_ONE, REQUIRED_DOWNLEVEL, REQUIRED_FORMATS,
 };
-#[cfg(feature = "testing")]
-pub use context::devices_or_skip;
 pub use context::{
     chosen_adapter, open_devices, open_devices_on, GpuContext, GpuError, GL_DEPTH_ERROR,
 };
+#[cfg(feature = "testing")]
+pub use context::{devices_or_skip, skip_test};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
     DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT,

@@ -32,13 +32,8 @@ fn gigawalk(args: &[&str], display: Option<&str>) -> (bool, String, String) {
     cli::output(&mut cmd).into_parts()
 }
 
-fn required() -> bool {
-    std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_some()
-}
-
 fn skip(why: &str) {
-    assert!(!required(), "GIGAWALK_REQUIRE_ADAPTER is set but {why}");
-    eprintln!("\n!!! SKIPPING gigawalk view test: {why} !!!\n");
+    gigawalk_gpu::skip_test("gigawalk view test", why);
 }
 
 /// An Xvfb server on its own display, killed when dropped.

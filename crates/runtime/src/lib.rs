@@ -492,7 +492,9 @@ impl<'s> Runtime<'s> {
         self.plan.is_some()
     }
 
-    /// LODs of the pinned set (empty when not streaming).
+    /// LODs of the pinned set (empty when not streaming). For tests
+    /// (feature `testing`).
+    #[cfg(feature = "testing")]
     pub fn pinned_lods(&self) -> Vec<u32> {
         self.plan
             .as_ref()
@@ -500,7 +502,9 @@ impl<'s> Runtime<'s> {
     }
 
     /// Whether every device holds every pinned LOD (the invariant that
-    /// eviction never breaks; trivially true when not streaming).
+    /// eviction never breaks, and asserts; trivially true when not
+    /// streaming). For tests (feature `testing`).
+    #[cfg(feature = "testing")]
     pub fn pinned_resident(&self) -> bool {
         let pinned = self.pinned_lods();
         self.geometry.iter().all(|g| match g {

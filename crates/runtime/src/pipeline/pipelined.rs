@@ -235,6 +235,9 @@ fn rvg_thread(
     let mut last: Option<(StcOutput, f64)> = None;
     let mut drawing_since = Instant::now();
     let mut speculated: Option<u64> = None;
+    // The frame begun and not ended yet: STC sends `Begin`, then the
+    // frame's scissors and items, then its `End`, one frame at a time.
+    let mut open: Option<u64> = None;
     loop {
         let late = match (&spec, &last, &pending) {
             (Some(_), Some((_, draw_ms)), Some((frame, ..))) if speculated != Some(*frame) => {
@@ -302,15 +305,25 @@ fn rvg_thread(
                 wait_ms = idle_since.elapsed().as_secs_f64() * 1e3;
                 drawing_since = Instant::now();
                 rvg.begin(frame, &view, style)?;
+                open = Some(frame);
             }
         }
         match m {
             StcToRvg::Begin(frame, view, style) => {
+                debug_assert!(
+                    open.is_none() && pending.is_none(),
+                    "frame {frame} begun while {open:?} is open"
+                );
                 pending = Some((frame, view, style));
             }
             StcToRvg::Scissor(rect) => rvg.scissor(rect),
             StcToRvg::Items(lods) => rvg.draw(&lods)?,
             StcToRvg::End(end) => {
+                debug_assert_eq!(
+                    open.take(),
+                    Some(end.sample.frame),
+                    "a frame's End closes the frame its Begin opened"
+                );
                 let set = spec.as_ref().map(|_| end.stc.clone());
                 let mut r = finish_frame(&mut rvg, presenter, *end)?;
                 r.rvg_wait_ms = wait_ms;

@@ -1,5 +1,6 @@
 //! The structs the GPU sees agree between Rust and WGSL (checked with naga,
-//! no GPU needed), and every pass's WGSL parses and validates.
+//! no GPU needed), and every shader in shaders/ parses and validates as its
+//! pass compiles it.
 
 use gigawalk_gpu::shader_types::{self, FrameUniforms, GpuVertex};
 
@@ -86,4 +87,51 @@ fn vertex_inputs_match_rust_layout() {
         })
         .collect();
     assert_eq!(locations, vec![0, 1, 2, 3]);
+}
+
+#[test]
+fn every_shader_in_the_tree_parses_and_validates() {
+    // As each pass compiles it: the scene passes and the query boxes after
+    // the shared common.wgsl, the full-screen and overlay passes alone.
+    let passes = [
+        (
+            "occluder_depth.wgsl",
+            shader_types::OCCLUDER_DEPTH_WGSL,
+            true,
+        ),
+        ("visible.wgsl", shader_types::VISIBLE_WGSL, true),
+        ("query_box.wgsl", gigawalk_gpu::QUERY_BOX_WGSL, true),
+        ("depth_copy.wgsl", gigawalk_gpu::DEPTH_COPY_WGSL, false),
+        ("blit.wgsl", gigawalk_gpu::BLIT_WGSL, false),
+        ("overlay.wgsl", gigawalk_gpu::OVERLAY_WGSL, false),
+    ];
+    for (_, src, with_common) in passes {
+        if with_common {
+            module(src);
+        } else {
+            validate_alone(src);
+        }
+    }
+    // Every file in shaders/ is one of them (common.wgsl is the prefix).
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders");
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".wgsl") && n != "common.wgsl")
+        .collect();
+    files.sort();
+    let mut named: Vec<String> = passes.iter().map(|p| p.0.to_string()).collect();
+    named.sort();
+    assert_eq!(files, named, "a shader no test validates");
+}
+
+fn validate_alone(src: &str) {
+    let module =
+        naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{e:?}"));
 }

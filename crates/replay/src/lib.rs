@@ -27,6 +27,7 @@ pub use accuracy::{
     bound_violations, bound_window, Accuracy, BOUND_RELATIVE_DEPTH, WRONGLY_CULLED_RELATIVE_DEPTH,
 };
 pub use mode::{runs, Mode};
+pub use plot::PlotError;
 pub use replay::{
     probe_devices, replay, replay_on, BadOption, FrameRecord, NoProgress, Progress, Replay,
     ReplayError, ReplayOptions, RunRecord, TargetFps, TileFigures,

@@ -57,8 +57,23 @@ pub fn is_sweep(s: &Summary) -> bool {
     errs.len() > 1 || s.modes.iter().any(|m| m.target_fps.is_some())
 }
 
-fn err<E: std::fmt::Display>(e: E) -> String {
-    e.to_string()
+/// Why a plot could not be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlotError {
+    /// Drawing it in memory failed (plotters).
+    #[error("{0}")]
+    Draw(#[source] Box<dyn std::error::Error + Send + Sync>),
+    /// Encoding it as PNG failed.
+    #[error("{0}")]
+    Encode(#[source] png::EncodingError),
+    /// Writing the file failed (nothing is left at its path).
+    #[error("{0}")]
+    Write(#[source] std::io::Error),
+}
+
+fn err<E: std::error::Error + Send + Sync + 'static>(e: E) -> PlotError {
+    PlotError::Draw(Box::new(e))
 }
 
 /// Draws a plot of `size` in memory with `draw`, then writes it to `file`
@@ -66,8 +81,8 @@ fn err<E: std::fmt::Display>(e: E) -> String {
 fn plot_png(
     file: &Path,
     size: (u32, u32),
-    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> Result<(), String>,
-) -> Result<(), String> {
+    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> Result<(), PlotError>,
+) -> Result<(), PlotError> {
     let mut rgb = vec![0; size.0 as usize * size.1 as usize * 3];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
@@ -80,15 +95,15 @@ fn plot_png(
 /// Encodes a plot drawn in memory as PNG and writes it to `file` whole
 /// or not at all (through a temporary file renamed into place): a full
 /// disk leaves no truncated image beside the report.
-fn write_png(file: &Path, size: (u32, u32), rgb: &[u8]) -> Result<(), String> {
+fn write_png(file: &Path, size: (u32, u32), rgb: &[u8]) -> Result<(), PlotError> {
     let mut bytes = Vec::new();
     let mut encoder = png::Encoder::new(&mut bytes, size.0, size.1);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(err)?;
-    writer.write_image_data(rgb).map_err(err)?;
-    writer.finish().map_err(err)?;
-    gigawalk_scene::write_atomic(file, &bytes).map_err(err)
+    let mut writer = encoder.write_header().map_err(PlotError::Encode)?;
+    writer.write_image_data(rgb).map_err(PlotError::Encode)?;
+    writer.finish().map_err(PlotError::Encode)?;
+    gigawalk_scene::write_atomic(file, &bytes).map_err(PlotError::Write)
 }
 
 /// Rounds a positive range out to whole decades for a log axis.
@@ -110,7 +125,7 @@ type Series = (String, Mode, Vec<(f64, f64)>);
 
 /// fps.png: each run's frame rate (1000 / frame ms) along the path, log
 /// scale, warm-up frames left out.
-pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
+pub fn fps(replay: &Replay, file: &Path) -> Result<(), PlotError> {
     fonts();
     plot_png(file, (1000, 520), |root| {
         root.fill(&WHITE).map_err(err)?;
@@ -187,7 +202,7 @@ pub fn fps(replay: &Replay, file: &Path) -> Result<(), String> {
 /// pixel_error.png (a target frame rate): the pixel-error tolerance each
 /// controlled run chose along the path, with its frame time against the
 /// target on a second panel.
-pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
+pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), PlotError> {
     fonts();
     plot_png(file, (1000, 640), |root| {
         root.fill(&WHITE).map_err(err)?;
@@ -282,7 +297,7 @@ pub fn pixel_error(replay: &Replay, file: &Path) -> Result<(), String> {
 /// differing colour, because it says whether a tolerance of p pixels keeps
 /// its promise: a coarse LOD that shades slightly differently but stays in
 /// place differs everywhere without breaking it.
-pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), String> {
+pub fn tradeoff(s: &Summary, file: &Path) -> Result<(), PlotError> {
     fonts();
     let with_accuracy = s.modes.iter().all(|m| m.bound_violating_fraction.is_some());
     let with_popping = with_accuracy && s.modes.iter().all(|m| m.popping.is_some());
@@ -326,7 +341,7 @@ fn tradeoff_panel<DB: DrawingBackend>(
     caption: &str,
     x_of: &dyn Fn(&crate::summary::ModeSummary) -> f64,
     x_desc: &str,
-) -> Result<(), String>
+) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
 {

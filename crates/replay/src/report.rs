@@ -17,8 +17,11 @@ pub enum ReportError {
         file: PathBuf,
         source: std::io::Error,
     },
-    #[error("{file}: cannot draw the plot: {message}")]
-    Plot { file: PathBuf, message: String },
+    #[error("{file}: cannot draw the plot: {source}")]
+    Plot {
+        file: PathBuf,
+        source: crate::plot::PlotError,
+    },
 }
 
 /// The files written, in the order written.
@@ -54,24 +57,24 @@ impl Replay {
         write(dir, "summary.md", markdown(&summary).as_bytes(), &mut w)?;
         write(dir, "frames.csv", self.csv().as_bytes(), &mut w)?;
         let fps = dir.join("fps.png");
-        crate::plot::fps(self, &fps).map_err(|message| ReportError::Plot {
+        crate::plot::fps(self, &fps).map_err(|source| ReportError::Plot {
             file: fps.clone(),
-            message,
+            source,
         })?;
         w.files.push(fps);
         if self.options.target.is_some() {
             let p = dir.join("pixel_error.png");
-            crate::plot::pixel_error(self, &p).map_err(|message| ReportError::Plot {
+            crate::plot::pixel_error(self, &p).map_err(|source| ReportError::Plot {
                 file: p.clone(),
-                message,
+                source,
             })?;
             w.files.push(p);
         }
         if crate::plot::is_sweep(&summary) {
             let t = dir.join("tradeoff.png");
-            crate::plot::tradeoff(&summary, &t).map_err(|message| ReportError::Plot {
+            crate::plot::tradeoff(&summary, &t).map_err(|source| ReportError::Plot {
                 file: t.clone(),
-                message,
+                source,
             })?;
             w.files.push(t);
         }

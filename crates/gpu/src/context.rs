@@ -49,7 +49,7 @@ pub struct GpuContext {
     pub(crate) queue: wgpu::Queue,
     pub(crate) info: wgpu::AdapterInfo,
     /// A name for messages, e.g. "A (llvmpipe, Vulkan)".
-    pub name: String,
+    name: String,
     /// The first uncaptured wgpu error, if any: wgpu reports validation
     /// errors through a callback; we turn them into [`GpuError::Device`]
     /// instead of the default panic.
@@ -62,6 +62,11 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// A name for messages, e.g. "A (llvmpipe, Vulkan)".
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
     /// The adapter's own name ("llvmpipe (LLVM 15.0.6, 256 bits)").
     pub fn adapter_name(&self) -> &str {
         &self.info.name

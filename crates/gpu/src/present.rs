@@ -239,14 +239,14 @@ impl WindowSurface {
                 }
                 wgpu::CurrentSurfaceTexture::Lost => {
                     return Err(GpuError::Device {
-                        device: ctx.name.clone(),
+                        device: ctx.name().to_string(),
                         message: "the window's surface was lost".into(),
                     })
                 }
                 wgpu::CurrentSurfaceTexture::Validation => {
                     ctx.check()?;
                     return Err(GpuError::Device {
-                        device: ctx.name.clone(),
+                        device: ctx.name().to_string(),
                         message: "validation error acquiring the window's surface texture".into(),
                     });
                 }

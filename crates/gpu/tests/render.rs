@@ -268,7 +268,7 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
     if !exact {
         eprintln!(
             "{}: occlusion queries say only zero or not; checking that much",
-            ctx.name
+            ctx.name()
         );
     }
     let shift = DVec3::new(1e6, -2e5, 3e6);

@@ -534,7 +534,7 @@ impl<'s> Runtime<'s> {
     }
 
     pub fn device_names(&self) -> Vec<String> {
-        self.devices.iter().map(|d| d.name.clone()).collect()
+        self.devices.iter().map(|d| d.name().to_string()).collect()
     }
 
     /// Runs frames until the source ends, `on_frame` returns false, or a
@@ -674,7 +674,7 @@ fn check_index_range(skeleton: &Skeleton, devices: &[GpuContext]) -> Result<(), 
             return Err(setup(GpuError::IndexRange {
                 lod,
                 vertices: most,
-                device: d.name.clone(),
+                device: d.name().to_string(),
                 max: d.max_lod_vertices(),
             }));
         }
@@ -700,12 +700,12 @@ pub fn probe_devices(
             return Err(RuntimeError::Viewport {
                 width,
                 height,
-                device: d.name.clone(),
+                device: d.name().to_string(),
                 max,
             });
         }
     }
-    Ok(devices.into_iter().map(|d| d.name).collect())
+    Ok(devices.iter().map(|d| d.name().to_string()).collect())
 }
 
 /// Opens `count` (1 or 2) wgpu devices, on an adapter whose name contains

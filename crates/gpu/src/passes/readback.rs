@@ -25,7 +25,7 @@ pub(crate) fn map_and_wait(ctx: &GpuContext, slice: wgpu::BufferSlice) -> Result
 
 pub(crate) fn device_error(ctx: &GpuContext, e: impl std::fmt::Display) -> GpuError {
     GpuError::Device {
-        device: ctx.name.clone(),
+        device: ctx.name().to_string(),
         message: e.to_string(),
     }
 }

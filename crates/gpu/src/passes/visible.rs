@@ -98,7 +98,7 @@ impl VisiblePass {
                 if !self.warned_no_wireframe {
                     tracing::warn!(
                         "{}: no POLYGON_MODE_LINE, drawing shaded instead of wireframe",
-                        ctx.name
+                        ctx.name()
                     );
                     self.warned_no_wireframe = true;
                 }

@@ -1,8 +1,12 @@
-//! The CPU's stand-in for a device (tests): LODs drawn into a
-//! conservative software depth image, no colour, no streaming.
+//! The CPU's stand-in for a device (tests, feature `testing`): LODs drawn
+//! into a conservative software depth image, no colour, no streaming.
 
 use gigawalk_cull::{CullView, SoftDepth, TriangleSource};
-use gigawalk_gpu::DepthImage;
+use gigawalk_gpu::{DepthImage, DrawStyle, FrameImage};
+
+use super::or::OccluderTarget;
+use super::rvg::VisibleTarget;
+use crate::RuntimeError;
 
 use crate::streaming::LodSource;
 use crate::triangles::TriangleCache;
@@ -11,12 +15,12 @@ use crate::triangles::TriangleCache;
 /// image (gigawalk-cull's conservative rasterizer) from triangles read
 /// on first use. Depth only; colour reads back as zeros.
 pub(crate) struct CpuRaster<'a> {
-    pub(super) triangles: TriangleCache<'a>,
-    pub(super) soft: SoftDepth,
-    pub(super) view_proj: glam::DMat4,
-    pub(super) eye: glam::DVec3,
-    pub(super) width: u32,
-    pub(super) height: u32,
+    triangles: TriangleCache<'a>,
+    soft: SoftDepth,
+    view_proj: glam::DMat4,
+    eye: glam::DVec3,
+    width: u32,
+    height: u32,
 }
 
 impl<'a> CpuRaster<'a> {
@@ -31,13 +35,13 @@ impl<'a> CpuRaster<'a> {
         }
     }
 
-    pub(super) fn begin(&mut self, view: &CullView) {
+    fn start(&mut self, view: &CullView) {
         self.soft.reset(self.width, self.height);
         self.view_proj = view.camera.view_projection_rel_f64();
         self.eye = view.camera.position;
     }
 
-    pub(super) fn draw(&mut self, lods: &[u32]) {
+    fn raster(&mut self, lods: &[u32]) {
         for &l in lods {
             if let Some(t) = self.triangles.lod_triangles(l) {
                 self.soft
@@ -46,11 +50,42 @@ impl<'a> CpuRaster<'a> {
         }
     }
 
-    pub(super) fn depth(&self) -> DepthImage {
+    fn depth_image(&self) -> DepthImage {
         DepthImage {
             width: self.width,
             height: self.height,
             depth: self.soft.depth().to_vec(),
         }
+    }
+}
+
+impl OccluderTarget for CpuRaster<'_> {
+    fn depth(&mut self, _: u64, view: &CullView, lods: &[u32]) -> Result<DepthImage, RuntimeError> {
+        self.start(view);
+        self.raster(lods);
+        Ok(self.depth_image())
+    }
+}
+
+impl VisibleTarget for CpuRaster<'_> {
+    fn begin(&mut self, view: &CullView, _: DrawStyle) {
+        self.start(view);
+    }
+
+    fn scissor(&mut self, rect: Option<[u32; 4]>) {
+        self.soft.set_scissor(rect);
+    }
+
+    fn draw(&mut self, _: u64, lods: &[u32]) -> Result<(), RuntimeError> {
+        self.raster(lods);
+        Ok(())
+    }
+
+    /// Depth, and colour as zeros.
+    fn read_back(&mut self) -> Result<FrameImage, RuntimeError> {
+        Ok(FrameImage {
+            colour: vec![0; self.width as usize * self.height as usize * 4],
+            depth: self.depth_image(),
+        })
     }
 }

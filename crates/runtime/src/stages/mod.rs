@@ -1,17 +1,17 @@
 //! The work of each stage for one frame, shared by the pipelined and the
 //! sequential schedule (so both run the same algorithms).
 
+#[cfg(feature = "testing")]
 mod cpu;
 mod or;
 mod rvg;
 mod stc;
 mod tile_frame;
 
-pub(crate) use cpu::CpuRaster;
-use or::OrRender;
+use or::{GpuOccluders, OccluderTarget};
 pub(crate) use or::{OrFigures, OrStage};
-use rvg::RvgRender;
 pub(crate) use rvg::RvgStage;
+use rvg::{GpuVisible, VisibleTarget};
 pub(crate) use stc::{StcOutput, StcStage};
 pub use tile_frame::TileFrame;
 
@@ -93,15 +93,6 @@ pub(crate) fn check_injected(
     opts.inject_failure.check(stage, frame)
 }
 
-/// A stage's drawing: its pass `P` on a device, or the CPU.
-pub(super) enum Render<'a, P> {
-    Gpu {
-        device: DeviceGeometry<'a>,
-        pass: Box<P>,
-    },
-    Cpu(Box<CpuRaster<'a>>),
-}
-
 /// What the stages draw on: the runtime's wgpu devices, or (the
 /// `testing` feature's `run_on_cpu`) the CPU's software depth
 /// rasterizer, so the schedules can be tested without an adapter.
@@ -110,9 +101,18 @@ pub(crate) struct Target<'a> {
     pub skeleton: &'a Skeleton,
     pub source: &'a dyn LodSource,
     pub plan: Option<&'a Plan>,
-    pub(super) gpu: Option<&'a Runtime<'a>>,
+    pub(super) devices: Devices<'a>,
     /// How many occluders OR draws (set by the schedule).
     pub occluders: OrBudget<'a>,
+}
+
+/// What OR and RVG draw on.
+#[derive(Clone, Copy)]
+pub(super) enum Devices<'a> {
+    Gpu(&'a Runtime<'a>),
+    /// The CPU's software depth (`Target::cpu`, for tests).
+    #[cfg(feature = "testing")]
+    Cpu,
 }
 
 /// The occluder budget as OR applies it.
@@ -129,20 +129,29 @@ impl<'a> Target<'a> {
             skeleton: rt.skeleton,
             source: rt.source,
             plan: rt.plan.as_ref(),
-            gpu: Some(rt),
+            devices: Devices::Gpu(rt),
             occluders: OrBudget::All,
         }
     }
 
-    /// Depth only, no colour, no streaming (see [`CpuRaster`]).
-    #[cfg_attr(not(feature = "testing"), allow(dead_code))]
+    /// Depth only, no colour, no streaming (see `cpu::CpuRaster`).
+    #[cfg(feature = "testing")]
     pub fn cpu(skeleton: &'a Skeleton, source: &'a dyn LodSource) -> Self {
         Target {
             skeleton,
             source,
             plan: None,
-            gpu: None,
+            devices: Devices::Cpu,
             occluders: OrBudget::All,
+        }
+    }
+
+    /// The runtime whose devices the stages draw on (`None`: the CPU).
+    pub fn runtime(&self) -> Option<&'a Runtime<'a>> {
+        match self.devices {
+            Devices::Gpu(rt) => Some(rt),
+            #[cfg(feature = "testing")]
+            Devices::Cpu => None,
         }
     }
 
@@ -157,7 +166,7 @@ impl<'a> Target<'a> {
     /// Whether OR's time comes out of RVG's: one device, a CPU rasterizer
     /// (its cores are RVG's), or the sequential schedule.
     pub fn or_shares_rvg(&self, opts: &RuntimeOptions) -> bool {
-        match self.gpu {
+        match self.runtime() {
             None => true,
             Some(rt) => {
                 opts.schedule == crate::Schedule::Sequential
@@ -170,7 +179,7 @@ impl<'a> Target<'a> {
     /// The device RVG draws on: the second when there are two and the
     /// options ask for two.
     pub fn rvg_device(&self, opts: &RuntimeOptions) -> usize {
-        match self.gpu {
+        match self.runtime() {
             Some(rt) if opts.devices >= 2 && rt.devices.len() >= 2 => 1,
             _ => 0,
         }
@@ -188,7 +197,7 @@ impl<'a> Target<'a> {
         if opts.traversal.occlusion {
             let setup = crate::cullers::Setup {
                 source: self.source,
-                gpu: self.gpu,
+                gpu: self.runtime(),
                 rvg_device,
             };
             stc.culler = Some(crate::cullers::State::new(&setup, opts)?);
@@ -199,15 +208,14 @@ impl<'a> Target<'a> {
     /// OR on device 0.
     pub fn or_stage(&self, opts: &'a RuntimeOptions, link: Option<Link>) -> OrStage<'a> {
         let (w, h) = opts.occluder_size();
-        let render = match self.gpu {
-            Some(rt) => {
+        let render: Box<dyn OccluderTarget + 'a> = match self.devices {
+            Devices::Gpu(rt) => {
                 let device = DeviceGeometry::new(rt, 0, link);
-                OrRender::Gpu {
-                    pass: Box::new(DepthPass::new(device.ctx, w, h)),
-                    device,
-                }
+                let pass = DepthPass::new(device.ctx, w, h);
+                Box::new(GpuOccluders { device, pass })
             }
-            None => OrRender::Cpu(Box::new(CpuRaster::new(self.source, w, h))),
+            #[cfg(feature = "testing")]
+            Devices::Cpu => Box::new(cpu::CpuRaster::new(self.source, w, h)),
         };
         OrStage {
             skeleton: self.skeleton,
@@ -224,19 +232,14 @@ impl<'a> Target<'a> {
         device: usize,
         link: Option<Link>,
     ) -> RvgStage<'a> {
-        let render = match self.gpu {
-            Some(rt) => {
+        let render: Box<dyn VisibleTarget + 'a> = match self.devices {
+            Devices::Gpu(rt) => {
                 let device = DeviceGeometry::new(rt, device, link);
-                RvgRender::Gpu {
-                    pass: Box::new(VisiblePass::new(device.ctx, opts.width, opts.height)),
-                    device,
-                }
+                let pass = VisiblePass::new(device.ctx, opts.width, opts.height);
+                Box::new(GpuVisible { device, pass })
             }
-            None => RvgRender::Cpu(Box::new(CpuRaster::new(
-                self.source,
-                opts.width,
-                opts.height,
-            ))),
+            #[cfg(feature = "testing")]
+            Devices::Cpu => Box::new(cpu::CpuRaster::new(self.source, opts.width, opts.height)),
         };
         RvgStage {
             render,

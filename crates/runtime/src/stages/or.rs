@@ -12,8 +12,53 @@ use super::*;
 use crate::streaming::Use;
 use crate::{gpu_view, ms_since, RuntimeError, RuntimeOptions, Stage};
 
-/// OR's drawing: a depth pass on a device, or the CPU.
-pub(super) type OrRender<'a> = Render<'a, DepthPass>;
+/// What OR draws occluder depth on: a depth pass on a device
+/// ([`GpuOccluders`]), or in tests the CPU's software depth.
+pub(super) trait OccluderTarget {
+    /// Whether occluders are streamed (OR ranks them best first so the
+    /// pool keeps those that hide most).
+    fn streaming(&self) -> bool {
+        false
+    }
+
+    /// The depth of `lods` (frame `frame`'s occluders) seen from `view`.
+    fn depth(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        lods: &[u32],
+    ) -> Result<DepthImage, RuntimeError>;
+}
+
+/// OR's depth pass on its device.
+pub(super) struct GpuOccluders<'a> {
+    pub device: DeviceGeometry<'a>,
+    pub pass: DepthPass,
+}
+
+impl OccluderTarget for GpuOccluders<'_> {
+    fn streaming(&self) -> bool {
+        self.device.plan.is_some()
+    }
+
+    fn depth(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        lods: &[u32],
+    ) -> Result<DepthImage, RuntimeError> {
+        let (ctx, pass) = (self.device.ctx, &mut self.pass);
+        // Streaming: resident occluders only (culling stays conservative).
+        self.device
+            .with(frame, lods, Use::Occluders, |residency, lods| {
+                pass.render(ctx, residency, &gpu_view(view), lods)
+            })?
+            .map_err(|source| RuntimeError::Gpu {
+                stage: Stage::Or,
+                source,
+            })
+    }
+}
 
 /// OR: the depth of frame i - lag's visible nodes, LODs re-selected for
 /// camera i (Section 5.2), at the occluder resolution.
@@ -21,7 +66,7 @@ pub(crate) struct OrStage<'a> {
     pub(super) skeleton: &'a Skeleton,
     pub(super) opts: &'a RuntimeOptions,
     pub(super) budget: OrBudget<'a>,
-    pub(super) render: OrRender<'a>,
+    pub(super) render: Box<dyn OccluderTarget + 'a>,
 }
 
 pub(crate) struct OrOutput {
@@ -81,8 +126,7 @@ impl<'a> OrStage<'a> {
         };
         // Streaming, all of them best first too: the pool keeps those that
         // fit it first.
-        let streaming =
-            matches!(&self.render, OrRender::Gpu { device, .. } if device.plan.is_some());
+        let streaming = self.render.streaming();
         let triangles = match limit {
             Some(budget) => select_occluders(self.skeleton, view, &mut items, budget),
             None if streaming => select_occluders(self.skeleton, view, &mut items, u64::MAX),
@@ -101,26 +145,7 @@ impl<'a> OrStage<'a> {
             return Ok(none(t, figures));
         }
         let lods = lod_ids(self.skeleton, &items);
-        let depth = match &mut self.render {
-            OrRender::Gpu { device, pass } => {
-                let ctx = device.ctx;
-                // Streaming: resident occluders only (culling stays
-                // conservative).
-                device
-                    .with(frame, &lods, Use::Occluders, |residency, lods| {
-                        pass.render(ctx, residency, &gpu_view(view), lods)
-                    })?
-                    .map_err(|source| RuntimeError::Gpu {
-                        stage: Stage::Or,
-                        source,
-                    })?
-            }
-            OrRender::Cpu(c) => {
-                c.begin(view);
-                c.draw(&lods);
-                c.depth()
-            }
-        };
+        let depth = self.render.depth(frame, view, &lods)?;
         Ok(OrOutput {
             depth: Some(depth),
             figures: OrFigures {

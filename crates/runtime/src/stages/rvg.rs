@@ -9,12 +9,87 @@ use super::*;
 use crate::streaming::{StreamStats, Use};
 use crate::{gpu_view, ms_since, Presenter, RuntimeError, RuntimeOptions, Stage};
 
-/// RVG's drawing: a visible pass on a device, or the CPU.
-pub(super) type RvgRender<'a> = Render<'a, VisiblePass>;
+/// What RVG draws the visible set on: a visible pass on a device
+/// ([`GpuVisible`]), or in tests the CPU's software depth (no colour).
+pub(super) trait VisibleTarget {
+    fn begin(&mut self, view: &CullView, style: DrawStyle);
+    /// The rectangle `[x, y, w, h]` later chunks draw into (a tile), or
+    /// the whole viewport.
+    fn scissor(&mut self, rect: Option<[u32; 4]>);
+    /// Draws a chunk of frame `frame`'s LODs.
+    fn draw(&mut self, frame: u64, lods: &[u32]) -> Result<(), RuntimeError>;
+    /// The frame's streaming figures (zeros when nothing streams).
+    fn stream_stats(&self) -> StreamStats {
+        StreamStats::default()
+    }
+    /// Shows the finished frame, where there is something to show on.
+    fn present(
+        &mut self,
+        _presenter: &mut dyn Presenter,
+        _report: &crate::FrameReport,
+    ) -> Result<(), RuntimeError> {
+        Ok(())
+    }
+    fn read_back(&mut self) -> Result<FrameImage, RuntimeError>;
+    /// Waits for the frame's drawing to finish.
+    fn finish(&mut self) -> Result<(), RuntimeError> {
+        Ok(())
+    }
+}
+
+/// RVG's visible pass on its device.
+pub(super) struct GpuVisible<'a> {
+    pub device: DeviceGeometry<'a>,
+    pub pass: VisiblePass,
+}
+
+impl VisibleTarget for GpuVisible<'_> {
+    fn begin(&mut self, view: &CullView, style: DrawStyle) {
+        self.pass.begin(self.device.ctx, &gpu_view(view), style);
+    }
+
+    fn scissor(&mut self, rect: Option<[u32; 4]>) {
+        self.pass.set_scissor(rect);
+    }
+
+    /// Streaming: resident LODs and stand-ins for the rest.
+    fn draw(&mut self, frame: u64, lods: &[u32]) -> Result<(), RuntimeError> {
+        let (ctx, pass) = (self.device.ctx, &mut self.pass);
+        self.device
+            .with(frame, lods, Use::Visible, |residency, lods| {
+                pass.draw(ctx, residency, lods)
+            })
+    }
+
+    fn stream_stats(&self) -> StreamStats {
+        self.device.take_stats()
+    }
+
+    fn present(
+        &mut self,
+        presenter: &mut dyn Presenter,
+        report: &crate::FrameReport,
+    ) -> Result<(), RuntimeError> {
+        presenter
+            .present(self.device.ctx, &self.pass, report)
+            .map_err(rvg_error)
+    }
+
+    fn read_back(&mut self) -> Result<FrameImage, RuntimeError> {
+        self.pass.read_back(self.device.ctx).map_err(rvg_error)
+    }
+
+    fn finish(&mut self) -> Result<(), RuntimeError> {
+        self.pass
+            .finish(self.device.ctx, false)
+            .map(|_| ())
+            .map_err(rvg_error)
+    }
+}
 
 /// RVG: draws a frame's items as they arrive.
 pub(crate) struct RvgStage<'a> {
-    pub(super) render: RvgRender<'a>,
+    pub(super) render: Box<dyn VisibleTarget + 'a>,
     pub(super) opts: &'a RuntimeOptions,
     pub(super) started: Option<Instant>,
     pub(super) frame: u64,
@@ -37,46 +112,26 @@ impl<'a> RvgStage<'a> {
         check_injected(self.opts, Stage::Rvg, frame)?;
         self.started = Some(Instant::now());
         self.frame = frame;
-        match &mut self.render {
-            RvgRender::Gpu { device, pass } => pass.begin(device.ctx, &gpu_view(view), style),
-            RvgRender::Cpu(c) => c.begin(view),
-        }
+        self.render.begin(view, style);
         Ok(())
     }
 
     /// The rectangle `[x, y, w, h]` later chunks draw into (a tile), or
     /// the whole viewport.
     pub fn scissor(&mut self, rect: Option<[u32; 4]>) {
-        match &mut self.render {
-            RvgRender::Gpu { pass, .. } => pass.set_scissor(rect),
-            RvgRender::Cpu(c) => c.soft.set_scissor(rect),
-        }
+        self.render.scissor(rect);
     }
 
     /// Draws a chunk of the frame's LODs (streaming: resident ones and
     /// stand-ins for the rest).
     pub fn draw(&mut self, lods: &[u32]) -> Result<(), RuntimeError> {
         let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
-        match &mut self.render {
-            RvgRender::Gpu { device, pass } => {
-                let ctx = device.ctx;
-                device.with(self.frame, lods, Use::Visible, |residency, lods| {
-                    pass.draw(ctx, residency, lods)
-                })
-            }
-            RvgRender::Cpu(c) => {
-                c.draw(lods);
-                Ok(())
-            }
-        }
+        self.render.draw(self.frame, lods)
     }
 
     /// The frame's streaming figures (call once, as the frame ends).
     pub fn stream_stats(&self) -> StreamStats {
-        match &self.render {
-            RvgRender::Gpu { device, .. } => device.take_stats(),
-            RvgRender::Cpu(_) => StreamStats::default(),
-        }
+        self.render.stream_stats()
     }
 
     /// Shows the finished frame (a device only).
@@ -85,32 +140,17 @@ impl<'a> RvgStage<'a> {
         presenter: &mut dyn Presenter,
         report: &crate::FrameReport,
     ) -> Result<(), RuntimeError> {
-        match &self.render {
-            RvgRender::Gpu { device, pass } => presenter
-                .present(device.ctx, pass, report)
-                .map_err(rvg_error),
-            RvgRender::Cpu(_) => Ok(()),
-        }
+        self.render.present(presenter, report)
     }
 
     /// Reads back the finished frame's colour and depth.
     pub fn read_back(&mut self) -> Result<Option<FrameImage>, RuntimeError> {
-        match &mut self.render {
-            RvgRender::Gpu { device, pass } => {
-                pass.read_back(device.ctx).map(Some).map_err(rvg_error)
-            }
-            RvgRender::Cpu(c) => Ok(Some(FrameImage {
-                colour: vec![0; c.width as usize * c.height as usize * 4],
-                depth: c.depth(),
-            })),
-        }
+        self.render.read_back().map(Some)
     }
 
     /// Waits for the frame; returns the stage's ms.
     pub fn finish(&mut self) -> Result<f64, RuntimeError> {
-        if let RvgRender::Gpu { device, pass } = &mut self.render {
-            pass.finish(device.ctx, false).map_err(rvg_error)?;
-        }
+        self.render.finish()?;
         Ok(self.started.take().map_or(0.0, ms_since))
     }
 }

@@ -37,6 +37,7 @@ pub use gigawalk_gpu::{
     chosen_adapter, list_adapters, AdapterReport, DrawStyle, FrameImage, GpuContext, GpuError,
     Optional, QueryCounts, VisiblePass,
 };
+pub(crate) use options::ResolvedOptions;
 pub use options::{
     FailureHook, MemoryBudget, MemoryUnknown, OccluderBudget, OccluderSelection, OptionsError,
     Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
@@ -558,16 +559,8 @@ impl<'s> Runtime<'s> {
         on_frame: &mut dyn FnMut(FrameReport) -> bool,
         presenter: &mut dyn Presenter,
     ) -> Result<u64, RuntimeError> {
-        opts.validate()?;
-        let selection = self.occluder_selection(opts.occluder_budget);
-        schedule(
-            Target::gpu(self),
-            opts,
-            selection,
-            source,
-            on_frame,
-            presenter,
-        )
+        let opts = opts.resolve(self.devices.iter().any(GpuContext::is_cpu))?;
+        schedule(Target::gpu(self), &opts, source, on_frame, presenter)
     }
 
     /// What the occluder budget `budget` means on these devices (resolves
@@ -587,13 +580,13 @@ impl<'s> Runtime<'s> {
 /// an adaptive budget hears of every finished frame before `on_frame`.
 fn schedule(
     target: Target,
-    opts: &RuntimeOptions,
-    selection: OccluderSelection,
+    opts: &ResolvedOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
 ) -> Result<u64, RuntimeError> {
     let control = Mutex::new(occluders::AdaptiveBudget::new(target.or_shares_rvg(opts)));
+    let selection = opts.occluders;
     let target = target.with_occluders(match selection {
         OccluderSelection::All => stages::OrBudget::All,
         OccluderSelection::Triangles(t) => stages::OrBudget::Triangles(t),
@@ -634,12 +627,10 @@ pub fn run_on_cpu(
     cameras: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
 ) -> Result<u64, RuntimeError> {
-    opts.validate()?;
-    let selection = opts.occluder_budget.resolve(true);
+    let opts = opts.resolve(true)?;
     schedule(
         Target::cpu(skeleton, source),
-        opts,
-        selection,
+        &opts,
         cameras,
         on_frame,
         &mut NoPresenter,

@@ -352,7 +352,36 @@ impl Default for RuntimeOptions {
     }
 }
 
+/// Options a run has checked, with the occluder budget resolved for its
+/// devices: all the schedules and stages receive. Only
+/// [`RuntimeOptions::resolve`] makes one, so no stage sees an unchecked
+/// option or an unresolved `auto` budget. Reads as the options it holds.
+#[derive(Clone, Debug)]
+pub(crate) struct ResolvedOptions {
+    opts: RuntimeOptions,
+    /// What the occluder budget means on the run's devices.
+    pub occluders: OccluderSelection,
+}
+
+impl std::ops::Deref for ResolvedOptions {
+    type Target = RuntimeOptions;
+
+    fn deref(&self) -> &RuntimeOptions {
+        &self.opts
+    }
+}
+
 impl RuntimeOptions {
+    /// The checked options for a run on devices of which some rasterize
+    /// on the CPU (`cpu_device`: `auto` budgets resolve for them).
+    pub(crate) fn resolve(&self, cpu_device: bool) -> Result<ResolvedOptions, OptionsError> {
+        self.validate()?;
+        Ok(ResolvedOptions {
+            opts: self.clone(),
+            occluders: self.occluder_budget.resolve(cpu_device),
+        })
+    }
+
     /// Checks the options; the error names the first bad one.
     pub fn validate(&self) -> Result<(), OptionsError> {
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {

@@ -9,7 +9,8 @@ use gigawalk_gpu::DepthImage;
 
 use super::{Setup, Traversal};
 use crate::ms_since;
-use crate::{RuntimeError, RuntimeOptions};
+use crate::ResolvedOptions;
+use crate::RuntimeError;
 
 /// The pyramid, rebuilt every frame from OR's depth.
 pub(crate) struct State {
@@ -38,7 +39,7 @@ impl State {
         &mut self,
         frame: u64,
         depth: Option<&DepthImage>,
-        opts: &RuntimeOptions,
+        opts: &ResolvedOptions,
     ) -> Result<(bool, f64), RuntimeError> {
         let Some(d) = depth else {
             return Ok((false, 0.0));

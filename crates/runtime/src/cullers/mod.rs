@@ -23,7 +23,8 @@ use gigawalk_gpu::DepthImage;
 use gigawalk_scene::Skeleton;
 
 use crate::streaming::LodSource;
-use crate::{Runtime, RuntimeError, RuntimeOptions};
+use crate::ResolvedOptions;
+use crate::{Runtime, RuntimeError};
 
 pub use ct::{CtArgs, CtOptions};
 pub use figures::{Column, Counter, Figure, Pool, Setting, Table};
@@ -312,7 +313,7 @@ impl<'a> State<'a> {
     /// The state of `opts.culler`: an error naming why it cannot run here
     /// (each culler's own setup finds that out as it takes what it needs:
     /// oq its device's resident geometry, ct the scene's occluders).
-    pub fn new(setup: &Setup<'a>, opts: &'a RuntimeOptions) -> Result<Self, RuntimeError> {
+    pub fn new(setup: &Setup<'a>, opts: &'a ResolvedOptions) -> Result<Self, RuntimeError> {
         Ok(match opts.culler {
             CullMethod::Hzb => State::Hzb(hzb::State::new(setup)),
             CullMethod::Grid => State::Grid(grid::State::new(setup, &opts.cullers.grid)),
@@ -328,7 +329,7 @@ impl<'a> State<'a> {
         &mut self,
         frame: u64,
         depth: Option<&DepthImage>,
-        opts: &RuntimeOptions,
+        opts: &ResolvedOptions,
     ) -> Result<(bool, f64), RuntimeError> {
         match self {
             State::Hzb(s) => s.prepare(frame, depth, opts),
@@ -340,7 +341,7 @@ impl<'a> State<'a> {
     pub fn cull(
         &mut self,
         t: &mut Traversal<'_, 'a>,
-        opts: &RuntimeOptions,
+        opts: &ResolvedOptions,
     ) -> Result<(TraversalStats, Option<CullerWork>), RuntimeError> {
         let o = &opts.cullers;
         Ok(match self {
@@ -364,6 +365,7 @@ impl<'a> State<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::RuntimeOptions;
 
     #[test]
     fn cullers_parse_print_and_say_whether_or_renders() {

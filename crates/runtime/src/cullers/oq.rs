@@ -276,7 +276,7 @@ impl<'a> State<'a> {
 
     /// The query pass on RVG's device; adaptive culling needs a device
     /// whose queries count samples.
-    pub fn new(setup: &Setup<'a>, opts: &crate::RuntimeOptions) -> Result<Self, RuntimeError> {
+    pub fn new(setup: &Setup<'a>, opts: &crate::ResolvedOptions) -> Result<Self, RuntimeError> {
         let unavailable = |why| RuntimeError::CullerUnavailable {
             culler: super::CullMethod::Oq,
             why,

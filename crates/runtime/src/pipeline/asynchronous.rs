@@ -8,6 +8,7 @@ use crossbeam_channel::{unbounded, TryRecvError};
 
 use super::*;
 use crate::stages::{OrStage, StcStage, Target};
+use crate::ResolvedOptions;
 use crate::{CameraSource, Presenter};
 
 /// The newest camera, handed from RVG (which owns the camera source in
@@ -65,7 +66,7 @@ impl Drop for CloseOnDrop<'_> {
 /// newest camera whenever they are free.
 pub(crate) fn run_async(
     t: Target,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
@@ -120,7 +121,7 @@ pub(crate) fn run_async(
 
 fn async_or_thread(
     mut or: OrStage,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     latest: &LatestSlot,
     out: Sender<OrToStc>,
     feedback: Receiver<(u64, VisibleSet)>,
@@ -186,7 +187,7 @@ fn async_stc_thread(
 fn async_rvg_thread(
     mut rvg: RvgStage,
     t: Target,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     source: &mut dyn CameraSource,
     latest: &LatestSlot,
     sets: Receiver<Box<FrameEnd>>,

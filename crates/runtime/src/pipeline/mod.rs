@@ -24,9 +24,8 @@ use crate::streaming::Prefetch;
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
 };
-use crate::{
-    CameraError, CameraSource, FrameReport, Presenter, RuntimeError, RuntimeOptions, Stage,
-};
+use crate::ResolvedOptions;
+use crate::{CameraError, CameraSource, FrameReport, Presenter, RuntimeError, Stage};
 
 /// A frame's visible set as OR gets it back for a later frame's occluders:
 /// shared with the frame's report, never copied.
@@ -80,7 +79,7 @@ pub(super) fn draw_plan(
     skeleton: &gigawalk_scene::Skeleton,
     s: &StcOutput,
     chunk: usize,
-    retile: Option<(&CullView, &RuntimeOptions)>,
+    retile: Option<(&CullView, &ResolvedOptions)>,
 ) -> Vec<(Option<[u32; 4]>, Vec<u32>)> {
     let ids = lod_ids(skeleton, &s.visible);
     let again = match (&s.tiles, retile) {
@@ -115,7 +114,7 @@ pub(super) fn draw_set(
     skeleton: &gigawalk_scene::Skeleton,
     s: &StcOutput,
     chunk: usize,
-    retile: Option<(&CullView, &RuntimeOptions)>,
+    retile: Option<(&CullView, &ResolvedOptions)>,
 ) -> Result<(), RuntimeError> {
     for (rect, lods) in draw_plan(skeleton, s, chunk, retile) {
         rvg.scissor(rect);
@@ -137,7 +136,7 @@ pub(super) struct FrameEnd {
 pub(super) fn next_sample(
     source: &mut dyn CameraSource,
     frame: u64,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
 ) -> Result<Option<Sample>, RuntimeError> {
     let Some(req) = source.next_camera(frame)? else {
         return Ok(None);
@@ -255,7 +254,7 @@ pub(super) struct StreamLinks<'a> {
 /// the stages drop their links.
 pub(super) fn stream_links<'a>(
     t: Target<'a>,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     a: usize,
     b: usize,
 ) -> StreamLinks<'a> {
@@ -400,7 +399,7 @@ pub(super) struct Occluders {
 }
 
 impl Occluders {
-    pub(super) fn new(opts: &RuntimeOptions) -> Self {
+    pub(super) fn new(opts: &ResolvedOptions) -> Self {
         Occluders {
             sets: VecDeque::new(),
             lag: opts.occluder_lag as u64,
@@ -460,6 +459,7 @@ impl Frozen {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::RuntimeOptions;
 
     fn set(n: u32) -> VisibleSet {
         vec![DrawItem { node: n, lod: 0 }].into()
@@ -467,7 +467,7 @@ mod tests {
 
     #[test]
     fn occluders_are_frame_i_minus_lag_and_none_in_the_startup_bypass() {
-        let opts = RuntimeOptions::default();
+        let opts = RuntimeOptions::default().resolve(false).unwrap();
         let mut o = Occluders::new(&opts);
         assert!(o.for_frame(0).is_none() && o.for_frame(1).is_none());
         for f in 0..10u64 {
@@ -488,7 +488,9 @@ mod tests {
         let grid = RuntimeOptions {
             culler: crate::CullMethod::Grid,
             ..Default::default()
-        };
+        }
+        .resolve(false)
+        .unwrap();
         let mut o = Occluders::new(&grid);
         o.push(0, set(0));
         assert!(o.for_frame(5).is_none());

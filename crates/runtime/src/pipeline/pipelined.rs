@@ -8,11 +8,12 @@ use crossbeam_channel::{unbounded, RecvTimeoutError};
 
 use super::*;
 use crate::stages::{OrFigures, OrStage, StcOutput, StcStage, Target};
+use crate::ResolvedOptions;
 use crate::{CameraSource, Presenter};
 
 pub(crate) fn run_pipelined(
     t: Target,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
@@ -68,7 +69,7 @@ pub(crate) fn run_pipelined(
 
 fn or_thread(
     mut or: OrStage,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     source: &mut dyn CameraSource,
     out: Sender<OrToStc>,
     feedback: Receiver<(u64, VisibleSet)>,
@@ -123,7 +124,7 @@ fn or_thread(
 fn stc_thread(
     mut stc: StcStage,
     t: Target,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     input: Receiver<OrToStc>,
     out: Sender<StcToRvg>,
     feedback: Sender<(u64, VisibleSet)>,
@@ -208,7 +209,7 @@ fn stc_thread(
 /// What speculative RVG needs to draw a set.
 struct Speculative<'a> {
     skeleton: &'a gigawalk_scene::Skeleton,
-    opts: &'a RuntimeOptions,
+    opts: &'a ResolvedOptions,
 }
 
 /// RVG: draws each frame as STC's items arrive. A frame begins on its

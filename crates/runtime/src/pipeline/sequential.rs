@@ -4,11 +4,12 @@
 use super::*;
 use crate::stages::Target;
 use crate::streaming::Link;
+use crate::ResolvedOptions;
 use crate::{CameraSource, Presenter};
 
 pub(crate) fn run_sequential(
     t: Target,
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,
@@ -50,7 +51,7 @@ pub(crate) fn run_sequential(
 #[allow(clippy::too_many_arguments)]
 fn sequential_frames<'a>(
     t: Target<'a>,
-    opts: &'a RuntimeOptions,
+    opts: &'a ResolvedOptions,
     source: &mut dyn CameraSource,
     on_frame: &mut dyn FnMut(FrameReport) -> bool,
     presenter: &mut dyn Presenter,

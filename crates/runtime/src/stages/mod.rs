@@ -20,12 +20,13 @@ use std::sync::Mutex;
 use gigawalk_cull::DrawItem;
 
 use crate::streaming::Prefetch;
+use crate::ResolvedOptions;
 use gigawalk_gpu::{DepthPass, GpuContext, VisiblePass};
 use gigawalk_scene::Skeleton;
 
 use crate::occluders::AdaptiveBudget;
 use crate::streaming::{Geometry, Link, LodSource, Plan, StreamStats, Use};
-use crate::{Runtime, RuntimeError, RuntimeOptions, Stage};
+use crate::{Runtime, RuntimeError, Stage};
 /// A stage's device, its geometry there, and (streaming) its end of the
 /// run's loader queues.
 pub(crate) struct DeviceGeometry<'a> {
@@ -86,7 +87,7 @@ pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
 /// The test hook [`RuntimeOptions::inject_failure`]: the injected error
 /// when `stage` is to fail by `frame`.
 pub(crate) fn check_injected(
-    opts: &RuntimeOptions,
+    opts: &ResolvedOptions,
     stage: Stage,
     frame: u64,
 ) -> Result<(), RuntimeError> {
@@ -165,7 +166,7 @@ impl<'a> Target<'a> {
 
     /// Whether OR's time comes out of RVG's: one device, a CPU rasterizer
     /// (its cores are RVG's), or the sequential schedule.
-    pub fn or_shares_rvg(&self, opts: &RuntimeOptions) -> bool {
+    pub fn or_shares_rvg(&self, opts: &ResolvedOptions) -> bool {
         match self.runtime() {
             None => true,
             Some(rt) => {
@@ -178,7 +179,7 @@ impl<'a> Target<'a> {
 
     /// The device RVG draws on: the second when there are two and the
     /// options ask for two.
-    pub fn rvg_device(&self, opts: &RuntimeOptions) -> usize {
+    pub fn rvg_device(&self, opts: &ResolvedOptions) -> usize {
         match self.runtime() {
             Some(rt) if opts.devices >= 2 && rt.devices.len() >= 2 => 1,
             _ => 0,
@@ -189,7 +190,7 @@ impl<'a> Target<'a> {
     /// occlusion-query culler on RVG's device `rvg_device`).
     pub fn stc_stage(
         &self,
-        opts: &'a RuntimeOptions,
+        opts: &'a ResolvedOptions,
         rvg_device: usize,
         prefetch: Option<Prefetch<'a>>,
     ) -> Result<StcStage<'a>, RuntimeError> {
@@ -206,7 +207,7 @@ impl<'a> Target<'a> {
     }
 
     /// OR on device 0.
-    pub fn or_stage(&self, opts: &'a RuntimeOptions, link: Option<Link>) -> OrStage<'a> {
+    pub fn or_stage(&self, opts: &'a ResolvedOptions, link: Option<Link>) -> OrStage<'a> {
         let (w, h) = opts.occluder_size();
         let render: Box<dyn OccluderTarget + 'a> = match self.devices {
             Devices::Gpu(rt) => {
@@ -228,7 +229,7 @@ impl<'a> Target<'a> {
     /// RVG on `device`.
     pub fn rvg_stage(
         &self,
-        opts: &'a RuntimeOptions,
+        opts: &'a ResolvedOptions,
         device: usize,
         link: Option<Link>,
     ) -> RvgStage<'a> {

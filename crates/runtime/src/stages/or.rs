@@ -10,7 +10,8 @@ use gigawalk_scene::Skeleton;
 
 use super::*;
 use crate::streaming::Use;
-use crate::{gpu_view, ms_since, RuntimeError, RuntimeOptions, Stage};
+use crate::ResolvedOptions;
+use crate::{gpu_view, ms_since, RuntimeError, Stage};
 
 /// What OR draws occluder depth on: a depth pass on a device
 /// ([`GpuOccluders`]), or in tests the CPU's software depth.
@@ -64,7 +65,7 @@ impl OccluderTarget for GpuOccluders<'_> {
 /// camera i (Section 5.2), at the occluder resolution.
 pub(crate) struct OrStage<'a> {
     pub(super) skeleton: &'a Skeleton,
-    pub(super) opts: &'a RuntimeOptions,
+    pub(super) opts: &'a ResolvedOptions,
     pub(super) budget: OrBudget<'a>,
     pub(super) render: Box<dyn OccluderTarget + 'a>,
 }

@@ -7,7 +7,8 @@ use gigawalk_gpu::{DrawStyle, FrameImage, VisiblePass};
 
 use super::*;
 use crate::streaming::{StreamStats, Use};
-use crate::{gpu_view, ms_since, Presenter, RuntimeError, RuntimeOptions, Stage};
+use crate::ResolvedOptions;
+use crate::{gpu_view, ms_since, Presenter, RuntimeError, Stage};
 
 /// What RVG draws the visible set on: a visible pass on a device
 /// ([`GpuVisible`]), or in tests the CPU's software depth (no colour).
@@ -90,7 +91,7 @@ impl VisibleTarget for GpuVisible<'_> {
 /// RVG: draws a frame's items as they arrive.
 pub(crate) struct RvgStage<'a> {
     pub(super) render: Box<dyn VisibleTarget + 'a>,
-    pub(super) opts: &'a RuntimeOptions,
+    pub(super) opts: &'a ResolvedOptions,
     pub(super) started: Option<Instant>,
     pub(super) frame: u64,
 }

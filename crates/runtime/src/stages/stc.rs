@@ -15,13 +15,14 @@ use gigawalk_scene::Skeleton;
 use super::*;
 use crate::cullers::CullerWork;
 use crate::streaming::Prefetch;
-use crate::{ms_since, RuntimeError, RuntimeOptions, Stage};
+use crate::ResolvedOptions;
+use crate::{ms_since, RuntimeError, Stage};
 
 /// STC: HZB from OR's depth, then traversal (Algorithm 5.2); or the lazy
 /// occlusion grid over what it draws itself.
 pub(crate) struct StcStage<'a> {
     pub skeleton: &'a Skeleton,
-    pub opts: &'a RuntimeOptions,
+    pub opts: &'a ResolvedOptions,
     pub(super) traverser: Traverser,
     /// The occlusion culler's state (with occlusion on).
     pub(super) culler: Option<crate::cullers::State<'a>>,
@@ -50,7 +51,7 @@ impl<'a> StcStage<'a> {
     /// Without a culler; [`Target::stc_stage`] sets it up.
     pub(super) fn new(
         skeleton: &'a Skeleton,
-        opts: &'a RuntimeOptions,
+        opts: &'a ResolvedOptions,
         prefetch: Option<Prefetch<'a>>,
     ) -> Self {
         StcStage {
@@ -154,6 +155,7 @@ impl<'a> StcStage<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::RuntimeOptions;
     use gigawalk_cull::{Camera, Viewport};
     use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Skeleton, NO_NODE};
     use glam::DVec3;
@@ -220,7 +222,9 @@ mod tests {
         let opts = RuntimeOptions {
             prefetch: crate::Prefetching::Ring,
             ..Default::default()
-        };
+        }
+        .resolve(false)
+        .unwrap();
         let (tx, rx) = crossbeam_channel::unbounded();
         let prefetch = Prefetch {
             requests: tx,

@@ -80,12 +80,7 @@ fn main() {
         .poses
         .iter()
         .take(frames)
-        .map(|p| {
-            CameraRequest::new(
-                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near),
-                false,
-            )
-        })
+        .map(|p| CameraRequest::new(Camera::of_pose(p, Viewport::new(w, h), near), false))
         .collect();
     println!(
         "plant {} triangles, {} frames at {w}x{h}, och pixel error {pixel_error}, occluder budget {occluder_budget} ({}), devices {:?}",

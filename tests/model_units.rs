@@ -17,13 +17,13 @@
 //! then a level more or less): the test bounds those differences, by the
 //! spread measured over ten decimal scales, instead of asking for equality.
 
-use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
+use gigawalk_cull::{default_near, TraversalOptions, Viewport};
 use gigawalk_gpu::{devices_or_skip, FrameImage};
 use gigawalk_import::{import_glb_bytes, Model};
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_replay::bound_violations;
-use gigawalk_runtime::{CameraList, CameraRequest, Runtime, RuntimeOptions, Schedule};
+use gigawalk_runtime::{CameraList, Runtime, RuntimeOptions, Schedule};
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::SceneReader;
 
@@ -75,16 +75,7 @@ fn render(
     let scene = SceneReader::open(&file).unwrap();
     let rt = Runtime::with_devices(&scene, devices).unwrap();
     let near = near.unwrap_or_else(|| default_near(&scene.skeleton().bounds()));
-    let mut source = CameraList {
-        cameras: poses
-            .iter()
-            .map(|p| {
-                let c =
-                    Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), near);
-                CameraRequest::new(c, true)
-            })
-            .collect(),
-    };
+    let mut source = CameraList::from_poses(poses, Viewport::new(W, H), near);
     let opts = RuntimeOptions {
         schedule: Schedule::Sequential,
         devices: 1,

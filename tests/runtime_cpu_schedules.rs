@@ -6,13 +6,13 @@
 
 use std::time::{Duration, Instant};
 
-use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
+use gigawalk_cull::{default_near, TraversalOptions, Viewport};
 use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_runtime::{
-    run_on_cpu, CameraList, CameraRequest, CullMethod, FailureHook, FrameReport, OccluderBudget,
-    RuntimeError, RuntimeOptions, Schedule, Stage,
+    run_on_cpu, CameraList, CullMethod, FailureHook, FrameReport, OccluderBudget, RuntimeError,
+    RuntimeOptions, Schedule, Stage,
 };
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::SceneReader;
@@ -30,16 +30,7 @@ fn city(dir: &std::path::Path) -> (SceneReader, Vec<Pose>) {
 
 fn cameras(scene: &SceneReader, poses: &[Pose]) -> CameraList {
     let near = default_near(&scene.skeleton().bounds());
-    CameraList {
-        cameras: poses
-            .iter()
-            .map(|p| {
-                let c =
-                    Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), near);
-                CameraRequest::new(c, true)
-            })
-            .collect(),
-    }
+    CameraList::from_poses(poses, Viewport::new(W, H), near)
 }
 
 fn options(schedule: Schedule, occlusion: bool, culler: CullMethod) -> RuntimeOptions {

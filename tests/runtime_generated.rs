@@ -45,12 +45,7 @@ fn check(kind: Kind) {
         .path
         .poses
         .iter()
-        .map(|p| {
-            CameraRequest::new(
-                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), 0.05),
-                true,
-            )
-        })
+        .map(|p| CameraRequest::new(Camera::of_pose(p, Viewport::new(W, H), 0.05), true))
         .collect();
     assert_eq!(cameras.len(), FRAMES);
     let opts = |schedule, occlusion| RuntimeOptions {

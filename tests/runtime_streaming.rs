@@ -4,13 +4,13 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
+use gigawalk_cull::{default_near, TraversalOptions, Viewport};
 use gigawalk_gpu::{devices_or_skip, FrameImage, GpuContext};
 use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::{preprocess, NoProgress, Params};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_runtime::{
-    scene_device_bytes, CameraList, CameraRequest, FrameReport, Prefetching, Runtime, RuntimeError,
+    scene_device_bytes, CameraList, FrameReport, Prefetching, Runtime, RuntimeError,
     RuntimeOptions, Schedule, StreamStats, MIN_MEMORY_BUDGET,
 };
 use gigawalk_scene::path::Pose;
@@ -50,16 +50,7 @@ fn options(schedule: Schedule, devices: usize, pixel_error: f64) -> RuntimeOptio
 
 fn cameras(scene: &SceneReader, poses: &[Pose]) -> CameraList {
     let near = default_near(&scene.skeleton().bounds());
-    CameraList {
-        cameras: poses
-            .iter()
-            .map(|p| {
-                let c =
-                    Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), near);
-                CameraRequest::new(c, true)
-            })
-            .collect(),
-    }
+    CameraList::from_poses(poses, Viewport::new(W, H), near)
 }
 
 fn run(

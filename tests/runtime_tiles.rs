@@ -34,7 +34,7 @@ fn scene(kind: Kind, dir: &std::path::Path) -> (SceneReader, Vec<CameraRequest>)
         .poses
         .iter()
         .map(|p| {
-            let c = Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(W, H), near);
+            let c = Camera::of_pose(p, Viewport::new(W, H), near);
             CameraRequest::new(c, true)
         })
         .collect();

@@ -37,9 +37,7 @@ fn software_depth_is_never_nearer_than_the_gpus_and_matches_it_closely() {
             .path
             .poses
             .iter()
-            .map(|p| {
-                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near)
-            })
+            .map(|p| Camera::of_pose(p, Viewport::new(w, h), near))
             .collect();
         let opts = RuntimeOptions {
             schedule: Schedule::Sequential,

@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     for pose in path.poses.iter().step_by(every) {
         frames += 1;
         let viewport = Viewport::new(w, h);
-        let camera = Camera::from_pose(pose.position, pose.orientation, pose.fovy, viewport, near);
+        let camera = Camera::of_pose(pose, viewport, near);
         let view = CullView::new(camera, viewport);
         items.clear();
         traverser.traverse(sk, &view, &NoOcclusion, &options, &mut |it| items.push(it));

@@ -73,7 +73,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             path.poses
                 .iter()
                 .step_by(every)
-                .map(|p| Camera::from_pose(p.position, p.orientation, p.fovy, viewport, near))
+                .map(|p| Camera::of_pose(p, viewport, near))
                 .collect()
         }
     };

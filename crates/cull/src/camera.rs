@@ -88,6 +88,12 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// The camera of a camera-path pose, rendering to `viewport` with its
+    /// near plane at `near`.
+    pub fn of_pose(pose: &gigawalk_scene::path::Pose, viewport: Viewport, near: f64) -> Self {
+        Camera::from_pose(pose.position, pose.orientation, pose.fovy, viewport, near)
+    }
+
     /// A camera from a camera-path pose `(position, orientation, fovy)` and
     /// the viewport it renders to.
     pub fn from_pose(

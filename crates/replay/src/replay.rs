@@ -396,8 +396,7 @@ pub fn replay_on(
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let camera =
-                Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near);
+            let camera = Camera::of_pose(p, Viewport::new(w, h), near);
             CameraRequest::new(camera, compared_or_next(i, k))
         })
         .collect();

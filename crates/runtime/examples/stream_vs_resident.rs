@@ -12,8 +12,8 @@
 
 use std::error::Error;
 
-use gigawalk_cull::{default_near, Camera, TraversalOptions, Viewport};
-use gigawalk_runtime::{CameraList, CameraRequest, Runtime, RuntimeOptions};
+use gigawalk_cull::{default_near, TraversalOptions, Viewport};
+use gigawalk_runtime::{CameraList, Runtime, RuntimeOptions};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 
@@ -28,17 +28,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let frames: usize = a[4].parse::<usize>()?.min(path.poses.len());
     let (w, h) = (640, 360);
     let near = default_near(&scene.skeleton().bounds());
-    let cams = || CameraList {
-        cameras: path.poses[..frames]
-            .iter()
-            .map(|p| {
-                CameraRequest::new(
-                    Camera::from_pose(p.position, p.orientation, p.fovy, Viewport::new(w, h), near),
-                    true,
-                )
-            })
-            .collect(),
-    };
+    let cams = || CameraList::from_poses(&path.poses[..frames], Viewport::new(w, h), near);
     let o = RuntimeOptions {
         width: w,
         height: h,

@@ -216,6 +216,23 @@ pub struct CameraList {
     pub cameras: Vec<CameraRequest>,
 }
 
+impl CameraList {
+    /// One camera per pose, rendering to `viewport` with its near plane at
+    /// `near`, every frame read back.
+    pub fn from_poses(
+        poses: &[gigawalk_scene::path::Pose],
+        viewport: gigawalk_cull::Viewport,
+        near: f64,
+    ) -> Self {
+        CameraList {
+            cameras: poses
+                .iter()
+                .map(|p| CameraRequest::new(Camera::of_pose(p, viewport, near), true))
+                .collect(),
+        }
+    }
+}
+
 impl CameraSource for CameraList {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
         Ok(self.cameras.get(frame as usize).copied())

@@ -7,7 +7,7 @@
 use gigawalk_import::import_glb_bytes;
 use gigawalk_preprocess::partition::{SplitAt, SplitRule};
 use gigawalk_preprocess::verify::{check_error_bounds, verify};
-use gigawalk_preprocess::{preprocess, NoProgress, Params};
+use gigawalk_preprocess::{preprocess, NoProgress, Params, PositionBits};
 use gigawalk_procgen::{generate, Kind};
 use gigawalk_scene::SceneReader;
 
@@ -60,6 +60,61 @@ fn check(kind: Kind, triangles: u64) {
     )
     .unwrap_or_else(|e| panic!("{}: {e}", kind.name()));
     assert!(b.lods >= nodes.len(), "{}: {b:?}", kind.name());
+
+    // ...and a bound on the distance to the original f32 geometry, not
+    // only to the scene's own quantized full detail: the same model with
+    // raw f32 positions (the same tree and LODs, unquantized) gives the
+    // original surface under each node.
+    let raw_path = dir.path().join("raw.gwk");
+    let raw_params = Params {
+        position_bits: PositionBits::F32,
+        ..Params::default()
+    };
+    preprocess(&model, &raw_params, &raw_path, kind.name(), &NoProgress).unwrap();
+    let raw = SceneReader::open(&raw_path).unwrap();
+    assert_eq!(raw.skeleton().nodes().len(), sk.nodes().len());
+    assert!(
+        sk.lods().iter().all(|l| l.encoded) && raw.skeleton().lods().iter().all(|l| !l.encoded)
+    );
+    let leaf_level_0: std::collections::HashSet<u32> = sk
+        .nodes()
+        .iter()
+        .filter(|n| n.is_leaf())
+        .map(|n| n.first_lod)
+        .collect();
+    let b = check_error_bounds(
+        sk.nodes(),
+        &errors,
+        &mut |i| match leaf_level_0.contains(&i) {
+            true => raw.read_lod(i).unwrap(),
+            false => reader.read_lod(i).unwrap(),
+        },
+        Some(&nodes),
+        300,
+        13,
+    )
+    .unwrap_or_else(|e| panic!("{} against f32: {e}", kind.name()));
+    assert!(b.lods >= nodes.len(), "{}: {b:?}", kind.name());
+    // The encoded scene is smaller (how much is a benchmark:
+    // docs/PERFORMANCE.md), and every stored error above the raw scene's
+    // by at most half the 16-bit grid's step diagonal over its node's
+    // box (sqrt(3) / 2 / 65535 of its longest side).
+    let (q, r) = (
+        std::fs::metadata(&path).unwrap().len(),
+        std::fs::metadata(&raw_path).unwrap().len(),
+    );
+    assert!(q < r, "{}: {q} bytes quantized, {r} raw", kind.name());
+    for (i, (a, b)) in sk.lods().iter().zip(raw.skeleton().lods()).enumerate() {
+        let side = sk.node(sk.owner(i as u32)).bounds.extent().max_element();
+        assert!(
+            a.error >= b.error
+                && (a.error - b.error) as f64 <= 1.4e-5 * side + 1e-6 * b.error as f64,
+            "{}: LOD {i} error {} quantized, {} raw",
+            kind.name(),
+            a.error,
+            b.error
+        );
+    }
 
     // Same input and flags: the same bytes.
     let again = dir.path().join("again.gwk");

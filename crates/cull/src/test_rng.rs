@@ -13,6 +13,7 @@ pub(crate) fn lod(error: f32, triangles: u32) -> LodInfo {
         origin: DVec3::ZERO,
         index_format: IndexFormat::U16,
         uniform_colour: None,
+        encoded: false,
         offset: 0,
         len: 0,
         checksum: 0,

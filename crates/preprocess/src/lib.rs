@@ -59,8 +59,10 @@ pub mod verify;
 /// bounded by it without a query (as sound, slightly different bounds);
 /// 11: those triangles bounded by the last level's own error (10 used the
 /// level before it), and an inner node's first level held to the node
-/// budget where its simplifier stalled above it.
-pub const REVISION: u32 = 11;
+/// budget where its simplifier stalled above it; 12: positions on a
+/// 16-bit grid over each LOD's box and every stream meshopt-encoded
+/// (scene format 2), each LOD's error raised by what its vertices moved.
+pub const REVISION: u32 = 12;
 
 use std::path::Path;
 use std::time::Instant;
@@ -68,7 +70,7 @@ use std::time::Instant;
 use gigawalk_scene::{Aabb, LodMesh, Node, Provenance, SceneWriter, WriteError};
 use rayon::prelude::*;
 
-pub use params::{ParamError, Params, Resolved};
+pub use params::{ParamError, Params, PositionBits, Resolved};
 pub use parts::InputError;
 pub use source::{Source, Spill, SpillError, SpillWriter};
 pub use stats::Stats;
@@ -195,6 +197,9 @@ pub(crate) fn write_scene(
 ) -> Result<Stats, PreprocessError> {
     // On any error below, dropping the writer removes its temporary file.
     let mut writer = SceneWriter::create(output).map_err(|e| PreprocessError::Write(e.into()))?;
+    writer
+        .set_position_bits(params.position_bits.bits())
+        .map_err(|e| PreprocessError::Write(e.into()))?;
     let (mut built, _) = build_role(model, params, &layout, &mut writer, progress, role)?;
     let t = Instant::now();
     progress.start(Phase::Write, 0);

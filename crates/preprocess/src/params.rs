@@ -106,6 +106,55 @@ pub struct Params {
     /// ...view directions: 4, 8 (the paper's count) or 16 around the up
     /// axis (+Y), or 6, 14 or 26 over the sphere.
     pub cell_directions: u32,
+    /// How the scene stores positions: on a grid over each LOD's box,
+    /// meshopt-encoded (each LOD's error grows by what its vertices moved),
+    /// or raw f32.
+    pub position_bits: PositionBits,
+}
+
+/// How a scene stores its positions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum PositionBits {
+    /// A grid of this many bits per axis over each LOD's box (8..=24).
+    Grid(u8),
+    /// f32 offsets from each LOD's centre, nothing encoded (format 1's
+    /// layout).
+    F32,
+}
+
+impl PositionBits {
+    /// What the scene writer takes: the grid's bits, `None` for f32.
+    pub fn bits(self) -> Option<u8> {
+        match self {
+            PositionBits::Grid(b) => Some(b),
+            PositionBits::F32 => None,
+        }
+    }
+}
+
+impl std::fmt::Display for PositionBits {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PositionBits::Grid(b) => write!(f, "{b}"),
+            PositionBits::F32 => f.write_str("f32"),
+        }
+    }
+}
+
+impl std::str::FromStr for PositionBits {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "f32" {
+            return Ok(PositionBits::F32);
+        }
+        match s.parse::<u8>() {
+            Ok(b) if gigawalk_scene::codec::POSITION_BITS.contains(&b) => Ok(PositionBits::Grid(b)),
+            _ => Err(format!(
+                "{s:?} is neither f32 nor a number of bits from 8 to 24"
+            )),
+        }
+    }
 }
 
 impl Default for Params {
@@ -129,6 +178,7 @@ impl Default for Params {
             cell_height: 8,
             cell_occluders: 32,
             cell_directions: 8,
+            position_bits: PositionBits::Grid(gigawalk_scene::DEFAULT_POSITION_BITS),
         }
     }
 }
@@ -235,6 +285,15 @@ impl Params {
                 why: "must be 4, 8 or 16 (around +Y) or 6, 14 or 26 (the sphere)",
             });
         }
+        if let PositionBits::Grid(b) = self.position_bits {
+            if !gigawalk_scene::codec::POSITION_BITS.contains(&b) {
+                return Err(ParamError {
+                    name: "position-bits",
+                    value: b as f64,
+                    why: "must be 8 to 24 bits, or f32",
+                });
+            }
+        }
         if self.lod_floor == 0 {
             return Err(ParamError {
                 name: "lod-floor",
@@ -295,6 +354,7 @@ impl Params {
             "cell_height": self.cell_height,
             "cell_occluders": self.cell_occluders,
             "cell_directions": self.cell_directions,
+            "position_bits": self.position_bits.to_string(),
         });
         match v {
             Value::Object(m) => m,

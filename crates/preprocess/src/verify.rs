@@ -133,7 +133,9 @@ pub fn verify(
                                 .as_dvec3()
                     };
                     let tri = [v(0), v(1), v(2)];
-                    if !index.take(&tri, tol) {
+                    // Full detail is the input moved by no more than its
+                    // stored error (a position grid's step; 0 stored raw).
+                    if !index.take(&tri, tol + errs[0] as f64) {
                         return Err(format!(
                             "leaf {i}: triangle {t} {tri:?} matches no unused input triangle"
                         ));
@@ -207,8 +209,14 @@ impl TriangleIndex {
                     let Some(list) = self.cells.get_mut(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
                         continue;
                     };
+                    // Any rotation of the corners (an encoded scene's
+                    // index codec may start a triangle at another corner;
+                    // the winding is kept).
+                    let matches = |cand: &[DVec3; 3]| {
+                        (0..3).any(|r| (0..3).all(|i| cand[(i + r) % 3].distance(tri[i]) <= tol))
+                    };
                     for (cand, used) in list.iter_mut() {
-                        if !*used && (0..3).all(|i| cand[i].distance(tri[i]) <= tol) {
+                        if !*used && matches(cand) {
                             *used = true;
                             self.left -= 1;
                             return true;

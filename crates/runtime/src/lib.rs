@@ -31,7 +31,8 @@ use std::time::Instant;
 
 pub use gigawalk_cull::tiles::{TileGrid, TileMethod};
 pub use gigawalk_cull::{
-    Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats, Viewport,
+    default_near, Camera, CullReason, DrawItem, Reduction, TraversalOptions, TraversalStats,
+    Viewport,
 };
 pub use gigawalk_gpu::{
     chosen_adapter, list_adapters, AdapterReport, DrawStyle, FrameImage, GpuContext, GpuError,

@@ -65,4 +65,8 @@ pub enum WriteError {
     BadMesh { lod: u32, detail: String },
     #[error("the scene would not be valid: {0}")]
     Invalid(ReadErrorKind),
+    #[error("{0} position bits is outside 8..=24")]
+    PositionBits(u8),
+    #[error("the scene would not be valid: {0}")]
+    Skeleton(crate::SkeletonError),
 }

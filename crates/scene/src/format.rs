@@ -1,4 +1,6 @@
-//! Byte layout of the `.gwk` scene file, format v1 (docs/scene-format.md).
+//! Byte layout of the `.gwk` scene file, format 2 (docs/scene-format.md;
+//! format 1 files are still read: they differ only in having no encoded
+//! LODs).
 //!
 //! Everything is little-endian and fixed-width. The file is a 64-byte
 //! header, then sections, then a table of contents (TOC) that the header
@@ -11,7 +13,9 @@ use glam::DVec3;
 use crate::{Aabb, IndexFormat, LodInfo, Node};
 
 pub const MAGIC: [u8; 8] = *b"GIGAWALK";
-pub const MAJOR: u16 = 1;
+pub const MAJOR: u16 = 2;
+/// The oldest major version this reader reads.
+pub const OLDEST_MAJOR: u16 = 1;
 pub const MINOR: u16 = 0;
 
 pub const HEADER_LEN: usize = 64;
@@ -35,7 +39,10 @@ pub const SECTION_OPTIONAL: u32 = 1;
 pub const LOD_U32_INDICES: u32 = 1;
 /// LOD flag: one RGBA8 colour per vertex is stored (else the record's colour).
 pub const LOD_VERTEX_COLOURS: u32 = 2;
-pub const LOD_KNOWN_FLAGS: u32 = LOD_U32_INDICES | LOD_VERTEX_COLOURS;
+/// LOD flag (format 2): the blob is quantized and meshopt-encoded
+/// (`codec.rs`); else positions are f32 and every stream raw.
+pub const LOD_ENCODED: u32 = 4;
+pub const LOD_KNOWN_FLAGS: u32 = LOD_U32_INDICES | LOD_VERTEX_COLOURS | LOD_ENCODED;
 
 pub fn section_name(tag: [u8; 4]) -> String {
     tag.iter()
@@ -264,6 +271,9 @@ pub fn encode_lod(p: &mut Put, l: &LodInfo) {
     if l.uniform_colour.is_none() {
         flags |= LOD_VERTEX_COLOURS;
     }
+    if l.encoded {
+        flags |= LOD_ENCODED;
+    }
     p.u32(flags);
     p.bytes(&l.uniform_colour.unwrap_or([0; 4]));
     p.u32(l.checksum);
@@ -298,6 +308,7 @@ pub fn decode_lod(g: &mut Get) -> (LodInfo, u32) {
         } else {
             Some(colour)
         },
+        encoded: flags & LOD_ENCODED != 0,
         offset,
         len,
         checksum,
@@ -305,8 +316,9 @@ pub fn decode_lod(g: &mut Get) -> (LodInfo, u32) {
     (info, flags)
 }
 
-/// Exact byte length of one LOD's geometry blob: positions (3 x f32),
-/// octahedral normals (2 x i16), optional RGBA8 colours, indices, padded to 4.
+/// Exact byte length of one raw (not encoded) LOD's geometry blob:
+/// positions (3 x f32), octahedral normals (2 x i16), optional RGBA8
+/// colours, indices, padded to 4.
 pub fn geometry_len(l: &LodInfo) -> u64 {
     let v = l.vertices as u64;
     let colours = if l.uniform_colour.is_none() { 4 * v } else { 0 };

@@ -17,6 +17,7 @@
 
 mod aabb;
 mod atomic;
+pub mod codec;
 mod error;
 mod format;
 mod mesh;
@@ -39,5 +40,5 @@ pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};
 pub use read::{ReadAt, SceneReader, SectionInfo};
 pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE};
-pub use stats::{DepthLevels, NodeSwitch, SceneStats, SwitchFactors};
-pub use write::{SceneWriter, WriteSummary};
+pub use stats::{DepthLevels, NodeSwitch, PositionStats, SceneStats, SwitchFactors};
+pub use write::{SceneWriter, WriteSummary, DEFAULT_POSITION_BITS};

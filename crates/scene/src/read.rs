@@ -222,19 +222,25 @@ impl<R: ReadAt> SceneReader<R> {
             });
         }
         let nv = info.vertices as usize;
-        let mut g = Get::new(&blob);
-        let positions: Vec<[f32; 3]> = (0..nv).map(|_| [g.f32(), g.f32(), g.f32()]).collect();
-        let normals: Vec<[f32; 3]> = (0..nv)
-            .map(|_| decode_normal([g.u16() as i16, g.u16() as i16]))
-            .collect();
-        let colours = match info.uniform_colour {
-            Some(c) => Colours::Uniform(c),
-            None => Colours::PerVertex((0..nv).map(|_| g.tag()).collect()),
+        let crate::codec::Streams {
+            positions,
+            normals,
+            colours,
+            indices,
+        } = if info.encoded {
+            crate::codec::decode(
+                &blob,
+                nv,
+                info.triangles as usize,
+                info.uniform_colour.is_none(),
+            )
+            .map_err(err)?
+        } else {
+            raw_streams(&blob, &info)
         };
-        let ni = 3 * info.triangles as usize;
-        let indices: Vec<u32> = match info.index_format {
-            IndexFormat::U16 => (0..ni).map(|_| g.u16() as u32).collect(),
-            IndexFormat::U32 => (0..ni).map(|_| g.u32()).collect(),
+        let colours = match (info.uniform_colour, colours) {
+            (Some(c), _) => Colours::Uniform(c),
+            (None, c) => Colours::PerVertex(c.unwrap_or_default()),
         };
         if let Some(i) = indices.iter().position(|&v| v as usize >= nv) {
             return Err(err(format!(
@@ -344,7 +350,7 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
             minor: h.minor,
         });
     }
-    if h.major < format::MAJOR {
+    if h.major < format::OLDEST_MAJOR {
         return Err(ReadErrorKind::OlderVersion {
             major: h.major,
             minor: h.minor,
@@ -522,7 +528,12 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
     let mut lods = Vec::with_capacity(scene.lods as usize);
     for i in 0..scene.lods {
         let (l, flags) = format::decode_lod(&mut g);
-        if flags & !format::LOD_KNOWN_FLAGS != 0 {
+        // Format 1 has no encoded LODs.
+        let known = match h.major {
+            1 => format::LOD_KNOWN_FLAGS & !format::LOD_ENCODED,
+            _ => format::LOD_KNOWN_FLAGS,
+        };
+        if flags & !known != 0 {
             return Err(ReadErrorKind::Lod {
                 lod: i,
                 node: crate::NO_NODE,
@@ -570,4 +581,30 @@ fn read_bytes<R: ReadAt>(src: &R, offset: u64, len: u64) -> Result<Vec<u8>, Read
     let mut b = vec![0u8; len as usize];
     src.read_exact_at(&mut b, offset)?;
     Ok(b)
+}
+
+/// A raw blob's streams (format 1's layout; its length was checked
+/// against the record's counts when the file was opened).
+fn raw_streams(blob: &[u8], info: &crate::LodInfo) -> crate::codec::Streams {
+    let nv = info.vertices as usize;
+    let mut g = Get::new(blob);
+    let positions = (0..nv).map(|_| [g.f32(), g.f32(), g.f32()]).collect();
+    let normals = (0..nv)
+        .map(|_| decode_normal([g.u16() as i16, g.u16() as i16]))
+        .collect();
+    let colours = info
+        .uniform_colour
+        .is_none()
+        .then(|| (0..nv).map(|_| g.tag()).collect());
+    let ni = 3 * info.triangles as usize;
+    let indices = match info.index_format {
+        IndexFormat::U16 => (0..ni).map(|_| g.u16() as u32).collect(),
+        IndexFormat::U32 => (0..ni).map(|_| g.u32()).collect(),
+    };
+    crate::codec::Streams {
+        positions,
+        normals,
+        colours,
+        indices,
+    }
 }

@@ -78,6 +78,9 @@ pub struct LodInfo {
     /// `Some(rgba)` when every vertex has this colour (no per-vertex colours
     /// stored); `None` when the LOD stores one colour per vertex.
     pub uniform_colour: Option<[u8; 4]>,
+    /// Whether the blob is quantized and meshopt-encoded (format 2's
+    /// default; docs/scene-format.md), else raw f32 positions.
+    pub encoded: bool,
     /// Byte offset of the geometry blob from the start of the file.
     pub offset: u64,
     pub len: u64,
@@ -252,6 +255,7 @@ mod tests {
             origin: DVec3::ZERO,
             index_format: IndexFormat::U16,
             uniform_colour: None,
+            encoded: false,
             offset: 0,
             len: 0,
             checksum: 0,

@@ -48,7 +48,58 @@ pub struct SceneStats {
     pub sections: Vec<(String, u64)>,
     /// Whole file size divided by the original triangle count.
     pub bytes_per_triangle: f64,
+    /// How positions are stored.
+    pub positions: PositionStats,
     pub provenance: Provenance,
+}
+
+/// How a scene stores its positions (docs/scene-format.md, GEOM).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct PositionStats {
+    /// LODs on a quantized grid, meshopt-encoded; the rest are raw f32.
+    pub encoded_lods: usize,
+    pub raw_lods: usize,
+    /// The grid's bits per axis, as the provenance records them (`None`
+    /// when it does not).
+    pub bits: Option<u8>,
+    /// Bounds on the grid step of the encoded LODs, model units: each
+    /// LOD's node box's longest side / (2^bits - 1) (its own box is no
+    /// larger). Largest and median; 0 without encoded LODs or bits.
+    pub step_max: f64,
+    pub step_median: f64,
+}
+
+impl PositionStats {
+    fn of(s: &crate::Skeleton) -> PositionStats {
+        let encoded = s.lods().iter().filter(|l| l.encoded).count();
+        let bits = s
+            .provenance()
+            .parameters
+            .get("position_bits")
+            .and_then(|v| {
+                v.as_str()
+                    .and_then(|t| t.parse().ok())
+                    .or(v.as_u64().map(|b| b as u8))
+            })
+            .filter(|b| crate::codec::POSITION_BITS.contains(b));
+        let mut steps: Vec<f64> = match bits {
+            Some(b) if encoded > 0 => {
+                let levels = ((1u64 << b) - 1) as f64;
+                (0..s.lods().len() as u32)
+                    .filter(|&l| s.lod(l).encoded)
+                    .map(|l| s.node(s.owner(l)).bounds.extent().max_element() / levels)
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
+        PositionStats {
+            encoded_lods: encoded,
+            raw_lods: s.lods().len() - encoded,
+            bits,
+            step_max: steps.iter().copied().fold(0.0, f64::max),
+            step_median: median(&mut steps),
+        }
+    }
 }
 
 /// The inner nodes at one tree depth: how many HLOD levels they have, and
@@ -325,6 +376,7 @@ impl SceneStats {
             })
             .collect();
         let (major, minor) = r.version();
+        let positions = PositionStats::of(s);
         SceneStats {
             format_version: format!("{major}.{minor}"),
             file_bytes: r.file_len(),
@@ -348,6 +400,7 @@ impl SceneStats {
                 .map(|x| (x.name.clone(), x.len))
                 .collect(),
             bytes_per_triangle: r.file_len() as f64 / triangles.max(1) as f64,
+            positions,
             provenance: s.provenance().clone(),
         }
     }
@@ -395,6 +448,7 @@ mod tests {
                 origin: DVec3::ZERO,
                 index_format: IndexFormat::U16,
                 uniform_colour: None,
+                encoded: false,
                 offset: 0,
                 len: 0,
                 checksum: 0,

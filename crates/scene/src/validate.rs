@@ -235,7 +235,13 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<(), ReadErrorKind> {
         if l.triangles == 0 || l.vertices == 0 {
             return Err(lod_err("has no triangles or no vertices".into()));
         }
-        if l.len != geometry_len(l) {
+        if l.encoded && l.len < crate::codec::HEADER_LEN as u64 {
+            return Err(lod_err(format!(
+                "encoded geometry of {} bytes is shorter than its header",
+                l.len
+            )));
+        }
+        if !l.encoded && l.len != geometry_len(l) {
             return Err(lod_err(format!(
                 "geometry length {} does not match {} vertices and {} triangles ({} bytes)",
                 l.len,

@@ -34,9 +34,17 @@ pub struct SceneWriter {
     lods: Vec<LodInfo>,
     /// World bounds of each LOD's geometry exactly as stored.
     lod_bounds: Vec<Aabb>,
+    /// How far quantization moved each LOD's vertices at most (0: raw).
+    moved: Vec<f64>,
     /// Optional sections to write after the v1 ones.
     optional: Vec<([u8; 4], Vec<u8>)>,
+    /// Bits of the position grid of each LOD (`None`: raw f32).
+    position_bits: Option<u8>,
 }
+
+/// Position bits a writer uses unless told otherwise: steps of 1/65535 of
+/// a LOD's box, as gltfpack's default quantization.
+pub const DEFAULT_POSITION_BITS: u8 = 16;
 
 impl SceneWriter {
     /// Adds an optional section (a reader that does not know `tag` skips
@@ -64,8 +72,23 @@ impl SceneWriter {
             geometry_crc: crc32fast::Hasher::new(),
             lods: Vec::new(),
             lod_bounds: Vec::new(),
+            moved: Vec::new(),
             optional: Vec::new(),
+            position_bits: Some(DEFAULT_POSITION_BITS),
         })
+    }
+
+    /// Stores the LODs added after this on a grid of `bits` bits per axis
+    /// over each LOD's box, meshopt-encoded (the default, 16 bits;
+    /// [`codec::POSITION_BITS`](crate::codec::POSITION_BITS)), or with
+    /// `None` raw: f32 positions, nothing encoded. Each encoded LOD's
+    /// stored error grows by the farthest any of its vertices moved.
+    pub fn set_position_bits(&mut self, bits: Option<u8>) -> Result<(), WriteError> {
+        if let Some(b) = bits.filter(|b| !crate::codec::POSITION_BITS.contains(b)) {
+            return Err(WriteError::PositionBits(b));
+        }
+        self.position_bits = bits;
+        Ok(())
     }
 
     fn io_err(&self, source: io::Error) -> WriteError {
@@ -81,8 +104,8 @@ impl SceneWriter {
     /// error in model units.
     pub fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
         let lod = self.lods.len() as u32;
-        let (info, bounds, blob) =
-            encode_lod(mesh, error).map_err(|detail| WriteError::BadMesh { lod, detail })?;
+        let (info, bounds, blob, moved) = encode_lod(mesh, error, self.position_bits)
+            .map_err(|detail| WriteError::BadMesh { lod, detail })?;
         let info = LodInfo {
             offset: self.pos,
             ..info
@@ -92,6 +115,7 @@ impl SceneWriter {
         self.pos += blob.len() as u64;
         self.lods.push(info);
         self.lod_bounds.push(bounds);
+        self.moved.push(moved);
         Ok(lod)
     }
 
@@ -108,6 +132,23 @@ impl SceneWriter {
         provenance: Provenance,
     ) -> Result<WriteSummary, WriteError> {
         grow_boxes(&mut nodes, &self.lod_bounds)?;
+        // The errors as given must be in order (a caller's bug otherwise)
+        // before quantization raises each LOD's by its own amount; the
+        // order is then kept by raising where needed (a larger bound is
+        // still a bound).
+        crate::validate::check_tree(
+            nodes.first().map_or(DVec3::ZERO, |n| n.bounds.center()),
+            &nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
+            &nodes,
+            &self.lods,
+        )
+        .map_err(WriteError::Skeleton)?;
+        for (l, &moved) in self.lods.iter_mut().zip(&self.moved) {
+            if moved > 0.0 {
+                l.error = up_f32(l.error as f64 + moved);
+            }
+        }
+        raise_errors(&nodes, &mut self.lods);
         let geometry_at = format::HEADER_LEN as u64;
         let geometry_len = self.pos - geometry_at;
         let bounds = nodes.first().map(|n| n.bounds).unwrap_or(Aabb::EMPTY);
@@ -233,7 +274,11 @@ impl SceneWriter {
 
 /// Checks and encodes one LOD: its record (offset left 0), the world
 /// bounds of the stored geometry, and the blob.
-fn encode_lod(mesh: &LodMesh, error: f32) -> Result<(LodInfo, Aabb, Vec<u8>), String> {
+fn encode_lod(
+    mesh: &LodMesh,
+    error: f32,
+    position_bits: Option<u8>,
+) -> Result<(LodInfo, Aabb, Vec<u8>, f64), String> {
     let nv = mesh.positions.len();
     if mesh.indices.is_empty() || !mesh.indices.len().is_multiple_of(3) {
         return Err(format!(
@@ -273,14 +318,43 @@ fn encode_lod(mesh: &LodMesh, error: f32) -> Result<(LodInfo, Aabb, Vec<u8>), St
         .iter()
         .map(|&p| (world(p) - origin).as_vec3().to_array())
         .collect();
-    let bounds = Aabb::from_points(stored.iter().map(|&p| origin + Vec3::from(p).as_dvec3()));
-
     // A per-vertex colour list that is one colour is stored as that colour.
     let uniform_colour = match &mesh.colours {
         Colours::Uniform(c) => Some(*c),
         Colours::PerVertex(c) if c.iter().all(|x| *x == c[0]) => Some(c[0]),
         Colours::PerVertex(_) => None,
     };
+    if let Some(bits) = position_bits {
+        let streams = crate::codec::Streams {
+            positions: stored,
+            normals: mesh.normals.clone(),
+            colours: match (&mesh.colours, uniform_colour) {
+                (Colours::PerVertex(c), None) => Some(c.clone()),
+                _ => None,
+            },
+            indices: mesh.indices.clone(),
+        };
+        let e = crate::codec::encode(&streams, bits)?;
+        let bounds = Aabb::from_points(
+            e.positions
+                .iter()
+                .map(|&p| origin + Vec3::from(p).as_dvec3()),
+        );
+        let info = LodInfo {
+            error,
+            triangles: (mesh.indices.len() / 3) as u32,
+            vertices: nv as u32,
+            origin,
+            index_format: IndexFormat::for_vertex_count(nv as u32),
+            uniform_colour,
+            encoded: true,
+            offset: 0,
+            len: e.blob.len() as u64,
+            checksum: crc32fast::hash(&e.blob),
+        };
+        return Ok((info, bounds, e.blob, e.moved));
+    }
+    let bounds = Aabb::from_points(stored.iter().map(|&p| origin + Vec3::from(p).as_dvec3()));
     let info = LodInfo {
         error,
         triangles: (mesh.indices.len() / 3) as u32,
@@ -288,6 +362,7 @@ fn encode_lod(mesh: &LodMesh, error: f32) -> Result<(LodInfo, Aabb, Vec<u8>), St
         origin,
         index_format: IndexFormat::for_vertex_count(nv as u32),
         uniform_colour,
+        encoded: false,
         offset: 0,
         len: 0,
         checksum: 0,
@@ -315,7 +390,50 @@ fn encode_lod(mesh: &LodMesh, error: f32) -> Result<(LodInfo, Aabb, Vec<u8>), St
         checksum: crc32fast::hash(&p.0),
         ..info
     };
-    Ok((info, bounds, p.0))
+    Ok((info, bounds, p.0, 0.0))
+}
+
+/// `v` as an f32 no smaller than it.
+fn up_f32(v: f64) -> f32 {
+    let f = v as f32;
+    if (f as f64) < v {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// Raises LOD errors where needed so that they do not decrease from a
+/// node's finest LOD to its coarsest, nor from a node's finest to its
+/// nearest ancestor with LODs. Children come after their parents, so one
+/// backward pass carries a child's raise up to every ancestor. Indices
+/// out of range are left for the validation after it to report.
+fn raise_errors(nodes: &[Node], lods: &mut [LodInfo]) {
+    for i in (0..nodes.len()).rev() {
+        let r = nodes[i].lods();
+        if r.is_empty() || r.end > lods.len() {
+            continue;
+        }
+        for l in r.start + 1..r.end {
+            lods[l].error = lods[l].error.max(lods[l - 1].error);
+        }
+        let finest = lods[r.start].error;
+        let mut a = i;
+        while a != 0 {
+            let p = nodes[a].parent as usize;
+            if p >= a {
+                break;
+            }
+            a = p;
+            if let Some(l) = lods
+                .get_mut(nodes[a].first_lod as usize)
+                .filter(|_| nodes[a].lod_count > 0)
+            {
+                l.error = l.error.max(finest);
+                break;
+            }
+        }
+    }
 }
 
 /// Grows node boxes by f32 rounding so they contain their stored geometry

@@ -43,7 +43,7 @@ fn open_reads_no_geometry() {
         .unwrap()
         .clone();
     assert!(
-        geom.len > 500 * 2 * 200,
+        geom.len > 500 * 60,
         "geometry section is {} bytes",
         geom.len
     );

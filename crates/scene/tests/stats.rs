@@ -22,7 +22,9 @@ fn leaf_floor_and_switch_factors_of_a_written_scene() {
     assert_eq!((f.over_2, f.over_4, f.over_8), (1, 0, 0));
     let w = f.worst.as_ref().unwrap();
     assert_eq!((w.node, w.depth, w.triangles), (0, 0, 12));
-    assert_eq!((w.error, w.children_triangles), (2.0, 36));
+    // Error 2 plus what the 16-bit grid moved the root's box's corners.
+    assert!((2.0..2.00001).contains(&w.error), "{}", w.error);
+    assert_eq!(w.children_triangles, 36);
     assert_eq!(w.diagonal, r.skeleton().nodes()[0].bounds.diagonal());
     assert_eq!(s.hlod_levels_per_depth[0].switch_factor_max, 3.0);
 

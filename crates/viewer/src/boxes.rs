@@ -79,6 +79,7 @@ mod tests {
             origin: DVec3::ZERO,
             index_format: IndexFormat::U16,
             uniform_colour: None,
+            encoded: false,
             offset: 0,
             len: 0,
             checksum: 0,

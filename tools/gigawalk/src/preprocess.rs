@@ -7,7 +7,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use gigawalk_preprocess::{preprocess, shards, Params, Phase, Progress};
+use gigawalk_preprocess::{preprocess, shards, Params, Phase, PositionBits, Progress};
 use gigawalk_scene::{SceneReader, SceneStats};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -102,6 +102,9 @@ pub struct Args {
     /// Object-space culling (ct): view directions per cell: 4, 8 (the paper's count) or 16 around the up axis (+Y, glTF's), or 6, 14 or 26 over the whole sphere
     #[arg(long, default_value_t = Params::default().cell_directions)]
     cell_directions: u32,
+    /// Storage: each LOD's positions on a grid of this many bits per axis over its own box (8-24), meshopt-encoded with its normals, colours and indices; each LOD's stored error grows by the farthest any of its vertices moved (16 bits: 1/65535 of the box). f32: raw f32 positions, nothing encoded (format 1's layout, 3.2x the bytes on the 1M plant)
+    #[arg(long, value_name = "BITS|f32", default_value_t = Params::default().position_bits)]
+    position_bits: PositionBits,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -124,6 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         cell_height: args.cell_height,
         cell_occluders: args.cell_occluders,
         cell_directions: args.cell_directions,
+        position_bits: args.position_bits,
     };
     // Bad flags fail before the (possibly long) import.
     params.validate().context("bad parameter")?;

@@ -28,6 +28,9 @@ fn write_scene_with(path: &std::path::Path, optional: Vec<([u8; 4], Vec<u8>)>) {
     for (tag, bytes) in optional {
         w.add_optional_section(tag, bytes);
     }
+    // Raw f32 positions: the figures below are exact (quantized, each
+    // error would grow by a millionth of its box).
+    w.set_position_bits(None).unwrap();
     w.add_lod(&tri(0.0, 1), 3.0).unwrap(); // root HLOD
     w.add_lod(&tri(0.0, 2), 0.0).unwrap();
     w.add_lod(&tri(0.0, 1), 1.0).unwrap();
@@ -76,6 +79,7 @@ fn info_text_and_json() {
     write_scene(&path);
     let (ok, out, err) = gigawalk(&["info", path.to_str().unwrap(), "--verify"]);
     assert!(ok, "{err}");
+    assert!(out.contains("positions   raw f32 (5 LODs)\n"), "{out}");
     assert!(out.contains("triangles   4\n"), "{out}");
     assert!(
         out.contains("nodes       3 (2 leaves, depth 2, up to 2 LODs per node)"),
@@ -188,9 +192,22 @@ fn lod_health_in_info_and_preprocess_stats() {
         "  switch         median ",
         "  switch above   2: ",
         "  worst switch   node ",
+        // A preprocessed scene's default: every LOD on a 16-bit grid.
+        "positions   16-bit grid over each LOD's box, meshopt-encoded (",
     ] {
         assert!(text.contains(line), "{line:?} missing from\n{text}");
     }
+    let p: serde_json::Value = {
+        let (ok, json, err) = gigawalk(&["info", &gwk, "--json"]);
+        assert!(ok, "{err}");
+        serde_json::from_str(&json).unwrap()
+    };
+    let p = &p["positions"];
+    assert_eq!(
+        (p["bits"].as_u64(), p["raw_lods"].as_u64()),
+        (Some(16), Some(0))
+    );
+    assert!(p["encoded_lods"].as_u64().unwrap() > 0 && p["step_max"].as_f64().unwrap() > 0.0);
     let (ok, json, err) = gigawalk(&["info", &gwk, "--json"]);
     assert!(ok, "{err}");
     let info: serde_json::Value = serde_json::from_str(&json).unwrap();

@@ -199,6 +199,7 @@ mod tests {
                 origin: leaf(a).center(),
                 index_format: IndexFormat::U16,
                 uniform_colour: None,
+                encoded: false,
                 offset: 0,
                 len: 0,
                 checksum: 0,

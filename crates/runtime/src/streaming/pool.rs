@@ -371,6 +371,7 @@ mod tests {
                 origin: m.origin,
                 index_format: IndexFormat::U16,
                 uniform_colour: None,
+                encoded: false,
                 offset: 0,
                 len: 0,
                 checksum: 0,

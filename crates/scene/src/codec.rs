@@ -1,0 +1,410 @@
+//! Encoded geometry blobs (format 2): positions quantized to an integer
+//! grid over the LOD's own box, then every stream compressed with
+//! meshoptimizer's vertex and index codecs (as gltfpack stores glTF with
+//! `EXT_meshopt_compression`; Kapoulkine, meshoptimizer). The grid's
+//! step is part of the LOD's stored error: the writer adds the largest
+//! distance any vertex moved (at most half a step's diagonal), so stored
+//! errors stay upper bounds (a point of a triangle moves by at most what
+//! its corners move).
+//!
+//! Blob layout (little-endian), docs/scene-format.md:
+//!
+//! | offset | type    | field |
+//! |-------:|---------|-------|
+//! | 0      | u8      | position bits b (8..=24) |
+//! | 1      | [u8; 3] | reserved, zero |
+//! | 4      | 3 x f32 | grid origin, relative to the LOD's origin |
+//! | 16     | 3 x f32 | grid step per axis (0 on an axis the LOD is flat in) |
+//! | 28     | u32     | positions stream length P |
+//! | 32     | u32     | normals stream length N |
+//! | 36     | u32     | colours stream length C (0 for a uniform colour) |
+//! | 40     | u32     | indices stream length I |
+//! | 44     | P bytes | positions: u16 x 4 (b <= 16, the 4th zero) or u32 x 3, vertex codec |
+//! |        | N bytes | octahedral normals, 2 x snorm16, vertex codec |
+//! |        | C bytes | RGBA8 colours, vertex codec |
+//! |        | I bytes | triangle list, index codec |
+
+use crate::format::{Get, Put};
+use crate::mesh::{decode_normal, encode_normal};
+
+/// Bytes before the streams.
+pub const HEADER_LEN: usize = 44;
+/// Position bits a writer may ask for.
+pub const POSITION_BITS: std::ops::RangeInclusive<u8> = 8..=24;
+
+/// One LOD's geometry with positions relative to its origin, as encoded
+/// and decoded.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Streams {
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    /// Per-vertex colours, or none for a uniform colour.
+    pub colours: Option<Vec<[u8; 4]>>,
+    pub indices: Vec<u32>,
+}
+
+/// What encoding did to the positions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Encoded {
+    pub blob: Vec<u8>,
+    /// The positions as a reader decodes them.
+    pub positions: Vec<[f32; 3]>,
+    /// The largest distance a vertex moved, rounded up.
+    pub moved: f64,
+}
+
+/// The grid of `bits` bits over `positions`: its origin (their minimum)
+/// and step per axis.
+fn grid(positions: &[[f32; 3]], bits: u8) -> ([f32; 3], [f32; 3]) {
+    let levels = ((1u64 << bits) - 1) as f64;
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in positions {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    // Rounded up, so that (hi - lo) / step never exceeds the top level.
+    let step = std::array::from_fn(|a| {
+        let s = ((hi[a] as f64 - lo[a] as f64) / levels) as f32;
+        if (s as f64) * levels < hi[a] as f64 - lo[a] as f64 {
+            s.next_up()
+        } else {
+            s
+        }
+    });
+    (lo, step)
+}
+
+fn dequantize(origin: [f32; 3], step: [f32; 3], q: [u32; 3]) -> [f32; 3] {
+    std::array::from_fn(|a| origin[a] + q[a] as f32 * step[a])
+}
+
+/// Encodes `s` with positions on a grid of `bits` bits (in
+/// [`POSITION_BITS`]). Positions must be finite and indices in range (the
+/// writer checks both first).
+pub fn encode(s: &Streams, bits: u8) -> Result<Encoded, String> {
+    if !POSITION_BITS.contains(&bits) {
+        return Err(format!(
+            "{bits} position bits is outside {}..={}",
+            POSITION_BITS.start(),
+            POSITION_BITS.end()
+        ));
+    }
+    let triangles = s.indices.len() / 3;
+    if s.positions.len() > 3 * triangles {
+        return Err(format!(
+            "{} vertices for {triangles} triangles: an encoded LOD keeps only the \
+             vertices its triangles use",
+            s.positions.len()
+        ));
+    }
+    let top = (1u64 << bits) - 1;
+    let (origin, step) = grid(&s.positions, bits);
+    let quantized: Vec<[u32; 3]> = s
+        .positions
+        .iter()
+        .map(|p| {
+            std::array::from_fn(|a| {
+                if step[a] > 0.0 {
+                    let q = ((p[a] as f64 - origin[a] as f64) / step[a] as f64).round();
+                    q.clamp(0.0, top as f64) as u32
+                } else {
+                    0
+                }
+            })
+        })
+        .collect();
+    let positions: Vec<[f32; 3]> = quantized
+        .iter()
+        .map(|&q| dequantize(origin, step, q))
+        .collect();
+    let moved = s
+        .positions
+        .iter()
+        .zip(&positions)
+        .map(|(a, b)| {
+            (0..3)
+                .map(|i| (a[i] as f64 - b[i] as f64).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    let err = |what: &str, e: meshopt::Error| format!("cannot encode the {what}: {e:?}");
+    let pos = if bits <= 16 {
+        let v: Vec<[u16; 4]> = quantized
+            .iter()
+            .map(|q| [q[0] as u16, q[1] as u16, q[2] as u16, 0])
+            .collect();
+        meshopt::encode_vertex_buffer(&v)
+    } else {
+        meshopt::encode_vertex_buffer(&quantized)
+    }
+    .map_err(|e| err("positions", e))?;
+    let normals: Vec<[i16; 2]> = s.normals.iter().map(|&n| encode_normal(n)).collect();
+    let nor = meshopt::encode_vertex_buffer(&normals).map_err(|e| err("normals", e))?;
+    let col = match &s.colours {
+        Some(c) => meshopt::encode_vertex_buffer(c).map_err(|e| err("colours", e))?,
+        None => Vec::new(),
+    };
+    let idx = meshopt::encode_index_buffer(&s.indices, s.positions.len())
+        .map_err(|e| err("indices", e))?;
+    let mut p = Put(Vec::with_capacity(
+        HEADER_LEN + pos.len() + nor.len() + col.len() + idx.len(),
+    ));
+    p.bytes(&[bits, 0, 0, 0]);
+    origin.iter().for_each(|&v| p.f32(v));
+    step.iter().for_each(|&v| p.f32(v));
+    for stream in [&pos, &nor, &col, &idx] {
+        let len = u32::try_from(stream.len()).map_err(|_| "a stream over 4 GiB".to_string())?;
+        p.u32(len);
+    }
+    for stream in [&pos, &nor, &col, &idx] {
+        p.bytes(stream);
+    }
+    Ok(Encoded {
+        blob: p.0,
+        positions,
+        // Up to the next f64: the distances above are rounded.
+        moved: if moved > 0.0 { moved.next_up() } else { 0.0 },
+    })
+}
+
+/// Decodes a blob for `vertices` vertices and `triangles` triangles, with
+/// per-vertex colours when `colours`. Any inconsistency is an error saying
+/// what (the blob's CRC has passed, so this is a writer's bug or a crafted
+/// file, never a panic).
+pub fn decode(
+    blob: &[u8],
+    vertices: usize,
+    triangles: usize,
+    colours: bool,
+) -> Result<Streams, String> {
+    if blob.len() < HEADER_LEN {
+        return Err(format!(
+            "encoded blob of {} bytes is shorter than its {HEADER_LEN}-byte header",
+            blob.len()
+        ));
+    }
+    let mut g = Get::new(&blob[..HEADER_LEN]);
+    let [bits, r0, r1, r2] = g.tag();
+    if !POSITION_BITS.contains(&bits) || [r0, r1, r2] != [0; 3] {
+        return Err(format!(
+            "position bits {bits} (reserved {r0} {r1} {r2}) is not valid"
+        ));
+    }
+    let origin = [g.f32(), g.f32(), g.f32()];
+    let step = [g.f32(), g.f32(), g.f32()];
+    if !origin.iter().chain(&step).all(|v| v.is_finite()) || step.iter().any(|&s| s < 0.0) {
+        return Err(format!(
+            "grid origin {origin:?} or step {step:?} is not finite and non-negative"
+        ));
+    }
+    let lens = [g.u32(), g.u32(), g.u32(), g.u32()].map(|l| l as usize);
+    let total = lens.iter().try_fold(HEADER_LEN, |a, &l| a.checked_add(l));
+    if total != Some(blob.len()) {
+        return Err(format!(
+            "streams of {lens:?} bytes after the header do not fill the {}-byte blob",
+            blob.len()
+        ));
+    }
+    if colours != (lens[2] > 0) {
+        return Err(format!(
+            "a colours stream of {} bytes where the record says {}",
+            lens[2],
+            if colours {
+                "per-vertex colours"
+            } else {
+                "one colour"
+            }
+        ));
+    }
+    let mut at = HEADER_LEN;
+    let mut stream = |i: usize| {
+        let s = &blob[at..at + lens[i]];
+        at += lens[i];
+        s
+    };
+    let (pos, nor, col, idx) = (stream(0), stream(1), stream(2), stream(3));
+    // Counts a corrupt record could inflate are refused before anything
+    // is allocated for them: the index codec spends at least a code byte
+    // a triangle, and an encoded LOD has no vertex its triangles do not
+    // use (the writer refuses one), so at most 3 a triangle. (The vertex
+    // codec bounds nothing: a constant stream of any length encodes in a
+    // few bytes.)
+    if triangles > idx.len() {
+        return Err(format!(
+            "{triangles} triangles cannot come from a {}-byte index stream",
+            idx.len()
+        ));
+    }
+    if vertices > 3 * triangles {
+        return Err(format!(
+            "{vertices} vertices for {triangles} triangles: more than they can use"
+        ));
+    }
+    let wide = bits > 16;
+    let err = |what: &str, e: meshopt::Error| format!("the {what} stream does not decode: {e:?}");
+    let quantized: Vec<[u32; 3]> = if wide {
+        meshopt::decode_vertex_buffer::<[u32; 3]>(pos, vertices).map_err(|e| err("positions", e))?
+    } else {
+        meshopt::decode_vertex_buffer::<[u16; 4]>(pos, vertices)
+            .map_err(|e| err("positions", e))?
+            .into_iter()
+            .map(|q| [q[0] as u32, q[1] as u32, q[2] as u32])
+            .collect()
+    };
+    let top = ((1u64 << bits) - 1) as u32;
+    if let Some(i) = quantized.iter().position(|q| q.iter().any(|&c| c > top)) {
+        return Err(format!("vertex {i} lies beyond the {bits}-bit grid"));
+    }
+    let positions = quantized
+        .into_iter()
+        .map(|q| dequantize(origin, step, q))
+        .collect();
+    let normals = meshopt::decode_vertex_buffer::<[i16; 2]>(nor, vertices)
+        .map_err(|e| err("normals", e))?
+        .into_iter()
+        .map(decode_normal)
+        .collect();
+    let colours = if colours {
+        Some(
+            meshopt::decode_vertex_buffer::<[u8; 4]>(col, vertices)
+                .map_err(|e| err("colours", e))?,
+        )
+    } else {
+        None
+    };
+    let indices =
+        meshopt::decode_index_buffer::<u32>(idx, 3 * triangles).map_err(|e| err("indices", e))?;
+    Ok(Streams {
+        positions,
+        normals,
+        colours,
+        indices,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bumpy grid of `n` x `n` vertices, far from its origin's scale.
+    fn sheet(n: u32, scale: f32) -> Streams {
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                positions.push([x * scale, (x * 7.0).sin() * y * scale * 0.1, y * scale]);
+                normals.push([0.0, 1.0, 0.0]);
+            }
+        }
+        let mut indices = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = j * n + i;
+                indices.extend([a, a + n, a + 1, a + 1, a + n, a + n + 1]);
+            }
+        }
+        let colours = Some((0..n * n).map(|i| [(i % 7) as u8, 20, 30, 255]).collect());
+        Streams {
+            positions,
+            normals,
+            colours,
+            indices,
+        }
+    }
+
+    #[test]
+    fn round_trip_moves_no_vertex_farther_than_it_says() {
+        for (bits, scale) in [
+            (8u8, 1.0f32),
+            (12, 1.0),
+            (16, 1000.0),
+            (20, 0.001),
+            (24, 3.0e5),
+        ] {
+            let s = sheet(40, scale);
+            let e = encode(&s, bits).unwrap();
+            let d = decode(&e.blob, s.positions.len(), s.indices.len() / 3, true).unwrap();
+            assert_eq!(d.indices, s.indices, "{bits} bits");
+            assert_eq!(d.colours, s.colours);
+            assert_eq!(
+                d.positions, e.positions,
+                "the reader sees what the writer measured"
+            );
+            // Within `moved`, and within half a step's diagonal plus the
+            // f32 rounding of a decoded coordinate.
+            let (_, step) = grid(&s.positions, bits);
+            let rounding = 4.0 * f32::EPSILON as f64 * scale as f64;
+            let half_diag =
+                0.5 * (step.iter().map(|&v| (v as f64).powi(2)).sum::<f64>()).sqrt() + rounding;
+            for (a, b) in s.positions.iter().zip(&d.positions) {
+                let m = (0..3)
+                    .map(|i| (a[i] as f64 - b[i] as f64).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(m <= e.moved && m <= half_diag, "{bits} bits: moved {m}");
+            }
+            assert!(
+                e.moved <= half_diag,
+                "{bits} bits: {} > {half_diag}",
+                e.moved
+            );
+            for (a, b) in s.normals.iter().zip(&d.normals) {
+                assert!((a[1] - b[1]).abs() < 1e-4);
+            }
+        }
+    }
+
+    #[test]
+    fn flat_and_single_point_lods_encode() {
+        let mut s = sheet(3, 1.0);
+        s.positions.iter_mut().for_each(|p| p[1] = 0.25);
+        let e = encode(&s, 16).unwrap();
+        let d = decode(&e.blob, 9, s.indices.len() / 3, true).unwrap();
+        assert!(d.positions.iter().all(|p| p[1] == 0.25));
+        s.positions.iter_mut().for_each(|p| *p = [1.0, 2.0, 3.0]);
+        let e = encode(&s, 16).unwrap();
+        assert_eq!(e.moved, 0.0);
+    }
+
+    #[test]
+    fn corrupt_blobs_are_errors_not_panics() {
+        let s = sheet(20, 1.0);
+        let (nv, nt) = (s.positions.len(), s.indices.len() / 3);
+        let blob = encode(&s, 16).unwrap().blob;
+        let bad = |b: &[u8], nv: usize, nt: usize, c: bool| decode(b, nv, nt, c).unwrap_err();
+        assert!(bad(&blob[..HEADER_LEN - 1], nv, nt, true).contains("shorter than"));
+        assert!(bad(&blob[..blob.len() - 1], nv, nt, true).contains("do not fill"));
+        let mut b = blob.clone();
+        b[0] = 40;
+        assert!(bad(&b, nv, nt, true).contains("position bits 40"));
+        let mut b = blob.clone();
+        b[16..20].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert!(bad(&b, nv, nt, true).contains("not finite"));
+        assert!(bad(&blob, nv, nt, false).contains("colours stream"));
+        assert!(bad(&blob, 3 * nt + 1, nt, true).contains("more than they can use"));
+        assert!(bad(&blob, nv, 1 << 30, true).contains("cannot come from"));
+        // Flipped bytes in the streams: an error or, where the codecs
+        // cannot tell, wrong values (the CRC catches those first; indices
+        // out of range are caught by the reader).
+        for i in HEADER_LEN..blob.len() {
+            let mut b = blob.clone();
+            b[i] ^= 0x5a;
+            let _ = decode(&b, nv, nt, true);
+        }
+        // Counts that do not match the streams.
+        let _ = decode(&blob, nv - 1, nt, true);
+        let _ = decode(&blob, nv, nt - 1, true);
+    }
+
+    #[test]
+    fn bits_outside_the_range_are_refused() {
+        let s = sheet(3, 1.0);
+        assert!(encode(&s, 7).unwrap_err().contains("outside 8..=24"));
+        assert!(encode(&s, 25).is_err());
+    }
+}

@@ -92,10 +92,9 @@ fn reorder(s: &Streams) -> Streams {
     let nv = s.positions.len();
     let indices = meshopt::optimize_vertex_cache(&s.indices, nv);
     let mut remap = meshopt::optimize_vertex_fetch_remap(&indices, nv);
-    let mut next = remap.iter().filter(|&&r| r != u32::MAX).count() as u32;
-    for r in remap.iter_mut().filter(|r| **r == u32::MAX) {
+    let used = remap.iter().filter(|&&r| r != u32::MAX).count() as u32;
+    for (r, next) in remap.iter_mut().filter(|r| **r == u32::MAX).zip(used..) {
         *r = next;
-        next += 1;
     }
     let moved = |v: &[[f32; 3]]| {
         let mut out = vec![[0.0; 3]; nv];

@@ -324,6 +324,26 @@ fn encode_lod(
         Colours::PerVertex(c) if c.iter().all(|x| *x == c[0]) => Some(c[0]),
         Colours::PerVertex(_) => None,
     };
+    // The record; the blob's length and checksum are filled in below.
+    let info = LodInfo {
+        error,
+        triangles: (mesh.indices.len() / 3) as u32,
+        vertices: nv as u32,
+        origin,
+        index_format: IndexFormat::for_vertex_count(nv as u32),
+        uniform_colour,
+        encoded: position_bits.is_some(),
+        offset: 0,
+        len: 0,
+        checksum: 0,
+    };
+    let with_blob = |blob: &[u8]| LodInfo {
+        len: blob.len() as u64,
+        checksum: crc32fast::hash(blob),
+        ..info
+    };
+    let world_box =
+        |p: &[[f32; 3]]| Aabb::from_points(p.iter().map(|&p| origin + Vec3::from(p).as_dvec3()));
     if let Some(bits) = position_bits {
         let streams = crate::codec::Streams {
             positions: stored,
@@ -335,38 +355,9 @@ fn encode_lod(
             indices: mesh.indices.clone(),
         };
         let e = crate::codec::encode(&streams, bits)?;
-        let bounds = Aabb::from_points(
-            e.positions
-                .iter()
-                .map(|&p| origin + Vec3::from(p).as_dvec3()),
-        );
-        let info = LodInfo {
-            error,
-            triangles: (mesh.indices.len() / 3) as u32,
-            vertices: nv as u32,
-            origin,
-            index_format: IndexFormat::for_vertex_count(nv as u32),
-            uniform_colour,
-            encoded: true,
-            offset: 0,
-            len: e.blob.len() as u64,
-            checksum: crc32fast::hash(&e.blob),
-        };
-        return Ok((info, bounds, e.blob, e.moved));
+        return Ok((with_blob(&e.blob), world_box(&e.positions), e.blob, e.moved));
     }
-    let bounds = Aabb::from_points(stored.iter().map(|&p| origin + Vec3::from(p).as_dvec3()));
-    let info = LodInfo {
-        error,
-        triangles: (mesh.indices.len() / 3) as u32,
-        vertices: nv as u32,
-        origin,
-        index_format: IndexFormat::for_vertex_count(nv as u32),
-        uniform_colour,
-        encoded: false,
-        offset: 0,
-        len: 0,
-        checksum: 0,
-    };
+    let bounds = world_box(&stored);
     let mut p = Put(Vec::with_capacity(format::geometry_len(&info) as usize));
     for v in &stored {
         v.iter().for_each(|&c| p.f32(c));
@@ -385,12 +376,7 @@ fn encode_lod(
     }
     let len = format::geometry_len(&info);
     p.zeros(len as usize - p.0.len());
-    let info = LodInfo {
-        len,
-        checksum: crc32fast::hash(&p.0),
-        ..info
-    };
-    Ok((info, bounds, p.0, 0.0))
+    Ok((with_blob(&p.0), bounds, p.0, 0.0))
 }
 
 /// `v` as an f32 no smaller than it.

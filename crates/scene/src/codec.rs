@@ -12,7 +12,8 @@
 //! | offset | type    | field |
 //! |-------:|---------|-------|
 //! | 0      | u8      | position bits b (8..=24) |
-//! | 1      | [u8; 3] | reserved, zero |
+//! | 1      | u8      | normal bits: 16 (2 x snorm16) or 8 (2 x snorm8) |
+//! | 2      | [u8; 2] | reserved, zero |
 //! | 4      | 3 x f32 | grid origin, relative to the LOD's origin |
 //! | 16     | 3 x f32 | grid step per axis (0 on an axis the LOD is flat in) |
 //! | 28     | u32     | positions stream length P |
@@ -20,17 +21,25 @@
 //! | 36     | u32     | colours stream length C (0 for a uniform colour) |
 //! | 40     | u32     | indices stream length I |
 //! | 44     | P bytes | positions: u16 x 4 (b <= 16, the 4th zero) or u32 x 3, vertex codec |
-//! |        | N bytes | octahedral normals, 2 x snorm16, vertex codec |
+//! |        | N bytes | octahedral normals, 2 x snorm16 or 4 x snorm8 (the last two zero), vertex codec |
 //! |        | C bytes | RGBA8 colours, vertex codec |
 //! |        | I bytes | triangle list, index codec |
 
 use crate::format::{Get, Put};
-use crate::mesh::{decode_normal, encode_normal};
+use crate::mesh::{decode_normal_snorm, encode_normal_snorm};
 
 /// Bytes before the streams.
 pub const HEADER_LEN: usize = 44;
 /// Position bits a writer may ask for.
 pub const POSITION_BITS: std::ops::RangeInclusive<u8> = 8..=24;
+/// Normal bits a writer may ask for: 16 (within 0.004 degrees) or 8
+/// (within 0.93 degrees, 0.34 on average over the sphere).
+pub const NORMAL_BITS: [u8; 2] = [16, 8];
+
+/// The largest snorm value of `bits` bits.
+fn snorm_top(bits: u8) -> f32 {
+    ((1u32 << (bits - 1)) - 1) as f32
+}
 
 /// One LOD's geometry with positions relative to its origin, as encoded
 /// and decoded.
@@ -126,13 +135,16 @@ fn vertex_codec<T>(v: &[T]) -> meshopt::Result<Vec<u8>> {
 /// Encodes `s` with positions on a grid of `bits` bits (in
 /// [`POSITION_BITS`]). Positions must be finite and indices in range (the
 /// writer checks both first).
-pub fn encode(s: &Streams, bits: u8) -> Result<Encoded, String> {
+pub fn encode(s: &Streams, bits: u8, normal_bits: u8) -> Result<Encoded, String> {
     if !POSITION_BITS.contains(&bits) {
         return Err(format!(
             "{bits} position bits is outside {}..={}",
             POSITION_BITS.start(),
             POSITION_BITS.end()
         ));
+    }
+    if !NORMAL_BITS.contains(&normal_bits) {
+        return Err(format!("{normal_bits} normal bits is neither 16 nor 8"));
     }
     let triangles = s.indices.len() / 3;
     if s.positions.len() > 3 * triangles {
@@ -185,8 +197,18 @@ pub fn encode(s: &Streams, bits: u8) -> Result<Encoded, String> {
         vertex_codec(&quantized)
     }
     .map_err(|e| err("positions", e))?;
-    let normals: Vec<[i16; 2]> = s.normals.iter().map(|&n| encode_normal(n)).collect();
-    let nor = vertex_codec(&normals).map_err(|e| err("normals", e))?;
+    let ntop = snorm_top(normal_bits);
+    let normals = s.normals.iter().map(|&n| encode_normal_snorm(n, ntop));
+    let nor = if normal_bits == 16 {
+        vertex_codec(&normals.collect::<Vec<[i16; 2]>>())
+    } else {
+        vertex_codec(
+            &normals
+                .map(|[u, v]| [u as i8, v as i8, 0, 0])
+                .collect::<Vec<[i8; 4]>>(),
+        )
+    }
+    .map_err(|e| err("normals", e))?;
     let col = match &s.colours {
         Some(c) => vertex_codec(c).map_err(|e| err("colours", e))?,
         None => Vec::new(),
@@ -196,7 +218,7 @@ pub fn encode(s: &Streams, bits: u8) -> Result<Encoded, String> {
     let mut p = Put(Vec::with_capacity(
         HEADER_LEN + pos.len() + nor.len() + col.len() + idx.len(),
     ));
-    p.bytes(&[bits, 0, 0, 0]);
+    p.bytes(&[bits, normal_bits, 0, 0]);
     origin.iter().for_each(|&v| p.f32(v));
     step.iter().for_each(|&v| p.f32(v));
     for stream in [&pos, &nor, &col, &idx] {
@@ -231,10 +253,10 @@ pub fn decode(
         ));
     }
     let mut g = Get::new(&blob[..HEADER_LEN]);
-    let [bits, r0, r1, r2] = g.tag();
-    if !POSITION_BITS.contains(&bits) || [r0, r1, r2] != [0; 3] {
+    let [bits, normal_bits, r0, r1] = g.tag();
+    if !POSITION_BITS.contains(&bits) || !NORMAL_BITS.contains(&normal_bits) || [r0, r1] != [0; 2] {
         return Err(format!(
-            "position bits {bits} (reserved {r0} {r1} {r2}) is not valid"
+            "position bits {bits}, normal bits {normal_bits} (reserved {r0} {r1}) is not valid"
         ));
     }
     let origin = [g.f32(), g.f32(), g.f32()];
@@ -306,11 +328,20 @@ pub fn decode(
         .into_iter()
         .map(|q| dequantize(origin, step, q))
         .collect();
-    let normals = meshopt::decode_vertex_buffer::<[i16; 2]>(nor, vertices)
-        .map_err(|e| err("normals", e))?
-        .into_iter()
-        .map(decode_normal)
-        .collect();
+    let ntop = snorm_top(normal_bits);
+    let normals = if normal_bits == 16 {
+        meshopt::decode_vertex_buffer::<[i16; 2]>(nor, vertices)
+            .map_err(|e| err("normals", e))?
+            .into_iter()
+            .map(|n| decode_normal_snorm(n, ntop))
+            .collect()
+    } else {
+        meshopt::decode_vertex_buffer::<[i8; 4]>(nor, vertices)
+            .map_err(|e| err("normals", e))?
+            .into_iter()
+            .map(|n| decode_normal_snorm([n[0] as i16, n[1] as i16], ntop))
+            .collect()
+    };
     let colours = if colours {
         Some(
             meshopt::decode_vertex_buffer::<[u8; 4]>(col, vertices)
@@ -370,7 +401,7 @@ mod tests {
             (24, 3.0e5),
         ] {
             let s = sheet(40, scale);
-            let e = encode(&s, bits).unwrap();
+            let e = encode(&s, bits, 16).unwrap();
             let d = decode(&e.blob, s.positions.len(), s.indices.len() / 3, true).unwrap();
             assert!(
                 d.positions == e.positions,
@@ -442,14 +473,42 @@ mod tests {
     }
 
     #[test]
+    fn eight_bit_normals_decode_within_a_degree_in_fewer_bytes() {
+        let mut s = sheet(30, 1.0);
+        for (i, n) in s.normals.iter_mut().enumerate() {
+            let a = i as f32 * 0.37;
+            let z = (i as f32 * 0.011).sin();
+            let r = (1.0 - z * z).sqrt();
+            *n = [r * a.cos(), z, r * a.sin()];
+        }
+        let (nv, nt) = (s.positions.len(), s.indices.len() / 3);
+        let normals_len = |blob: &[u8]| u32::from_le_bytes(blob[32..36].try_into().unwrap());
+        let wide = encode(&s, 16, 16).unwrap().blob;
+        let narrow = encode(&s, 16, 8).unwrap().blob;
+        assert!(normals_len(&narrow) < normals_len(&wide));
+        let d = decode(&narrow, nv, nt, true).unwrap();
+        // Decoded vertices are reordered: match each by its position.
+        for (p, n) in d.positions.iter().zip(&d.normals) {
+            let o = s
+                .positions
+                .iter()
+                .position(|q| (0..3).all(|k| (q[k] - p[k]).abs() < 1e-3))
+                .unwrap();
+            let m = s.normals[o];
+            let dot = (0..3).map(|k| m[k] * n[k]).sum::<f32>().clamp(-1.0, 1.0);
+            assert!(dot.acos().to_degrees() < 0.94, "{m:?} decoded as {n:?}");
+        }
+    }
+
+    #[test]
     fn flat_and_single_point_lods_encode() {
         let mut s = sheet(3, 1.0);
         s.positions.iter_mut().for_each(|p| p[1] = 0.25);
-        let e = encode(&s, 16).unwrap();
+        let e = encode(&s, 16, 16).unwrap();
         let d = decode(&e.blob, 9, s.indices.len() / 3, true).unwrap();
         assert!(d.positions.iter().all(|p| p[1] == 0.25));
         s.positions.iter_mut().for_each(|p| *p = [1.0, 2.0, 3.0]);
-        let e = encode(&s, 16).unwrap();
+        let e = encode(&s, 16, 16).unwrap();
         assert_eq!(e.moved, 0.0);
     }
 
@@ -457,13 +516,16 @@ mod tests {
     fn corrupt_blobs_are_errors_not_panics() {
         let s = sheet(20, 1.0);
         let (nv, nt) = (s.positions.len(), s.indices.len() / 3);
-        let blob = encode(&s, 16).unwrap().blob;
+        let blob = encode(&s, 16, 16).unwrap().blob;
         let bad = |b: &[u8], nv: usize, nt: usize, c: bool| decode(b, nv, nt, c).unwrap_err();
         assert!(bad(&blob[..HEADER_LEN - 1], nv, nt, true).contains("shorter than"));
         assert!(bad(&blob[..blob.len() - 1], nv, nt, true).contains("do not fill"));
         let mut b = blob.clone();
         b[0] = 40;
         assert!(bad(&b, nv, nt, true).contains("position bits 40"));
+        let mut b = blob.clone();
+        b[1] = 12;
+        assert!(bad(&b, nv, nt, true).contains("normal bits 12"));
         let mut b = blob.clone();
         b[16..20].copy_from_slice(&f32::NAN.to_le_bytes());
         assert!(bad(&b, nv, nt, true).contains("not finite"));
@@ -486,7 +548,8 @@ mod tests {
     #[test]
     fn bits_outside_the_range_are_refused() {
         let s = sheet(3, 1.0);
-        assert!(encode(&s, 7).unwrap_err().contains("outside 8..=24"));
-        assert!(encode(&s, 25).is_err());
+        assert!(encode(&s, 7, 16).unwrap_err().contains("outside 8..=24"));
+        assert!(encode(&s, 25, 16).is_err());
+        assert!(encode(&s, 16, 12).unwrap_err().contains("neither 16 nor 8"));
     }
 }

@@ -67,6 +67,8 @@ pub enum WriteError {
     Invalid(ReadErrorKind),
     #[error("{0} position bits is outside 8..=24")]
     PositionBits(u8),
+    #[error("{0} normal bits is neither 16 nor 8")]
+    NormalBits(u8),
     #[error("the scene would not be valid: {0}")]
     Skeleton(crate::SkeletonError),
 }

@@ -40,6 +40,12 @@ impl LodMesh {
 /// al. 2014, "A Survey of Efficient Representations for Independent Unit
 /// Vectors"). Non-finite or zero vectors encode as +Z.
 pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
+    encode_normal_snorm(n, 32767.0)
+}
+
+/// [`encode_normal`] into snorm values of `top` steps each way (32767 for
+/// 16 bits, 127 for 8).
+pub fn encode_normal_snorm(n: [f32; 3], top: f32) -> [i16; 2] {
     let [x, y, z] = n;
     let l1 = x.abs() + y.abs() + z.abs();
     if !(l1.is_finite() && l1 > 0.0) {
@@ -51,14 +57,19 @@ pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
         u = (1.0 - pv.abs()) * sign_not_zero(pu);
         v = (1.0 - pu.abs()) * sign_not_zero(pv);
     }
-    let q = |a: f32| (a.clamp(-1.0, 1.0) * 32767.0).round() as i16;
+    let q = |a: f32| (a.clamp(-1.0, 1.0) * top).round() as i16;
     [q(u), q(v)]
 }
 
 /// Inverse of [`encode_normal`]: a unit vector.
 pub fn decode_normal(e: [i16; 2]) -> [f32; 3] {
-    let u = (e[0] as f32 / 32767.0).clamp(-1.0, 1.0);
-    let v = (e[1] as f32 / 32767.0).clamp(-1.0, 1.0);
+    decode_normal_snorm(e, 32767.0)
+}
+
+/// Inverse of [`encode_normal_snorm`] with the same `top`.
+pub fn decode_normal_snorm(e: [i16; 2], top: f32) -> [f32; 3] {
+    let u = (e[0] as f32 / top).clamp(-1.0, 1.0);
+    let v = (e[1] as f32 / top).clamp(-1.0, 1.0);
     let z = 1.0 - u.abs() - v.abs();
     let (x, y) = if z < 0.0 {
         (
@@ -100,6 +111,26 @@ mod tests {
             worst = worst.max(err);
         }
         assert!(worst < 1e-4, "worst normal error {worst}");
+    }
+
+    #[test]
+    fn eight_bit_normals_are_within_a_degree() {
+        // The shading difference 8-bit normals make: the angle between a
+        // normal and its decoded self, which bounds the change of any
+        // Lambert term (|cos a - cos b| <= |a - b|).
+        let mut worst = 0.0f32;
+        for i in 0..20000 {
+            let t = i as f32 / 19999.0;
+            let z = 1.0 - 2.0 * t;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = i as f32 * 2.399_963;
+            let n = [r * a.cos(), r * a.sin(), z];
+            let d = decode_normal_snorm(encode_normal_snorm(n, 127.0), 127.0);
+            let dot = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).clamp(-1.0, 1.0);
+            worst = worst.max(dot.acos().to_degrees());
+        }
+        assert!(worst < 1.0, "worst 8-bit normal error {worst} degrees");
+        assert!(worst > 0.1, "{worst}: 8 bits do cost something");
     }
 
     #[test]

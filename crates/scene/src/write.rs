@@ -40,6 +40,8 @@ pub struct SceneWriter {
     optional: Vec<([u8; 4], Vec<u8>)>,
     /// Bits of the position grid of each LOD (`None`: raw f32).
     position_bits: Option<u8>,
+    /// Bits of each octahedral normal coordinate in encoded LODs.
+    normal_bits: u8,
 }
 
 /// Position bits a writer uses unless told otherwise: steps of 1/65535 of
@@ -75,7 +77,20 @@ impl SceneWriter {
             moved: Vec::new(),
             optional: Vec::new(),
             position_bits: Some(DEFAULT_POSITION_BITS),
+            normal_bits: 16,
         })
+    }
+
+    /// Stores the normals of encoded LODs added after this in 2 x 16 bits
+    /// (the default; within 0.004 degrees) or 2 x 8 bits (within 0.93
+    /// degrees; [`codec::NORMAL_BITS`](crate::codec::NORMAL_BITS)). Raw
+    /// LODs always take 16.
+    pub fn set_normal_bits(&mut self, bits: u8) -> Result<(), WriteError> {
+        if !crate::codec::NORMAL_BITS.contains(&bits) {
+            return Err(WriteError::NormalBits(bits));
+        }
+        self.normal_bits = bits;
+        Ok(())
     }
 
     /// Stores the LODs added after this on a grid of `bits` bits per axis
@@ -104,8 +119,9 @@ impl SceneWriter {
     /// error in model units.
     pub fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
         let lod = self.lods.len() as u32;
-        let (info, bounds, blob, moved) = encode_lod(mesh, error, self.position_bits)
-            .map_err(|detail| WriteError::BadMesh { lod, detail })?;
+        let (info, bounds, blob, moved) =
+            encode_lod(mesh, error, self.position_bits, self.normal_bits)
+                .map_err(|detail| WriteError::BadMesh { lod, detail })?;
         let info = LodInfo {
             offset: self.pos,
             ..info
@@ -278,6 +294,7 @@ fn encode_lod(
     mesh: &LodMesh,
     error: f32,
     position_bits: Option<u8>,
+    normal_bits: u8,
 ) -> Result<(LodInfo, Aabb, Vec<u8>, f64), String> {
     let nv = mesh.positions.len();
     if mesh.indices.is_empty() || !mesh.indices.len().is_multiple_of(3) {
@@ -354,7 +371,7 @@ fn encode_lod(
             },
             indices: mesh.indices.clone(),
         };
-        let e = crate::codec::encode(&streams, bits)?;
+        let e = crate::codec::encode(&streams, bits, normal_bits)?;
         return Ok((with_blob(&e.blob), world_box(&e.positions), e.blob, e.moved));
     }
     let bounds = world_box(&stored);

@@ -95,16 +95,22 @@ fn sign_not_zero(a: f32) -> f32 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn normals_round_trip_within_1e4() {
-        let mut worst = 0.0f32;
-        for i in 0..2000 {
-            // A spiral over the sphere, both hemispheres and the poles.
-            let t = i as f32 / 1999.0;
+    /// `count` unit vectors on a spiral over the sphere, both hemispheres
+    /// and the poles.
+    fn spiral(count: u32) -> impl Iterator<Item = [f32; 3]> {
+        (0..count).map(move |i| {
+            let t = i as f32 / (count - 1) as f32;
             let z = 1.0 - 2.0 * t;
             let r = (1.0 - z * z).max(0.0).sqrt();
             let a = i as f32 * 2.399_963;
-            let n = [r * a.cos(), r * a.sin(), z];
+            [r * a.cos(), r * a.sin(), z]
+        })
+    }
+
+    #[test]
+    fn normals_round_trip_within_1e4() {
+        let mut worst = 0.0f32;
+        for n in spiral(2000) {
             let d = decode_normal(encode_normal(n));
             let err =
                 ((d[0] - n[0]).powi(2) + (d[1] - n[1]).powi(2) + (d[2] - n[2]).powi(2)).sqrt();
@@ -119,12 +125,7 @@ mod tests {
         // normal and its decoded self, which bounds the change of any
         // Lambert term (|cos a - cos b| <= |a - b|).
         let mut worst = 0.0f32;
-        for i in 0..20000 {
-            let t = i as f32 / 19999.0;
-            let z = 1.0 - 2.0 * t;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let a = i as f32 * 2.399_963;
-            let n = [r * a.cos(), r * a.sin(), z];
+        for n in spiral(20000) {
             let d = decode_normal_snorm(encode_normal_snorm(n, 127.0), 127.0);
             let dot = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).clamp(-1.0, 1.0);
             worst = worst.max(dot.acos().to_degrees());

@@ -32,8 +32,9 @@ use crate::mesh::{decode_normal_snorm, encode_normal_snorm};
 pub const HEADER_LEN: usize = 44;
 /// Position bits a writer may ask for.
 pub const POSITION_BITS: std::ops::RangeInclusive<u8> = 8..=24;
-/// Normal bits a writer may ask for: 16 (within 0.004 degrees) or 8
-/// (within 0.93 degrees, 0.34 on average over the sphere).
+/// Normal bits a writer may ask for: 16 (within 0.004 degrees; the
+/// scene writer's default) or 8 (within 0.93 degrees, 0.34 on average
+/// over the sphere; `gigawalk preprocess`'s default).
 pub const NORMAL_BITS: [u8; 2] = [16, 8];
 
 /// The largest snorm value of `bits` bits.

@@ -10,10 +10,8 @@
 //! `cargo run --release -p gigawalk-replay --example compare_scenes -- A.gwk B.gwk PATH [FRAMES] [WIDTHxHEIGHT]`
 
 use gigawalk_cull::{default_near, Viewport};
-use gigawalk_replay::Accuracy;
-use gigawalk_runtime::{
-    CameraList, FrameImage, Runtime, RuntimeOptions, Schedule, TraversalOptions,
-};
+use gigawalk_replay::{Accuracy, Mode};
+use gigawalk_runtime::{CameraList, FrameImage, Runtime, RuntimeOptions, Schedule};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 
@@ -45,11 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         devices: 1,
         width: w,
         height: h,
-        traversal: TraversalOptions {
-            occlusion: false,
-            hlod: false,
-            pixel_tolerance: 0.0,
-        },
+        traversal: Mode::Vfc.traversal(0.0),
         ..Default::default()
     };
     let draw = |scene: &SceneReader| -> Result<Vec<FrameImage>, Box<dyn std::error::Error>> {

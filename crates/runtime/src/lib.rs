@@ -577,14 +577,20 @@ impl<'s> Runtime<'s> {
         on_frame: &mut dyn FnMut(FrameReport) -> bool,
         presenter: &mut dyn Presenter,
     ) -> Result<u64, RuntimeError> {
-        let opts = opts.resolve(self.devices.iter().any(GpuContext::is_cpu))?;
+        let opts = opts.resolve(self.rasterizes_on_cpu())?;
         schedule(Target::gpu(self), &opts, source, on_frame, presenter)
     }
 
     /// What the occluder budget `budget` means on these devices (resolves
     /// [`OccluderBudget::Auto`]).
     pub fn occluder_selection(&self, budget: OccluderBudget) -> OccluderSelection {
-        budget.resolve(self.devices.iter().any(GpuContext::is_cpu))
+        budget.resolve(self.rasterizes_on_cpu())
+    }
+
+    /// Whether any device rasterizes on the CPU (llvmpipe, lavapipe): its
+    /// cores are the CPU stages' too.
+    pub(crate) fn rasterizes_on_cpu(&self) -> bool {
+        self.devices.iter().any(GpuContext::is_cpu)
     }
 
     /// Device `i` (0 = OR's; RVG uses 1 when there are two; the last one

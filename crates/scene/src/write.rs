@@ -148,17 +148,18 @@ impl SceneWriter {
         provenance: Provenance,
     ) -> Result<WriteSummary, WriteError> {
         grow_boxes(&mut nodes, &self.lod_bounds)?;
+        let bounds = nodes.first().map(|n| n.bounds).unwrap_or(Aabb::EMPTY);
+        let origin = if bounds.is_valid() {
+            bounds.center()
+        } else {
+            DVec3::ZERO
+        };
         // The errors as given must be in order (a caller's bug otherwise)
         // before quantization raises each LOD's by its own amount; the
         // order is then kept by raising where needed (a larger bound is
         // still a bound).
-        crate::validate::check_tree(
-            nodes.first().map_or(DVec3::ZERO, |n| n.bounds.center()),
-            &nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
-            &nodes,
-            &self.lods,
-        )
-        .map_err(WriteError::Skeleton)?;
+        crate::validate::check_tree(origin, &bounds, &nodes, &self.lods)
+            .map_err(WriteError::Skeleton)?;
         for (l, &moved) in self.lods.iter_mut().zip(&self.moved) {
             if moved > 0.0 {
                 l.error = up_f32(l.error as f64 + moved);
@@ -167,12 +168,6 @@ impl SceneWriter {
         raise_errors(&nodes, &mut self.lods);
         let geometry_at = format::HEADER_LEN as u64;
         let geometry_len = self.pos - geometry_at;
-        let bounds = nodes.first().map(|n| n.bounds).unwrap_or(Aabb::EMPTY);
-        let origin = if bounds.is_valid() {
-            bounds.center()
-        } else {
-            DVec3::ZERO
-        };
         let lods = std::mem::take(&mut self.lods);
 
         let mut toc = vec![TocEntry {

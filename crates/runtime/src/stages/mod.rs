@@ -26,7 +26,7 @@ use gigawalk_scene::Skeleton;
 
 use crate::occluders::AdaptiveBudget;
 use crate::streaming::{Geometry, Link, LodSource, Plan, StreamStats, Use};
-use crate::{Runtime, RuntimeError, Stage};
+use crate::{Runtime, RuntimeError};
 /// A stage's device, its geometry there, and (streaming) its end of the
 /// run's loader queues.
 pub(crate) struct DeviceGeometry<'a> {
@@ -82,16 +82,6 @@ pub(crate) fn lod_ids(skeleton: &Skeleton, items: &[DrawItem]) -> Vec<u32> {
         .iter()
         .map(|i| skeleton.nodes()[i.node as usize].first_lod + i.lod)
         .collect()
-}
-
-/// The test hook [`RuntimeOptions::inject_failure`]: the injected error
-/// when `stage` is to fail by `frame`.
-pub(crate) fn check_injected(
-    opts: &ResolvedOptions,
-    stage: Stage,
-    frame: u64,
-) -> Result<(), RuntimeError> {
-    opts.inject_failure.check(stage, frame)
 }
 
 /// What the stages draw on: the runtime's wgpu devices, or (the
@@ -172,7 +162,7 @@ impl<'a> Target<'a> {
             Some(rt) => {
                 opts.schedule == crate::Schedule::Sequential
                     || self.rvg_device(opts) == 0
-                    || rt.devices.iter().any(GpuContext::is_cpu)
+                    || rt.rasterizes_on_cpu()
             }
         }
     }

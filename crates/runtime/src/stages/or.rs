@@ -99,7 +99,7 @@ impl<'a> OrStage<'a> {
     ) -> Result<OrOutput, RuntimeError> {
         let _span = tracing::info_span!("OR", frame).entered();
         let t = Instant::now();
-        check_injected(self.opts, Stage::Or, frame)?;
+        self.opts.inject_failure.check(Stage::Or, frame)?;
         let none = |t: Instant, figures: OrFigures| OrOutput {
             depth: None,
             figures: OrFigures {

@@ -110,7 +110,7 @@ impl<'a> RvgStage<'a> {
         view: &CullView,
         style: DrawStyle,
     ) -> Result<(), RuntimeError> {
-        check_injected(self.opts, Stage::Rvg, frame)?;
+        self.opts.inject_failure.check(Stage::Rvg, frame)?;
         self.started = Some(Instant::now());
         self.frame = frame;
         self.render.begin(view, style);

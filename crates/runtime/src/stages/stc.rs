@@ -80,7 +80,7 @@ impl<'a> StcStage<'a> {
                 self.opts.stc_delay_ms / 1e3,
             ));
         }
-        check_injected(self.opts, Stage::Stc, frame)?;
+        self.opts.inject_failure.check(Stage::Stc, frame)?;
         // The culler, when occlusion is on, and whether it culls this
         // frame (the HZB needs OR's depth: none in the startup bypass).
         let (occlusion, hzb_ms) = match self.culler.as_mut() {

@@ -26,6 +26,21 @@ fn vs_main(
     return out;
 }
 
+// The compact layout: grid coordinates and snorm8 normals (common.wgsl).
+@vertex
+fn vs_compact(
+    @location(0) q: vec4<u32>,
+    @location(2) colour: vec4<f32>,
+    @location(3) offset: vec4<f32>,
+    @location(4) scale: vec4<f32>,
+) -> VsOut {
+    var out: VsOut;
+    out.clip = frame.view_proj * vec4<f32>(compact_position(q, offset, scale), 1.0);
+    out.normal = decode_normal(compact_normal(q));
+    out.colour = vec4<f32>(srgb_to_linear(colour.rgb), colour.a);
+    return out;
+}
+
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     // Wireframe: the object's colour, unlit, so edges read on any side.

@@ -18,6 +18,7 @@ pub fn bare_lod(error: f32, triangles: u32) -> LodInfo {
         index_format: IndexFormat::U16,
         uniform_colour: None,
         encoded: false,
+        grid: None,
         offset: 0,
         len: 0,
         checksum: 0,

@@ -39,6 +39,7 @@ pub use passes::{
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};
 pub use residency::{
-    DecodedLod, GeometryPool, HostGeometry, LodRange, Residency, ResidentGeometry, INDEX_BYTES,
-    VERTEX_BYTES,
+    device_bytes, DecodedLod, GeometryPool, HostGeometry, LodRange, Residency, ResidentGeometry,
+    INDEX_BYTES, VERTEX_BYTES,
 };
+pub use shader_types::VertexLayout;

@@ -5,8 +5,8 @@
 use glam::Vec3;
 
 use crate::passes::{
-    depth_attachment, device_error, map_and_wait, pipeline, target, Drawer, DEPTH_COMPARE,
-    DEPTH_FORMAT,
+    depth_attachment, device_error, map_and_wait, pipeline, target, Drawer, ScenePipelines,
+    DEPTH_COMPARE, DEPTH_FORMAT,
 };
 use crate::shader_types;
 use crate::{GpuContext, GpuError, Residency, View};
@@ -41,7 +41,7 @@ const BOX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
 /// occlusion query per box; returns the samples each passed).
 pub struct QueryPass {
     drawer: Drawer,
-    depth_pipeline: wgpu::RenderPipeline,
+    depth_pipelines: ScenePipelines,
     box_pipeline: wgpu::RenderPipeline,
     depth: wgpu::Texture,
     queries: wgpu::QuerySet,
@@ -98,7 +98,7 @@ impl QueryPass {
         // Boxes are drawn nearer by twice the device's depth error (GL's):
         // box and node are rounded independently.
         drawer.depth_bias = 2.0 * ctx.depth_error();
-        let depth_pipeline = pipeline(
+        let depth_pipelines = pipeline(
             ctx,
             &drawer,
             "query depth",
@@ -149,7 +149,7 @@ impl QueryPass {
         let (queries, resolve, read, boxes) = query_buffers(ctx, capacity);
         QueryPass {
             drawer,
-            depth_pipeline,
+            depth_pipelines,
             box_pipeline,
             depth: target(
                 ctx,
@@ -239,8 +239,8 @@ impl QueryPass {
                 ..Default::default()
             });
             if let Some(r) = residency.filter(|_| !draws.is_empty()) {
-                pass.set_pipeline(&self.depth_pipeline);
-                self.drawer.record(&mut pass, r, &draws);
+                self.drawer
+                    .record(&mut pass, r, &draws, &self.depth_pipelines);
             }
             pass.set_pipeline(&self.box_pipeline);
             pass.set_bind_group(0, &self.drawer.bind_group, &[]);

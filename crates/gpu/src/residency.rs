@@ -10,20 +10,26 @@ use std::ops::Range;
 use glam::DVec3;
 use range_alloc::RangeAllocator;
 
-use gigawalk_scene::{Colours, LodMesh, ReadAt, SceneReader};
+use gigawalk_scene::codec::{GridPositions, OctNormals};
+use gigawalk_scene::{Colours, LodInfo, LodMesh, ReadAt, ReadError, SceneReader, StoredLod};
 
-use crate::shader_types::GpuVertex;
+use crate::shader_types::{CompactVertex, GpuVertex, VertexLayout};
 use crate::{GpuContext, GpuError};
 
 /// Where one LOD lives: which buffer pair, and the ranges inside it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LodRange {
     pub buffer: u32,
+    /// In indices of `index_format` from the start of the index buffer.
     pub first_index: u32,
     pub index_count: u32,
     pub base_vertex: i32,
-    /// World point the LOD's positions are relative to.
+    pub layout: VertexLayout,
+    pub index_format: wgpu::IndexFormat,
+    /// World point the LOD's position 0 (grid coordinate 0) lies at.
     pub origin: DVec3,
+    /// Model units per coordinate on each axis (1 for the wide layout).
+    pub scale: [f32; 3],
 }
 
 /// What a pass needs to draw a LOD.
@@ -35,56 +41,160 @@ pub trait Residency {
     fn buffers(&self, buffer: u32) -> (&wgpu::Buffer, &wgpu::Buffer);
 }
 
-/// A LOD's vertices in the GPU's layout.
-fn gpu_vertices(mesh: &LodMesh) -> impl Iterator<Item = GpuVertex> + '_ {
-    let colour = move |i: usize| match &mesh.colours {
-        Colours::Uniform(c) => *c,
-        Colours::PerVertex(v) => v[i],
-    };
-    mesh.positions
-        .iter()
-        .zip(&mesh.normals)
-        .enumerate()
-        .map(move |(i, (p, n))| GpuVertex {
-            position: *p,
-            normal: gigawalk_scene::encode_normal(*n),
-            colour: colour(i),
-        })
-}
-
-/// Bytes one vertex takes on a device.
-pub const VERTEX_BYTES: u64 = std::mem::size_of::<GpuVertex>() as u64;
-/// Bytes one index takes on a device.
+/// Bytes of a wide vertex (f32 positions).
+pub const VERTEX_BYTES: u64 = VertexLayout::Wide.stride();
+/// Bytes of an index of a LOD with more vertices than u16 indices reach.
 pub const INDEX_BYTES: u64 = 4;
 
-/// One LOD decoded into the GPU's layout in host memory: what a streaming
-/// loader hands to the devices.
+/// Vertices a LOD may have for u16 indices: index 0xffff is left out, as
+/// it restarts primitives where a driver keeps restart on for lists.
+const U16_VERTICES: usize = 0xffff;
+
+/// The index format for a LOD of `vertices` vertices.
+fn index_format(vertices: usize) -> wgpu::IndexFormat {
+    if vertices <= U16_VERTICES {
+        wgpu::IndexFormat::Uint16
+    } else {
+        wgpu::IndexFormat::Uint32
+    }
+}
+
+/// Device bytes of a LOD's indices (padded to 4 bytes).
+fn index_bytes(vertices: usize, indices: usize) -> u64 {
+    (indices as u64 * index_format(vertices).byte_size() as u64).next_multiple_of(4)
+}
+
+/// Device bytes a LOD of this record takes: its vertices in
+/// [`VertexLayout::of`], its indices in u16 when they reach every vertex.
+pub fn device_bytes(info: &LodInfo) -> u64 {
+    info.vertices as u64 * VertexLayout::of(info).stride()
+        + index_bytes(info.vertices as usize, 3 * info.triangles as usize)
+}
+
+/// One LOD decoded into a device layout in host memory: what a streaming
+/// loader hands to the devices, and what [`HostGeometry`] packs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DecodedLod {
-    pub vertices: Vec<GpuVertex>,
-    pub indices: Vec<u32>,
-    /// World point the positions are relative to.
+    pub layout: VertexLayout,
+    /// The vertices in `layout`.
+    pub vertices: Vec<u8>,
+    pub index_format: wgpu::IndexFormat,
+    /// The indices in `index_format`, zero-padded to 4 bytes.
+    pub indices: Vec<u8>,
+    pub index_count: u32,
+    /// World point position 0 (grid coordinate 0) lies at.
     pub origin: DVec3,
+    /// Model units per coordinate (1 for the wide layout).
+    pub scale: [f32; 3],
 }
 
 impl DecodedLod {
+    /// A decoded LOD in the wide layout.
     pub fn new(mesh: &LodMesh) -> Self {
+        let colour = |i: usize| match &mesh.colours {
+            Colours::Uniform(c) => *c,
+            Colours::PerVertex(v) => v[i],
+        };
+        let vertices: Vec<GpuVertex> = mesh
+            .positions
+            .iter()
+            .zip(&mesh.normals)
+            .enumerate()
+            .map(|(i, (p, n))| GpuVertex {
+                position: *p,
+                normal: gigawalk_scene::encode_normal(*n),
+                colour: colour(i),
+            })
+            .collect();
+        DecodedLod::with_indices(
+            VertexLayout::Wide,
+            bytemuck::cast_slice(&vertices).to_vec(),
+            mesh.positions.len(),
+            &mesh.indices,
+            mesh.origin,
+            [1.0; 3],
+        )
+    }
+
+    /// A LOD as its blob stores it: an encoded LOD whose layout allows it
+    /// ([`VertexLayout::for_grid`]) stays on its grid, in the compact
+    /// layout; anything else is decoded into the wide one.
+    pub fn from_stored(lod: StoredLod) -> Self {
+        let g = match lod {
+            StoredLod::Grid(g) => g,
+            mesh => return DecodedLod::new(&mesh.into_mesh()),
+        };
+        // 16-bit grids decode to u16 coordinates and 8-bit normals to
+        // snorm8: exactly `VertexLayout::for_grid`'s compact case.
+        let s = &g.streams;
+        let (GridPositions::U16(p), OctNormals::Snorm8(nm)) = (&s.positions, &s.normals) else {
+            return DecodedLod::new(&StoredLod::Grid(g).into_mesh());
+        };
+        let vertices: Vec<CompactVertex> = p
+            .iter()
+            .zip(nm)
+            .enumerate()
+            .map(|(i, (p, n))| CompactVertex {
+                position: [p[0], p[1], p[2], CompactVertex::pack_normal(n[0], n[1])],
+                colour: g.colour(i),
+            })
+            .collect();
+        DecodedLod::with_indices(
+            VertexLayout::Compact,
+            bytemuck::cast_slice(&vertices).to_vec(),
+            p.len(),
+            &s.indices,
+            g.origin + glam::Vec3::from(s.origin).as_dvec3(),
+            s.step,
+        )
+    }
+
+    fn with_indices(
+        layout: VertexLayout,
+        vertices: Vec<u8>,
+        vertex_count: usize,
+        indices: &[u32],
+        origin: DVec3,
+        scale: [f32; 3],
+    ) -> Self {
+        let index_format = index_format(vertex_count);
+        let mut bytes: Vec<u8> = match index_format {
+            wgpu::IndexFormat::Uint16 => {
+                let narrow: Vec<u16> = indices.iter().map(|&i| i as u16).collect();
+                bytemuck::cast_slice(&narrow).to_vec()
+            }
+            wgpu::IndexFormat::Uint32 => bytemuck::cast_slice(indices).to_vec(),
+        };
+        bytes.resize(bytes.len().next_multiple_of(4), 0);
         DecodedLod {
-            vertices: gpu_vertices(mesh).collect(),
-            indices: mesh.indices.clone(),
-            origin: mesh.origin,
+            layout,
+            vertices,
+            index_format,
+            indices: bytes,
+            index_count: indices.len() as u32,
+            origin,
+            scale,
         }
+    }
+
+    /// Reads LOD `lod` of `scene` into its device layout.
+    pub fn read<R: ReadAt>(scene: &SceneReader<R>, lod: u32) -> Result<Self, ReadError> {
+        scene.read_lod_stored(lod).map(DecodedLod::from_stored)
+    }
+
+    pub fn vertex_count(&self) -> u64 {
+        self.vertices.len() as u64 / self.layout.stride()
     }
 
     /// Device bytes the LOD takes.
     pub fn bytes(&self) -> u64 {
-        self.vertices.len() as u64 * VERTEX_BYTES + self.indices.len() as u64 * INDEX_BYTES
+        (self.vertices.len() + self.indices.len()) as u64
     }
 }
 
-/// All of a scene's geometry decoded into GPU layout in host memory, split
-/// into chunks that fit a device's buffer limit. Built once, uploaded to
-/// each device that draws.
+/// All of a scene's geometry decoded into device layouts in host memory,
+/// split into chunks that fit a device's buffer limit. Built once,
+/// uploaded to each device that draws.
 pub struct HostGeometry {
     chunks: Vec<Chunk>,
     ranges: Vec<LodRange>,
@@ -92,8 +202,8 @@ pub struct HostGeometry {
 
 #[derive(Default)]
 struct Chunk {
-    vertices: Vec<GpuVertex>,
-    indices: Vec<u32>,
+    vertices: Vec<u8>,
+    indices: Vec<u8>,
 }
 
 impl HostGeometry {
@@ -113,47 +223,60 @@ impl HostGeometry {
         let lods = scene.skeleton().lods().len();
         let mut chunks = vec![Chunk::default()];
         let mut ranges = Vec::with_capacity(lods);
-        let vsize = std::mem::size_of::<GpuVertex>() as u64;
         for lod in 0..lods as u32 {
-            let mesh = scene.read_lod(lod)?;
-            let (nv, ni) = (mesh.positions.len() as u64, mesh.indices.len() as u64);
-            if nv * vsize > max_chunk_bytes || ni * 4 > max_chunk_bytes {
+            let d = DecodedLod::read(scene, lod)?;
+            let stride = d.layout.stride() as usize;
+            let (nv, ni) = (d.vertices.len() as u64, d.indices.len() as u64);
+            if nv + stride as u64 > max_chunk_bytes || ni > max_chunk_bytes {
                 return Err(GpuError::TooLarge {
                     what: format!("LOD {lod}"),
-                    needed: (nv * vsize).max(ni * 4),
+                    needed: nv.max(ni),
                     limit: max_chunk_bytes,
                 });
             }
             let c = chunks.last().expect("one chunk");
-            if (c.vertices.len() as u64 + nv) * vsize > max_chunk_bytes
-                || (c.indices.len() as u64 + ni) * 4 > max_chunk_bytes
-                || c.vertices.len() as u64 + nv > i32::MAX as u64
+            let at = c.vertices.len().next_multiple_of(stride);
+            if (at as u64 + nv) > max_chunk_bytes
+                || c.indices.len() as u64 + ni > max_chunk_bytes
+                || (at + d.vertices.len()) / stride > i32::MAX as usize
             {
                 chunks.push(Chunk::default());
             }
             let buffer = chunks.len() as u32 - 1;
             let c = chunks.last_mut().expect("one chunk");
+            // Each LOD's vertices start on a whole vertex of its layout.
+            c.vertices
+                .resize(c.vertices.len().next_multiple_of(stride), 0);
             ranges.push(LodRange {
                 buffer,
-                first_index: c.indices.len() as u32,
-                index_count: ni as u32,
-                base_vertex: c.vertices.len() as i32,
-                origin: mesh.origin,
+                first_index: (c.indices.len() as u64 / d.index_format.byte_size() as u64) as u32,
+                index_count: d.index_count,
+                base_vertex: (c.vertices.len() / stride) as i32,
+                layout: d.layout,
+                index_format: d.index_format,
+                origin: d.origin,
+                scale: d.scale,
             });
-            c.vertices.extend(gpu_vertices(&mesh));
-            c.indices.extend_from_slice(&mesh.indices);
+            c.vertices.extend_from_slice(&d.vertices);
+            c.indices.extend_from_slice(&d.indices);
             progress(lod as u64 + 1, lods as u64);
         }
         Ok(HostGeometry { chunks, ranges })
     }
 
+    /// Device bytes the geometry takes (what each device that draws holds).
     pub fn bytes(&self) -> u64 {
         self.chunks
             .iter()
-            .map(|c| {
-                (c.vertices.len() * std::mem::size_of::<GpuVertex>() + c.indices.len() * 4) as u64
-            })
+            .map(|c| (c.vertices.len() + c.indices.len()) as u64)
             .sum()
+    }
+
+    /// LODs in each vertex layout, in [`VertexLayout::ALL`]'s order.
+    pub fn layout_counts(&self) -> [usize; 2] {
+        let mut n = [0; 2];
+        self.ranges.iter().for_each(|r| n[r.layout as usize] += 1);
+        n
     }
 
     /// Uploads everything to one device.
@@ -167,16 +290,8 @@ impl HostGeometry {
                 b
             };
             buffers.push((
-                make(
-                    "vertices",
-                    bytemuck::cast_slice(&c.vertices),
-                    wgpu::BufferUsages::VERTEX,
-                ),
-                make(
-                    "indices",
-                    bytemuck::cast_slice(&c.indices),
-                    wgpu::BufferUsages::INDEX,
-                ),
+                make("vertices", &c.vertices, wgpu::BufferUsages::VERTEX),
+                make("indices", &c.indices, wgpu::BufferUsages::INDEX),
             ));
         }
         ctx.queue.submit([]);
@@ -220,13 +335,9 @@ impl Residency for ResidentGeometry {
     }
 }
 
-/// Bytes of the pool's allocation unit: one vertex, or five indices. A
-/// LOD takes whole units (its indices padded to a unit), so every LOD's
-/// vertices start on a whole `base_vertex` of the buffer.
-const UNIT_BYTES: u64 = VERTEX_BYTES;
-/// Indices in a unit.
-const UNIT_INDICES: u32 = (UNIT_BYTES / INDEX_BYTES) as u32;
-const _: () = assert!(UNIT_BYTES.is_multiple_of(INDEX_BYTES));
+/// Bytes of the pool's allocation unit: every write to a buffer is a
+/// multiple of 4 bytes at a multiple of 4.
+const UNIT_BYTES: u64 = 4;
 
 /// One pool buffer (bound as both the vertex and the index buffer) and
 /// what of it is taken, in units.
@@ -254,6 +365,9 @@ struct Slot {
 /// separate vertex and index buffers split in the scene's proportions, a
 /// working set richer in vertices than the scene ran out of vertex room
 /// with a fifth of the pool free (a held camera then never settled).
+/// Vertices start on a whole vertex of their layout (a draw names them by
+/// `base_vertex`): a range has room for that, at most a vertex less 4
+/// bytes more than the LOD's own bytes.
 ///
 /// Overwriting a removed LOD's range is safe while earlier frames still
 /// draw from it on the GPU: `Queue::write_buffer` takes effect at the next
@@ -265,17 +379,16 @@ pub struct GeometryPool {
     capacity_bytes: u64,
 }
 
-/// Units `lod` takes in a pool (vertices, then indices), if a `u32` range
-/// can hold them.
+/// Units `lod` takes in a pool (room to align its vertices, then
+/// vertices and indices), if a `u32` range can hold them.
 fn pool_units(lod: &DecodedLod) -> Option<u32> {
-    let units =
-        lod.vertices.len() as u64 + lod.indices.len().div_ceil(UNIT_INDICES as usize) as u64;
-    u32::try_from(units.max(1)).ok()
+    let bytes = lod.layout.stride() - UNIT_BYTES + lod.bytes();
+    u32::try_from(bytes / UNIT_BYTES).ok()
 }
 
 impl GeometryPool {
     /// A pool for a scene of `lods` LODs with room for `bytes` of
-    /// geometry (rounded down to whole units of 20 bytes), split into
+    /// geometry (rounded down to whole units of 4 bytes), split into
     /// buffers of at most `max_buffer_bytes`.
     pub fn new(
         ctx: &GpuContext,
@@ -283,10 +396,11 @@ impl GeometryPool {
         bytes: u64,
         max_buffer_bytes: u64,
     ) -> Result<Self, GpuError> {
-        // Units a buffer can address: the first index (five a unit) is a
-        // u32, the base vertex (one a unit) an i32.
-        let max = (max_buffer_bytes / UNIT_BYTES).min(u32::MAX as u64 / UNIT_INDICES as u64);
-        if max == 0 {
+        // Units a buffer can address: a u32 unit offset; the first index
+        // (a u32, two a unit at most) and the base vertex (an i32) then
+        // fit as well.
+        let max = (max_buffer_bytes / UNIT_BYTES).min(u32::MAX as u64 / 2);
+        if max < VERTEX_BYTES / UNIT_BYTES {
             return Err(GpuError::TooLarge {
                 what: "a geometry pool buffer".into(),
                 needed: VERTEX_BYTES,
@@ -322,8 +436,8 @@ impl GeometryPool {
         self.capacity_bytes
     }
 
-    /// Device bytes the resident LODs take (each rounded up to whole
-    /// units: at most 16 bytes more than its vertices and indices).
+    /// Device bytes the resident LODs take (each with its room to align:
+    /// at most a vertex less 4 bytes more than its vertices and indices).
     pub fn used_bytes(&self) -> u64 {
         self.used_bytes
     }
@@ -362,28 +476,29 @@ impl GeometryPool {
         if id as usize >= self.slots.len() {
             return false;
         }
+        let stride = lod.layout.stride();
         for (b, page) in self.pages.iter_mut().enumerate() {
-            let Ok(r) = page.free.allocate_range(units) else {
+            let Ok(r) = page.free.allocate_range(units.max(1)) else {
                 continue;
             };
-            let indices_at = r.start + lod.vertices.len() as u32;
-            for (at, data) in [
-                (r.start, bytemuck::cast_slice::<_, u8>(&lod.vertices)),
-                (indices_at, bytemuck::cast_slice(&lod.indices)),
-            ] {
+            let vertices_at = (r.start as u64 * UNIT_BYTES).next_multiple_of(stride);
+            let indices_at = vertices_at + lod.vertices.len() as u64;
+            for (at, data) in [(vertices_at, &lod.vertices), (indices_at, &lod.indices)] {
                 if !data.is_empty() {
-                    ctx.queue
-                        .write_buffer(&page.buffer, at as u64 * UNIT_BYTES, data);
+                    ctx.queue.write_buffer(&page.buffer, at, data);
                 }
             }
             let bytes = r.len() as u64 * UNIT_BYTES;
             self.slots[id as usize] = Some(Slot {
                 range: LodRange {
                     buffer: b as u32,
-                    first_index: indices_at * UNIT_INDICES,
-                    index_count: lod.indices.len() as u32,
-                    base_vertex: r.start as i32,
+                    first_index: (indices_at / lod.index_format.byte_size() as u64) as u32,
+                    index_count: lod.index_count,
+                    base_vertex: (vertices_at / stride) as i32,
+                    layout: lod.layout,
+                    index_format: lod.index_format,
                     origin: lod.origin,
+                    scale: lod.scale,
                 },
                 units: r,
                 bytes,

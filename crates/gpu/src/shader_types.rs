@@ -18,7 +18,7 @@ pub struct FrameUniforms {
     pub params: [f32; 4],
 }
 
-/// One vertex as the GPU reads it: 20 bytes.
+/// One vertex in the wide layout ([`VertexLayout::Wide`]): 20 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuVertex {
@@ -30,12 +30,99 @@ pub struct GpuVertex {
     pub colour: [u8; 4],
 }
 
-/// Per-draw instance data: the LOD origin minus the camera position,
-/// computed in f64 and rounded once (location 3).
+/// One vertex in the compact layout ([`VertexLayout::Compact`]): 12
+/// bytes. A scene's encoded LODs keep their positions on a grid of at
+/// most 16 bits over the LOD's box; the GPU reads those coordinates and
+/// scales them per draw (`DrawInstance::scale`), as Nanite keeps cluster
+/// positions quantized.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct CompactVertex {
+    /// Grid coordinates x, y, z; w holds the octahedral normal as two
+    /// snorm8, u in the low byte, v in the high (location 0).
+    pub position: [u16; 4],
+    /// sRGB-encoded RGBA8 (location 2).
+    pub colour: [u8; 4],
+}
+
+impl CompactVertex {
+    /// `w` for an octahedral snorm8 normal.
+    pub fn pack_normal(u: i8, v: i8) -> u16 {
+        u as u8 as u16 | (v as u8 as u16) << 8
+    }
+}
+
+/// How a resident LOD's vertices are laid out on a device. A scene may
+/// hold both: each LOD takes the compact layout when its blob allows it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum VertexLayout {
+    /// [`GpuVertex`]: f32 positions relative to the LOD's origin,
+    /// snorm16 octahedral normals. Raw LODs, grids over 16 bits, 16-bit
+    /// normals.
+    Wide,
+    /// [`CompactVertex`]: grid coordinates of at most 16 bits and snorm8
+    /// octahedral normals (`gigawalk preprocess`'s defaults).
+    Compact,
+}
+
+impl VertexLayout {
+    pub const ALL: [VertexLayout; 2] = [VertexLayout::Wide, VertexLayout::Compact];
+
+    /// Bytes a vertex takes.
+    pub const fn stride(self) -> u64 {
+        match self {
+            VertexLayout::Wide => std::mem::size_of::<GpuVertex>() as u64,
+            VertexLayout::Compact => std::mem::size_of::<CompactVertex>() as u64,
+        }
+    }
+
+    /// The layout for an encoded LOD of these bits.
+    pub fn for_grid(position_bits: u8, normal_bits: u8) -> VertexLayout {
+        if position_bits <= 16 && normal_bits == 8 {
+            VertexLayout::Compact
+        } else {
+            VertexLayout::Wide
+        }
+    }
+
+    /// The layout a LOD of this record takes (a 2.0 file's encoded LODs
+    /// do not state their bits: counted wide, the larger).
+    pub fn of(info: &gigawalk_scene::LodInfo) -> VertexLayout {
+        match info.grid {
+            Some(g) => VertexLayout::for_grid(g.position, g.normal),
+            None => VertexLayout::Wide,
+        }
+    }
+
+    /// The vertex shader entry point that reads this layout.
+    pub fn entry_point(self) -> &'static str {
+        match self {
+            VertexLayout::Wide => "vs_main",
+            VertexLayout::Compact => "vs_compact",
+        }
+    }
+
+    pub fn buffer_layout(self) -> wgpu::VertexBufferLayout<'static> {
+        wgpu::VertexBufferLayout {
+            array_stride: self.stride(),
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: match self {
+                VertexLayout::Wide => &VERTEX_ATTRIBUTES,
+                VertexLayout::Compact => &COMPACT_ATTRIBUTES,
+            },
+        }
+    }
+}
+
+/// Per-draw instance data (locations 3 and 4): where the LOD's position
+/// 0 lies relative to the camera, computed in f64 and rounded once, and
+/// model units per coordinate on each axis (the grid's step for the
+/// compact layout; the wide layout's shader does not read it).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct DrawInstance {
     pub offset: [f32; 4],
+    pub scale: [f32; 4],
 }
 
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] = wgpu::vertex_attr_array![
@@ -43,16 +130,12 @@ pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 3] = wgpu::vertex_attr_arra
     1 => Snorm16x2,
     2 => Unorm8x4,
 ];
-pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 1] =
-    wgpu::vertex_attr_array![3 => Float32x4];
-
-pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
-    wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<GpuVertex>() as u64,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &VERTEX_ATTRIBUTES,
-    }
-}
+pub const COMPACT_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![
+    0 => Uint16x4,
+    2 => Unorm8x4,
+];
+pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
+    wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4];
 
 pub fn instance_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {

@@ -2,7 +2,9 @@
 //! no GPU needed), and every shader in shaders/ parses and validates as its
 //! pass compiles it.
 
-use gigawalk_gpu::shader_types::{self, FrameUniforms, GpuVertex};
+use gigawalk_gpu::shader_types::{
+    self, CompactVertex, DrawInstance, FrameUniforms, GpuVertex, VertexLayout,
+};
 
 fn module(pass: &str) -> naga::Module {
     let src = shader_types::shader_source(pass);
@@ -74,19 +76,70 @@ fn vertex_inputs_match_rust_layout() {
         std::mem::offset_of!(GpuVertex, colour)
     );
     assert_eq!(std::mem::size_of::<GpuVertex>(), 20);
-    // The visible pass's vertex entry point takes exactly locations 0..=3.
-    let m = module(shader_types::VISIBLE_WGSL);
-    let ep = m.entry_points.iter().find(|e| e.name == "vs_main").unwrap();
-    let locations: Vec<u32> = ep
-        .function
-        .arguments
-        .iter()
-        .filter_map(|a| match a.binding {
-            Some(naga::Binding::Location { location, .. }) => Some(location),
-            _ => None,
-        })
-        .collect();
-    assert_eq!(locations, vec![0, 1, 2, 3]);
+    let compact = shader_types::COMPACT_ATTRIBUTES;
+    assert_eq!(
+        compact[0].offset as usize,
+        std::mem::offset_of!(CompactVertex, position)
+    );
+    assert_eq!(
+        compact[1].offset as usize,
+        std::mem::offset_of!(CompactVertex, colour)
+    );
+    assert_eq!(std::mem::size_of::<CompactVertex>(), 12);
+    let instance = shader_types::INSTANCE_ATTRIBUTES;
+    assert_eq!(
+        instance[1].offset as usize,
+        std::mem::offset_of!(DrawInstance, scale)
+    );
+    // Each pass's entry point for a layout takes exactly that layout's
+    // locations and the instance's it reads, and the layout's stride is
+    // its struct's size.
+    let locations = |m: &naga::Module, name: &str| -> Vec<u32> {
+        let ep = m.entry_points.iter().find(|e| e.name == name).unwrap();
+        ep.function
+            .arguments
+            .iter()
+            .filter_map(|a| match a.binding {
+                Some(naga::Binding::Location { location, .. }) => Some(location),
+                _ => None,
+            })
+            .collect()
+    };
+    let visible = module(shader_types::VISIBLE_WGSL);
+    let depth = module(shader_types::OCCLUDER_DEPTH_WGSL);
+    for layout in VertexLayout::ALL {
+        let (ep, rvg, or, size) = match layout {
+            VertexLayout::Wide => (
+                "vs_main",
+                vec![0, 1, 2, 3],
+                vec![0, 3],
+                std::mem::size_of::<GpuVertex>(),
+            ),
+            VertexLayout::Compact => (
+                "vs_compact",
+                vec![0, 2, 3, 4],
+                vec![0, 3, 4],
+                std::mem::size_of::<CompactVertex>(),
+            ),
+        };
+        assert_eq!(layout.entry_point(), ep);
+        assert_eq!(locations(&visible, ep), rvg, "{layout:?}");
+        assert_eq!(locations(&depth, ep), or, "{layout:?}");
+        assert_eq!(layout.stride() as usize, size);
+    }
+}
+
+/// The compact layout's normal packing as the shader unpacks it: two
+/// snorm8, sign-extended, u in the low byte.
+#[test]
+fn compact_normals_pack_as_the_shader_unpacks_them() {
+    for (u, v) in [(0i8, 0i8), (127, -127), (-1, 1), (-128, 127), (5, -90)] {
+        let w = CompactVertex::pack_normal(u, v) as u32;
+        // compact_normal in common.wgsl, in Rust.
+        let su = ((w << 24) as i32) >> 24;
+        let sv = ((w << 16) as i32) >> 24;
+        assert_eq!((su, sv), (u as i32, v as i32));
+    }
 }
 
 #[test]

@@ -5,15 +5,21 @@
 use gigawalk_cull::Camera;
 use gigawalk_gpu::{
     devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, HostGeometry,
-    ResidentGeometry, View, VisiblePass,
+    ResidentGeometry, VertexLayout, View, VisiblePass,
 };
 use gigawalk_scene::{Aabb, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use gigawalk_testkit::box_mesh;
 use glam::{DVec3, Vec3};
 
 /// A red 2x2x1 box 5 units ahead on -Z, and a green 6x6x1 box 20 ahead and
-/// to the right (x 3..9), all shifted by `shift`.
+/// to the right (x 3..9), all shifted by `shift`, with 16-bit normals
+/// (the scene writer's default: drawn in the wide layout).
 fn write_scene(path: &std::path::Path, shift: DVec3) {
+    write_scene_with(path, shift, 16)
+}
+
+/// [`write_scene`] with normals of `normal_bits` (8: the compact layout).
+fn write_scene_with(path: &std::path::Path, shift: DVec3, normal_bits: u8) {
     let boxes = [
         (
             Aabb::new(DVec3::new(-1.0, -1.0, -6.0), DVec3::new(1.0, 1.0, -5.0)),
@@ -25,6 +31,7 @@ fn write_scene(path: &std::path::Path, shift: DVec3) {
         ),
     ];
     let mut w = SceneWriter::create(path).unwrap();
+    w.set_normal_bits(normal_bits).unwrap();
     let mut nodes = vec![Node {
         bounds: Aabb::EMPTY,
         parent: NO_NODE,
@@ -49,16 +56,22 @@ fn write_scene(path: &std::path::Path, shift: DVec3) {
     w.finish(nodes, Provenance::default()).unwrap();
 }
 
-/// The two boxes of [`write_scene`], shifted by `shift`, resident on `ctx`.
-fn upload_scene(ctx: &GpuContext, shift: DVec3) -> ResidentGeometry {
+/// The two boxes of [`write_scene_with`], shifted by `shift`, resident on
+/// `ctx` in `layout`.
+fn upload_scene(ctx: &GpuContext, shift: DVec3, layout: VertexLayout) -> ResidentGeometry {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
-    write_scene(&path, shift);
+    let normal_bits = match layout {
+        VertexLayout::Wide => 16,
+        VertexLayout::Compact => 8,
+    };
+    write_scene_with(&path, shift, normal_bits);
     let scene = SceneReader::open(&path).unwrap();
-    HostGeometry::load(&scene, 1 << 20)
-        .unwrap()
-        .upload(ctx)
-        .unwrap()
+    let host = HostGeometry::load(&scene, 1 << 20).unwrap();
+    let mut counts = [0; 2];
+    counts[layout as usize] = 2;
+    assert_eq!(host.layout_counts(), counts);
+    host.upload(ctx).unwrap()
 }
 
 fn view(shift: DVec3, w: u32, h: u32) -> View {
@@ -78,7 +91,12 @@ fn view(shift: DVec3, w: u32, h: u32) -> View {
 
 /// Renders (depth pass image, visible colour, visible depth) of the scene shifted by `shift`.
 fn render(shift: DVec3) -> Option<(Vec<f32>, Vec<u8>, Vec<f32>)> {
-    render_styled(shift, DrawStyle::Shaded, (64, 48)).map(|(r, _)| r)
+    render_in(shift, VertexLayout::Wide)
+}
+
+/// [`render`] from geometry in `layout`.
+fn render_in(shift: DVec3, layout: VertexLayout) -> Option<(Vec<f32>, Vec<u8>, Vec<f32>)> {
+    render_styled(shift, DrawStyle::Shaded, (64, 48), layout).map(|(r, _)| r)
 }
 
 /// As [`render`], drawing RVG in `style`; also says whether the device
@@ -88,9 +106,10 @@ fn render_styled(
     shift: DVec3,
     style: DrawStyle,
     (w, h): (u32, u32),
+    layout: VertexLayout,
 ) -> Option<((Vec<f32>, Vec<u8>, Vec<f32>), bool)> {
     let ctx = devices_or_skip(1, "gpu render").map(|mut d| d.remove(0))?;
-    let geometry = upload_scene(&ctx, shift);
+    let geometry = upload_scene(&ctx, shift, layout);
     let v = view(shift, w, h);
     let mut or = DepthPass::new(&ctx, w, h);
     let depth = or.render(&ctx, &geometry, &v, &[0, 1]).unwrap();
@@ -143,7 +162,7 @@ type Rendered = (Vec<f32>, Vec<u8>, Vec<f32>);
 fn render_both_depth_paths() -> Option<[Rendered; 2]> {
     let mut ctx = devices_or_skip(1, "depth copy pass").map(|mut d| d.remove(0))?;
     let shift = DVec3::new(-3e5, 7e4, 1e6);
-    let geometry = upload_scene(&ctx, shift);
+    let geometry = upload_scene(&ctx, shift, VertexLayout::Wide);
     let (w, h) = (80, 50);
     let v = view(shift + DVec3::new(0.0, -1.5, 0.0), w, h);
     let mut out = Vec::new();
@@ -195,38 +214,99 @@ fn depth_through_the_copy_pass_is_the_direct_copy_bit_for_bit() {
     );
 }
 
+/// In both vertex layouts: the compact one's grid coordinates are
+/// relative to the LOD's box as the wide one's positions are.
 #[test]
 fn far_from_origin_renders_like_the_origin() {
-    let Some(near) = render(DVec3::ZERO) else {
+    for layout in VertexLayout::ALL {
+        let Some(near) = render_in(DVec3::ZERO, layout) else {
+            return;
+        };
+        let far = render_in(DVec3::new(1.0e7, -3.0e7, 2.0e7), layout).unwrap();
+        let max_diff = near
+            .0
+            .iter()
+            .zip(&far.0)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max);
+        assert!(max_diff < 1e-6, "{layout:?}: depth differs by {max_diff}");
+        let differing = near
+            .1
+            .chunks(4)
+            .zip(far.1.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(differing, 0, "{layout:?}: colour pixels differ");
+    }
+}
+
+/// The compact layout (grid coordinates scaled per draw, snorm8 normals
+/// unpacked in the shader) draws what the same LODs decoded into the
+/// wide layout draw: the same depth to rounding, the same colours to a
+/// level.
+#[test]
+fn compact_layout_draws_like_the_wide_one() {
+    let Some(ctx) = devices_or_skip(1, "compact layout").map(|mut d| d.remove(0)) else {
         return;
     };
-    let far = render(DVec3::new(1.0e7, -3.0e7, 2.0e7)).unwrap();
-    let max_diff = near
-        .0
-        .iter()
-        .zip(&far.0)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f32::max);
-    assert!(max_diff < 1e-6, "depth differs by {max_diff}");
-    let differing = near
-        .1
-        .chunks(4)
-        .zip(far.1.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(differing, 0, "colour pixels differ");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    let shift = DVec3::new(3.0e6, 1.0, -2.0e6);
+    write_scene_with(&path, shift, 8);
+    let scene = SceneReader::open(&path).unwrap();
+    let compact = HostGeometry::load(&scene, 1 << 20).unwrap();
+    assert_eq!(compact.layout_counts(), [0, 2]);
+    let compact = compact.upload(&ctx).unwrap();
+    let mut wide = GeometryPool::new(&ctx, 2, 1 << 16, 1 << 20).unwrap();
+    for l in 0..2 {
+        let d = DecodedLod::new(&scene.read_lod(l).unwrap());
+        assert_eq!(d.layout, VertexLayout::Wide);
+        assert!(wide.insert(&ctx, l, &d));
+    }
+    let v = view(shift, 64, 48);
+    let draw = |geometry: &dyn gigawalk_gpu::Residency| {
+        let mut rvg = VisiblePass::new(&ctx, 64, 48);
+        rvg.begin(&ctx, &v, DrawStyle::Shaded);
+        rvg.draw(&ctx, geometry, &[0, 1]);
+        let frame = rvg.finish(&ctx, true).unwrap().unwrap();
+        let depth = DepthPass::new(&ctx, 64, 48)
+            .render(&ctx, geometry, &v, &[0, 1])
+            .unwrap();
+        (frame.colour, frame.depth.depth, depth.depth)
+    };
+    let (a, b) = (draw(&compact), draw(&wide));
+    assert!(
+        a.0.chunks_exact(4).any(|p| p[0] > 200),
+        "the red box is drawn"
+    );
+    for (what, x, y) in [("RVG", &a.1, &b.1), ("OR", &a.2, &b.2)] {
+        let worst = x
+            .iter()
+            .zip(y)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f32::max);
+        assert!(worst < 1e-5, "{what} depth differs by {worst}");
+    }
+    let worst =
+        a.0.iter()
+            .zip(&b.0)
+            .map(|(p, q)| p.abs_diff(*q))
+            .max()
+            .unwrap();
+    assert!(worst <= 1, "colours differ by {worst} levels");
 }
 
 #[test]
 fn wireframe_draws_edges_in_the_unlit_object_colour() {
     // Big enough that faces cover many more pixels than their edges.
     let size = (256, 192);
-    let Some(((_, shaded, _), supported)) = render_styled(DVec3::ZERO, DrawStyle::Shaded, size)
+    let Some(((_, shaded, _), supported)) =
+        render_styled(DVec3::ZERO, DrawStyle::Shaded, size, VertexLayout::Wide)
     else {
         return;
     };
     let ((_, wire, wire_depth), _) =
-        render_styled(DVec3::ZERO, DrawStyle::Wireframe, size).unwrap();
+        render_styled(DVec3::ZERO, DrawStyle::Wireframe, size, VertexLayout::Wide).unwrap();
     // CI's adapter (lavapipe) has line mode; a real GPU does too.
     assert!(
         supported || std::env::var_os("GIGAWALK_REQUIRE_ADAPTER").is_none(),
@@ -272,7 +352,7 @@ fn occlusion_queries_count_samples_behind_and_in_front_of_what_was_drawn() {
         );
     }
     let shift = DVec3::new(1e6, -2e5, 3e6);
-    let geometry = upload_scene(&ctx, shift);
+    let geometry = upload_scene(&ctx, shift, VertexLayout::Wide);
     let (w, h) = (64, 48);
     let v = view(shift, w, h);
     let mut q = gigawalk_gpu::QueryPass::new(&ctx, w, h);
@@ -333,15 +413,18 @@ fn a_pool_takes_any_mix_of_vertices_and_indices_and_draws_like_resident_geometry
     // Fillers of equal bytes: all vertices but one triangle, and all
     // indices (degenerate triangles) but two vertices.
     let filler = |vertices: usize, indices: usize| DecodedLod {
-        vertices: vec![boxes[0].vertices[0]; vertices],
-        indices: vec![0; indices],
-        origin: DVec3::ZERO,
+        vertices: boxes[0].vertices[..20].repeat(vertices),
+        index_format: wgpu::IndexFormat::Uint16,
+        indices: vec![0; (2 * indices).next_multiple_of(4)],
+        index_count: indices as u32,
+        ..boxes[0].clone()
     };
-    let (vertex_heavy, index_heavy) = (filler(50, 5), filler(2, 245));
+    let (vertex_heavy, index_heavy) = (filler(50, 6), filler(2, 486));
     assert_eq!(vertex_heavy.bytes(), index_heavy.bytes());
-    // A LOD takes whole units of a vertex's 20 bytes: the pool is exactly
-    // full once all three are in.
-    let units = |l: &DecodedLod| l.bytes().next_multiple_of(20);
+    // A LOD takes its bytes and room to start its vertices on a whole
+    // vertex (16 bytes for a wide one): the pool is exactly full once
+    // all three are in.
+    let units = |l: &DecodedLod| l.bytes() + 16;
     let bytes = boxes.iter().map(units).sum::<u64>() + units(&vertex_heavy);
     let mut pool = GeometryPool::new(&ctx, 4, bytes, 1 << 20).unwrap();
     assert_eq!(pool.capacity_bytes(), bytes);

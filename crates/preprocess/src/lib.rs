@@ -61,8 +61,10 @@ pub mod verify;
 /// level before it), and an inner node's first level held to the node
 /// budget where its simplifier stalled above it; 12: positions on a
 /// 16-bit grid over each LOD's box and every stream meshopt-encoded
-/// (scene format 2), each LOD's error raised by what its vertices moved.
-pub const REVISION: u32 = 12;
+/// (scene format 2), each LOD's error raised by what its vertices moved;
+/// 13: each encoded LOD's position and normal bits in its record (format
+/// 2.1: a runtime sizes its device layout without reading the blob).
+pub const REVISION: u32 = 13;
 
 use std::path::Path;
 use std::time::Instant;

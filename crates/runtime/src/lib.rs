@@ -418,10 +418,10 @@ impl<'s> Runtime<'s> {
             progress(0, 0);
         }
         for (done, l) in (1..).zip(plan.pinned()) {
-            let mesh = scene.read_lod(l).map_err(|source| RuntimeError::Load {
-                source: Box::new(source),
-            })?;
-            let lod = gigawalk_gpu::DecodedLod::new(&mesh);
+            let lod =
+                gigawalk_gpu::DecodedLod::read(scene, l).map_err(|source| RuntimeError::Load {
+                    source: Box::new(source),
+                })?;
             for (s, d) in streams.iter_mut().zip(&devices) {
                 s.pin(d, &plan, l, &lod);
             }

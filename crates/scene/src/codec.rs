@@ -237,6 +237,116 @@ pub fn encode(s: &Streams, bits: u8, normal_bits: u8) -> Result<Encoded, String>
     })
 }
 
+/// Grid coordinates as stored: 16 bits an axis (the 4th zero) up to 16
+/// bits, else 32.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GridPositions {
+    U16(Vec<[u16; 4]>),
+    U32(Vec<[u32; 3]>),
+}
+
+impl GridPositions {
+    pub fn len(&self) -> usize {
+        match self {
+            GridPositions::U16(v) => v.len(),
+            GridPositions::U32(v) => v.len(),
+        }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Vertex `i`'s coordinates.
+    pub fn get(&self, i: usize) -> [u32; 3] {
+        match self {
+            GridPositions::U16(v) => [v[i][0] as u32, v[i][1] as u32, v[i][2] as u32],
+            GridPositions::U32(v) => v[i],
+        }
+    }
+}
+
+/// Octahedral normals as stored: 2 x snorm16, or 2 x snorm8 (the last
+/// two bytes zero).
+#[derive(Clone, Debug, PartialEq)]
+pub enum OctNormals {
+    Snorm16(Vec<[i16; 2]>),
+    Snorm8(Vec<[i8; 4]>),
+}
+
+/// One LOD's streams as an encoded blob stores them, decoded but not
+/// dequantized: what a renderer that reads grid coordinates itself takes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridStreams {
+    /// Position bits per axis ([`POSITION_BITS`]); every coordinate is
+    /// below 2^bits.
+    pub bits: u8,
+    /// Normal bits ([`NORMAL_BITS`]).
+    pub normal_bits: u8,
+    /// The grid's origin, relative to the LOD's origin.
+    pub origin: [f32; 3],
+    /// The grid's step per axis (0 on an axis the LOD is flat in).
+    pub step: [f32; 3],
+    pub positions: GridPositions,
+    pub normals: OctNormals,
+    /// Per-vertex colours, or none for a uniform colour.
+    pub colours: Option<Vec<[u8; 4]>>,
+    pub indices: Vec<u32>,
+}
+
+impl GridStreams {
+    /// Vertex `i`'s position relative to the LOD's origin, in f32 as
+    /// [`decode`] gives it (the writer measured what quantizing moved
+    /// with exactly this arithmetic).
+    pub fn position(&self, i: usize) -> [f32; 3] {
+        dequantize(self.origin, self.step, self.positions.get(i))
+    }
+
+    /// The smallest and the largest coordinate on each axis, `None`
+    /// without vertices. Dequantizing is monotonic on each axis, so the
+    /// two corners these give bound every decoded position.
+    pub fn extent(&self) -> Option<([u32; 3], [u32; 3])> {
+        let mut lo = [u32::MAX; 3];
+        let mut hi = [0u32; 3];
+        for i in 0..self.positions.len() {
+            let q = self.positions.get(i);
+            for a in 0..3 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
+            }
+        }
+        (!self.positions.is_empty()).then_some((lo, hi))
+    }
+
+    /// The corners of [`GridStreams::extent`], dequantized.
+    pub fn corners(&self) -> Option<([f32; 3], [f32; 3])> {
+        self.extent().map(|(lo, hi)| {
+            (
+                dequantize(self.origin, self.step, lo),
+                dequantize(self.origin, self.step, hi),
+            )
+        })
+    }
+
+    /// Vertex `i`'s normal, a unit vector.
+    pub fn normal(&self, i: usize) -> [f32; 3] {
+        let top = snorm_top(self.normal_bits);
+        match &self.normals {
+            OctNormals::Snorm16(n) => decode_normal_snorm(n[i], top),
+            OctNormals::Snorm8(n) => decode_normal_snorm([n[i][0] as i16, n[i][1] as i16], top),
+        }
+    }
+
+    /// Dequantized streams: what [`decode`] returns.
+    pub fn into_streams(self) -> Streams {
+        let n = self.positions.len();
+        Streams {
+            positions: (0..n).map(|i| self.position(i)).collect(),
+            normals: (0..n).map(|i| self.normal(i)).collect(),
+            colours: self.colours,
+            indices: self.indices,
+        }
+    }
+}
+
 /// Decodes a blob for `vertices` vertices and `triangles` triangles, with
 /// per-vertex colours when `colours`. Any inconsistency is an error saying
 /// what (the blob's CRC has passed, so this is a writer's bug or a crafted
@@ -247,6 +357,17 @@ pub fn decode(
     triangles: usize,
     colours: bool,
 ) -> Result<Streams, String> {
+    decode_grid(blob, vertices, triangles, colours).map(GridStreams::into_streams)
+}
+
+/// [`decode`] without dequantizing: positions stay grid coordinates and
+/// normals stay octahedral, as stored.
+pub fn decode_grid(
+    blob: &[u8],
+    vertices: usize,
+    triangles: usize,
+    colours: bool,
+) -> Result<GridStreams, String> {
     if blob.len() < HEADER_LEN {
         return Err(format!(
             "encoded blob of {} bytes is shorter than its {HEADER_LEN}-byte header",
@@ -310,38 +431,32 @@ pub fn decode(
             "{vertices} vertices for {triangles} triangles: more than they can use"
         ));
     }
-    let wide = bits > 16;
     let err = |what: &str, e: meshopt::Error| format!("the {what} stream does not decode: {e:?}");
-    let quantized: Vec<[u32; 3]> = if wide {
-        meshopt::decode_vertex_buffer::<[u32; 3]>(pos, vertices).map_err(|e| err("positions", e))?
+    let positions = if bits > 16 {
+        GridPositions::U32(
+            meshopt::decode_vertex_buffer::<[u32; 3]>(pos, vertices)
+                .map_err(|e| err("positions", e))?,
+        )
     } else {
-        meshopt::decode_vertex_buffer::<[u16; 4]>(pos, vertices)
-            .map_err(|e| err("positions", e))?
-            .into_iter()
-            .map(|q| [q[0] as u32, q[1] as u32, q[2] as u32])
-            .collect()
+        GridPositions::U16(
+            meshopt::decode_vertex_buffer::<[u16; 4]>(pos, vertices)
+                .map_err(|e| err("positions", e))?,
+        )
     };
     let top = ((1u64 << bits) - 1) as u32;
-    if let Some(i) = quantized.iter().position(|q| q.iter().any(|&c| c > top)) {
+    if let Some(i) = (0..vertices).find(|&i| positions.get(i).iter().any(|&c| c > top)) {
         return Err(format!("vertex {i} lies beyond the {bits}-bit grid"));
     }
-    let positions = quantized
-        .into_iter()
-        .map(|q| dequantize(origin, step, q))
-        .collect();
-    let ntop = snorm_top(normal_bits);
     let normals = if normal_bits == 16 {
-        meshopt::decode_vertex_buffer::<[i16; 2]>(nor, vertices)
-            .map_err(|e| err("normals", e))?
-            .into_iter()
-            .map(|n| decode_normal_snorm(n, ntop))
-            .collect()
+        OctNormals::Snorm16(
+            meshopt::decode_vertex_buffer::<[i16; 2]>(nor, vertices)
+                .map_err(|e| err("normals", e))?,
+        )
     } else {
-        meshopt::decode_vertex_buffer::<[i8; 4]>(nor, vertices)
-            .map_err(|e| err("normals", e))?
-            .into_iter()
-            .map(|n| decode_normal_snorm([n[0] as i16, n[1] as i16], ntop))
-            .collect()
+        OctNormals::Snorm8(
+            meshopt::decode_vertex_buffer::<[i8; 4]>(nor, vertices)
+                .map_err(|e| err("normals", e))?,
+        )
     };
     let colours = if colours {
         Some(
@@ -353,7 +468,11 @@ pub fn decode(
     };
     let indices =
         meshopt::decode_index_buffer::<u32>(idx, 3 * triangles).map_err(|e| err("indices", e))?;
-    Ok(Streams {
+    Ok(GridStreams {
+        bits,
+        normal_bits,
+        origin,
+        step,
         positions,
         normals,
         colours,

@@ -10,13 +10,15 @@
 
 use glam::DVec3;
 
-use crate::{Aabb, IndexFormat, LodInfo, Node};
+use crate::{Aabb, GridBits, IndexFormat, LodInfo, Node};
 
 pub const MAGIC: [u8; 8] = *b"GIGAWALK";
 pub const MAJOR: u16 = 2;
 /// The oldest major version this reader reads.
 pub const OLDEST_MAJOR: u16 = 1;
-pub const MINOR: u16 = 0;
+/// Minor 1 records an encoded LOD's bits in its flags (bits 8-15: position
+/// bits, 16-23: normal bits); 2.0 files leave them zero.
+pub const MINOR: u16 = 1;
 
 pub const HEADER_LEN: usize = 64;
 pub const TOC_ENTRY_LEN: usize = 32;
@@ -42,7 +44,12 @@ pub const LOD_VERTEX_COLOURS: u32 = 2;
 /// LOD flag (format 2): the blob is quantized and meshopt-encoded
 /// (`codec.rs`); else positions are f32 and every stream raw.
 pub const LOD_ENCODED: u32 = 4;
-pub const LOD_KNOWN_FLAGS: u32 = LOD_U32_INDICES | LOD_VERTEX_COLOURS | LOD_ENCODED;
+/// LOD flags (format 2.1, encoded LODs): position bits in bits 8-15,
+/// normal bits in bits 16-23; zero when unstated.
+pub const LOD_POSITION_BITS_SHIFT: u32 = 8;
+pub const LOD_NORMAL_BITS_SHIFT: u32 = 16;
+pub const LOD_BITS_MASK: u32 = 0xff_ff00;
+pub const LOD_KNOWN_FLAGS: u32 = LOD_U32_INDICES | LOD_VERTEX_COLOURS | LOD_ENCODED | LOD_BITS_MASK;
 
 pub fn section_name(tag: [u8; 4]) -> String {
     tag.iter()
@@ -274,6 +281,10 @@ pub fn encode_lod(p: &mut Put, l: &LodInfo) {
     if l.encoded {
         flags |= LOD_ENCODED;
     }
+    if let Some(g) = l.grid {
+        flags |= (g.position as u32) << LOD_POSITION_BITS_SHIFT
+            | (g.normal as u32) << LOD_NORMAL_BITS_SHIFT;
+    }
     p.u32(flags);
     p.bytes(&l.uniform_colour.unwrap_or([0; 4]));
     p.u32(l.checksum);
@@ -309,6 +320,13 @@ pub fn decode_lod(g: &mut Get) -> (LodInfo, u32) {
             Some(colour)
         },
         encoded: flags & LOD_ENCODED != 0,
+        grid: match (
+            (flags >> LOD_POSITION_BITS_SHIFT) as u8,
+            (flags >> LOD_NORMAL_BITS_SHIFT) as u8,
+        ) {
+            (0, 0) => None,
+            (position, normal) => Some(GridBits { position, normal }),
+        },
         offset,
         len,
         checksum,

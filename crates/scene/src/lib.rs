@@ -38,7 +38,9 @@ pub use atomic::{
 pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};
-pub use read::{ReadAt, SceneReader, SectionInfo};
-pub use skeleton::{IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE};
+pub use read::{GridLod, ReadAt, SceneReader, SectionInfo, StoredLod};
+pub use skeleton::{
+    GridBits, IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE,
+};
 pub use stats::{DepthLevels, NodeSwitch, PositionStats, SceneStats, SwitchFactors};
 pub use write::{SceneWriter, WriteSummary, DEFAULT_POSITION_BITS};

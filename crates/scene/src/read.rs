@@ -7,7 +7,7 @@ use std::fs::File;
 use std::io;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::error::{ReadError, ReadErrorKind};
 use crate::format::{self, Get, Header, TocEntry};
@@ -192,13 +192,20 @@ impl<R: ReadAt> SceneReader<R> {
     /// Reads, checks (checksum, index range, geometry inside its node's
     /// box) and decodes one LOD's geometry.
     pub fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
+        self.read_lod_stored(lod).map(StoredLod::into_mesh)
+    }
+
+    /// [`SceneReader::read_lod`] without dequantizing an encoded LOD:
+    /// its positions stay on their grid (what a renderer that reads grid
+    /// coordinates takes), with the same checks.
+    pub fn read_lod_stored(&self, lod: u32) -> Result<StoredLod, ReadError> {
         self.read_lod_kind(lod).map_err(|kind| ReadError {
             file: self.file.clone(),
             kind,
         })
     }
 
-    fn read_lod_kind(&self, lod: u32) -> Result<LodMesh, ReadErrorKind> {
+    fn read_lod_kind(&self, lod: u32) -> Result<StoredLod, ReadErrorKind> {
         let count = self.skeleton.lods().len() as u32;
         let info = *self
             .skeleton
@@ -222,25 +229,67 @@ impl<R: ReadAt> SceneReader<R> {
             });
         }
         let nv = info.vertices as usize;
-        let crate::codec::Streams {
-            positions,
-            normals,
-            colours,
-            indices,
-        } = if info.encoded {
-            crate::codec::decode(
+        let bounds = self.skeleton.node(node).bounds;
+        let outside = |i: usize, p: [f32; 3]| {
+            let w = info.origin + Vec3::from(p).as_dvec3();
+            (!bounds.contains_point(w))
+                .then(|| err(format!("vertex {i} at {w} lies outside the node's box")))
+        };
+        let stored = if info.encoded {
+            let streams = crate::codec::decode_grid(
                 &blob,
                 nv,
                 info.triangles as usize,
                 info.uniform_colour.is_none(),
             )
-            .map_err(err)?
+            .map_err(err)?;
+            if let Some(g) = info.grid {
+                if (g.position, g.normal) != (streams.bits, streams.normal_bits) {
+                    return Err(err(format!(
+                        "the record states {} position and {} normal bits, the blob {} and {}",
+                        g.position, g.normal, streams.bits, streams.normal_bits
+                    )));
+                }
+            }
+            // Dequantizing is monotonic per axis and a box is checked
+            // axis by axis: the extent's two corners lie inside exactly
+            // when every vertex does (the vertex loop only names one).
+            if let Some((lo, hi)) = streams.corners() {
+                if outside(0, lo).is_some() || outside(0, hi).is_some() {
+                    if let Some(e) = (0..nv).find_map(|i| outside(i, streams.position(i))) {
+                        return Err(e);
+                    }
+                }
+            }
+            StoredLod::Grid(GridLod {
+                origin: info.origin,
+                uniform_colour: info.uniform_colour,
+                streams,
+            })
         } else {
-            raw_streams(&blob, &info)
+            let s = raw_streams(&blob, &info);
+            if let Some(e) = s
+                .positions
+                .iter()
+                .enumerate()
+                .find_map(|(i, p)| outside(i, *p))
+            {
+                return Err(e);
+            }
+            StoredLod::Mesh(LodMesh {
+                origin: info.origin,
+                colours: match (info.uniform_colour, s.colours) {
+                    (Some(c), _) => Colours::Uniform(c),
+                    (None, c) => Colours::PerVertex(c.unwrap_or_default()),
+                },
+                positions: s.positions,
+                normals: s.normals,
+                indices: s.indices,
+            })
         };
-        let colours = match (info.uniform_colour, colours) {
-            (Some(c), _) => Colours::Uniform(c),
-            (None, c) => Colours::PerVertex(c.unwrap_or_default()),
+        let indices = match &stored {
+            StoredLod::Grid(g) => &g.streams.indices,
+            StoredLod::Mesh(m) => &m.indices,
         };
         if let Some(i) = indices.iter().position(|&v| v as usize >= nv) {
             return Err(err(format!(
@@ -248,22 +297,7 @@ impl<R: ReadAt> SceneReader<R> {
                 indices[i]
             )));
         }
-        let bounds = self.skeleton.node(node).bounds;
-        for (i, p) in positions.iter().enumerate() {
-            let w = info.origin + Vec3::from(*p).as_dvec3();
-            if !bounds.contains_point(w) {
-                return Err(err(format!(
-                    "vertex {i} at {w} lies outside the node's box"
-                )));
-            }
-        }
-        Ok(LodMesh {
-            origin: info.origin,
-            positions,
-            normals,
-            colours,
-            indices,
-        })
+        Ok(stored)
     }
 
     /// Reads every byte: checks the geometry section's checksum, every
@@ -530,7 +564,7 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
         let (l, flags) = format::decode_lod(&mut g);
         // Format 1 has no encoded LODs.
         let known = match h.major {
-            1 => format::LOD_KNOWN_FLAGS & !format::LOD_ENCODED,
+            1 => format::LOD_KNOWN_FLAGS & !format::LOD_ENCODED & !format::LOD_BITS_MASK,
             _ => format::LOD_KNOWN_FLAGS,
         };
         if flags & !known != 0 {
@@ -585,6 +619,58 @@ fn read_bytes<R: ReadAt>(src: &R, offset: u64, len: u64) -> Result<Vec<u8>, Read
 
 /// A raw blob's streams (format 1's layout; its length was checked
 /// against the record's counts when the file was opened).
+/// One LOD as its blob stores it ([`SceneReader::read_lod_stored`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StoredLod {
+    /// An encoded LOD: positions on their grid, octahedral normals.
+    Grid(GridLod),
+    /// A raw LOD (f32 positions), decoded.
+    Mesh(LodMesh),
+}
+
+impl StoredLod {
+    /// The LOD decoded, as [`SceneReader::read_lod`] returns it.
+    pub fn into_mesh(self) -> LodMesh {
+        match self {
+            StoredLod::Mesh(m) => m,
+            StoredLod::Grid(g) => {
+                let uniform = g.uniform_colour;
+                let s = g.streams.into_streams();
+                LodMesh {
+                    origin: g.origin,
+                    colours: match (uniform, s.colours) {
+                        (Some(c), _) => Colours::Uniform(c),
+                        (None, c) => Colours::PerVertex(c.unwrap_or_default()),
+                    },
+                    positions: s.positions,
+                    normals: s.normals,
+                    indices: s.indices,
+                }
+            }
+        }
+    }
+}
+
+/// An encoded LOD, decoded but not dequantized.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridLod {
+    /// World point the grid's origin is relative to.
+    pub origin: DVec3,
+    /// The LOD's colour when it has one (`streams.colours` is then `None`).
+    pub uniform_colour: Option<[u8; 4]>,
+    pub streams: crate::codec::GridStreams,
+}
+
+impl GridLod {
+    /// Vertex `i`'s sRGB-encoded RGBA colour.
+    pub fn colour(&self, i: usize) -> [u8; 4] {
+        match (&self.streams.colours, self.uniform_colour) {
+            (Some(c), _) => c[i],
+            (None, c) => c.unwrap_or([255; 4]),
+        }
+    }
+}
+
 fn raw_streams(blob: &[u8], info: &crate::LodInfo) -> crate::codec::Streams {
     let nv = info.vertices as usize;
     let mut g = Get::new(blob);

@@ -81,11 +81,25 @@ pub struct LodInfo {
     /// Whether the blob is quantized and meshopt-encoded (format 2's
     /// default; docs/scene-format.md), else raw f32 positions.
     pub encoded: bool,
+    /// An encoded LOD's grid and normal bits, as its record states them
+    /// (format 2.1; `None` for raw LODs and in 2.0 files, whose blobs
+    /// alone say). A renderer sizes the LOD's device layout from this
+    /// without reading the blob.
+    pub grid: Option<GridBits>,
     /// Byte offset of the geometry blob from the start of the file.
     pub offset: u64,
     pub len: u64,
     /// CRC-32 of the geometry blob, checked when the LOD is read.
     pub checksum: u32,
+}
+
+/// The bits of an encoded LOD: grid positions per axis
+/// ([`codec::POSITION_BITS`](crate::codec::POSITION_BITS)) and octahedral
+/// normals ([`codec::NORMAL_BITS`](crate::codec::NORMAL_BITS)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridBits {
+    pub position: u8,
+    pub normal: u8,
 }
 
 /// Provenance: where a scene came from and how it was made. Stored as JSON.
@@ -256,6 +270,7 @@ mod tests {
             index_format: IndexFormat::U16,
             uniform_colour: None,
             encoded: false,
+            grid: None,
             offset: 0,
             len: 0,
             checksum: 0,

@@ -235,6 +235,19 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<(), ReadErrorKind> {
         if l.triangles == 0 || l.vertices == 0 {
             return Err(lod_err("has no triangles or no vertices".into()));
         }
+        if let Some(g) = l.grid {
+            if !l.encoded
+                || !crate::codec::POSITION_BITS.contains(&g.position)
+                || !crate::codec::NORMAL_BITS.contains(&g.normal)
+            {
+                return Err(lod_err(format!(
+                    "flags state {} position bits and {} normal bits for {} LOD",
+                    g.position,
+                    g.normal,
+                    if l.encoded { "an encoded" } else { "a raw" }
+                )));
+            }
+        }
         if l.encoded && l.len < crate::codec::HEADER_LEN as u64 {
             return Err(lod_err(format!(
                 "encoded geometry of {} bytes is shorter than its header",

@@ -345,6 +345,10 @@ fn encode_lod(
         index_format: IndexFormat::for_vertex_count(nv as u32),
         uniform_colour,
         encoded: position_bits.is_some(),
+        grid: position_bits.map(|position| crate::GridBits {
+            position,
+            normal: normal_bits,
+        }),
         offset: 0,
         len: 0,
         checksum: 0,

@@ -374,8 +374,9 @@ fn newer_major_version_is_refused_by_name() {
         .to_string();
     assert!(
         e.starts_with(&format!(
-            "future.gwk: file is format version {}.0",
-            gigawalk_scene::FORMAT_MAJOR + 1
+            "future.gwk: file is format version {}.{}",
+            gigawalk_scene::FORMAT_MAJOR + 1,
+            gigawalk_scene::FORMAT_MINOR
         )) && e.contains("newer gigawalk"),
         "{e}"
     );

@@ -80,6 +80,7 @@ mod tests {
             index_format: IndexFormat::U16,
             uniform_colour: None,
             encoded: false,
+            grid: None,
             offset: 0,
             len: 0,
             checksum: 0,

@@ -1,7 +1,8 @@
 //! OR: the occluders' depth at its own resolution, read back for the HZB.
 
 use crate::passes::{
-    depth_attachment, pipeline, target, DepthImage, Drawer, ReadBack, View, DEPTH_FORMAT,
+    depth_attachment, pipeline, target, DepthImage, Drawer, ReadBack, ScenePipelines, View,
+    DEPTH_FORMAT,
 };
 use crate::residency::Residency;
 use crate::shader_types;
@@ -10,7 +11,7 @@ use crate::{GpuContext, GpuError};
 /// OR: renders occluders' depth at its own resolution and reads it back.
 pub struct DepthPass {
     drawer: Drawer,
-    pipeline: wgpu::RenderPipeline,
+    pipelines: ScenePipelines,
     depth: wgpu::Texture,
     readback: ReadBack,
     width: u32,
@@ -20,7 +21,7 @@ pub struct DepthPass {
 impl DepthPass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> DepthPass {
         let drawer = Drawer::new(ctx, "occluder depth");
-        let pipeline = pipeline(
+        let pipelines = pipeline(
             ctx,
             &drawer,
             "occluder depth",
@@ -37,7 +38,7 @@ impl DepthPass {
                 DEPTH_FORMAT,
             ),
             drawer,
-            pipeline,
+            pipelines,
             readback: ReadBack::default(),
             width: width.max(1),
             height: height.max(1),
@@ -64,8 +65,8 @@ impl DepthPass {
                 depth_stencil_attachment: Some(depth_attachment(&dv, true)),
                 ..Default::default()
             });
-            pass.set_pipeline(&self.pipeline);
-            self.drawer.record(&mut pass, residency, &draws);
+            self.drawer
+                .record(&mut pass, residency, &draws, &self.pipelines);
         }
         ctx.queue.submit([enc.finish()]);
         self.readback

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use crate::passes::View;
+use crate::passes::{ScenePipelines, View};
 use crate::residency::{LodRange, Residency};
 use crate::shader_types::{DrawInstance, FrameUniforms};
 use crate::GpuContext;
@@ -92,7 +92,10 @@ impl Drawer {
         residency: &dyn Residency,
         lods: &[u32],
     ) -> Vec<(LodRange, u32)> {
-        let draws: Vec<LodRange> = lods.iter().filter_map(|&l| residency.range(l)).collect();
+        let mut draws: Vec<LodRange> = lods.iter().filter_map(|&l| residency.range(l)).collect();
+        // One pipeline switch at most: draws grouped by layout, in the
+        // caller's order within each.
+        draws.sort_by_key(|r| r.layout as u8);
         let size = std::mem::size_of::<DrawInstance>() as u64;
         let needed = self.used + draws.len() as u64;
         if needed * size > self.instances.size() {
@@ -104,6 +107,7 @@ impl Drawer {
             .iter()
             .map(|r| DrawInstance {
                 offset: (r.origin - view.eye).as_vec3().extend(0.0).to_array(),
+                scale: [r.scale[0], r.scale[1], r.scale[2], 0.0],
             })
             .collect();
         ctx.queue.write_buffer(
@@ -120,21 +124,31 @@ impl Drawer {
             .collect()
     }
 
+    /// Records `draws` (from [`Drawer::prepare`]) with the pipeline of
+    /// each one's vertex layout.
     pub(crate) fn record(
         &self,
         pass: &mut wgpu::RenderPass,
         residency: &dyn Residency,
         draws: &[(LodRange, u32)],
+        pipelines: &ScenePipelines,
     ) {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(1, self.instances.slice(..));
-        let mut bound = None;
+        let (mut layout, mut vertices, mut indices) = (None, None, None);
         for (r, instance) in draws {
-            if bound != Some(r.buffer) {
+            if layout != Some(r.layout) {
+                pass.set_pipeline(pipelines.get(r.layout));
+                layout = Some(r.layout);
+            }
+            if vertices != Some(r.buffer) || indices != Some((r.buffer, r.index_format)) {
                 let (v, i) = residency.buffers(r.buffer);
-                pass.set_vertex_buffer(0, v.slice(..));
-                pass.set_index_buffer(i.slice(..), wgpu::IndexFormat::Uint32);
-                bound = Some(r.buffer);
+                if vertices != Some(r.buffer) {
+                    pass.set_vertex_buffer(0, v.slice(..));
+                    vertices = Some(r.buffer);
+                }
+                pass.set_index_buffer(i.slice(..), r.index_format);
+                indices = Some((r.buffer, r.index_format));
             }
             pass.draw_indexed(
                 r.first_index..r.first_index + r.index_count,

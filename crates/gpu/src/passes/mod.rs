@@ -20,7 +20,7 @@ use crate::GpuContext;
 
 pub use depth::DepthPass;
 pub(crate) use drawer::Drawer;
-pub(crate) use pipelines::{fullscreen_pipeline, pipeline};
+pub(crate) use pipelines::{fullscreen_pipeline, pipeline, ScenePipelines};
 pub(crate) use readback::{device_error, map_and_wait, ReadBack};
 pub use visible::VisiblePass;
 

@@ -3,8 +3,18 @@
 //! pipeline that draws one triangle (the blit to a window, the depth copy).
 
 use crate::passes::{Drawer, DEPTH_COMPARE, DEPTH_FORMAT};
-use crate::shader_types;
+use crate::shader_types::{self, VertexLayout};
 use crate::GpuContext;
+
+/// A scene pipeline for each vertex layout (the same pass, the entry
+/// point that reads that layout).
+pub(crate) struct ScenePipelines([wgpu::RenderPipeline; 2]);
+
+impl ScenePipelines {
+    pub(crate) fn get(&self, layout: VertexLayout) -> &wgpu::RenderPipeline {
+        &self.0[layout as usize]
+    }
+}
 
 pub(crate) fn pipeline(
     ctx: &GpuContext,
@@ -13,7 +23,7 @@ pub(crate) fn pipeline(
     wgsl: &str,
     colour: Option<wgpu::TextureFormat>,
     polygon_mode: wgpu::PolygonMode,
-) -> wgpu::RenderPipeline {
+) -> ScenePipelines {
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -25,43 +35,45 @@ pub(crate) fn pipeline(
         blend: None,
         write_mask: wgpu::ColorWrites::ALL,
     })];
-    ctx.device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(&drawer.layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(shader_types::vertex_layout()),
-                    Some(shader_types::instance_layout()),
-                ],
-            },
-            primitive: wgpu::PrimitiveState {
-                // No culling: imported winding is not trusted, and OR must
-                // write every occluder's depth.
-                cull_mode: None,
-                polygon_mode,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(DEPTH_COMPARE),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: colour.map(|_| wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+    ScenePipelines(VertexLayout::ALL.map(|layout| {
+        ctx.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&drawer.layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(layout.entry_point()),
+                    compilation_options: Default::default(),
+                    buffers: &[
+                        Some(layout.buffer_layout()),
+                        Some(shader_types::instance_layout()),
+                    ],
+                },
+                primitive: wgpu::PrimitiveState {
+                    // No culling: imported winding is not trusted, and OR must
+                    // write every occluder's depth.
+                    cull_mode: None,
+                    polygon_mode,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(DEPTH_COMPARE),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: colour.map(|_| wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    }))
 }
 
 /// A pipeline that draws one fullscreen triangle (`vs_main`, no vertex

@@ -3,7 +3,7 @@
 
 use crate::passes::{
     depth_attachment, device_error, pipeline, target, DrawStyle, Drawer, FrameImage, ReadBack,
-    View, COLOUR_FORMAT, DEPTH_FORMAT,
+    ScenePipelines, View, COLOUR_FORMAT, DEPTH_FORMAT,
 };
 use crate::residency::{LodRange, Residency};
 use crate::shader_types;
@@ -13,9 +13,9 @@ use crate::{GpuContext, GpuError};
 /// colour target (or a caller-provided view, e.g. a window's surface).
 pub struct VisiblePass {
     drawer: Drawer,
-    pipeline: wgpu::RenderPipeline,
-    /// The line-mode pipeline, where the device supports it.
-    wire_pipeline: Option<wgpu::RenderPipeline>,
+    pipelines: ScenePipelines,
+    /// The line-mode pipelines, where the device supports them.
+    wire_pipelines: Option<ScenePipelines>,
     style: DrawStyle,
     warned_no_wireframe: bool,
     colour: wgpu::Texture,
@@ -53,12 +53,12 @@ impl VisiblePass {
                 mode,
             )
         };
-        let pipeline = visible("visible", wgpu::PolygonMode::Fill);
-        let wire_pipeline = ctx
+        let pipelines = visible("visible", wgpu::PolygonMode::Fill);
+        let wire_pipelines = ctx
             .supports_wireframe()
             .then(|| visible("visible wireframe", wgpu::PolygonMode::Line));
         VisiblePass {
-            wire_pipeline,
+            wire_pipelines,
             style: DrawStyle::Shaded,
             warned_no_wireframe: false,
             colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
@@ -66,7 +66,7 @@ impl VisiblePass {
             colour_readback: ReadBack::default(),
             depth_readback: ReadBack::default(),
             drawer,
-            pipeline,
+            pipelines,
             width,
             height,
             cleared: false,
@@ -94,7 +94,7 @@ impl VisiblePass {
     /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
     pub fn begin(&mut self, ctx: &GpuContext, view: &View, style: DrawStyle) {
         self.style = match style {
-            DrawStyle::Wireframe if self.wire_pipeline.is_none() => {
+            DrawStyle::Wireframe if self.wire_pipelines.is_none() => {
                 if !self.warned_no_wireframe {
                     tracing::warn!(
                         "{}: no POLYGON_MODE_LINE, drawing shaded instead of wireframe",
@@ -147,17 +147,16 @@ impl VisiblePass {
                 depth_stencil_attachment: Some(depth_attachment(&dv, !self.cleared)),
                 ..Default::default()
             });
-            let pipeline = match (self.style, &self.wire_pipeline) {
+            let pipelines = match (self.style, &self.wire_pipelines) {
                 (DrawStyle::Wireframe, Some(wire)) => wire,
-                _ => &self.pipeline,
+                _ => &self.pipelines,
             };
-            pass.set_pipeline(pipeline);
             if let Some([x, y, w, h]) = self.scissor {
                 let (tw, th) = (self.width, self.height);
                 let (x, y) = (x.min(tw), y.min(th));
                 pass.set_scissor_rect(x, y, w.min(tw - x), h.min(th - y));
             }
-            self.drawer.record(&mut pass, residency, &draws);
+            self.drawer.record(&mut pass, residency, &draws, pipelines);
         }
         self.cleared = true;
         ctx.queue.submit([enc.finish()]);

@@ -76,10 +76,12 @@ pub(crate) fn loader(
             continue;
         };
         pending.remove(&lod);
-        let mesh = source.read_lod(lod).map_err(|source| RuntimeError::Load {
-            source: Box::new(source),
-        })?;
-        let loaded: Loaded = Arc::new((lod, DecodedLod::new(&mesh)));
+        let stored = source
+            .read_lod_stored(lod)
+            .map_err(|source| RuntimeError::Load {
+                source: Box::new(source),
+            })?;
+        let loaded: Loaded = Arc::new((lod, DecodedLod::from_stored(stored)));
         // A stage that has finished (OR at the end of the cameras) closes
         // its inbox; the others still take loads.
         devices.retain(|d| d.send(loaded.clone()).is_ok());

@@ -25,10 +25,8 @@
 use std::sync::{Arc, Mutex};
 
 use crossbeam_channel::{Receiver, Sender};
-use gigawalk_gpu::{
-    DecodedLod, GpuContext, Residency, ResidentGeometry, INDEX_BYTES, VERTEX_BYTES,
-};
-use gigawalk_scene::{LodInfo, LodMesh, ReadAt, ReadError, SceneReader, Skeleton};
+use gigawalk_gpu::{DecodedLod, GpuContext, Residency, ResidentGeometry};
+use gigawalk_scene::{LodInfo, LodMesh, ReadAt, ReadError, SceneReader, Skeleton, StoredLod};
 
 mod loader;
 mod plan;
@@ -44,6 +42,11 @@ pub(crate) use prefetch::Prefetch;
 /// Where LODs are read from while a walk runs: a scene file.
 pub trait LodSource: Sync {
     fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError>;
+    /// The LOD as stored (an encoded LOD not dequantized: the loader
+    /// hands grid coordinates to the devices as they are).
+    fn read_lod_stored(&self, lod: u32) -> Result<StoredLod, ReadError> {
+        self.read_lod(lod).map(StoredLod::Mesh)
+    }
     /// The scene's stored occluders (`None`: the file has none).
     fn occluders(
         &self,
@@ -64,6 +67,9 @@ pub trait LodSource: Sync {
 impl<R: ReadAt + Sync> LodSource for SceneReader<R> {
     fn read_lod(&self, lod: u32) -> Result<LodMesh, ReadError> {
         SceneReader::read_lod(self, lod)
+    }
+    fn read_lod_stored(&self, lod: u32) -> Result<StoredLod, ReadError> {
+        SceneReader::read_lod_stored(self, lod)
     }
     fn occluders(
         &self,
@@ -105,28 +111,16 @@ pub(crate) const REQUEST_QUEUE: usize = 4096;
 /// bounds the host memory in flight to tens of MB.
 pub(crate) const INBOX: usize = 1024;
 
-/// Device bytes a LOD takes: (vertices, indices).
-fn lod_bytes(l: &LodInfo) -> (u64, u64) {
-    (
-        l.vertices as u64 * VERTEX_BYTES,
-        l.triangles as u64 * 3 * INDEX_BYTES,
-    )
-}
-
-/// Device bytes the whole scene would take resident: (vertex, index).
-pub(crate) fn scene_bytes(skeleton: &Skeleton) -> (u64, u64) {
-    skeleton
-        .lods()
-        .iter()
-        .map(lod_bytes)
-        .fold((0, 0), |(v, i), (lv, li)| (v + lv, i + li))
+/// Device bytes a LOD takes (its vertex layout and index format as the
+/// record states them).
+fn lod_bytes(l: &LodInfo) -> u64 {
+    gigawalk_gpu::device_bytes(l)
 }
 
 /// Device bytes the whole scene takes resident on one device: a memory
 /// budget at least this large loads it whole.
 pub fn scene_device_bytes(skeleton: &Skeleton) -> u64 {
-    let (v, i) = scene_bytes(skeleton);
-    v + i
+    skeleton.lods().iter().map(lod_bytes).sum()
 }
 
 /// Per-frame streaming figures of the device that draws the visible set

@@ -34,8 +34,7 @@ impl Plan {
         while let Some(n) = queue.pop_front() {
             let node = skeleton.node(n);
             if let Some(l) = node.lods().last() {
-                let (v, i) = lod_bytes(&skeleton.lods()[l]);
-                let b = v + i;
+                let b = lod_bytes(&skeleton.lods()[l]);
                 if bytes + b > limit {
                     break;
                 }

@@ -39,10 +39,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         r.verify()?;
     }
     let s = SceneStats::of(&r);
+    let device = DeviceFigures::of(r.skeleton());
     if args.json {
+        let mut v = serde_json::to_value(&s).context("serialising stats")?;
+        if let Some(map) = v.as_object_mut() {
+            map.insert(
+                "device".into(),
+                serde_json::json!({
+                    "bytes": device.bytes,
+                    "triangles": device.triangles,
+                    "lods": device.lods,
+                    "compact_lods": device.compact_lods,
+                    "unstated_lods": device.unstated_lods,
+                }),
+            );
+        }
         out!(
             "{}",
-            serde_json::to_string_pretty(&s).context("serialising stats")?
+            serde_json::to_string_pretty(&v).context("serialising stats")?
         )?;
         return Ok(());
     }
@@ -62,6 +76,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         s.bytes_per_triangle
     )?;
     print_positions(&s)?;
+    out!(
+        "device      {} resident ({:.2} bytes a stored triangle): {} LODs in 12-byte compact \
+         vertices, {} in 20-byte wide ones{}",
+        human_bytes(device.bytes),
+        device.bytes as f64 / device.triangles.max(1) as f64,
+        device.compact_lods,
+        device.lods - device.compact_lods,
+        if device.unstated_lods > 0 {
+            format!(
+                " (the {} encoded LODs of this format 2.0 file do not state their bits and \
+                 are counted wide; preprocess again for exact figures)",
+                device.unstated_lods
+            )
+        } else {
+            String::new()
+        }
+    )?;
     out!("triangles   {}", s.triangles)?;
     out!(
         "nodes       {} ({} leaves, depth {}, up to {} LODs per node)",
@@ -116,6 +147,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         out!("  {k:<24} {v}")?;
     }
     Ok(())
+}
+
+/// What the scene takes on a device when every LOD is resident (what
+/// `--memory-budget all` loads), from the LOD records.
+struct DeviceFigures {
+    bytes: u64,
+    /// Triangles over every LOD.
+    triangles: u64,
+    lods: usize,
+    /// LODs drawn from their grid coordinates (12-byte vertices).
+    compact_lods: usize,
+    /// Encoded LODs whose records do not state their bits (format 2.0).
+    unstated_lods: usize,
+}
+
+impl DeviceFigures {
+    fn of(s: &gigawalk_scene::Skeleton) -> DeviceFigures {
+        let lods = s.lods();
+        DeviceFigures {
+            bytes: lods.iter().map(gigawalk_gpu::device_bytes).sum(),
+            triangles: lods.iter().map(|l| l.triangles as u64).sum(),
+            lods: lods.len(),
+            compact_lods: lods
+                .iter()
+                .filter(|l| {
+                    gigawalk_gpu::VertexLayout::of(l) == gigawalk_gpu::VertexLayout::Compact
+                })
+                .count(),
+            unstated_lods: lods
+                .iter()
+                .filter(|l| l.encoded && l.grid.is_none())
+                .count(),
+        }
+    }
 }
 
 /// How positions are stored, and what the grid's step means on screen:

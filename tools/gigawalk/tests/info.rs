@@ -202,6 +202,20 @@ fn lod_health_in_info_and_preprocess_stats() {
         assert!(ok, "{err}");
         serde_json::from_str(&json).unwrap()
     };
+    // ... and 8-bit normals: every LOD compact on a device, its bytes
+    // stated from the records.
+    let d = &p["device"];
+    let lods = d["lods"].as_u64().unwrap();
+    assert!(lods > 0 && d["compact_lods"].as_u64() == Some(lods), "{d}");
+    assert_eq!(d["unstated_lods"].as_u64(), Some(0));
+    let (bytes, triangles) = (
+        d["bytes"].as_u64().unwrap(),
+        d["triangles"].as_u64().unwrap(),
+    );
+    assert!(bytes > 12 * triangles / 2 && bytes < 40 * triangles, "{d}");
+    assert!(text.contains(&format!(
+        "{lods} LODs in 12-byte compact vertices, 0 in 20-byte"
+    )));
     let p = &p["positions"];
     assert_eq!(
         (p["bits"].as_u64(), p["raw_lods"].as_u64()),

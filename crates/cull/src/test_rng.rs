@@ -15,6 +15,7 @@ pub(crate) fn lod(error: f32, triangles: u32) -> LodInfo {
         uniform_colour: None,
         encoded: false,
         grid: None,
+        compressed: false,
         offset: 0,
         len: 0,
         checksum: 0,

@@ -14,6 +14,9 @@ use std::time::Instant;
 use gigawalk_gpu::{DecodedLod, VertexLayout};
 use gigawalk_scene::SceneReader;
 
+/// One way of reading a LOD into a device layout.
+type Read<'a> = dyn Fn(u32) -> Result<DecodedLod, gigawalk_scene::ReadError> + 'a;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).ok_or("usage: device_bytes SCENE")?;
     let r = SceneReader::open(std::path::Path::new(&path))?;
@@ -22,10 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let blobs: u64 = r.skeleton().lods().iter().map(|l| l.len).sum();
     let wide_lod = |l: u32| r.read_lod(l).map(|m| DecodedLod::new(&m));
     let own_lod = |l: u32| DecodedLod::read(&r, l);
-    let runs: [(
-        &str,
-        &dyn Fn(u32) -> Result<DecodedLod, gigawalk_scene::ReadError>,
-    ); 2] = [("device layout", &own_lod), ("wide layout", &wide_lod)];
+    let runs: [(&str, &Read); 2] = [("device layout", &own_lod), ("wide layout", &wide_lod)];
     println!(
         "{path}: {n} LODs, {triangles} triangles, {:.1} MB of blobs ({:.2} bytes a triangle)",
         blobs as f64 / 1e6,

@@ -202,6 +202,7 @@ pub(crate) fn write_scene(
     writer
         .set_position_bits(params.position_bits.bits())
         .and_then(|()| writer.set_normal_bits(params.normal_bits))
+        .and_then(|()| writer.set_compression(params.compress))
         .map_err(|e| PreprocessError::Write(e.into()))?;
     let (mut built, _) = build_role(model, params, &layout, &mut writer, progress, role)?;
     let t = Instant::now();

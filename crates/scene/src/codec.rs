@@ -37,6 +37,21 @@ pub const POSITION_BITS: std::ops::RangeInclusive<u8> = 8..=24;
 /// over the sphere; `gigawalk preprocess`'s default).
 pub const NORMAL_BITS: [u8; 2] = [16, 8];
 
+/// The most bytes an encoded blob of these counts can take (meshopt's
+/// bounds for the widest streams, with room to spare): what a reader
+/// lets a compressed blob decompress to.
+pub fn blob_limit(vertices: u32, triangles: u32, colours: bool) -> usize {
+    let v = vertices as u64;
+    let stream = |size: u64| 2 * v * size + 4096;
+    let total = HEADER_LEN as u64
+        + stream(12)
+        + stream(4)
+        + if colours { stream(4) } else { 0 }
+        + 16 * triangles as u64
+        + 64;
+    usize::try_from(total).unwrap_or(usize::MAX)
+}
+
 /// The largest snorm value of `bits` bits.
 fn snorm_top(bits: u8) -> f32 {
     ((1u32 << (bits - 1)) - 1) as f32

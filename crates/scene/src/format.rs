@@ -33,6 +33,9 @@ pub const TAG_NODES: [u8; 4] = *b"NODE";
 pub const TAG_LODS: [u8; 4] = *b"LODS";
 pub const TAG_GEOMETRY: [u8; 4] = *b"GEOM";
 pub const TAG_META: [u8; 4] = *b"META";
+/// The zstd dictionary of compressed blobs (format 2.1; present when
+/// the writer trained one).
+pub const TAG_DICTIONARY: [u8; 4] = *b"ZDIC";
 
 /// TOC flag: a reader that does not know this section may skip it.
 pub const SECTION_OPTIONAL: u32 = 1;
@@ -49,7 +52,10 @@ pub const LOD_ENCODED: u32 = 4;
 pub const LOD_POSITION_BITS_SHIFT: u32 = 8;
 pub const LOD_NORMAL_BITS_SHIFT: u32 = 16;
 pub const LOD_BITS_MASK: u32 = 0xff_ff00;
-pub const LOD_KNOWN_FLAGS: u32 = LOD_U32_INDICES | LOD_VERTEX_COLOURS | LOD_ENCODED | LOD_BITS_MASK;
+/// LOD flag (format 2.1): the encoded blob is zstd-compressed.
+pub const LOD_COMPRESSED: u32 = 8;
+pub const LOD_KNOWN_FLAGS: u32 =
+    LOD_U32_INDICES | LOD_VERTEX_COLOURS | LOD_ENCODED | LOD_COMPRESSED | LOD_BITS_MASK;
 
 pub fn section_name(tag: [u8; 4]) -> String {
     tag.iter()
@@ -281,6 +287,9 @@ pub fn encode_lod(p: &mut Put, l: &LodInfo) {
     if l.encoded {
         flags |= LOD_ENCODED;
     }
+    if l.compressed {
+        flags |= LOD_COMPRESSED;
+    }
     if let Some(g) = l.grid {
         flags |= (g.position as u32) << LOD_POSITION_BITS_SHIFT
             | (g.normal as u32) << LOD_NORMAL_BITS_SHIFT;
@@ -320,6 +329,7 @@ pub fn decode_lod(g: &mut Get) -> (LodInfo, u32) {
             Some(colour)
         },
         encoded: flags & LOD_ENCODED != 0,
+        compressed: flags & LOD_COMPRESSED != 0,
         grid: match (
             (flags >> LOD_POSITION_BITS_SHIFT) as u8,
             (flags >> LOD_NORMAL_BITS_SHIFT) as u8,

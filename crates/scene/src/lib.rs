@@ -26,6 +26,7 @@ pub mod occluders;
 pub mod path;
 mod read;
 mod skeleton;
+mod squeeze;
 mod stats;
 mod validate;
 mod write;

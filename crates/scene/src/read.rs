@@ -101,6 +101,8 @@ pub struct SceneReader<R = File> {
     optional: Vec<TocEntry>,
     file_len: u64,
     version: (u16, u16),
+    /// The zstd dictionary of compressed blobs (ZDIC), when there is one.
+    dictionary: Option<crate::squeeze::Dictionary>,
 }
 
 impl SceneReader<File> {
@@ -227,6 +229,15 @@ impl<R: ReadAt> SceneReader<R> {
                 offset: info.offset,
                 end: info.offset + info.len,
             });
+        }
+        if info.compressed {
+            let limit = crate::codec::blob_limit(
+                info.vertices,
+                info.triangles,
+                info.uniform_colour.is_none(),
+            );
+            blob =
+                crate::squeeze::decompress(&blob, self.dictionary.as_ref(), limit).map_err(err)?;
         }
         let nv = info.vertices as usize;
         let bounds = self.skeleton.node(node).bounds;
@@ -483,6 +494,7 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
                 format::TAG_LODS,
                 format::TAG_GEOMETRY,
                 format::TAG_META,
+                format::TAG_DICTIONARY,
             ]
             .contains(&e.tag)
     }) {
@@ -553,6 +565,13 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
         )
     })?;
     let geometry = find(format::TAG_GEOMETRY)?;
+    let dictionary = if toc.iter().any(|e| e.tag == format::TAG_DICTIONARY) {
+        Some(crate::squeeze::Dictionary::new(
+            checked(format::TAG_DICTIONARY)?.1,
+        ))
+    } else {
+        None
+    };
 
     let mut g = Get::new(&nodes_b);
     let nodes = (0..scene.nodes)
@@ -564,7 +583,10 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
         let (l, flags) = format::decode_lod(&mut g);
         // Format 1 has no encoded LODs.
         let known = match h.major {
-            1 => format::LOD_KNOWN_FLAGS & !format::LOD_ENCODED & !format::LOD_BITS_MASK,
+            1 => {
+                format::LOD_KNOWN_FLAGS
+                    & !(format::LOD_ENCODED | format::LOD_COMPRESSED | format::LOD_BITS_MASK)
+            }
             _ => format::LOD_KNOWN_FLAGS,
         };
         if flags & !known != 0 {
@@ -606,6 +628,7 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
             .collect(),
         file_len: actual,
         version: (h.major, h.minor),
+        dictionary,
     })
 }
 

@@ -86,6 +86,10 @@ pub struct LodInfo {
     /// alone say). A renderer sizes the LOD's device layout from this
     /// without reading the blob.
     pub grid: Option<GridBits>,
+    /// Whether the encoded blob is zstd-compressed after meshopt's codecs,
+    /// with the file's dictionary when it has one (format 2.1, section
+    /// ZDIC).
+    pub compressed: bool,
     /// Byte offset of the geometry blob from the start of the file.
     pub offset: u64,
     pub len: u64,
@@ -271,6 +275,7 @@ mod tests {
             uniform_colour: None,
             encoded: false,
             grid: None,
+            compressed: false,
             offset: 0,
             len: 0,
             checksum: 0,

@@ -235,6 +235,9 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<(), ReadErrorKind> {
         if l.triangles == 0 || l.vertices == 0 {
             return Err(lod_err("has no triangles or no vertices".into()));
         }
+        if l.compressed && !l.encoded {
+            return Err(lod_err("flags state a compressed raw blob".into()));
+        }
         if let Some(g) = l.grid {
             if !l.encoded
                 || !crate::codec::POSITION_BITS.contains(&g.position)
@@ -248,7 +251,7 @@ pub fn validate(s: &Skeleton, at: &Layout) -> Result<(), ReadErrorKind> {
                 )));
             }
         }
-        if l.encoded && l.len < crate::codec::HEADER_LEN as u64 {
+        if l.encoded && !l.compressed && l.len < crate::codec::HEADER_LEN as u64 {
             return Err(lod_err(format!(
                 "encoded geometry of {} bytes is shorter than its header",
                 l.len

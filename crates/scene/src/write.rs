@@ -42,6 +42,20 @@ pub struct SceneWriter {
     position_bits: Option<u8>,
     /// Bits of each octahedral normal coordinate in encoded LODs.
     normal_bits: u8,
+    /// zstd over encoded blobs.
+    squeeze: Squeeze,
+}
+
+/// Where the writer's zstd stage stands.
+enum Squeeze {
+    Off,
+    /// Encoded blobs held back (LOD, bytes) until there are enough to
+    /// train the dictionary on.
+    Sampling {
+        pending: Vec<(u32, Vec<u8>)>,
+        bytes: usize,
+    },
+    On(crate::squeeze::Squeezer),
 }
 
 /// Position bits a writer uses unless told otherwise: steps of 1/65535 of
@@ -78,7 +92,89 @@ impl SceneWriter {
             optional: Vec::new(),
             position_bits: Some(DEFAULT_POSITION_BITS),
             normal_bits: 16,
+            squeeze: Squeeze::Off,
         })
+    }
+
+    /// Compresses the encoded blobs of LODs added after this with zstd,
+    /// with a dictionary trained on the first few MB of them (stored
+    /// once, in the ZDIC section), where that makes a blob smaller; off
+    /// by default. Raw LODs are never compressed.
+    pub fn set_compression(&mut self, on: bool) -> Result<(), WriteError> {
+        match (&self.squeeze, on) {
+            (Squeeze::Off, true) => {
+                self.squeeze = Squeeze::Sampling {
+                    pending: Vec::new(),
+                    bytes: 0,
+                }
+            }
+            (Squeeze::Off, false) | (_, true) => {}
+            (_, false) => {
+                // What was held back is written as it is.
+                if let Squeeze::Sampling { pending, .. } =
+                    std::mem::replace(&mut self.squeeze, Squeeze::Off)
+                {
+                    for (lod, blob) in pending {
+                        self.put_blob(lod, &blob, false)?;
+                    }
+                }
+                self.squeeze = Squeeze::Off;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes `lod`'s stored blob at the end of the geometry and fills in
+    /// its record's place, length, checksum and compression.
+    fn put_blob(&mut self, lod: u32, blob: &[u8], compressed: bool) -> Result<(), WriteError> {
+        let l = &mut self.lods[lod as usize];
+        l.offset = self.pos;
+        l.len = blob.len() as u64;
+        l.checksum = crc32fast::hash(blob);
+        l.compressed = compressed;
+        self.geometry_crc.update(blob);
+        self.out.write_all(blob).map_err(|e| self.io_err(e))?;
+        self.pos += blob.len() as u64;
+        Ok(())
+    }
+
+    /// Compresses `blob` and writes whichever is smaller.
+    fn put_squeezed(
+        &mut self,
+        squeezer: &mut crate::squeeze::Squeezer,
+        lod: u32,
+        blob: &[u8],
+    ) -> Result<(), WriteError> {
+        let small = squeezer
+            .compress(blob)
+            .map_err(|detail| WriteError::BadMesh { lod, detail })?;
+        if small.len() < blob.len() {
+            self.put_blob(lod, &small, true)
+        } else {
+            self.put_blob(lod, blob, false)
+        }
+    }
+
+    /// Trains the dictionary on the blobs held back and writes them.
+    fn start_squeezing(&mut self) -> Result<(), WriteError> {
+        if !matches!(self.squeeze, Squeeze::Sampling { .. }) {
+            return Ok(());
+        }
+        let Squeeze::Sampling { pending, .. } = std::mem::replace(&mut self.squeeze, Squeeze::Off)
+        else {
+            return Ok(());
+        };
+        let samples: Vec<&[u8]> = pending.iter().map(|(_, b)| b.as_slice()).collect();
+        let mut squeezer =
+            crate::squeeze::Squeezer::train(&samples).map_err(|detail| WriteError::BadMesh {
+                lod: pending.first().map_or(0, |p| p.0),
+                detail,
+            })?;
+        for (lod, blob) in pending {
+            self.put_squeezed(&mut squeezer, lod, &blob)?;
+        }
+        self.squeeze = Squeeze::On(squeezer);
+        Ok(())
     }
 
     /// Stores the normals of encoded LODs added after this in 2 x 16 bits
@@ -122,16 +218,32 @@ impl SceneWriter {
         let (info, bounds, blob, moved) =
             encode_lod(mesh, error, self.position_bits, self.normal_bits)
                 .map_err(|detail| WriteError::BadMesh { lod, detail })?;
-        let info = LodInfo {
-            offset: self.pos,
-            ..info
-        };
-        self.geometry_crc.update(&blob);
-        self.out.write_all(&blob).map_err(|e| self.io_err(e))?;
-        self.pos += blob.len() as u64;
+        let encoded = info.encoded;
         self.lods.push(info);
         self.lod_bounds.push(bounds);
         self.moved.push(moved);
+        match std::mem::replace(&mut self.squeeze, Squeeze::Off) {
+            Squeeze::Sampling {
+                mut pending,
+                mut bytes,
+            } if encoded => {
+                bytes += blob.len();
+                pending.push((lod, blob));
+                self.squeeze = Squeeze::Sampling { pending, bytes };
+                if bytes >= crate::squeeze::SAMPLE_BYTES {
+                    self.start_squeezing()?;
+                }
+            }
+            Squeeze::On(mut squeezer) if encoded => {
+                let put = self.put_squeezed(&mut squeezer, lod, &blob);
+                self.squeeze = Squeeze::On(squeezer);
+                put?;
+            }
+            other => {
+                self.squeeze = other;
+                self.put_blob(lod, &blob, false)?;
+            }
+        }
         Ok(lod)
     }
 
@@ -147,6 +259,11 @@ impl SceneWriter {
         mut nodes: Vec<Node>,
         provenance: Provenance,
     ) -> Result<WriteSummary, WriteError> {
+        self.start_squeezing()?;
+        let dictionary = match &mut self.squeeze {
+            Squeeze::On(s) => s.dictionary.take(),
+            _ => None,
+        };
         grow_boxes(&mut nodes, &self.lod_bounds)?;
         let bounds = nodes.first().map(|n| n.bounds).unwrap_or(Aabb::EMPTY);
         let origin = if bounds.is_valid() {
@@ -196,6 +313,9 @@ impl SceneWriter {
         sections.push((format::TAG_LODS, p.0));
         let meta = serde_json::to_vec_pretty(&provenance).expect("provenance serialises");
         sections.push((format::TAG_META, meta));
+        if let Some(d) = dictionary {
+            sections.push((format::TAG_DICTIONARY, d));
+        }
 
         let flagged = sections
             .iter()
@@ -345,6 +465,7 @@ fn encode_lod(
         index_format: IndexFormat::for_vertex_count(nv as u32),
         uniform_colour,
         encoded: position_bits.is_some(),
+        compressed: false,
         grid: position_bits.map(|position| crate::GridBits {
             position,
             normal: normal_bits,

@@ -186,3 +186,132 @@ fn refresh_checksums(b: &mut [u8]) {
     let crc = crc32fast::hash(&b[..60]);
     b[60..64].copy_from_slice(&crc.to_le_bytes());
 }
+
+/// A scene of 150 leaf boxes with compressed blobs: enough of them for
+/// zstd to train a dictionary (ZDIC).
+fn compressed_scene(compress: bool) -> Vec<u8> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("z.gwk");
+    common::write_tree_opts(
+        &path,
+        &common::wide(150, glam::DVec3::new(1.0e6, -2.0, 3.0)),
+        Vec::new(),
+        compress,
+    );
+    std::fs::read(path).unwrap()
+}
+
+/// The LOD table's place and each record's (flags, offset, len).
+fn lod_records(b: &[u8]) -> (usize, Vec<(u32, usize, usize)>) {
+    let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+    let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
+    let (count, toc) = (u32_at(12) as usize, u64_at(16));
+    let section = |tag: &[u8]| {
+        (0..count)
+            .map(|e| toc + 32 * e)
+            .find(|&at| &b[at..at + 4] == tag)
+            .map(|at| (u64_at(at + 8), u64_at(at + 16)))
+    };
+    let (at, len) = section(b"LODS").unwrap();
+    let records = (0..len / 64)
+        .map(|i| {
+            let r = at + 64 * i;
+            (u32_at(r + 36), u64_at(r + 48), u64_at(r + 56))
+        })
+        .collect();
+    (at, records)
+}
+
+#[test]
+fn compressed_blobs_read_back_as_written() {
+    let (plain, packed) = (compressed_scene(false), compressed_scene(true));
+    assert!(
+        packed.len() < plain.len(),
+        "{} >= {}",
+        packed.len(),
+        plain.len()
+    );
+    let (_, records) = lod_records(&packed);
+    let compressed = records.iter().filter(|r| r.0 & 8 != 0).count();
+    assert!(
+        compressed > records.len() / 2,
+        "{compressed} of {}",
+        records.len()
+    );
+    let (a, b) = (
+        SceneReader::from_source(plain, "plain.gwk").unwrap(),
+        SceneReader::from_source(packed, "packed.gwk").unwrap(),
+    );
+    assert!(
+        b.sections().iter().any(|s| s.name == "ZDIC"),
+        "a dictionary was trained"
+    );
+    b.verify().unwrap();
+    for l in 0..a.skeleton().lods().len() as u32 {
+        assert_eq!(a.read_lod(l).unwrap(), b.read_lod(l).unwrap());
+    }
+}
+
+/// Rewritten bytes of compressed blobs (and of the dictionary) with every
+/// checksum fixed: each read is an error naming the LOD, or geometry that
+/// passes every check; never a panic.
+#[test]
+fn damaged_compressed_blobs_are_errors_naming_the_lod() {
+    let bytes = compressed_scene(true);
+    let (lods_at, records) = lod_records(&bytes);
+    let compressed: Vec<(usize, &(u32, usize, usize))> = records
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.0 & 8 != 0)
+        .collect();
+    let mut rng = XorShift::new(0x51ed_2705);
+    let (mut errors, tries) = (0, 400);
+    for t in 0..tries {
+        let mut b = bytes.clone();
+        let (lod, &(_, off, len)) = compressed[rng.next_u64() as usize % compressed.len()];
+        let at = off + rng.next_u64() as usize % len;
+        b[at] ^= 1 + (rng.next_u64() % 255) as u8;
+        if t % 2 == 0 {
+            // The frame's first bytes: magic, header, stated size.
+            let head = off + (rng.next_u64() as usize % 8).min(len - 1);
+            b[head] ^= 0x40;
+        }
+        let crc = crc32fast::hash(&b[off..off + len]);
+        let rec = lods_at + 64 * lod;
+        b[rec + 44..rec + 48].copy_from_slice(&crc.to_le_bytes());
+        refresh_checksums(&mut b);
+        let r = SceneReader::from_source(b, "damaged.gwk").unwrap();
+        if let Err(e) = r.read_lod(lod as u32) {
+            errors += 1;
+            let e = e.to_string();
+            assert!(e.contains(&format!("LOD {lod} ")), "{e}");
+        }
+    }
+    assert!(
+        errors > tries / 2,
+        "only {errors} of {tries} damaged blobs were errors"
+    );
+    // A rewritten dictionary: every read an error or a valid LOD.
+    let mut b = bytes.clone();
+    let zdic = {
+        let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
+        let (count, toc) = (
+            u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize,
+            u64_at(16),
+        );
+        (0..count)
+            .map(|e| toc + 32 * e)
+            .find(|&at| &b[at..at + 4] == b"ZDIC")
+            .map(|at| (u64_at(at + 8), u64_at(at + 16)))
+            .unwrap()
+    };
+    for i in (zdic.0..zdic.0 + zdic.1).step_by(7) {
+        b[i] = b[i].wrapping_mul(31).wrapping_add(7);
+    }
+    refresh_checksums(&mut b);
+    let r = SceneReader::from_source(b, "damaged.gwk").unwrap();
+    let failed = (0..records.len() as u32)
+        .filter(|&l| r.read_lod(l).is_err())
+        .count();
+    assert!(failed > 0, "a scrambled dictionary read every LOD");
+}

@@ -81,6 +81,7 @@ mod tests {
             uniform_colour: None,
             encoded: false,
             grid: None,
+            compressed: false,
             offset: 0,
             len: 0,
             checksum: 0,

@@ -96,6 +96,16 @@ pub fn write_tree_with(
     spec: &TreeSpec,
     optional: Vec<([u8; 4], Vec<u8>)>,
 ) -> WriteSummary {
+    write_tree_opts(path, spec, optional, false)
+}
+
+/// [`write_tree_with`], its encoded blobs zstd-compressed when `compress`.
+pub fn write_tree_opts(
+    path: &Path,
+    spec: &TreeSpec,
+    optional: Vec<([u8; 4], Vec<u8>)>,
+    compress: bool,
+) -> WriteSummary {
     let n = spec.parents.len();
     let mut bounds: Vec<Aabb> = spec
         .leaf_boxes
@@ -109,6 +119,7 @@ pub fn write_tree_with(
         height[p] = height[p].max(height[i] + 1);
     }
     let mut w = SceneWriter::create(path).expect("create");
+    w.set_compression(compress).unwrap();
     for (tag, bytes) in optional {
         w.add_optional_section(tag, bytes);
     }

@@ -214,6 +214,23 @@ fn depth_through_the_copy_pass_is_the_direct_copy_bit_for_bit() {
     );
 }
 
+/// LODs 0 and 1 of `geometry` drawn at 64x48 by RVG (colour, depth) and
+/// OR (depth).
+fn draw_both(
+    ctx: &GpuContext,
+    geometry: &dyn gigawalk_gpu::Residency,
+    v: &View,
+) -> (Vec<u8>, Vec<f32>, Vec<f32>) {
+    let mut rvg = VisiblePass::new(ctx, 64, 48);
+    rvg.begin(ctx, v, DrawStyle::Shaded);
+    rvg.draw(ctx, geometry, &[0, 1]);
+    let frame = rvg.finish(ctx, true).unwrap().unwrap();
+    let depth = DepthPass::new(ctx, 64, 48)
+        .render(ctx, geometry, v, &[0, 1])
+        .unwrap();
+    (frame.colour, frame.depth.depth, depth.depth)
+}
+
 /// In both vertex layouts: the compact one's grid coordinates are
 /// relative to the LOD's box as the wide one's positions are.
 #[test]
@@ -264,16 +281,7 @@ fn compact_layout_draws_like_the_wide_one() {
         assert!(wide.insert(&ctx, l, &d));
     }
     let v = view(shift, 64, 48);
-    let draw = |geometry: &dyn gigawalk_gpu::Residency| {
-        let mut rvg = VisiblePass::new(&ctx, 64, 48);
-        rvg.begin(&ctx, &v, DrawStyle::Shaded);
-        rvg.draw(&ctx, geometry, &[0, 1]);
-        let frame = rvg.finish(&ctx, true).unwrap().unwrap();
-        let depth = DepthPass::new(&ctx, 64, 48)
-            .render(&ctx, geometry, &v, &[0, 1])
-            .unwrap();
-        (frame.colour, frame.depth.depth, depth.depth)
-    };
+    let draw = |geometry: &dyn gigawalk_gpu::Residency| draw_both(&ctx, geometry, &v);
     let (a, b) = (draw(&compact), draw(&wide));
     assert!(
         a.0.chunks_exact(4).any(|p| p[0] > 200),
@@ -445,16 +453,7 @@ fn a_pool_takes_any_mix_of_vertices_and_indices_and_draws_like_resident_geometry
         .upload(&ctx)
         .unwrap();
     let v = view(DVec3::ZERO, 64, 48);
-    let draw = |geometry: &dyn gigawalk_gpu::Residency| {
-        let mut rvg = VisiblePass::new(&ctx, 64, 48);
-        rvg.begin(&ctx, &v, DrawStyle::Shaded);
-        rvg.draw(&ctx, geometry, &[0, 1]);
-        let frame = rvg.finish(&ctx, true).unwrap().unwrap();
-        let depth = DepthPass::new(&ctx, 64, 48)
-            .render(&ctx, geometry, &v, &[0, 1])
-            .unwrap();
-        (frame.colour, frame.depth.depth, depth.depth)
-    };
+    let draw = |geometry: &dyn gigawalk_gpu::Residency| draw_both(&ctx, geometry, &v);
     let (from_pool, from_resident) = (draw(&pool), draw(&resident));
     assert!(
         from_resident.0.chunks_exact(4).any(|p| p[0] > 200),

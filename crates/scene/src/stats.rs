@@ -59,6 +59,8 @@ pub struct PositionStats {
     /// LODs on a quantized grid, meshopt-encoded; the rest are raw f32.
     pub encoded_lods: usize,
     pub raw_lods: usize,
+    /// Encoded LODs whose blob is zstd-compressed too.
+    pub compressed_lods: usize,
     /// The grid's bits per axis, as the provenance records them (`None`
     /// when it does not).
     pub bits: Option<u8>,
@@ -93,6 +95,7 @@ impl PositionStats {
             _ => Vec::new(),
         };
         PositionStats {
+            compressed_lods: s.lods().iter().filter(|l| l.compressed).count(),
             encoded_lods: encoded,
             raw_lods: s.lods().len() - encoded,
             bits,

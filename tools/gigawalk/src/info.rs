@@ -194,11 +194,12 @@ fn print_positions(s: &SceneStats) -> anyhow::Result<()> {
             let near = gigawalk_runtime::default_near(&b);
             let pixels_per_radian = 1080.0 / (2.0 * 30f64.to_radians().tan());
             out!(
-                "positions   {bits}-bit grid over each LOD's box, meshopt-encoded ({} of {} LODs); \
-                 step <= {:.3e} (median {:.3e}) model units: {:.1} px at the near plane ({near:.3e}), \
-                 under 1 px from {:.3e} away (1080p, 60 deg)",
+                "positions   {bits}-bit grid over each LOD's box, meshopt-encoded ({} of {} LODs; \
+                 {} of them zstd-compressed); step <= {:.3e} (median {:.3e}) model units: {:.1} px \
+                 at the near plane ({near:.3e}), under 1 px from {:.3e} away (1080p, 60 deg)",
                 p.encoded_lods,
                 p.encoded_lods + p.raw_lods,
+                p.compressed_lods,
                 p.step_max,
                 p.step_median,
                 p.step_max / near * pixels_per_radian,

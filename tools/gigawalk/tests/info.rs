@@ -222,6 +222,11 @@ fn lod_health_in_info_and_preprocess_stats() {
         (Some(16), Some(0))
     );
     assert!(p["encoded_lods"].as_u64().unwrap() > 0 && p["step_max"].as_f64().unwrap() > 0.0);
+    // zstd by default: most blobs are smaller compressed.
+    assert!(
+        2 * p["compressed_lods"].as_u64().unwrap() > p["encoded_lods"].as_u64().unwrap(),
+        "{p}"
+    );
     let (ok, json, err) = gigawalk(&["info", &gwk, "--json"]);
     assert!(ok, "{err}");
     let info: serde_json::Value = serde_json::from_str(&json).unwrap();

@@ -166,7 +166,7 @@ impl DeviceFigures {
     fn of(s: &gigawalk_scene::Skeleton) -> DeviceFigures {
         let lods = s.lods();
         DeviceFigures {
-            bytes: lods.iter().map(gigawalk_gpu::device_bytes).sum(),
+            bytes: gigawalk_runtime::scene_device_bytes(s),
             triangles: lods.iter().map(|l| l.triangles as u64).sum(),
             lods: lods.len(),
             compact_lods: lods

@@ -25,7 +25,7 @@
 use std::sync::{Arc, Mutex};
 
 use crossbeam_channel::{Receiver, Sender};
-use gigawalk_gpu::{DecodedLod, GpuContext, Residency, ResidentGeometry};
+use gigawalk_gpu::{DecodedLod, GpuContext, Residency, ResidentGeometry, VertexLayout};
 use gigawalk_scene::{LodInfo, LodMesh, ReadAt, ReadError, SceneReader, Skeleton, StoredLod};
 
 mod loader;
@@ -117,10 +117,18 @@ fn lod_bytes(l: &LodInfo) -> u64 {
     gigawalk_gpu::device_bytes(l)
 }
 
-/// Device bytes the whole scene takes resident on one device: a memory
-/// budget at least this large loads it whole.
+/// Device bytes the whole scene takes resident on one device, at most: a
+/// memory budget at least this large loads it whole. (The resident
+/// geometry starts a LOD's vertices on a whole vertex of its layout, so
+/// where the layout changes from one LOD to the next it may pad by up to
+/// a wide vertex less 4 bytes.)
 pub fn scene_device_bytes(skeleton: &Skeleton) -> u64 {
-    skeleton.lods().iter().map(lod_bytes).sum()
+    let lods = skeleton.lods();
+    let switches = lods
+        .windows(2)
+        .filter(|w| VertexLayout::of(&w[0]) != VertexLayout::of(&w[1]))
+        .count() as u64;
+    lods.iter().map(lod_bytes).sum::<u64>() + switches * (VertexLayout::Wide.stride() - 4)
 }
 
 /// Per-frame streaming figures of the device that draws the visible set

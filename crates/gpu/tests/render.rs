@@ -273,6 +273,15 @@ fn compact_layout_draws_like_the_wide_one() {
     let scene = SceneReader::open(&path).unwrap();
     let compact = HostGeometry::load(&scene, 1 << 20).unwrap();
     assert_eq!(compact.layout_counts(), [0, 2]);
+    // What the streaming plan counts from the records is what a LOD takes.
+    for l in 0..2 {
+        let d = DecodedLod::read(&scene, l).unwrap();
+        assert_eq!(d.layout, VertexLayout::Compact);
+        assert_eq!(
+            gigawalk_gpu::device_bytes(scene.skeleton().lod(l)),
+            d.bytes()
+        );
+    }
     let compact = compact.upload(&ctx).unwrap();
     let mut wide = GeometryPool::new(&ctx, 2, 1 << 16, 1 << 20).unwrap();
     for l in 0..2 {

@@ -55,7 +55,12 @@ enum Squeeze {
         pending: Vec<(u32, Vec<u8>)>,
         bytes: usize,
     },
-    On(crate::squeeze::Squeezer),
+    /// Trained; `active` while new blobs are compressed (the dictionary
+    /// is written at the end either way: earlier blobs need it).
+    On {
+        squeezer: crate::squeeze::Squeezer,
+        active: bool,
+    },
 }
 
 /// Position bits a writer uses unless told otherwise: steps of 1/65535 of
@@ -101,15 +106,15 @@ impl SceneWriter {
     /// once, in the ZDIC section), where that makes a blob smaller; off
     /// by default. Raw LODs are never compressed.
     pub fn set_compression(&mut self, on: bool) -> Result<(), WriteError> {
-        match (&self.squeeze, on) {
+        match (&mut self.squeeze, on) {
             (Squeeze::Off, true) => {
                 self.squeeze = Squeeze::Sampling {
                     pending: Vec::new(),
                     bytes: 0,
                 }
             }
-            (Squeeze::Off, false) | (_, true) => {}
-            (_, false) => {
+            (Squeeze::On { active, .. }, on) => *active = on,
+            (Squeeze::Sampling { .. }, false) => {
                 // What was held back is written as it is.
                 if let Squeeze::Sampling { pending, .. } =
                     std::mem::replace(&mut self.squeeze, Squeeze::Off)
@@ -118,8 +123,8 @@ impl SceneWriter {
                         self.put_blob(lod, &blob, false)?;
                     }
                 }
-                self.squeeze = Squeeze::Off;
             }
+            (Squeeze::Off, false) | (Squeeze::Sampling { .. }, true) => {}
         }
         Ok(())
     }
@@ -173,7 +178,10 @@ impl SceneWriter {
         for (lod, blob) in pending {
             self.put_squeezed(&mut squeezer, lod, &blob)?;
         }
-        self.squeeze = Squeeze::On(squeezer);
+        self.squeeze = Squeeze::On {
+            squeezer,
+            active: true,
+        };
         Ok(())
     }
 
@@ -234,9 +242,15 @@ impl SceneWriter {
                     self.start_squeezing()?;
                 }
             }
-            Squeeze::On(mut squeezer) if encoded => {
+            Squeeze::On {
+                mut squeezer,
+                active: true,
+            } if encoded => {
                 let put = self.put_squeezed(&mut squeezer, lod, &blob);
-                self.squeeze = Squeeze::On(squeezer);
+                self.squeeze = Squeeze::On {
+                    squeezer,
+                    active: true,
+                };
                 put?;
             }
             other => {
@@ -261,7 +275,7 @@ impl SceneWriter {
     ) -> Result<WriteSummary, WriteError> {
         self.start_squeezing()?;
         let dictionary = match &mut self.squeeze {
-            Squeeze::On(s) => s.dictionary.take(),
+            Squeeze::On { squeezer, .. } => squeezer.dictionary.take(),
             _ => None,
         };
         grow_boxes(&mut nodes, &self.lod_bounds)?;

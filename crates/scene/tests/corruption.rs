@@ -315,3 +315,94 @@ fn damaged_compressed_blobs_are_errors_naming_the_lod() {
         .count();
     assert!(failed > 0, "a scrambled dictionary read every LOD");
 }
+
+/// A bumpy sheet of `n` x `n` vertices in the unit box at `x`.
+fn sheet(n: u32, x: f64, seed: u32) -> gigawalk_scene::LodMesh {
+    let mut positions = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = (i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
+            let h = 0.5 + 0.4 * ((u * 9.0 + seed as f32).sin() * (v * 7.0).cos());
+            positions.push([u, h, v]);
+        }
+    }
+    let mut indices = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i;
+            indices.extend([a, a + n, a + 1, a + 1, a + n, a + n + 1]);
+        }
+    }
+    gigawalk_scene::LodMesh {
+        origin: glam::DVec3::new(x, 0.0, 0.0),
+        normals: vec![[0.0, 1.0, 0.0]; positions.len()],
+        positions,
+        colours: gigawalk_scene::Colours::Uniform([200, 100, 50, 255]),
+        indices,
+    }
+}
+
+/// Writes a root box over `leaves` sheets side by side, switching
+/// compression at the LODs `switch` names.
+fn write_sheets(path: &std::path::Path, leaves: u32, switch: &[(u32, bool)]) {
+    use gigawalk_scene::{Aabb, Node, Provenance, SceneWriter, NO_NODE};
+    let mut w = SceneWriter::create(path).unwrap();
+    let all = Aabb::new(glam::DVec3::ZERO, glam::DVec3::new(leaves as f64, 1.0, 1.0));
+    let mut nodes = vec![Node {
+        bounds: all,
+        parent: NO_NODE,
+        first_child: 1,
+        child_count: leaves,
+        first_lod: 0,
+        lod_count: 1,
+    }];
+    w.add_lod(&common::box_mesh(&all, [9, 9, 9, 255]), 1.0)
+        .unwrap();
+    for i in 0..leaves {
+        if let Some(&(_, on)) = switch.iter().find(|s| s.0 == i) {
+            w.set_compression(on).unwrap();
+        }
+        let first_lod = w.add_lod(&sheet(96, i as f64, i), 0.0).unwrap();
+        nodes.push(Node {
+            bounds: Aabb::new(
+                glam::DVec3::new(i as f64, 0.0, 0.0),
+                glam::DVec3::new(i as f64 + 1.0, 1.0, 1.0),
+            ),
+            parent: 0,
+            first_child: 0,
+            child_count: 0,
+            first_lod,
+            lod_count: 1,
+        });
+    }
+    w.finish(nodes, Provenance::default()).unwrap();
+}
+
+/// Compression switched off and on again while writing, after the
+/// dictionary was trained: every LOD reads back as without compression
+/// (blobs compressed before the pause need the dictionary written at the
+/// end).
+#[test]
+fn compression_switched_while_writing_reads_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.gwk"), dir.path().join("b.gwk"));
+    let leaves = 260;
+    write_sheets(&a, leaves, &[]);
+    write_sheets(&b, leaves, &[(0, true), (200, false), (230, true)]);
+    let bytes = std::fs::read(&b).unwrap();
+    let (_, records) = lod_records(&bytes);
+    let compressed =
+        |range: std::ops::Range<usize>| records[range].iter().filter(|r| r.0 & 8 != 0).count();
+    // LOD i + 1 is leaf i: trained mid-way, paused, resumed.
+    assert!(compressed(1..150) > 100, "{}", compressed(1..150));
+    assert_eq!(compressed(201..231), 0);
+    assert!(compressed(231..261) > 20);
+    let (a, b) = (
+        SceneReader::open(&a).unwrap(),
+        SceneReader::open(&b).unwrap(),
+    );
+    assert!(b.sections().iter().any(|s| s.name == "ZDIC"));
+    for l in 0..=leaves {
+        assert_eq!(a.read_lod(l).unwrap(), b.read_lod(l).unwrap(), "LOD {l}");
+    }
+}

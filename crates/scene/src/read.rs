@@ -287,16 +287,7 @@ impl<R: ReadAt> SceneReader<R> {
             {
                 return Err(e);
             }
-            StoredLod::Mesh(LodMesh {
-                origin: info.origin,
-                colours: match (info.uniform_colour, s.colours) {
-                    (Some(c), _) => Colours::Uniform(c),
-                    (None, c) => Colours::PerVertex(c.unwrap_or_default()),
-                },
-                positions: s.positions,
-                normals: s.normals,
-                indices: s.indices,
-            })
+            StoredLod::Mesh(lod_mesh(info.origin, info.uniform_colour, s))
         };
         let indices = match &stored {
             StoredLod::Grid(g) => &g.streams.indices,
@@ -656,21 +647,23 @@ impl StoredLod {
     pub fn into_mesh(self) -> LodMesh {
         match self {
             StoredLod::Mesh(m) => m,
-            StoredLod::Grid(g) => {
-                let uniform = g.uniform_colour;
-                let s = g.streams.into_streams();
-                LodMesh {
-                    origin: g.origin,
-                    colours: match (uniform, s.colours) {
-                        (Some(c), _) => Colours::Uniform(c),
-                        (None, c) => Colours::PerVertex(c.unwrap_or_default()),
-                    },
-                    positions: s.positions,
-                    normals: s.normals,
-                    indices: s.indices,
-                }
-            }
+            StoredLod::Grid(g) => lod_mesh(g.origin, g.uniform_colour, g.streams.into_streams()),
         }
+    }
+}
+
+/// A LOD's decoded streams as a mesh: the record's colour when it has
+/// one, else the per-vertex colours.
+fn lod_mesh(origin: DVec3, uniform_colour: Option<[u8; 4]>, s: crate::codec::Streams) -> LodMesh {
+    LodMesh {
+        origin,
+        colours: match (uniform_colour, s.colours) {
+            (Some(c), _) => Colours::Uniform(c),
+            (None, c) => Colours::PerVertex(c.unwrap_or_default()),
+        },
+        positions: s.positions,
+        normals: s.normals,
+        indices: s.indices,
     }
 }
 

@@ -162,12 +162,12 @@ impl SceneWriter {
 
     /// Trains the dictionary on the blobs held back and writes them.
     fn start_squeezing(&mut self) -> Result<(), WriteError> {
-        if !matches!(self.squeeze, Squeeze::Sampling { .. }) {
-            return Ok(());
-        }
-        let Squeeze::Sampling { pending, .. } = std::mem::replace(&mut self.squeeze, Squeeze::Off)
-        else {
-            return Ok(());
+        let pending = match std::mem::replace(&mut self.squeeze, Squeeze::Off) {
+            Squeeze::Sampling { pending, .. } => pending,
+            other => {
+                self.squeeze = other;
+                return Ok(());
+            }
         };
         let samples: Vec<&[u8]> = pending.iter().map(|(_, b)| b.as_slice()).collect();
         let mut squeezer =

@@ -201,18 +201,24 @@ fn compressed_scene(compress: bool) -> Vec<u8> {
     std::fs::read(path).unwrap()
 }
 
+/// Where the TOC says section `tag` lies: (offset, length).
+fn section(b: &[u8], tag: &[u8; 4]) -> Option<(usize, usize)> {
+    let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
+    let (count, toc) = (
+        u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize,
+        u64_at(16),
+    );
+    (0..count)
+        .map(|e| toc + 32 * e)
+        .find(|&at| &b[at..at + 4] == tag)
+        .map(|at| (u64_at(at + 8), u64_at(at + 16)))
+}
+
 /// The LOD table's place and each record's (flags, offset, len).
 fn lod_records(b: &[u8]) -> (usize, Vec<(u32, usize, usize)>) {
     let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
     let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
-    let (count, toc) = (u32_at(12) as usize, u64_at(16));
-    let section = |tag: &[u8]| {
-        (0..count)
-            .map(|e| toc + 32 * e)
-            .find(|&at| &b[at..at + 4] == tag)
-            .map(|at| (u64_at(at + 8), u64_at(at + 16)))
-    };
-    let (at, len) = section(b"LODS").unwrap();
+    let (at, len) = section(b, b"LODS").unwrap();
     let records = (0..len / 64)
         .map(|i| {
             let r = at + 64 * i;
@@ -293,18 +299,7 @@ fn damaged_compressed_blobs_are_errors_naming_the_lod() {
     );
     // A rewritten dictionary: every read an error or a valid LOD.
     let mut b = bytes.clone();
-    let zdic = {
-        let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
-        let (count, toc) = (
-            u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize,
-            u64_at(16),
-        );
-        (0..count)
-            .map(|e| toc + 32 * e)
-            .find(|&at| &b[at..at + 4] == b"ZDIC")
-            .map(|at| (u64_at(at + 8), u64_at(at + 16)))
-            .unwrap()
-    };
+    let zdic = section(&b, b"ZDIC").unwrap();
     for i in (zdic.0..zdic.0 + zdic.1).step_by(7) {
         b[i] = b[i].wrapping_mul(31).wrapping_add(7);
     }

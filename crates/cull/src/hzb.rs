@@ -12,6 +12,11 @@
 //! `[x 2^k, (x+1) 2^k) x [y 2^k, (y+1) 2^k)` clipped to the image, for any
 //! size (odd and non-power-of-two included): a border cell of an odd-sized
 //! level covers its one or two real children only.
+//!
+//! The pyramid is built here from the whole image ([`Hzb::rebuild`]), or
+//! from one of its levels that OR's device built and read back
+//! ([`Hzb::rebuild_from_level`]): then the finer levels are absent and
+//! tests read no finer than that level.
 
 use rayon::prelude::*;
 
@@ -45,6 +50,13 @@ pub enum HzbError {
     },
     #[error("n-th farthest reduction needs n in 1..=4, got {0}")]
     BadN(u8),
+    #[error("HZB level {level} of a {width}x{height} image: the pyramid has levels 0 to {top}")]
+    NoLevel {
+        level: u32,
+        width: u32,
+        height: u32,
+        top: u32,
+    },
 }
 
 /// One level of the pyramid.
@@ -52,22 +64,44 @@ pub enum HzbError {
 pub struct HzbLevel {
     pub width: u32,
     pub height: u32,
-    /// Row-major, row 0 = top.
+    /// Row-major, row 0 = top; empty for a level finer than the pyramid's
+    /// [`Hzb::base`].
     pub data: Vec<f32>,
+}
+
+/// The sizes of a `width x height` image's pyramid levels, finest first:
+/// halved (rounding up) until 1x1.
+pub fn level_sizes(width: u32, height: u32) -> Vec<(u32, u32)> {
+    let mut sizes = vec![(width, height)];
+    while let Some(&(w, h)) = sizes.last() {
+        if w <= 1 && h <= 1 {
+            break;
+        }
+        sizes.push((w.div_ceil(2), h.div_ceil(2)));
+    }
+    sizes
 }
 
 /// A hierarchical Z-buffer; see the module docs for the depth convention.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Hzb {
     levels: Vec<HzbLevel>,
-    /// The finest level that stores what the reduction promises: 0 for
-    /// `Farthest`, 1 for an approximate `NthFarthest` (level 0 is exact).
+    /// The finest level that stores what the reduction promises: the
+    /// base for `Farthest`, 1 for an approximate `NthFarthest` (level 0
+    /// is exact).
     finest: usize,
+    /// The finest level held: 0 when built from the whole image.
+    base: usize,
 }
 
 /// Rows per rayon task: small enough to split 1080 rows over a few cores,
 /// large enough that task overhead stays well under the per-row work.
 const ROWS_PER_TASK: usize = 8;
+
+/// Levels with fewer texels than this are reduced on the calling thread:
+/// handing them to rayon's pool costs more than the reduction (a 320x180
+/// level takes some 20 us; a wake-up of the pool is of that order).
+const PARALLEL_TEXELS: usize = 1 << 16;
 
 impl Hzb {
     /// An empty HZB, to be filled by [`Hzb::rebuild`].
@@ -113,26 +147,11 @@ impl Hzb {
                 return Err(HzbError::BadN(n));
             }
         }
-
-        // Level sizes: halve (rounding up) until 1x1.
-        let mut sizes = vec![(width, height)];
-        while let Some(&(w, h)) = sizes.last() {
-            if w == 1 && h == 1 {
-                break;
-            }
-            sizes.push((w.div_ceil(2), h.div_ceil(2)));
-        }
-        self.levels.resize_with(sizes.len(), HzbLevel::default);
+        let sizes = self.size_levels(width, height, 0);
         self.finest = match reduction {
             Reduction::NthFarthest(n) if n > 1 => 1.min(sizes.len() - 1),
             _ => 0,
         };
-        for (level, &(w, h)) in self.levels.iter_mut().zip(&sizes) {
-            level.width = w;
-            level.height = h;
-            level.data.resize(w as usize * h as usize, 0.0);
-        }
-
         if self.levels.len() == 1 {
             self.levels[0].data.copy_from_slice(depth);
             return Ok(());
@@ -158,22 +177,102 @@ impl Hzb {
                     Reduction::NthFarthest(n) => reduce_row_nth(r0, r1, out, n as usize),
                 }
             });
-        for k in 1..self.levels.len() - 1 {
+        self.reduce_from(1);
+        Ok(())
+    }
+
+    /// Rebuilds from level `level` of the pyramid of a `width x height`
+    /// depth image, made elsewhere (OR's device) with the farthest
+    /// reduction: `data` holds that level's `ceil(width / 2^level) x
+    /// ceil(height / 2^level)` cells, each the farthest depth of the
+    /// pixels it covers. The coarser levels are reduced here; the finer
+    /// ones stay empty, so a test reads no finer than `level` and a cell
+    /// there that does not hide keeps the box: conservative, only coarser
+    /// than the whole pyramid.
+    pub fn rebuild_from_level(
+        &mut self,
+        width: u32,
+        height: u32,
+        level: u32,
+        data: &[f32],
+    ) -> Result<(), HzbError> {
+        if width == 0 || height == 0 {
+            return Err(HzbError::Empty { width, height });
+        }
+        let sizes = level_sizes(width, height);
+        let Some(&(lw, lh)) = sizes.get(level as usize) else {
+            return Err(HzbError::NoLevel {
+                level,
+                width,
+                height,
+                top: sizes.len() as u32 - 1,
+            });
+        };
+        let expected = lw as usize * lh as usize;
+        if data.len() != expected {
+            return Err(HzbError::SizeMismatch {
+                width: lw,
+                height: lh,
+                expected,
+                got: data.len(),
+            });
+        }
+        let base = level as usize;
+        self.size_levels(width, height, base);
+        self.finest = base;
+        self.levels[base].data.copy_from_slice(data);
+        self.reduce_from(base);
+        Ok(())
+    }
+
+    /// Sizes the levels of a `width x height` image's pyramid held from
+    /// level `base` on (the finer ones empty), reusing allocations;
+    /// returns the sizes.
+    fn size_levels(&mut self, width: u32, height: u32, base: usize) -> Vec<(u32, u32)> {
+        let sizes = level_sizes(width, height);
+        self.levels.resize_with(sizes.len(), HzbLevel::default);
+        self.base = base;
+        for (k, (level, &(w, h))) in self.levels.iter_mut().zip(&sizes).enumerate() {
+            level.width = w;
+            level.height = h;
+            let len = if k < base { 0 } else { w as usize * h as usize };
+            level.data.resize(len, 0.0);
+        }
+        sizes
+    }
+
+    /// Each level above `k` from the one below it, farthest of 2x2;
+    /// levels of fewer than [`PARALLEL_TEXELS`] on this thread.
+    fn reduce_from(&mut self, k: usize) {
+        for k in k..self.levels.len() - 1 {
             let (lo, hi) = self.levels.split_at_mut(k + 1);
             let src = &lo[k];
             let dst = &mut hi[0];
             let sw = src.width as usize;
-            dst.data
-                .par_chunks_mut(dst.width as usize)
-                .zip(src.data.par_chunks(2 * sw))
-                .with_min_len(ROWS_PER_TASK)
-                .for_each(|(out, src)| {
-                    let (r0, r1) = src.split_at(sw.min(src.len()));
-                    let r1 = if r1.is_empty() { r0 } else { r1 };
-                    reduce_row(r0, r1, out);
-                });
+            let rows = |(out, src): (&mut [f32], &[f32])| {
+                let (r0, r1) = src.split_at(sw.min(src.len()));
+                let r1 = if r1.is_empty() { r0 } else { r1 };
+                reduce_row(r0, r1, out);
+            };
+            if dst.data.len() < PARALLEL_TEXELS {
+                dst.data
+                    .chunks_mut(dst.width as usize)
+                    .zip(src.data.chunks(2 * sw))
+                    .for_each(rows);
+            } else {
+                dst.data
+                    .par_chunks_mut(dst.width as usize)
+                    .zip(src.data.par_chunks(2 * sw))
+                    .with_min_len(ROWS_PER_TASK)
+                    .for_each(rows);
+            }
         }
-        Ok(())
+    }
+
+    /// The finest level held: 0 when built from the whole image, else the
+    /// level [`Hzb::rebuild_from_level`] was given.
+    pub fn base(&self) -> usize {
+        self.base
     }
 
     /// Width of level 0 (the depth image) in pixels; 0 before the first build.
@@ -254,7 +353,7 @@ impl Hzb {
         if (x1 >> k) - (x0 >> k) > 1 || (y1 >> k) - (y0 >> k) > 1 {
             k += 1;
         }
-        (k as usize).min(self.levels.len() - 1)
+        (k as usize).clamp(self.base, self.levels.len() - 1)
     }
 }
 
@@ -521,6 +620,92 @@ mod tests {
         assert_eq!(second.levels()[1].data, [0.7]);
         let first = Hzb::build(2, 2, &d, Reduction::NthFarthest(1)).unwrap();
         assert_eq!(first, far);
+    }
+
+    #[test]
+    fn a_pyramid_from_a_level_matches_the_whole_one_from_there_up() {
+        for (w, h) in [
+            (1, 1),
+            (1, 9),
+            (9, 1),
+            (17, 9),
+            (640, 1),
+            (13, 11),
+            (16, 16),
+        ] {
+            let d: Vec<f32> = (0..w * h)
+                .map(|i| ((i * 7919 + 13) % 101) as f32 / 100.0)
+                .collect();
+            let whole = Hzb::build(w, h, &d, Reduction::Farthest).unwrap();
+            for base in 0..whole.levels().len() {
+                let mut part = Hzb::new();
+                part.rebuild_from_level(w, h, base as u32, &whole.levels()[base].data)
+                    .unwrap();
+                assert_eq!((part.width(), part.height(), part.base()), (w, h, base));
+                for (k, (a, b)) in part.levels().iter().zip(whole.levels()).enumerate() {
+                    assert_eq!((a.width, a.height), (b.width, b.height));
+                    if k < base {
+                        assert!(a.data.is_empty(), "{w}x{h} base {base}: level {k} held");
+                    } else {
+                        assert_eq!(a.data, b.data, "{w}x{h} base {base}: level {k}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn tests_against_a_pyramid_from_a_level_are_conservative_and_exact_at_its_cells() {
+        every_rect(|hzb, d, w, [x0, y0, x1, y1]| {
+            let h = hzb.height();
+            let farthest = brute_farthest(w, d, x0, y0, x1, y1);
+            for base in 1..hzb.levels().len() {
+                let mut part = Hzb::new();
+                part.rebuild_from_level(w, h, base as u32, &hzb.levels()[base].data)
+                    .unwrap();
+                // The farthest of the level-`base` cells the rectangle meets.
+                let (k, lw) = (base as u32, hzb.levels()[base].width as usize);
+                let mut cells = f32::INFINITY;
+                for cy in y0 >> k..=y1 >> k {
+                    for cx in x0 >> k..=x1 >> k {
+                        cells = cells.min(hzb.levels()[base].data[cy as usize * lw + cx as usize]);
+                    }
+                }
+                assert!(part.farthest_in_rect(x0, y0, x1, y1) <= farthest);
+                for t in [0.05, 0.3, 0.6, 0.95] {
+                    let got = part.rect_hides(x0, y0, x1, y1, usize::MAX, |v| v > t);
+                    assert!(!got || farthest > t, "base {base} hid a visible rect");
+                    assert_eq!(got, cells > t, "base {base}, rect {x0},{y0}..{x1},{y1}");
+                }
+            }
+        });
+    }
+
+    #[test]
+    fn a_level_the_pyramid_lacks_or_of_the_wrong_size_is_an_error() {
+        let mut hzb = Hzb::new();
+        assert_eq!(
+            hzb.rebuild_from_level(5, 3, 4, &[0.0]),
+            Err(HzbError::NoLevel {
+                level: 4,
+                width: 5,
+                height: 3,
+                top: 3
+            })
+        );
+        assert!(matches!(
+            hzb.rebuild_from_level(5, 3, 1, &[0.0; 5]),
+            Err(HzbError::SizeMismatch {
+                width: 3,
+                height: 2,
+                expected: 6,
+                got: 5
+            })
+        ));
+        assert!(matches!(
+            hzb.rebuild_from_level(0, 3, 0, &[]),
+            Err(HzbError::Empty { .. })
+        ));
     }
 
     #[test]

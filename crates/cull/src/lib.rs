@@ -55,7 +55,7 @@ pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
 pub use grid::{
     GridCuller, GridStats, LodTriangles, OcclusionGrid, TriangleSource, DEFAULT_GRID_CELL,
 };
-pub use hzb::{Hzb, HzbError, HzbLevel, Reduction};
+pub use hzb::{level_sizes, Hzb, HzbError, HzbLevel, Reduction};
 pub use lod::select_lod;
 pub use object_space::{occlusion, pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
 pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, MAX_SPLITS, SPLITS};

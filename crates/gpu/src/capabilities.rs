@@ -108,8 +108,19 @@ impl AdapterReport {
         if !limits.is_empty() {
             missing.push(format!("limits: {}", limits.join(", ")));
         }
+        // The null adapter states no format capabilities of its own; a
+        // device that does not ask for adapter-specific format features
+        // (ours never does) gets WebGPU's guaranteed ones, so those are
+        // what it has.
+        let null = info.backend == wgpu::Backend::Noop;
         for (format, usages, why) in REQUIRED_FORMATS {
-            let has = adapter.get_texture_format_features(format).allowed_usages;
+            let has = if null {
+                format
+                    .guaranteed_format_features(adapter.features())
+                    .allowed_usages
+            } else {
+                adapter.get_texture_format_features(format).allowed_usages
+            };
             if !has.contains(usages) {
                 missing.push(format!("{format:?} as {:?} ({why})", usages - has));
             }

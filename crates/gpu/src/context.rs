@@ -59,6 +59,10 @@ pub struct GpuContext {
     pub(crate) depth_via_pass: bool,
     /// Whether index values may use all 32 bits.
     full_index_range: bool,
+    pub(crate) downlevel_flags: wgpu::DownlevelFlags,
+    /// Whether OR builds its HZB pyramid with fragment passes even where
+    /// compute would do (tests compare the two paths on one adapter).
+    pub(crate) force_fragment_pyramid: bool,
 }
 
 impl GpuContext {
@@ -86,6 +90,12 @@ impl GpuContext {
     /// without waiting for it.
     pub fn flush(&self) {
         self.queue.submit([]);
+    }
+
+    /// Whether this is the null adapter ([`NULL_ADAPTER_NAMES`]): every
+    /// GPU operation free, nothing drawn, depth read back as zeros.
+    pub fn is_null(&self) -> bool {
+        self.info.backend == wgpu::Backend::Noop
     }
 
     /// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe, WARP).
@@ -127,6 +137,13 @@ impl GpuContext {
     #[cfg(feature = "testing")]
     pub fn force_depth_copy_pass(&mut self) {
         self.depth_via_pass = true;
+    }
+
+    /// Builds OR's HZB pyramid with fragment passes even where compute
+    /// passes would be used, so tests compare the two paths on one adapter.
+    #[cfg(feature = "testing")]
+    pub fn force_fragment_pyramid(&mut self) {
+        self.force_fragment_pyramid = true;
     }
 
     /// Returns the first GPU error seen since the device was opened.
@@ -178,7 +195,22 @@ pub(crate) fn rank(t: wgpu::DeviceType) -> u8 {
 pub(crate) fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
+    // wgpu lists the noop adapter only when asked for it by name.
+    desc.backend_options.noop.enable = backends.contains(wgpu::Backends::NOOP);
     wgpu::Instance::new(desc)
+}
+
+/// The names `--adapter` takes for the null adapter (wgpu's noop backend:
+/// every GPU operation is free and does nothing, depth reads back as
+/// zeros), which measures what the CPU can feed a GPU. Never chosen
+/// unless asked for by one of these names.
+pub const NULL_ADAPTER_NAMES: [&str; 2] = ["null", "noop"];
+
+/// Whether `--adapter want` asks for the null adapter.
+pub fn is_null_adapter(want: &str) -> bool {
+    NULL_ADAPTER_NAMES
+        .iter()
+        .any(|n| n.eq_ignore_ascii_case(want.trim()))
 }
 
 /// The adapters devices may be opened on, best first, from one instance.
@@ -202,7 +234,9 @@ pub(crate) fn candidates(
 ) -> Result<Candidates, GpuError> {
     // Only backends this build has (no Metal or DX12 on Linux).
     let built = wgpu::Instance::enabled_backend_features();
+    let null = adapter.is_some_and(is_null_adapter);
     let tries = match wgpu::Backends::from_env() {
+        _ if null => vec![wgpu::Backends::NOOP],
         Some(b) if (b & built).is_empty() => {
             let value = std::env::var("WGPU_BACKEND").unwrap_or_default();
             return Err(GpuError::NoAdapter {
@@ -239,7 +273,7 @@ pub(crate) fn candidates(
                 continue;
             }
             usable_names.push(report.name());
-            if adapter.is_none_or(|want| name_matches(&report.name(), want)) {
+            if null || adapter.is_none_or(|want| name_matches(&report.name(), want)) {
                 usable.push(a);
             }
         }
@@ -282,9 +316,18 @@ pub(crate) const BACKENDS: [(wgpu::Backends, &str); 4] = [
     (wgpu::Backends::GL, "GL"),
 ];
 
+/// [`BACKENDS`] and the null adapter's, for naming backends in messages.
+const NAMED_BACKENDS: [(wgpu::Backends, &str); 5] = [
+    BACKENDS[0],
+    BACKENDS[1],
+    BACKENDS[2],
+    BACKENDS[3],
+    (wgpu::Backends::NOOP, "noop"),
+];
+
 /// "Vulkan, Metal, DX12": the backends of [`BACKENDS`] in `b`, for messages.
 fn backend_names(b: wgpu::Backends) -> String {
-    let names: Vec<&str> = BACKENDS
+    let names: Vec<&str> = NAMED_BACKENDS
         .iter()
         .filter(|(flag, _)| b.contains(*flag))
         .map(|(_, name)| *name)
@@ -397,6 +440,8 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
         // Big scenes want big buffers; take what the adapter offers.
         max_buffer_size: adapter.limits().max_buffer_size,
         max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
+        // OR's HZB pyramid is one storage buffer of a third of its depth.
+        max_storage_buffer_binding_size: adapter.limits().max_storage_buffer_binding_size,
         ..wgpu::Limits::downlevel_defaults()
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -430,6 +475,8 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
         errors,
         depth_via_pass,
         full_index_range,
+        downlevel_flags: flags,
+        force_fragment_pyramid: false,
     })
 }
 

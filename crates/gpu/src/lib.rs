@@ -3,7 +3,8 @@
 //! Main types: [`GpuContext`] (one device; [`open_devices`] opens the two
 //! the pipeline uses, on adapters that have what [`AdapterReport`] checks), [`HostGeometry`] / [`ResidentGeometry`] (the scene's
 //! geometry in a few large buffers per device, behind the [`Residency`]
-//! trait), [`DepthPass`] (OR: occluder depth, read back for the HZB) and
+//! trait), [`DepthPass`] (OR: occluder depth, reduced to the HZB's
+//! pyramid on the device and a level of it read back) and
 //! [`VisiblePass`] (RVG: colour + depth of the visible set, drawn in
 //! chunks). Every draw is camera-relative: a pass gets the camera position
 //! in f64 and each LOD's origin minus it, rounded once to f32.
@@ -27,14 +28,15 @@ pub use capabilities::{
     list_adapters, AdapterReport, Optional, HOW_TO_GET_ONE, REQUIRED_DOWNLEVEL, REQUIRED_FORMATS,
 };
 pub use context::{
-    chosen_adapter, open_devices, open_devices_on, GpuContext, GpuError, GL_DEPTH_ERROR,
+    chosen_adapter, is_null_adapter, open_devices, open_devices_on, GpuContext, GpuError,
+    GL_DEPTH_ERROR, NULL_ADAPTER_NAMES,
 };
 #[cfg(feature = "testing")]
 pub use context::{devices_or_skip, skip_test};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
-    DepthImage, DepthPass, DrawStyle, FrameImage, View, VisiblePass, COLOUR_FORMAT,
-    DEPTH_COPY_WGSL, DEPTH_FORMAT,
+    DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, PassFigures, PyramidPath, View,
+    VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL,
 };
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};

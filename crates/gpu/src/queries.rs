@@ -5,8 +5,8 @@
 use glam::Vec3;
 
 use crate::passes::{
-    depth_attachment, device_error, map_and_wait, pipeline, target, Drawer, ScenePipelines,
-    DEPTH_COMPARE, DEPTH_FORMAT,
+    depth_attachment, device_error, map_and_wait, pipeline, target, Drawer, PassFigures,
+    ScenePipelines, DEPTH_COMPARE, DEPTH_FORMAT,
 };
 use crate::shader_types;
 use crate::{GpuContext, GpuError, Residency, View};
@@ -258,9 +258,14 @@ impl QueryPass {
         }
         enc.resolve_query_set(&self.queries, 0..n, &self.resolve, 0);
         enc.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, n as u64 * 8);
-        ctx.queue.submit([enc.finish()]);
+        let index = ctx.queue.submit([enc.finish()]);
         let bytes = n as u64 * 8;
-        map_and_wait(ctx, self.read.slice(..bytes))?;
+        map_and_wait(
+            ctx,
+            self.read.slice(..bytes),
+            index,
+            &mut PassFigures::default(),
+        )?;
         let out = {
             let data = self
                 .read

@@ -18,6 +18,20 @@ pub struct FrameUniforms {
     pub params: [f32; 4],
 }
 
+/// What one step of OR's HZB pyramid reads (WGSL `Level` in
+/// shaders/hzb_downsample.wgsl): the source and destination level sizes
+/// in texels, and where each starts in the pyramid's storage buffer (in
+/// u32s; compute passes only).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct HzbLevelUniforms {
+    pub src_size: [u32; 2],
+    pub dst_size: [u32; 2],
+    pub src_offset: u32,
+    pub dst_offset: u32,
+    pub _pad: [u32; 2],
+}
+
 /// One vertex in the wide layout ([`VertexLayout::Wide`]): 20 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]

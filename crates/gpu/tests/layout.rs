@@ -3,7 +3,7 @@
 //! pass compiles it.
 
 use gigawalk_gpu::shader_types::{
-    self, CompactVertex, DrawInstance, FrameUniforms, GpuVertex, VertexLayout,
+    self, CompactVertex, DrawInstance, FrameUniforms, GpuVertex, HzbLevelUniforms, VertexLayout,
 };
 
 fn module(pass: &str) -> naga::Module {
@@ -143,6 +143,32 @@ fn compact_normals_pack_as_the_shader_unpacks_them() {
 }
 
 #[test]
+fn hzb_level_uniforms_match_wgsl() {
+    let src = gigawalk_gpu::HZB_DOWNSAMPLE_WGSL;
+    let m =
+        naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+    let (size, members) = wgsl_struct(&m, "Level");
+    assert_eq!(size as usize, std::mem::size_of::<HzbLevelUniforms>());
+    let rust = [
+        ("src_size", std::mem::offset_of!(HzbLevelUniforms, src_size)),
+        ("dst_size", std::mem::offset_of!(HzbLevelUniforms, dst_size)),
+        (
+            "src_offset",
+            std::mem::offset_of!(HzbLevelUniforms, src_offset),
+        ),
+        (
+            "dst_offset",
+            std::mem::offset_of!(HzbLevelUniforms, dst_offset),
+        ),
+        ("_pad", std::mem::offset_of!(HzbLevelUniforms, _pad)),
+    ];
+    assert_eq!(members.len(), rust.len());
+    for ((wname, woff), (rname, roff)) in members.iter().zip(rust) {
+        assert_eq!((wname.as_str(), *woff as usize), (rname, roff));
+    }
+}
+
+#[test]
 fn every_shader_in_the_tree_parses_and_validates() {
     // As each pass compiles it: the scene passes and the query boxes after
     // the shared common.wgsl, the full-screen and overlay passes alone.
@@ -157,6 +183,11 @@ fn every_shader_in_the_tree_parses_and_validates() {
         ("depth_copy.wgsl", gigawalk_gpu::DEPTH_COPY_WGSL, false),
         ("blit.wgsl", gigawalk_gpu::BLIT_WGSL, false),
         ("overlay.wgsl", gigawalk_gpu::OVERLAY_WGSL, false),
+        (
+            "hzb_downsample.wgsl",
+            gigawalk_gpu::HZB_DOWNSAMPLE_WGSL,
+            false,
+        ),
     ];
     for (_, src, with_common) in passes {
         if with_common {

@@ -2,10 +2,10 @@
 //! reversed-Z convention, colour shows the scene, and a scene 10^7 units
 //! from the origin renders like the same scene at the origin.
 
-use gigawalk_cull::Camera;
+use gigawalk_cull::{Camera, Hzb, Reduction};
 use gigawalk_gpu::{
     devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, HostGeometry,
-    ResidentGeometry, VertexLayout, View, VisiblePass,
+    PyramidPath, ResidentGeometry, VertexLayout, View, VisiblePass,
 };
 use gigawalk_scene::{Aabb, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use gigawalk_testkit::box_mesh;
@@ -212,6 +212,67 @@ fn depth_through_the_copy_pass_is_the_direct_copy_bit_for_bit() {
         upper > 4 * lower.max(1),
         "drawn pixels: {upper} upper, {lower} lower"
     );
+}
+
+/// OR's pyramid built on the device, read back level by level, equals
+/// the CPU's pyramid of the same depth bit for bit, at odd sizes and
+/// one-pixel rows and columns included, through compute passes (where the
+/// adapter uses them) and fragment passes alike: each texel the farthest
+/// depth of exactly the pixels it covers.
+#[test]
+fn the_device_pyramid_is_the_cpu_pyramid_of_the_same_depth_level_by_level() {
+    let Some(mut ctx) = devices_or_skip(1, "gpu hzb pyramid").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    let shift = DVec3::new(0.3, 0.2, 0.0);
+    let geometry = upload_scene(&ctx, shift, VertexLayout::Wide);
+    let mut paths = Vec::new();
+    for forced in [false, true] {
+        if forced {
+            ctx.force_fragment_pyramid();
+        }
+        for (w, h) in [(1, 1), (17, 9), (640, 1), (1, 37), (1023, 769), (64, 48)] {
+            let v = view(shift + DVec3::new(1.3, -0.7, 0.0), w, h);
+            let mut or = DepthPass::new(&ctx, w, h);
+            paths.push(or.pyramid_path(&ctx));
+            let whole = or.render_level(&ctx, &geometry, &v, &[0, 1], 0).unwrap();
+            assert_eq!(whole.level, 0);
+            assert_eq!(whole.figures.read_bytes % 4, 0);
+            let cpu = Hzb::build(w, h, &whole.image.depth, Reduction::Farthest).unwrap();
+            assert_eq!(cpu.levels().len() as u32, or.top_level() + 1, "{w}x{h}");
+            let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            for k in 1..=or.top_level() {
+                let got = or.render_level(&ctx, &geometry, &v, &[0, 1], k).unwrap();
+                let want = &cpu.levels()[k as usize];
+                assert_eq!((got.level, got.width, got.height), (k, w, h));
+                assert_eq!(
+                    (got.image.width, got.image.height),
+                    (want.width, want.height),
+                    "{w}x{h} level {k}"
+                );
+                assert_eq!(
+                    bits(&got.image.depth),
+                    bits(&want.data),
+                    "{w}x{h} level {k}, {:?}",
+                    or.pyramid_path(&ctx)
+                );
+                assert!(got.figures.read_bytes >= 4 * want.data.len() as u64);
+            }
+            // Past the top reads the top.
+            let past = or.render_level(&ctx, &geometry, &v, &[0, 1], 40).unwrap();
+            assert_eq!(past.level, or.top_level());
+        }
+    }
+    // The second round went through fragment passes.
+    assert!(paths[paths.len() / 2..]
+        .iter()
+        .all(|p| *p == PyramidPath::Fragment));
+    // Something was drawn: the test compares more than cleared depth.
+    let v = view(shift, 64, 48);
+    let d = DepthPass::new(&ctx, 64, 48)
+        .render(&ctx, &geometry, &v, &[0, 1])
+        .unwrap();
+    assert!(d.depth.iter().any(|&z| z > 0.0) && d.depth.contains(&0.0));
 }
 
 /// LODs 0 and 1 of `geometry` drawn at 64x48 by RVG (colour, depth) and

@@ -204,6 +204,61 @@ pub struct FrameRecord {
     pub popping: Option<f64>,
     /// Against the reference, on every K-th frame.
     pub accuracy: Option<Accuracy>,
+    /// Where the stages' CPU time went.
+    pub cpu: CpuSplit,
+}
+
+/// Where a frame's CPU time went, step by step (ms), and what crossed
+/// from the devices to the host: with the null adapter (every GPU
+/// operation free) this is the whole frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CpuSplit {
+    /// The level of OR's depth pyramid read back (0: the whole image).
+    pub hzb_level: u32,
+    /// OR: recording its depth pass (and pyramid), submitting it, waiting
+    /// for the read-back, copying it out of mapped memory.
+    pub or_encode_ms: f64,
+    pub or_submit_ms: f64,
+    pub or_wait_ms: f64,
+    pub or_copy_ms: f64,
+    /// STC: traversal, and the culler's tests within it (the HZB build
+    /// is `FrameRecord::hzb_ms`).
+    pub traversal_ms: f64,
+    pub cull_test_ms: f64,
+    /// RVG: recording its chunks, submitting them, waiting for the device
+    /// (the frame before, or a read-back), copying read-backs out.
+    pub rvg_encode_ms: f64,
+    pub rvg_submit_ms: f64,
+    pub rvg_wait_ms: f64,
+    pub rvg_copy_ms: f64,
+    /// Bytes OR read back (its depth, or the level of its pyramid), and
+    /// RVG (frames compared for accuracy); how many times a stage waited
+    /// for a device.
+    pub or_read_bytes: u64,
+    pub rvg_read_bytes: u64,
+    pub device_waits: u32,
+}
+
+impl CpuSplit {
+    fn of(r: &FrameReport) -> CpuSplit {
+        let (o, v) = (&r.or_pass, &r.rvg_pass);
+        CpuSplit {
+            hzb_level: r.hzb_level,
+            or_encode_ms: o.encode_ms,
+            or_submit_ms: o.submit_ms,
+            or_wait_ms: o.wait_ms,
+            or_copy_ms: o.copy_ms,
+            traversal_ms: r.traversal_ms,
+            cull_test_ms: r.cull_test_ms,
+            rvg_encode_ms: v.encode_ms,
+            rvg_submit_ms: v.submit_ms,
+            rvg_wait_ms: v.wait_ms,
+            rvg_copy_ms: v.copy_ms,
+            or_read_bytes: o.read_bytes,
+            rvg_read_bytes: v.read_bytes,
+            device_waits: o.waits + v.waits,
+        }
+    }
 }
 
 /// One run: a mode at a pixel error along the path.
@@ -262,6 +317,8 @@ pub struct Replay {
     /// (`options.runtime.occluder_budget` resolved).
     pub occluder_selection: gigawalk_runtime::OccluderSelection,
     pub devices: Vec<String>,
+    /// Ran on the null adapter ([`Runtime::is_null`]): no accuracy.
+    pub null_adapter: bool,
     pub runs: Vec<RunRecord>,
     /// False when the replay was stopped early ([`Progress::keep_going`]).
     pub complete: bool,
@@ -388,7 +445,9 @@ pub fn replay_on(
         return Err(ReplayError::EmptyPath);
     }
     let (w, h) = (opts.runtime.width, opts.runtime.height);
-    let k = opts.accuracy_every;
+    // The null adapter draws nothing: there is no image to compare.
+    let null_adapter = rt.is_null();
+    let k = if null_adapter { 0 } else { opts.accuracy_every };
     let near = opts
         .near
         .unwrap_or_else(|| default_near(&rt.skeleton().bounds()));
@@ -412,9 +471,13 @@ pub fn replay_on(
         path: path_name.to_string(),
         frames: n,
         near,
-        options: opts.clone(),
+        options: ReplayOptions {
+            accuracy_every: k,
+            ..opts.clone()
+        },
         occluder_selection: rt.occluder_selection(opts.runtime.occluder_budget),
         devices: rt.device_names(),
+        null_adapter,
         runs: Vec::new(),
         complete: true,
         reference_frames: 0,
@@ -586,6 +649,7 @@ pub fn replay_on(
                 warmup: i < opts.warmup,
                 popping: None,
                 accuracy: None,
+                cpu: CpuSplit::of(&r),
             });
             if let Some(img) = r.image {
                 if k > 0 && i.is_multiple_of(k) {

@@ -90,7 +90,9 @@ impl Replay {
              bound_violating_fraction,psnr_db,resident_bytes,loaded_bytes,requests,substituted_draws,\
              missing_draws,culler,{}tile_ms_adaptive,tile_ms_naive,tile_tests,\
              max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms,\
-             bound_exceeding_pixels,bound_exceeding_fraction,occluder_triangles,occluder_limit\n",
+             bound_exceeding_pixels,bound_exceeding_fraction,occluder_triangles,occluder_limit,\
+             hzb_level,or_encode_ms,or_submit_ms,or_wait_ms,or_copy_ms,traversal_ms,cull_test_ms,\
+             rvg_encode_ms,rvg_submit_ms,rvg_device_wait_ms,rvg_copy_ms,or_read_bytes,rvg_read_bytes,device_waits\n",
             csv_counters().map(|(_, _, k)| format!("{},", k.name)).collect::<String>(),
         );
         for run in &self.runs {
@@ -98,7 +100,7 @@ impl Replay {
                 let opt =
                     |x: Option<f64>, d: usize| x.map_or(String::new(), |x| format!("{x:.d$}"));
                 let a = f.accuracy.as_ref();
-                let _ = writeln!(
+                let _ = write!(
                     s,
                     "{},{},{},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}{},{},{},{},{},{:.4},{},{},{:.3},{},{},{},{}",
                     run.mode,
@@ -149,6 +151,25 @@ impl Replay {
                     f.occluder_triangles,
                     f.occluder_limit.map_or(String::new(), |l| l.to_string()),
                 );
+                let c = &f.cpu;
+                let _ = writeln!(
+                    s,
+                    ",{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{}",
+                    c.hzb_level,
+                    c.or_encode_ms,
+                    c.or_submit_ms,
+                    c.or_wait_ms,
+                    c.or_copy_ms,
+                    c.traversal_ms,
+                    c.cull_test_ms,
+                    c.rvg_encode_ms,
+                    c.rvg_submit_ms,
+                    c.rvg_wait_ms,
+                    c.rvg_copy_ms,
+                    c.or_read_bytes,
+                    c.rvg_read_bytes,
+                    c.device_waits,
+                );
             }
         }
         s
@@ -193,6 +214,12 @@ fn culler_cells(work: Option<&gigawalk_runtime::CullerWork>) -> String {
 pub fn markdown(s: &Summary) -> String {
     let mut m = String::new();
     let _ = writeln!(m, "# gigawalk replay report\n");
+    if s.null_adapter {
+        let _ = writeln!(
+            m,
+            "**Null adapter: every GPU operation was free and drew nothing. The frame rates are the CPU's ceiling, what it can feed a GPU, with nothing occluded (depth reads back as zeros, so occlusion culls nothing and traversal and drawing do their most work); accuracy is not measured.**\n"
+        );
+    }
     let _ = writeln!(m, "- scene: `{}`", s.scene);
     let _ = writeln!(m, "- path: `{}`, {} frames per run", s.path, s.frames);
     let _ = writeln!(m, "- viewport: {}x{}", s.width, s.height);
@@ -223,6 +250,11 @@ pub fn markdown(s: &Summary) -> String {
             100.0 * crate::accuracy::BOUND_RELATIVE_DEPTH,
             100.0 * crate::accuracy::BOUND_RELATIVE_DEPTH
         );
+    } else if s.null_adapter {
+        let _ = writeln!(
+            m,
+            "- accuracy: not measured (the null adapter draws nothing)"
+        );
     } else {
         let _ = writeln!(m, "- accuracy: not measured (`--accuracy-every 0`)");
     }
@@ -237,6 +269,11 @@ pub fn markdown(s: &Summary) -> String {
     m += &s.table();
     let _ = writeln!(m, "\n## Stages (medians) and nodes (means)\n");
     m += &s.stage_table();
+    let _ = writeln!(
+        m,
+        "\n## CPU time a frame (medians, ms) and read-back (means)\n\nOR: recording its depth pass and pyramid, submitting, waiting for the read-back, copying it out; the HZB level read back (0: the whole image) and STC's build of the rest; traversal and the culler's tests within it; RVG: recording, submitting, waiting for the device; KB OR read back a frame (its depth, or the level of its pyramid), and how many times a stage waited for a device (RVG's read-backs of compared frames are left out of the KB).\n"
+    );
+    m += &s.cpu_table();
     for c in gigawalk_runtime::CullMethod::ALL {
         if let Some((title, table)) = s.culler_table(c) {
             let _ = writeln!(m, "\n## {title}\n");

@@ -25,6 +25,11 @@ pub struct Summary {
     /// or are missing.
     pub complete: bool,
     pub devices: Vec<String>,
+    /// Ran on the null adapter (wgpu's noop backend): every GPU operation
+    /// free, nothing drawn, depth read back as zeros, so frame times are
+    /// what the CPU can feed, with nothing occluded, and no accuracy.
+    #[serde(default)]
+    pub null_adapter: bool,
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
@@ -90,6 +95,10 @@ pub struct ModeSummary {
     pub median_hzb_ms: f64,
     pub median_stc_ms: f64,
     pub median_rvg_ms: f64,
+    /// Where the stages' CPU time went (medians a frame) and what was read
+    /// back (mean bytes a frame).
+    #[serde(default)]
+    pub cpu: CpuSummary,
     /// Every culler's figures of the run (`median_grid_raster_ms`,
     /// `mean_oq_queries`, ...: each culler's file names and pools its
     /// own), null for the cullers the run did not use.
@@ -307,6 +316,21 @@ fn summarise(
         median_hzb_ms: med(|f| f.hzb_ms),
         median_stc_ms: med(|f| f.stc_ms),
         median_rvg_ms: med(|f| f.rvg_ms),
+        cpu: CpuSummary {
+            median_hzb_level: med(|f| f.cpu.hzb_level as f64),
+            median_or_encode_ms: med(|f| f.cpu.or_encode_ms),
+            median_or_submit_ms: med(|f| f.cpu.or_submit_ms),
+            median_or_wait_ms: med(|f| f.cpu.or_wait_ms),
+            median_or_copy_ms: med(|f| f.cpu.or_copy_ms),
+            median_traversal_ms: med(|f| f.cpu.traversal_ms),
+            median_cull_test_ms: med(|f| f.cpu.cull_test_ms),
+            median_rvg_encode_ms: med(|f| f.cpu.rvg_encode_ms),
+            median_rvg_submit_ms: med(|f| f.cpu.rvg_submit_ms),
+            median_rvg_device_wait_ms: med(|f| f.cpu.rvg_wait_ms),
+            median_rvg_copy_ms: med(|f| f.cpu.rvg_copy_ms),
+            mean_or_read_bytes: mean(m.iter().map(|f| f.cpu.or_read_bytes as f64)),
+            mean_device_waits: mean(m.iter().map(|f| f.cpu.device_waits as f64)),
+        },
         accuracy_frames,
         wrongly_culled_pixels: has_acc.then_some(acc.wrongly_culled_pixels),
         wrongly_culled_fraction: has_acc.then(|| acc.wrongly_culled_fraction()),
@@ -332,6 +356,28 @@ fn summarise(
             .filter(|f| f.substituted_draws > 0)
             .count(),
     }
+}
+
+/// Where a run's CPU time went a frame (medians over measured frames, ms)
+/// and what crossed from the devices (means): OR's depth pass, STC's HZB
+/// build, traversal and culler tests, RVG's drawing (docs/report-format.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CpuSummary {
+    /// The level of OR's depth pyramid read back (0: the whole image).
+    pub median_hzb_level: f64,
+    pub median_or_encode_ms: f64,
+    pub median_or_submit_ms: f64,
+    pub median_or_wait_ms: f64,
+    pub median_or_copy_ms: f64,
+    pub median_traversal_ms: f64,
+    pub median_cull_test_ms: f64,
+    pub median_rvg_encode_ms: f64,
+    pub median_rvg_submit_ms: f64,
+    pub median_rvg_device_wait_ms: f64,
+    pub median_rvg_copy_ms: f64,
+    /// Bytes OR read back a frame.
+    pub mean_or_read_bytes: f64,
+    pub mean_device_waits: f64,
 }
 
 /// NaN and infinities become JSON null through `Option`; keep figures
@@ -505,6 +551,7 @@ impl Replay {
             accuracy_every: self.options.accuracy_every,
             complete: self.complete,
             devices: self.devices.clone(),
+            null_adapter: self.null_adapter,
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,
@@ -601,6 +648,36 @@ impl Summary {
                 thousands(m.mean_drawn_nodes),
                 m.median_speedup_vs_vfc
                     .map_or("-".into(), |x| format!("{x:.2}x")),
+            );
+        }
+        s
+    }
+
+    /// summary.md's table of where each run's CPU time went a frame.
+    pub fn cpu_table(&self) -> String {
+        let mut s = String::from(
+            "| mode | pixel error | OR encode | OR submit | OR wait | OR copy | HZB level | HZB build | traversal | culler tests | RVG encode | RVG submit | RVG wait | OR read-back KB | device waits |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        for m in &self.modes {
+            let c = &m.cpu;
+            s += &format!(
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                self.mode_cell(m),
+                m.pixel_error,
+                num(c.median_or_encode_ms, 3),
+                num(c.median_or_submit_ms, 3),
+                num(c.median_or_wait_ms, 3),
+                num(c.median_or_copy_ms, 3),
+                num(c.median_hzb_level, 0),
+                num(m.median_hzb_ms, 3),
+                num(c.median_traversal_ms, 3),
+                num(c.median_cull_test_ms, 3),
+                num(c.median_rvg_encode_ms, 3),
+                num(c.median_rvg_submit_ms, 3),
+                num(c.median_rvg_device_wait_ms, 3),
+                num(c.mean_or_read_bytes / 1024.0, 1),
+                num(c.mean_device_waits, 1),
             );
         }
         s
@@ -812,6 +889,7 @@ mod tests {
             warmup,
             popping: None,
             accuracy: None,
+            cpu: Default::default(),
         }
     }
 
@@ -831,6 +909,7 @@ mod tests {
             options,
             occluder_selection: gigawalk_runtime::OccluderSelection::All,
             devices: vec!["test".into()],
+            null_adapter: false,
             runs: vec![RunRecord {
                 mode: Mode::Vfc,
                 pixel_error: 0.0,

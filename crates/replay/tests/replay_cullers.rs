@@ -9,7 +9,8 @@ use gigawalk_procgen::{generate, Generated, Kind};
 use gigawalk_replay::FrameRecord;
 use gigawalk_replay::{replay_on, Mode, NoProgress, ReplayOptions};
 use gigawalk_runtime::{
-    CullMethod, CullerWork, GridStats, OqStats, Runtime, RuntimeOptions, Schedule,
+    CullMethod, CullerWork, GridStats, HzbBuild, HzbLevel, OqStats, Runtime, RuntimeOptions,
+    Schedule,
 };
 use gigawalk_scene::SceneReader;
 
@@ -125,6 +126,55 @@ fn every_culler_draws_the_reference_image_at_pixel_error_0() {
             "{kind:?}: the grid culled nothing, the test means little"
         );
     }
+}
+
+/// The HZB built on OR's device and read back at a coarse level culls
+/// conservatively: at pixel error 0, occ and och draw the full-detail
+/// reference image pixel for pixel on the plant, city and forest, at odd
+/// viewports and one-pixel rows, whatever level is read back; and the
+/// coarse HZB still culls.
+#[test]
+fn the_device_built_hzb_read_at_any_level_draws_the_reference_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut culled = 0;
+    for kind in [Kind::Plant, Kind::City, Kind::Forest] {
+        let (scene, g) = scene(dir.path(), kind, 7, 12);
+        let Some(d) = devices_or_skip(2, "device HZB on plant, city and forest") else {
+            return;
+        };
+        let rt = Runtime::with_devices(&scene, d).unwrap();
+        for ((w, h), level) in [((17, 9), 1), ((640, 1), 3), ((1023, 769), 2), ((W, H), 4)] {
+            let mut opts = options(&[CullMethod::Hzb], Schedule::Pipelined, 12);
+            opts.runtime.width = w;
+            opts.runtime.height = h;
+            opts.runtime.hzb = HzbBuild::Gpu(HzbLevel::Fixed(level));
+            let r = replay_on(
+                &rt,
+                "m.gwk",
+                &g.path.poses,
+                "m.path",
+                &opts,
+                &mut NoProgress,
+            )
+            .unwrap();
+            for m in &r.summary().modes {
+                let what = format!("{kind:?} {w}x{h} level {level} {}", m.name);
+                assert_eq!(m.accuracy_frames, 4, "{what}");
+                assert_eq!(m.wrongly_culled_pixels, Some(0), "{what}: lost pixels");
+                assert_eq!(m.differing_pixels_fraction, Some(0.0), "{what}: differs");
+            }
+            for f in r.runs.iter().flat_map(|r| &r.frames) {
+                if f.occlusion_used {
+                    assert_eq!(f.cpu.hzb_level, level, "{kind:?} {w}x{h}");
+                }
+                culled += f.occlusion_culled;
+            }
+        }
+    }
+    assert!(
+        culled > 0,
+        "the coarse HZB culled nothing: the test means little"
+    );
 }
 
 #[test]

@@ -40,8 +40,9 @@ pub use gigawalk_gpu::{
 };
 pub(crate) use options::ResolvedOptions;
 pub use options::{
-    FailureHook, MemoryBudget, MemoryUnknown, OccluderBudget, OccluderSelection, OptionsError,
-    Prefetching, RuntimeOptions, Schedule, Stage, AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET,
+    auto_hzb_level, FailureHook, HzbBuild, HzbLevel, MemoryBudget, MemoryUnknown, OccluderBudget,
+    OccluderSelection, OptionsError, Prefetching, RuntimeOptions, Schedule, Stage,
+    AUTO_MEMORY_SHARE, CPU_OCCLUDER_BUDGET, HZB_READ_TEXELS, MAX_HZB_LEVEL,
 };
 
 // Every culler's public types (its options, flags and stats) and the
@@ -260,6 +261,19 @@ pub struct FrameReport {
     pub occluder_limit: Option<u64>,
     pub or_ms: f64,
     pub hzb_ms: f64,
+    /// The level of OR's depth pyramid the HZB was built from: read back
+    /// from OR's device, coarser levels reduced by STC (0: the whole
+    /// image, the pyramid built by STC).
+    pub hzb_level: u32,
+    /// STC's traversal (LOD selection and the culler's tests), and the
+    /// culler's tests alone (ms; within `stc_ms`).
+    pub traversal_ms: f64,
+    pub cull_test_ms: f64,
+    /// What OR's depth pass and RVG's visible pass cost the CPU this
+    /// frame, step by step: encoding, submitting, waiting for the
+    /// device, copying read-back data, and the bytes read back.
+    pub or_pass: gigawalk_gpu::PassFigures,
+    pub rvg_pass: gigawalk_gpu::PassFigures,
     /// What the culler did this frame beyond traversal (typed, and as
     /// named counts; none for the HZB).
     pub culler_work: Option<CullerWork>,
@@ -554,6 +568,13 @@ impl<'s> Runtime<'s> {
 
     pub fn device_names(&self) -> Vec<String> {
         self.devices.iter().map(|d| d.name().to_string()).collect()
+    }
+
+    /// Whether the devices are the null adapter's (every GPU operation
+    /// free, nothing drawn, depth read back as zeros): frame times are
+    /// then what the CPU can feed.
+    pub fn is_null(&self) -> bool {
+        self.devices.iter().any(GpuContext::is_null)
     }
 
     /// Runs frames until the source ends, `on_frame` returns false, or a

@@ -197,6 +197,84 @@ impl std::str::FromStr for Prefetching {
     }
 }
 
+/// Where STC's HZB pyramid is built (`--hzb`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HzbBuild {
+    /// On OR's device, from its depth, up to a level that is read back;
+    /// STC reduces the coarser levels and tests no finer than that one.
+    Gpu(HzbLevel),
+    /// The whole depth image read back and the pyramid built on the CPU
+    /// (the paper's Section 5.1.2, and the reference the GPU's is measured
+    /// against).
+    Cpu,
+}
+
+impl Default for HzbBuild {
+    fn default() -> Self {
+        HzbBuild::Gpu(HzbLevel::Auto)
+    }
+}
+
+/// Which level of OR's pyramid is read back (`--hzb-level`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HzbLevel {
+    /// [`auto_hzb_level`] of the occluder size.
+    #[default]
+    Auto,
+    /// This level (0: the whole image; clamped to the 1x1 top).
+    Fixed(u32),
+}
+
+impl std::str::FromStr for HzbBuild {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "gpu" => Ok(HzbBuild::default()),
+            "cpu" => Ok(HzbBuild::Cpu),
+            _ => Err(format!("--hzb {s:?} is not gpu or cpu")),
+        }
+    }
+}
+
+impl std::str::FromStr for HzbLevel {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(HzbLevel::Auto),
+            _ => s
+                .parse::<u32>()
+                .ok()
+                .filter(|&k| k <= MAX_HZB_LEVEL)
+                .map(HzbLevel::Fixed)
+                .ok_or_else(|| {
+                    format!("--hzb-level {s:?} is not auto or a level 0 to {MAX_HZB_LEVEL}")
+                }),
+        }
+    }
+}
+
+/// The coarsest level a run may ask for: a 16384-pixel side's pyramid
+/// reaches 1x1 at level 14.
+pub const MAX_HZB_LEVEL: u32 = 14;
+
+/// Texels of the level OR reads back by default: the finest level with at
+/// most this many (2^17: 0.5 MiB of f32 depth; level 3 at 3840x2160, 2
+/// at 1920x1080, 1 at 640x360). What each level costs and culls is in
+/// docs/PERFORMANCE.md, "Frame cost on the CPU".
+pub const HZB_READ_TEXELS: u64 = 1 << 17;
+
+/// The finest level of a `w x h` depth image's pyramid with at most
+/// [`HZB_READ_TEXELS`] texels.
+pub fn auto_hzb_level(w: u32, h: u32) -> u32 {
+    let (mut w, mut h, mut k) = (w as u64, h as u64, 0);
+    while w * h > HZB_READ_TEXELS {
+        (w, h, k) = (w.div_ceil(2), h.div_ceil(2), k + 1);
+    }
+    k
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {
     pub schedule: Schedule,
@@ -216,8 +294,11 @@ pub struct RuntimeOptions {
     /// How many occluder triangles OR draws a frame (see [`OccluderBudget`]).
     pub occluder_budget: OccluderBudget,
     /// How the HZB reduces depth: farthest (conservative) or n-th farthest
-    /// (approximate, Section 5.3).
+    /// (approximate, Section 5.3; built on the CPU whatever `hzb` says).
     pub hzb_reduction: Reduction,
+    /// Where the HZB's pyramid is built: on OR's device, a small level of
+    /// it read back (the default), or on the CPU from the whole image.
+    pub hzb: HzbBuild,
     /// Number of wgpu devices in pipelined mode (1 or 2).
     pub devices: usize,
     /// Visible items per RVG submission: RVG starts drawing a frame while
@@ -313,6 +394,8 @@ pub enum OptionsError {
     PixelError(f64),
     #[error("n-th farthest HZB needs n in 1..=4, got {0}")]
     NthFarthest(u8),
+    #[error("HZB level {0} must be 0 to 14 (0 reads the whole depth image)")]
+    HzbLevel(u32),
     #[error("asynchronous RVG needs the pipelined schedule")]
     AsyncNeedsPipelined,
     #[error("speculative RVG needs the pipelined schedule with synchronous RVG")]
@@ -336,6 +419,7 @@ impl Default for RuntimeOptions {
             occluder_scale: 1.0,
             occluder_budget: OccluderBudget::All,
             hzb_reduction: Reduction::Farthest,
+            hzb: HzbBuild::default(),
             devices: 2,
             chunk: 256,
             async_rvg: false,
@@ -407,6 +491,11 @@ impl RuntimeOptions {
                 return Err(OptionsError::NthFarthest(n));
             }
         }
+        if let HzbBuild::Gpu(HzbLevel::Fixed(k)) = self.hzb {
+            if k > MAX_HZB_LEVEL {
+                return Err(OptionsError::HzbLevel(k));
+            }
+        }
         if self.async_rvg && self.schedule == Schedule::Sequential {
             return Err(OptionsError::AsyncNeedsPipelined);
         }
@@ -435,6 +524,21 @@ impl RuntimeOptions {
     /// Whether OR renders occluder depth at all (the culler reads it).
     pub fn wants_occluder_depth(&self) -> bool {
         self.traversal.occlusion && self.culler.needs_occluder_depth()
+    }
+
+    /// The level of the occluder depth's pyramid OR reads back for the
+    /// HZB: 0 (the whole image) when the CPU builds the pyramid, as it
+    /// does for an n-th farthest reduction (OR's device reduces only to
+    /// the farthest); with `auto`, [`auto_hzb_level`] of the occluder size.
+    pub fn hzb_read_level(&self) -> u32 {
+        match (self.hzb, self.hzb_reduction) {
+            (HzbBuild::Cpu, _) | (_, Reduction::NthFarthest(2..)) => 0,
+            (HzbBuild::Gpu(HzbLevel::Fixed(k)), _) => k,
+            (HzbBuild::Gpu(HzbLevel::Auto), _) => {
+                let (w, h) = self.occluder_size();
+                auto_hzb_level(w, h)
+            }
+        }
     }
 
     /// The occluder depth image size.

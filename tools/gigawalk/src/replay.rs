@@ -9,8 +9,8 @@ use std::time::Instant;
 use anyhow::Context as _;
 use gigawalk_replay::{Mode, Progress, Replay, ReplayOptions};
 use gigawalk_runtime::{
-    CullMethod, CullerArgs, MemoryBudget, OccluderBudget, Prefetching, Reduction, RuntimeOptions,
-    Schedule, TileGrid, TileMethod,
+    CullMethod, CullerArgs, HzbBuild, HzbLevel, MemoryBudget, OccluderBudget, Prefetching,
+    Reduction, RuntimeOptions, Schedule, TileGrid, TileMethod,
 };
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
@@ -66,7 +66,7 @@ pub struct RuntimeArgs {
     /// Viewport height
     #[arg(long, default_value_t = 360)]
     pub height: u32,
-    /// Use the GPU adapter whose name contains this (case-insensitive; the name as `gigawalk info --adapters` lists it, backend included: `--adapter gl` picks GL); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend [default: the best adapter that qualifies, hardware first]
+    /// Use the GPU adapter whose name contains this (case-insensitive; the name as `gigawalk info --adapters` lists it, backend included: `--adapter gl` picks GL); WGPU_BACKEND=vulkan|gl|metal|dx12 picks the backend. `--adapter null` runs on no GPU at all: every GPU operation is free and draws nothing, so the frame rates are the CPU's ceiling (what it can feed a GPU, with nothing occluded) and accuracy is not measured [default: the best adapter that qualifies, hardware first]
     #[arg(long, value_name = "NAME")]
     pub adapter: Option<String>,
     /// Occluders of frame i are the visible set of frame i - lag (1 or 2; paper: 2)
@@ -82,9 +82,15 @@ pub struct RuntimeArgs {
         default_value = "adaptive"
     )]
     occluder_budget: OccluderBudget,
-    /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest)
+    /// HZB keeps the n-th farthest depth of each 2x2 block instead of the farthest (approximate; 1 = farthest; builds the HZB on the CPU, as --hzb cpu)
     #[arg(long)]
     nth_farthest: Option<u8>,
+    /// Where the HZB pyramid is built: gpu = on OR's device, only a small level of it read back (--hzb-level); cpu = the whole depth image read back and the pyramid built on the CPU (the paper's way; culls a little more, costs a full-resolution read-back a frame)
+    #[arg(long, value_name = "gpu|cpu", default_value = "gpu")]
+    hzb: HzbBuild,
+    /// With --hzb gpu: the pyramid level read back (0 = the whole image; each level halves both sides): auto = the finest with at most 131,072 texels (0.5 MiB; level 1 at 640x360, 2 at 1920x1080, 3 at 3840x2160). Coarser reads less and culls less, never wrongly
+    #[arg(long, value_name = "auto|LEVEL", default_value = "auto")]
+    hzb_level: HzbLevel,
     /// wgpu devices in the pipelined schedule (1 or 2)
     #[arg(long, default_value_t = 2)]
     devices: usize,
@@ -149,6 +155,10 @@ impl RuntimeArgs {
             hzb_reduction: match self.nth_farthest {
                 None | Some(1) => Reduction::Farthest,
                 Some(n) => Reduction::NthFarthest(n),
+            },
+            hzb: match self.hzb {
+                HzbBuild::Gpu(_) => HzbBuild::Gpu(self.hzb_level),
+                HzbBuild::Cpu => HzbBuild::Cpu,
             },
             devices: self.devices,
             chunk: self.chunk,

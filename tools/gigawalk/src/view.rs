@@ -118,6 +118,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.width == 0 || a.height == 0 {
         anyhow::bail!("--width and --height must be at least 1");
     }
+    if let Some(null) = a
+        .adapter
+        .as_deref()
+        .filter(|n| gigawalk_gpu::is_null_adapter(n))
+    {
+        anyhow::bail!(
+            "--adapter {null}: the null adapter draws nothing and cannot show a window; it measures what the CPU can feed a GPU in `gigawalk replay` and `gigawalk demo`"
+        );
+    }
     let scene = a.scene.clone();
     gigawalk_viewer::run(ViewArgs {
         scene: a.scene,

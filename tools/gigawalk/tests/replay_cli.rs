@@ -158,6 +158,92 @@ fn small_plant_replays_into_a_report() {
     assert_eq!(rows, 1 + 2 * 12);
 }
 
+/// `--adapter null` needs no GPU: every GPU operation is free, so the
+/// report is what the CPU can feed, and says so. Nothing is drawn, so
+/// accuracy is not measured; depth reads back as zeros, so occlusion
+/// culls nothing; OR reads back the small level of its pyramid, not the
+/// whole image, unless `--hzb cpu` asks for it.
+#[test]
+fn a_null_adapter_replay_reports_the_cpu_ceiling() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk, out) = plant(dir.path(), "20k");
+    let (w, h) = (1280u64, 720u64);
+    let run = |out: &Path, hzb: &str| {
+        let (ok, stdout, err) = replay(
+            &gwk,
+            &path,
+            out,
+            &[
+                "--adapter",
+                "null",
+                "--width",
+                "1280",
+                "--height",
+                "720",
+                "--warmup",
+                "2",
+                "--modes",
+                "vfc,hlod,och",
+                "--hzb",
+                hzb,
+            ],
+        );
+        assert!(ok, "{err}");
+        assert!(stdout.contains("| och |"), "{stdout}");
+        let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+        assert!(md.contains("**Null adapter"), "{md}");
+        assert!(
+            md.contains("accuracy: not measured (the null adapter"),
+            "{md}"
+        );
+        assert!(md.contains("## CPU time a frame"), "{md}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(json["null_adapter"], true);
+        assert_eq!(json["accuracy_every"], 0);
+        let modes = json["modes"].as_array().unwrap().clone();
+        assert_eq!(modes.len(), 3);
+        for m in &modes {
+            assert_eq!(m["accuracy_frames"], 0, "{m}");
+            assert_eq!(m["mean_occlusion_culled"], 0.0, "nothing occluded: {m}");
+            assert!(m["mean_triangles"].as_f64().unwrap() > 0.0, "{m}");
+        }
+        modes[2].clone()
+    };
+    let gpu = run(&out, "gpu");
+    let cpu = run(&dir.path().join("cpu"), "cpu");
+    // 1280x720 reads level 2 (320x180), 16 times fewer bytes than the
+    // whole image; both draw the same (nothing is occluded either way).
+    assert_eq!(gpu["cpu"]["median_hzb_level"], 2.0);
+    assert_eq!(cpu["cpu"]["median_hzb_level"], 0.0);
+    let read = |m: &serde_json::Value| m["cpu"]["mean_or_read_bytes"].as_f64().unwrap();
+    assert!(read(&cpu) >= (w * h * 4) as f64, "{cpu}");
+    assert!(read(&gpu) <= (w * h * 4 / 16) as f64 + 4096.0, "{gpu}");
+    assert_eq!(gpu["mean_triangles"], cpu["mean_triangles"]);
+    // frames.csv has the split of each frame's CPU time.
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    for col in [
+        "or_wait_ms",
+        "traversal_ms",
+        "cull_test_ms",
+        "rvg_encode_ms",
+        "or_read_bytes",
+    ] {
+        assert!(
+            header.split(',').any(|c| c == col),
+            "{col} missing: {header}"
+        );
+    }
+    // A window cannot be shown on it.
+    let (ok, _, err) = gigawalk(&["view", s(&gwk), "--adapter", "null"]);
+    assert!(
+        !ok && err.contains("the null adapter draws nothing"),
+        "{err}"
+    );
+}
+
 #[test]
 fn a_corrupted_lod_found_while_streaming_ends_the_replay_with_a_partial_report() {
     if gigawalk_gpu::devices_or_skip(2, "gigawalk replay CLI, streaming").is_none() {

@@ -1,21 +1,45 @@
-//! OR: the occluders' depth at its own resolution, read back for the HZB.
+//! OR: the occluders' depth at its own resolution, and what of it STC
+//! reads: a level of the HZB pyramid built here on the device (the
+//! default), or the whole image (the CPU builds the pyramid).
 
+use std::time::Instant;
+
+use crate::passes::hzb::{level_size, Pyramid};
 use crate::passes::{
-    depth_attachment, pipeline, target, DepthImage, Drawer, ReadBack, ScenePipelines, View,
-    DEPTH_FORMAT,
+    depth_attachment, ms_since, pipeline, target, DepthImage, Drawer, PassFigures, PyramidPath,
+    ReadBack, ScenePipelines, View, DEPTH_FORMAT,
 };
 use crate::residency::Residency;
 use crate::shader_types;
 use crate::{GpuContext, GpuError};
 
-/// OR: renders occluders' depth at its own resolution and reads it back.
+/// OR: renders occluders' depth at its own resolution and reads back a
+/// level of its pyramid.
 pub struct DepthPass {
     drawer: Drawer,
     pipelines: ScenePipelines,
     depth: wgpu::Texture,
     readback: ReadBack,
+    /// Made on the first read of a level above 0.
+    pyramid: Option<Pyramid>,
     width: u32,
     height: u32,
+}
+
+/// Level `level` of the pyramid of OR's `width x height` depth image, as
+/// read back: at level 0 the image itself, above it each texel the
+/// farthest depth of the pixels it covers (`gigawalk_cull::Hzb`'s
+/// levels, the same sizes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthLevel {
+    pub level: u32,
+    /// The size of level 0 (the depth image).
+    pub width: u32,
+    pub height: u32,
+    /// The level's texels.
+    pub image: DepthImage,
+    /// What drawing and reading it cost the CPU.
+    pub figures: PassFigures,
 }
 
 impl DepthPass {
@@ -40,13 +64,26 @@ impl DepthPass {
             drawer,
             pipelines,
             readback: ReadBack::default(),
+            pyramid: None,
             width: width.max(1),
             height: height.max(1),
         }
     }
 
-    /// Draws the LODs' depth and waits for the readback (call it on the
-    /// OR thread: it blocks only that stage).
+    /// The pyramid's top level (1x1) for this pass's size: the coarsest
+    /// level [`DepthPass::render_level`] reads.
+    pub fn top_level(&self) -> u32 {
+        let side = self.width.max(self.height);
+        u32::BITS - (side - 1).leading_zeros()
+    }
+
+    /// How the pyramid is built on `ctx` for this pass's size.
+    pub fn pyramid_path(&self, ctx: &GpuContext) -> PyramidPath {
+        Pyramid::path_for(ctx, self.width, self.height)
+    }
+
+    /// Draws the LODs' depth and reads the whole image back (call it on
+    /// the OR thread: it blocks only that stage).
     pub fn render(
         &mut self,
         ctx: &GpuContext,
@@ -54,6 +91,24 @@ impl DepthPass {
         view: &View,
         lods: &[u32],
     ) -> Result<DepthImage, GpuError> {
+        Ok(self.render_level(ctx, residency, view, lods, 0)?.image)
+    }
+
+    /// Draws the LODs' depth, builds its pyramid up to `level` (at most
+    /// [`DepthPass::top_level`]) on the device and reads that level back,
+    /// waiting for this submission only (call it on the OR thread: it
+    /// blocks only that stage). Level 0 reads the whole image.
+    pub fn render_level(
+        &mut self,
+        ctx: &GpuContext,
+        residency: &dyn Residency,
+        view: &View,
+        lods: &[u32],
+        level: u32,
+    ) -> Result<DepthLevel, GpuError> {
+        let level = level.min(self.top_level());
+        let mut figures = PassFigures::default();
+        let t = Instant::now();
         self.drawer.begin(ctx, view, false);
         let draws = self.drawer.prepare(ctx, view, residency, lods);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -68,8 +123,29 @@ impl DepthPass {
             self.drawer
                 .record(&mut pass, residency, &draws, &self.pipelines);
         }
-        ctx.queue.submit([enc.finish()]);
-        self.readback
-            .depth(ctx, &self.depth, self.width, self.height)
+        let size = (self.width, self.height);
+        let rows = if level == 0 {
+            self.readback
+                .record_depth(ctx, &mut enc, &self.depth, size.0, size.1)
+        } else {
+            let path = Pyramid::path_for(ctx, size.0, size.1);
+            let pyramid = match &mut self.pyramid {
+                Some(p) if p.path() == path => p,
+                slot => slot.insert(Pyramid::new(ctx, path)),
+            };
+            pyramid.record(ctx, &mut enc, &self.depth, size, level, &mut self.readback)
+        };
+        figures.encode_ms += ms_since(t);
+        let bits = self
+            .readback
+            .submit_and_read(ctx, enc, rows, &mut figures)?;
+        let (w, h) = level_size(size.0, size.1, level);
+        Ok(DepthLevel {
+            level,
+            width: size.0,
+            height: size.1,
+            image: DepthImage::from_bits(w, h, bits),
+            figures,
+        })
     }
 }

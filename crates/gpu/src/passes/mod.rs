@@ -1,5 +1,5 @@
-//! The two render passes: OR (depth of the occluders, read back for the
-//! HZB) and RVG (colour + depth of the visible set, to an offscreen target
+//! The two render passes: OR (depth of the occluders, reduced to the HZB's
+//! pyramid on the device and a level of it read back) and RVG (colour + depth of the visible set, to an offscreen target
 //! or a window). Both draw a list of LODs camera-relatively.
 //!
 //! Here: what the passes and their callers share (the camera [`View`], the
@@ -10,6 +10,7 @@
 
 mod depth;
 mod drawer;
+mod hzb;
 mod pipelines;
 mod readback;
 mod visible;
@@ -18,10 +19,14 @@ use glam::{DVec3, Mat4, Vec3};
 
 use crate::GpuContext;
 
-pub use depth::DepthPass;
+pub use depth::{DepthLevel, DepthPass};
 pub(crate) use drawer::Drawer;
-pub(crate) use pipelines::{fullscreen_pipeline, pipeline, ScenePipelines};
-pub(crate) use readback::{device_error, map_and_wait, ReadBack};
+pub use hzb::{PyramidPath, HZB_DOWNSAMPLE_WGSL};
+pub(crate) use pipelines::{
+    fullscreen_pipeline, fullscreen_pipeline_entry, pipeline, ScenePipelines,
+};
+pub use readback::PassFigures;
+pub(crate) use readback::{device_error, map_and_wait, ms_since, ReadBack, Rows};
 pub use visible::VisiblePass;
 
 /// What a pass needs to know about the camera. `view_proj` has no
@@ -41,6 +46,17 @@ pub struct DepthImage {
     pub width: u32,
     pub height: u32,
     pub depth: Vec<f32>,
+}
+
+impl DepthImage {
+    /// An image of depths read back as their f32 bits.
+    pub(crate) fn from_bits(width: u32, height: u32, bits: Vec<u32>) -> DepthImage {
+        DepthImage {
+            width,
+            height,
+            depth: bits.into_iter().map(f32::from_bits).collect(),
+        }
+    }
 }
 
 /// A colour image (sRGB RGBA8, row 0 at the top) with its depth.

@@ -86,6 +86,18 @@ pub(crate) fn fullscreen_pipeline(
     layout: &wgpu::BindGroupLayout,
     format: wgpu::TextureFormat,
 ) -> wgpu::RenderPipeline {
+    fullscreen_pipeline_entry(ctx, label, wgsl, layout, format, "fs_main")
+}
+
+/// [`fullscreen_pipeline`] with the fragment entry point `fragment`.
+pub(crate) fn fullscreen_pipeline_entry(
+    ctx: &GpuContext,
+    label: &str,
+    wgsl: &str,
+    layout: &wgpu::BindGroupLayout,
+    format: wgpu::TextureFormat,
+    fragment: &str,
+) -> wgpu::RenderPipeline {
     let d = &ctx.device;
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
@@ -110,7 +122,7 @@ pub(crate) fn fullscreen_pipeline(
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("fs_main"),
+            entry_point: Some(fragment),
             compilation_options: Default::default(),
             targets: &[Some(wgpu::ColorTargetState {
                 format,

@@ -1,9 +1,11 @@
 //! RVG: the visible set's colour and depth, drawn in chunks as the list
 //! arrives, with an optional wireframe pipeline and a scissor for tiles.
 
+use std::time::Instant;
+
 use crate::passes::{
-    depth_attachment, device_error, pipeline, target, DrawStyle, Drawer, FrameImage, ReadBack,
-    ScenePipelines, View, COLOUR_FORMAT, DEPTH_FORMAT,
+    depth_attachment, ms_since, pipeline, target, DrawStyle, Drawer, FrameImage, PassFigures,
+    ReadBack, ScenePipelines, View, COLOUR_FORMAT, DEPTH_FORMAT,
 };
 use crate::residency::{LodRange, Residency};
 use crate::shader_types;
@@ -29,6 +31,12 @@ pub struct VisiblePass {
     view: Option<View>,
     /// Where later draws of the frame may write (a tile), `[x, y, w, h]`.
     scissor: Option<[u32; 4]>,
+    /// This frame's last submission, and the last frame's: a frame ends
+    /// by waiting for the one before it, so at most two are in flight.
+    submitted: Option<wgpu::SubmissionIndex>,
+    previous_frame: Option<wgpu::SubmissionIndex>,
+    /// What the frame so far cost the CPU.
+    figures: PassFigures,
 }
 
 /// Background colour (linear): a dark blue-grey, so black geometry shows.
@@ -72,7 +80,15 @@ impl VisiblePass {
             cleared: false,
             scissor: None,
             view: None,
+            submitted: None,
+            previous_frame: None,
+            figures: PassFigures::default(),
         }
+    }
+
+    /// What the frame cost the CPU since the last call, step by step.
+    pub fn take_figures(&mut self) -> PassFigures {
+        std::mem::take(&mut self.figures)
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -124,6 +140,7 @@ impl VisiblePass {
     /// GPU works while the rest of the list is still being culled.
     pub fn draw(&mut self, ctx: &GpuContext, residency: &dyn Residency, lods: &[u32]) {
         let view = self.view.expect("VisiblePass::begin before draw");
+        let t = Instant::now();
         let draws = self.drawer.prepare(ctx, &view, residency, lods);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
@@ -159,44 +176,61 @@ impl VisiblePass {
             self.drawer.record(&mut pass, residency, &draws, pipelines);
         }
         self.cleared = true;
-        ctx.queue.submit([enc.finish()]);
+        self.figures.encode_ms += ms_since(t);
+        self.submitted = Some(self.figures.submit(ctx, enc));
     }
 
-    /// Ends the frame: waits until the GPU is done and optionally reads
-    /// back colour and depth.
+    /// Ends the frame and optionally reads back its colour and depth
+    /// (waiting for them): [`VisiblePass::end`], then the read.
     pub fn finish(
         &mut self,
         ctx: &GpuContext,
         read_back: bool,
     ) -> Result<Option<FrameImage>, GpuError> {
+        self.end(ctx)?;
+        if read_back {
+            self.read_back(ctx).map(Some)
+        } else {
+            Ok(None)
+        }
+    }
+
+    /// Ends the frame, waiting only for the frame before it to leave the
+    /// device: the GPU may still draw this one while the CPU prepares the
+    /// next, so at most two frames are in flight, and a device that keeps
+    /// up costs no wait.
+    pub fn end(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
         if !self.cleared {
             // An empty frame still clears its targets.
             self.draw(ctx, &NoGeometry, &[]);
         }
         self.view = None;
-        if !read_back {
-            ctx.device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| device_error(ctx, e))?;
-            ctx.check()?;
-            return Ok(None);
+        let this_frame = self.submitted.take();
+        if let Some(index) = std::mem::replace(&mut self.previous_frame, this_frame) {
+            self.figures.wait(ctx, index)?;
         }
-        self.read_back(ctx).map(Some)
+        ctx.check()
     }
 
     /// Reads back the last finished frame's colour and depth.
     pub fn read_back(&mut self, ctx: &GpuContext) -> Result<FrameImage, GpuError> {
-        let colour = self.colour_readback.read(
+        let (w, h) = (self.width, self.height);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let rows = self.colour_readback.record_texture(
             ctx,
+            &mut enc,
             &self.colour,
-            self.width,
-            self.height,
+            w,
+            h,
             4,
             wgpu::TextureAspect::All,
-        )?;
+        );
+        let colour = self
+            .colour_readback
+            .submit_and_read(ctx, enc, rows, &mut self.figures)?;
         let depth = self
             .depth_readback
-            .depth(ctx, &self.depth, self.width, self.height)?;
+            .depth(ctx, &self.depth, w, h, &mut self.figures)?;
         Ok(FrameImage { colour, depth })
     }
 }

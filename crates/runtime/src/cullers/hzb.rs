@@ -1,11 +1,13 @@
 //! GigaWalk's hierarchical Z-buffer (Section 5.2): OR's depth of frame
 //! i - lag's visible set, reduced to a pyramid that node boxes are tested
-//! against. Needs OR's depth, so it culls nothing in the startup bypass.
+//! against: on OR's device up to the level it reads back, here from
+//! there up (or, with `HzbBuild::Cpu`, here from the whole image). Needs
+//! OR's depth, so it culls nothing in the startup bypass.
 
 use std::time::Instant;
 
 use gigawalk_cull::{BoxTest, Hzb, HzbOcclusion, TraversalStats};
-use gigawalk_gpu::DepthImage;
+use gigawalk_gpu::DepthLevel;
 
 use super::{Setup, Traversal};
 use crate::ms_since;
@@ -33,17 +35,18 @@ impl State {
         }
     }
 
-    /// Builds the HZB from OR's depth; without depth (the startup
-    /// bypass) the frame is not culled.
+    /// Builds the HZB from OR's depth (the level of its pyramid OR read
+    /// back); without depth (the startup bypass) the frame is not culled.
     pub fn prepare(
         &mut self,
         frame: u64,
-        depth: Option<&DepthImage>,
+        depth: Option<&DepthLevel>,
         opts: &ResolvedOptions,
     ) -> Result<(bool, f64), RuntimeError> {
-        let Some(d) = depth else {
+        let Some(level) = depth else {
             return Ok((false, 0.0));
         };
+        let d = &level.image;
         let t = Instant::now();
         let _s = tracing::info_span!("HZB build", frame).entered();
         let depth = if self.or_depth_error > 0.0 {
@@ -55,9 +58,17 @@ impl State {
         } else {
             &d.depth
         };
-        self.hzb
-            .rebuild(d.width, d.height, depth, opts.hzb_reduction)
-            .map_err(|source| RuntimeError::Hzb { frame, source })?;
+        // Lowering every texel by the error lowers the farthest of any
+        // block by it: the same whether OR's device reduced first or not.
+        match level.level {
+            0 => self
+                .hzb
+                .rebuild(d.width, d.height, depth, opts.hzb_reduction),
+            k => self
+                .hzb
+                .rebuild_from_level(level.width, level.height, k, depth),
+        }
+        .map_err(|source| RuntimeError::Hzb { frame, source })?;
         Ok((true, ms_since(t)))
     }
 

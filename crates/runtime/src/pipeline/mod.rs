@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
-use gigawalk_gpu::{DepthImage, DrawStyle};
+use gigawalk_gpu::{DepthLevel, DrawStyle};
 
 use crate::stages::{lod_ids, OrFigures, RvgStage, StcOutput, Target};
 use crate::streaming::Prefetch;
@@ -56,7 +56,7 @@ pub(super) struct Sample {
 /// OR -> STC: one frame's camera and occluder depth.
 pub(super) struct OrToStc {
     pub(super) sample: Sample,
-    pub(super) depth: Option<DepthImage>,
+    pub(super) depth: Option<DepthLevel>,
     pub(super) or: OrFigures,
 }
 
@@ -181,6 +181,11 @@ pub(super) fn report(
         occluder_limit: end.or.limit,
         or_ms: end.or.ms,
         hzb_ms: end.stc.hzb_ms,
+        hzb_level: end.or.level,
+        traversal_ms: end.stc.traversal_ms,
+        cull_test_ms: end.stc.test_ms,
+        or_pass: end.or.pass,
+        rvg_pass: Default::default(),
         culler_work: end.stc.culler_work,
         tiles: end.stc.tiles.clone(),
         pixel_error: end.stc.tolerance,
@@ -210,6 +215,7 @@ pub(super) fn finish_frame(
     if read_back {
         r.image = rvg.read_back()?;
     }
+    r.rvg_pass = rvg.take_figures();
     r.rvg_ms = (Instant::now() - r.finished_at).as_secs_f64() * 1e3 + rvg_ms;
     r.finished_at = Instant::now();
     Ok(r)

@@ -1,8 +1,8 @@
 //! The CPU's stand-in for a device (tests, feature `testing`): LODs drawn
 //! into a conservative software depth image, no colour, no streaming.
 
-use gigawalk_cull::{CullView, SoftDepth, TriangleSource};
-use gigawalk_gpu::{DepthImage, DrawStyle, FrameImage};
+use gigawalk_cull::{CullView, Hzb, Reduction, SoftDepth, TriangleSource};
+use gigawalk_gpu::{DepthImage, DepthLevel, DrawStyle, FrameImage};
 
 use super::or::OccluderTarget;
 use super::rvg::VisibleTarget;
@@ -60,10 +60,40 @@ impl<'a> CpuRaster<'a> {
 }
 
 impl OccluderTarget for CpuRaster<'_> {
-    fn depth(&mut self, _: u64, view: &CullView, lods: &[u32]) -> Result<DepthImage, RuntimeError> {
+    /// Level `level` reduced here as OR's device reduces it.
+    fn depth(
+        &mut self,
+        _: u64,
+        view: &CullView,
+        lods: &[u32],
+        level: u32,
+    ) -> Result<DepthLevel, RuntimeError> {
         self.start(view);
         self.raster(lods);
-        Ok(self.depth_image())
+        let whole = self.depth_image();
+        let (width, height) = (whole.width, whole.height);
+        let image = match level {
+            0 => whole,
+            k => {
+                let hzb = Hzb::build(width, height, &whole.depth, Reduction::Farthest)
+                    .expect("a software depth image of the pass's size");
+                let levels = hzb.levels();
+                let l = &levels[(k as usize).min(levels.len() - 1)];
+                DepthImage {
+                    width: l.width,
+                    height: l.height,
+                    depth: l.data.clone(),
+                }
+            }
+        };
+        let top = gigawalk_cull::level_sizes(width, height).len() as u32 - 1;
+        Ok(DepthLevel {
+            level: level.min(top),
+            width,
+            height,
+            image,
+            figures: Default::default(),
+        })
     }
 }
 

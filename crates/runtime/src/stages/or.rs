@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use gigawalk_cull::{reselect_lods, select_occluders, CullView, DrawItem, TraversalOptions};
-use gigawalk_gpu::{DepthImage, DepthPass};
+use gigawalk_gpu::{DepthLevel, DepthPass, PassFigures};
 use gigawalk_scene::Skeleton;
 
 use super::*;
@@ -22,13 +22,15 @@ pub(super) trait OccluderTarget {
         false
     }
 
-    /// The depth of `lods` (frame `frame`'s occluders) seen from `view`.
+    /// Level `level` of the pyramid of the depth of `lods` (frame
+    /// `frame`'s occluders) seen from `view` (0: the depth itself).
     fn depth(
         &mut self,
         frame: u64,
         view: &CullView,
         lods: &[u32],
-    ) -> Result<DepthImage, RuntimeError>;
+        level: u32,
+    ) -> Result<DepthLevel, RuntimeError>;
 }
 
 /// OR's depth pass on its device.
@@ -47,12 +49,13 @@ impl OccluderTarget for GpuOccluders<'_> {
         frame: u64,
         view: &CullView,
         lods: &[u32],
-    ) -> Result<DepthImage, RuntimeError> {
+        level: u32,
+    ) -> Result<DepthLevel, RuntimeError> {
         let (ctx, pass) = (self.device.ctx, &mut self.pass);
         // Streaming: resident occluders only (culling stays conservative).
         self.device
             .with(frame, lods, Use::Occluders, |residency, lods| {
-                pass.render(ctx, residency, &gpu_view(view), lods)
+                pass.render_level(ctx, residency, &gpu_view(view), lods, level)
             })?
             .map_err(|source| RuntimeError::Gpu {
                 stage: Stage::Or,
@@ -71,7 +74,7 @@ pub(crate) struct OrStage<'a> {
 }
 
 pub(crate) struct OrOutput {
-    pub depth: Option<DepthImage>,
+    pub depth: Option<DepthLevel>,
     pub figures: OrFigures,
 }
 
@@ -85,6 +88,10 @@ pub(crate) struct OrFigures {
     /// The budget applied (`None`: all).
     pub limit: Option<u64>,
     pub ms: f64,
+    /// The level of the depth's pyramid read back (0: the whole image).
+    pub level: u32,
+    /// What the depth pass cost the CPU, step by step.
+    pub pass: PassFigures,
 }
 
 impl<'a> OrStage<'a> {
@@ -139,6 +146,8 @@ impl<'a> OrStage<'a> {
             candidates,
             limit,
             ms: 0.0,
+            level: 0,
+            pass: PassFigures::default(),
         };
         if items.is_empty() {
             // No occluder (a budget of 0, or nothing in view): an all-far
@@ -146,13 +155,17 @@ impl<'a> OrStage<'a> {
             return Ok(none(t, figures));
         }
         let lods = lod_ids(self.skeleton, &items);
-        let depth = self.render.depth(frame, view, &lods)?;
+        let depth = self
+            .render
+            .depth(frame, view, &lods, self.opts.hzb_read_level())?;
         Ok(OrOutput {
-            depth: Some(depth),
             figures: OrFigures {
                 ms: ms_since(t),
+                level: depth.level,
+                pass: depth.figures,
                 ..figures
             },
+            depth: Some(depth),
         })
     }
 }

@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use gigawalk_cull::CullView;
-use gigawalk_gpu::{DrawStyle, FrameImage, VisiblePass};
+use gigawalk_gpu::{DrawStyle, FrameImage, PassFigures, VisiblePass};
 
 use super::*;
 use crate::streaming::{StreamStats, Use};
@@ -32,9 +32,13 @@ pub(super) trait VisibleTarget {
         Ok(())
     }
     fn read_back(&mut self) -> Result<FrameImage, RuntimeError>;
-    /// Waits for the frame's drawing to finish.
+    /// Ends the frame (at most two in flight).
     fn finish(&mut self) -> Result<(), RuntimeError> {
         Ok(())
+    }
+    /// What the frame cost the CPU, step by step, since the last call.
+    fn take_figures(&mut self) -> PassFigures {
+        PassFigures::default()
     }
 }
 
@@ -81,10 +85,11 @@ impl VisibleTarget for GpuVisible<'_> {
     }
 
     fn finish(&mut self) -> Result<(), RuntimeError> {
-        self.pass
-            .finish(self.device.ctx, false)
-            .map(|_| ())
-            .map_err(rvg_error)
+        self.pass.end(self.device.ctx).map_err(rvg_error)
+    }
+
+    fn take_figures(&mut self) -> PassFigures {
+        self.pass.take_figures()
     }
 }
 
@@ -149,9 +154,14 @@ impl<'a> RvgStage<'a> {
         self.render.read_back().map(Some)
     }
 
-    /// Waits for the frame; returns the stage's ms.
+    /// Ends the frame (at most two in flight); returns the stage's ms.
     pub fn finish(&mut self) -> Result<f64, RuntimeError> {
         self.render.finish()?;
         Ok(self.started.take().map_or(0.0, ms_since))
+    }
+
+    /// What the frame cost the CPU on RVG's device, step by step.
+    pub fn take_figures(&mut self) -> PassFigures {
+        self.render.take_figures()
     }
 }

@@ -9,7 +9,7 @@ use gigawalk_cull::{
     BoxTest, CullReason, CullView, DrawItem, NoOcclusion, TraversalOptions, TraversalStats,
     Traverser,
 };
-use gigawalk_gpu::DepthImage;
+use gigawalk_gpu::DepthLevel;
 use gigawalk_scene::Skeleton;
 
 use super::*;
@@ -38,6 +38,10 @@ pub(crate) struct StcOutput {
     pub culled: Arc<[(u32, CullReason)]>,
     pub occlusion_used: bool,
     pub hzb_ms: f64,
+    /// Traversal (LOD selection and the culler's tests), and the tests
+    /// alone.
+    pub traversal_ms: f64,
+    pub test_ms: f64,
     /// What the culler did beyond traversal (none for the HZB).
     pub culler_work: Option<CullerWork>,
     /// The tiles' draw lists (a tiled display only).
@@ -70,7 +74,7 @@ impl<'a> StcStage<'a> {
         frame: u64,
         view: &CullView,
         tolerance: Option<f64>,
-        depth: Option<&DepthImage>,
+        depth: Option<&DepthLevel>,
         emit: &mut dyn FnMut(DrawItem),
     ) -> Result<StcOutput, RuntimeError> {
         let _span = tracing::info_span!("STC", frame).entered();
@@ -120,11 +124,15 @@ impl<'a> StcStage<'a> {
             options: &options,
             sink: &mut sink,
             on_cull: &mut on_cull,
+            test_time: std::time::Duration::ZERO,
         };
+        let traversed = Instant::now();
         let (stats, work) = match self.culler.as_mut().filter(|_| occlusion) {
             Some(c) => c.cull(&mut traversal, self.opts)?,
             None => (traversal.run(&mut BoxTest(&NoOcclusion)), None),
         };
+        let test_ms = traversal.test_time.as_secs_f64() * 1e3;
+        let traversal_ms = ms_since(traversed);
         if let Some(p) = self.prefetch.as_ref().filter(|_| self.opts.prefetch.ring()) {
             p.margin(&mut self.traverser, skeleton, view, &options, frame);
         }
@@ -146,6 +154,8 @@ impl<'a> StcStage<'a> {
             visible: visible.into(),
             occlusion_used: occlusion,
             hzb_ms,
+            traversal_ms,
+            test_ms,
             culler_work: work,
             ms: ms_since(t),
         })

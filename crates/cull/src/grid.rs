@@ -23,7 +23,7 @@ use std::time::Instant;
 use gigawalk_scene::Skeleton;
 use glam::{DMat4, DVec3};
 
-use crate::occlusion::{hides_split, occludes, SPLITS};
+use crate::occlusion::{hides_split, occludes, RectTest, SPLITS};
 use crate::raster::{PixelRect, SoftDepth};
 use crate::{CullView, Culler, DrawItem, RelBox, Verdict};
 
@@ -284,7 +284,7 @@ impl Culler for GridCuller<'_> {
         let (w, h) = (self.grid.depth.width(), self.grid.depth.height());
         let grid = &mut *self.grid;
         let hidden = hides_split(view, b, w, h, SPLITS, &mut |rect, nearest| {
-            grid.hides(rect, nearest)
+            RectTest::from_hides(grid.hides(rect, nearest))
         });
         self.grid.stats.test_ms += t.elapsed().as_secs_f64() * 1e3;
         let v = if hidden {

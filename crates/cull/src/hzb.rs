@@ -67,6 +67,12 @@ pub struct HzbLevel {
     /// Row-major, row 0 = top; empty for a level finer than the pyramid's
     /// [`Hzb::base`].
     pub data: Vec<f32>,
+    /// Each cell's nearest (largest) value of the base level's cells it
+    /// covers, for levels above the base (empty at and below it, where
+    /// `data` is that value): a cell whose nearest does not hide a box
+    /// shows it wherever the cell meets its footprint, so the test stops
+    /// there instead of refining.
+    pub near: Vec<f32>,
 }
 
 /// The sizes of a `width x height` image's pyramid levels, finest first:
@@ -165,17 +171,18 @@ impl Hzb {
         let w1 = l1.width as usize;
         l1.data
             .par_chunks_mut(w1)
+            .zip(l1.near.par_chunks_mut(w1))
             .zip(l0.data.par_chunks_mut(2 * w))
             .zip(depth.par_chunks(2 * w))
             .with_min_len(ROWS_PER_TASK)
-            .for_each(|((out, copy), src)| {
+            .for_each(|(((out, near), copy), src)| {
                 copy.copy_from_slice(src);
-                let (r0, r1) = src.split_at(w.min(src.len()));
-                let r1 = if r1.is_empty() { r0 } else { r1 };
+                let (r0, r1) = row_pair(src, w);
                 match reduction {
                     Reduction::Farthest => reduce_row(r0, r1, out),
                     Reduction::NthFarthest(n) => reduce_row_nth(r0, r1, out, n as usize),
                 }
+                reduce_row_near(r0, r1, near);
             });
         self.reduce_from(1);
         Ok(())
@@ -237,35 +244,56 @@ impl Hzb {
             level.height = h;
             let len = if k < base { 0 } else { w as usize * h as usize };
             level.data.resize(len, 0.0);
+            level.near.resize(if k > base { len } else { 0 }, 0.0);
         }
         sizes
     }
 
-    /// Each level above `k` from the one below it, farthest of 2x2;
-    /// levels of fewer than [`PARALLEL_TEXELS`] on this thread.
+    /// Each level above `k` from the one below it: farthest of 2x2, and
+    /// the nearest of the base level below (`near`); levels of fewer than
+    /// [`PARALLEL_TEXELS`] on this thread.
     fn reduce_from(&mut self, k: usize) {
+        let base = self.base;
         for k in k..self.levels.len() - 1 {
             let (lo, hi) = self.levels.split_at_mut(k + 1);
             let src = &lo[k];
             let dst = &mut hi[0];
             let sw = src.width as usize;
-            let rows = |(out, src): (&mut [f32], &[f32])| {
-                let (r0, r1) = src.split_at(sw.min(src.len()));
-                let r1 = if r1.is_empty() { r0 } else { r1 };
+            let dw = dst.width as usize;
+            let near_src = if k == base { &src.data } else { &src.near };
+            let rows = |((out, near), (src, nsrc)): RowPair| {
+                let (r0, r1) = row_pair(src, sw);
                 reduce_row(r0, r1, out);
+                let (n0, n1) = row_pair(nsrc, sw);
+                reduce_row_near(n0, n1, near);
             };
             if dst.data.len() < PARALLEL_TEXELS {
                 dst.data
-                    .chunks_mut(dst.width as usize)
-                    .zip(src.data.chunks(2 * sw))
+                    .chunks_mut(dw)
+                    .zip(dst.near.chunks_mut(dw))
+                    .zip(src.data.chunks(2 * sw).zip(near_src.chunks(2 * sw)))
                     .for_each(rows);
             } else {
                 dst.data
-                    .par_chunks_mut(dst.width as usize)
-                    .zip(src.data.par_chunks(2 * sw))
+                    .par_chunks_mut(dw)
+                    .zip(dst.near.par_chunks_mut(dw))
+                    .zip(src.data.par_chunks(2 * sw).zip(near_src.par_chunks(2 * sw)))
                     .with_min_len(ROWS_PER_TASK)
                     .for_each(rows);
             }
+        }
+    }
+
+    /// The nearest base-level value under cell (cx, cy) of level `k`
+    /// (`k` at least the base).
+    #[inline]
+    fn nearest(&self, k: usize, cx: u32, cy: u32) -> f32 {
+        let level = &self.levels[k];
+        let i = cy as usize * level.width as usize + cx as usize;
+        if k == self.base {
+            level.data[i]
+        } else {
+            level.near[i]
         }
     }
 
@@ -344,6 +372,26 @@ impl Hzb {
         )
     }
 
+    /// Whether no pixel of the level-0 rectangle `[x0, x1] x [y0, y1]`
+    /// (inclusive, as [`Hzb::farthest_in_rect`]) satisfies `hides` (as in
+    /// [`Hzb::rect_hides`]), judged from the nearest base-level value under
+    /// each of the at most 2x2 cells that cover it: a quick `true` for a
+    /// box in front of everything around it, `false` when unsure. Cells
+    /// of the base level meeting the rectangle are read whole, so this is
+    /// exact at the base's resolution: what the pyramid can tell.
+    pub fn rect_shows(
+        &self,
+        x0: u32,
+        y0: u32,
+        x1: u32,
+        y1: u32,
+        hides: impl Fn(f32) -> bool,
+    ) -> bool {
+        debug_assert!(x0 <= x1 && x1 < self.width() && y0 <= y1 && y1 < self.height());
+        let k = self.cover_level(x0, y0, x1, y1);
+        (y0 >> k..=y1 >> k).all(|cy| (x0 >> k..=x1 >> k).all(|cx| !hides(self.nearest(k, cx, cy))))
+    }
+
     /// The finest level where the rectangle spans at most 2x2 cells.
     fn cover_level(&self, x0: u32, y0: u32, x1: u32, y1: u32) -> usize {
         // 2^k >= span guarantees at most 2 cells per axis; one level finer
@@ -387,8 +435,14 @@ impl<F: Fn(f32) -> bool> RectQuery<'_, F> {
                 }
                 // A cell at the finest trusted level, or covering only
                 // rectangle pixels, stores the depth of some rectangle
-                // pixel (some finest-level cell of it): visible.
-                if k <= self.hzb.finest || self.inside(k, cx, cy) {
+                // pixel (some finest-level cell of it): visible. So is one
+                // whose nearest base cell does not hide: every base cell
+                // under it that meets the rectangle (one does) would be
+                // found visible by the refinement.
+                if k <= self.hzb.finest
+                    || self.inside(k, cx, cy)
+                    || !(self.hides)(self.hzb.nearest(k, cx, cy))
+                {
                     return false;
                 }
                 refine[n] = (cx, cy);
@@ -451,6 +505,46 @@ fn reduce_row(r0: &[f32], r1: &[f32], out: &mut [f32]) {
     if r0.len() % 2 == 1 {
         let last = r0.len() - 1;
         out[pairs] = farther(r0[last], r1[last]);
+    }
+}
+
+/// Output rows of farthest and nearest values, with the input rows
+/// (farthest and nearest sources) they reduce.
+type RowPair<'a> = ((&'a mut [f32], &'a mut [f32]), (&'a [f32], &'a [f32]));
+
+/// The two input rows of one output row from the chunk of (up to) two rows
+/// `src` of width `w`: the same row twice for the last row of an odd
+/// height.
+#[inline]
+fn row_pair(src: &[f32], w: usize) -> (&[f32], &[f32]) {
+    let (r0, r1) = src.split_at(w.min(src.len()));
+    (r0, if r1.is_empty() { r0 } else { r1 })
+}
+
+/// [`reduce_row`] keeping the nearer (larger) of each block.
+#[inline]
+fn reduce_row_near(r0: &[f32], r1: &[f32], out: &mut [f32]) {
+    let pairs = r0.len() / 2;
+    for ((o, a), b) in out[..pairs]
+        .iter_mut()
+        .zip(r0.chunks_exact(2))
+        .zip(r1.chunks_exact(2))
+    {
+        *o = nearer(nearer(a[0], b[0]), nearer(a[1], b[1]));
+    }
+    if r0.len() % 2 == 1 {
+        let last = r0.len() - 1;
+        out[pairs] = nearer(r0[last], r1[last]);
+    }
+}
+
+/// Reversed Z: the nearer of two depths is the larger.
+#[inline(always)]
+fn nearer(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
     }
 }
 
@@ -642,12 +736,31 @@ mod tests {
                 part.rebuild_from_level(w, h, base as u32, &whole.levels()[base].data)
                     .unwrap();
                 assert_eq!((part.width(), part.height(), part.base()), (w, h, base));
-                for (k, (a, b)) in part.levels().iter().zip(whole.levels()).enumerate() {
-                    assert_eq!((a.width, a.height), (b.width, b.height));
+                let b = &whole.levels()[base];
+                for (k, (a, c)) in part.levels().iter().zip(whole.levels()).enumerate() {
+                    assert_eq!((a.width, a.height), (c.width, c.height));
                     if k < base {
                         assert!(a.data.is_empty(), "{w}x{h} base {base}: level {k} held");
-                    } else {
-                        assert_eq!(a.data, b.data, "{w}x{h} base {base}: level {k}");
+                        continue;
+                    }
+                    assert_eq!(a.data, c.data, "{w}x{h} base {base}: level {k}");
+                    if k == base {
+                        assert!(a.near.is_empty());
+                        continue;
+                    }
+                    // Each cell's nearest: the largest base cell it covers.
+                    let s = k - base;
+                    for cy in 0..a.height {
+                        for cx in 0..a.width {
+                            let mut m = f32::NEG_INFINITY;
+                            for y in (cy << s)..((cy + 1) << s).min(b.height) {
+                                for x in (cx << s)..((cx + 1) << s).min(b.width) {
+                                    m = m.max(b.data[(y * b.width + x) as usize]);
+                                }
+                            }
+                            let got = a.near[(cy * a.width + cx) as usize];
+                            assert_eq!(got, m, "{w}x{h} base {base} level {k} ({cx}, {cy})");
+                        }
                     }
                 }
             }

@@ -89,38 +89,73 @@ impl OcclusionTest for HzbOcclusion<'_> {
     fn is_visible(&self, view: &CullView, b: &RelBox) -> bool {
         let (w, h) = (self.hzb.width(), self.hzb.height());
         !hides_split(view, b, w, h, self.splits, &mut |r, nearest| {
-            self.hzb
-                .rect_hides(r.x0, r.y0, r.x1, r.y1, REFINE_CELLS, |d| {
-                    occludes(nearest, d)
-                })
+            let hides = |d| occludes(nearest, d);
+            if self
+                .hzb
+                .rect_hides(r.x0, r.y0, r.x1, r.y1, REFINE_CELLS, hides)
+            {
+                RectTest::Hides
+            } else if self.hzb.rect_shows(r.x0, r.y0, r.x1, r.y1, hides) {
+                RectTest::ShowsEverywhere
+            } else {
+                RectTest::Shows
+            }
         })
     }
 }
 
+/// What a footprint test found for a box part of some nearest depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum RectTest {
+    /// Every pixel of the rectangle hides it.
+    Hides,
+    /// Some pixel may show it.
+    Shows,
+    /// No pixel of the rectangle hides it: no part of the box with the
+    /// same nearest depth hides either, so splitting cannot help.
+    ShowsEverywhere,
+}
+
+impl RectTest {
+    /// Hides, or shows (without saying more).
+    pub(crate) fn from_hides(hides: bool) -> RectTest {
+        if hides {
+            RectTest::Hides
+        } else {
+            RectTest::Shows
+        }
+    }
+}
+
 /// Whether a box hides in a `w x h` depth image, where `hides(rect,
-/// nearest)` says whether every pixel of `rect` hides a box part whose
-/// nearest depth is `nearest` (conservatively): the box as a whole, or
-/// else both its [`halves`], up to `splits` times deep. A box crossing
-/// the near plane shows (so does any half of it that crosses it); one
-/// wholly beside the image hides.
+/// nearest)` tests the pixels of `rect` against a box part whose nearest
+/// depth is `nearest` (conservatively): the box as a whole, or else both
+/// its [`halves`], up to `splits` times deep. A box crossing the near
+/// plane shows (so does any half of it that crosses it); one wholly
+/// beside the image hides. A box whose rectangle shows it everywhere is
+/// not split: the half holding its nearest corner has the same nearest
+/// depth and a footprint inside the rectangle, so it shows too.
 pub(crate) fn hides_split(
     view: &CullView,
     b: &RelBox,
     w: u32,
     h: u32,
     splits: u8,
-    hides: &mut impl FnMut(PixelRect, f32) -> bool,
+    hides: &mut impl FnMut(PixelRect, f32) -> RectTest,
 ) -> bool {
     match footprint(view, b, w, h) {
         Footprint::Visible => false,
         Footprint::Beside => true,
-        Footprint::Pixels { rect, nearest } => {
-            hides(rect, nearest)
-                || (splits > 0
+        Footprint::Pixels { rect, nearest } => match hides(rect, nearest) {
+            RectTest::Hides => true,
+            RectTest::ShowsEverywhere => false,
+            RectTest::Shows => {
+                splits > 0
                     && halves(b)
                         .iter()
-                        .all(|half| hides_split(view, half, w, h, splits - 1, hides)))
-        }
+                        .all(|half| hides_split(view, half, w, h, splits - 1, hides))
+            }
+        },
     }
 }
 

@@ -1,7 +1,7 @@
 //! Box tests per second (HZB occlusion and frustum, one core) and traversal
 //! of a 100k-node hierarchy against a realistic HZB.
 //!
-//! Run: `cargo bench --bench cull -- --noplot` (figures in docs/PERFORMANCE.md).
+//! Run: `cargo bench --bench cull -- --noplot` (figures in docs/results.md, "The HZB: build and box test").
 
 use std::collections::VecDeque;
 use std::hint::black_box;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds and runs every cargo-fuzz target under fuzz/ for MINUTES each
-# (docs/PERFORMANCE.md, "Fuzzing"): release builds with debug assertions
+# (docs/results.md, "Fuzzing"): release builds with debug assertions
 # and overflow checks on (cargo-fuzz's default), no sanitizer, on a stable
 # toolchain through RUSTC_BOOTSTRAP=1. Each target starts from its seeds
 # (fuzz/seeds/TARGET, committed) and the corpus earlier runs grew

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One unattended run on a real GPU, started with one command (issue 12):
+# One unattended run on a real GPU, started with one command:
 # builds release, prepares the default demo plant (4M triangles) and a
 # 50M-triangle plant (both cached between runs), replays each at 1920x1080
 # and 640x360 in the four modes with accuracy, times pipelined against
@@ -8,7 +8,7 @@
 # unit) and OUTDIR/summary.md. Every step has a time limit and the whole
 # run a deadline (8 minutes on a 16-core machine with an H200-class GPU);
 # a failed or stopped step is recorded and the rest still run.
-# docs/PERFORMANCE.md ("Real GPU") has the plan and the time budget.
+# docs/results.md ("Real GPU") says what it runs and what it writes.
 #
 # Usage: benches/gpu-run.sh OUTDIR [--quick]
 #   --quick  small scenes, short paths, small viewports: a few minutes on

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Does "pixel error p" hold, and what do HLODs buy, across scene kinds,
-# seeds and sizes (docs/PERFORMANCE.md, "HLODs with measured error
-# bounds")? For every scene: generate, preprocess (cached in OUT_DIR), and
+# seeds and sizes (docs/results.md, "Across scenes and
+# viewports")? For every scene: generate, preprocess (cached in OUT_DIR), and
 # replay hlod and och at pixel error 1 and 2 against the full-detail
 # reference, at 640x360 and 1920x1080; prints one table row per run:
 # bound-violating fraction, the same with the depth match scaled to the

@@ -1,6 +1,6 @@
 //! HZB build time from a GPU-style depth readback, per variant and size.
 //!
-//! Run: `cargo bench --bench hzb -- --noplot` (figures in docs/PERFORMANCE.md).
+//! Run: `cargo bench --bench hzb -- --noplot` (figures in docs/results.md, "The HZB: build and box test").
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use gigawalk_cull::{Hzb, Reduction};

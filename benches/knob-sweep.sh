@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Speed and image error (differing, wrongly culled and bound-violating
 # pixels) of every runtime knob on the default demo scene,
-# each knob against the defaults in the same session (docs/PERFORMANCE.md,
-# "Knobs"). Run `gigawalk demo` once first to build the cached scene.
+# each knob against the defaults in the same run (docs/results.md,
+# "Runtime knobs"). Run `gigawalk demo` once first to build the cached scene.
 # Usage: benches/knob-sweep.sh [OUT_DIR]   (about 6 minutes on 2 cores with lavapipe)
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,5 +1,5 @@
 //! Pipelined against sequential throughput on the generated plant's walk
-//! (issue 6's performance figure): median frame time, each stage's median
+//! (the pipeline's speed-up target): median frame time, each stage's median
 //! time, and latency, per schedule, measured in one run.
 //!
 //! Run: `cargo bench -p gigawalk-suite --bench pipeline` (env: OCCLUDER_BUDGET, PLANT_TRIANGLES

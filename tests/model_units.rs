@@ -1,4 +1,4 @@
-//! Any model's units (issue 12): the generated plant and its walk scaled by
+//! Any model's units: the generated plant and its walk scaled by
 //! about 1e-3 (a model in kilometres), 1e3 (millimetres) and 1e6 draw,
 //! frame by frame, the same triangles and the same pixels as at scale 1,
 //! with the near plane derived from the scene (`gigawalk_cull::default_near`,

@@ -96,7 +96,7 @@ fn check(kind: Kind, triangles: u64) {
     .unwrap_or_else(|e| panic!("{} against f32: {e}", kind.name()));
     assert!(b.lods >= nodes.len(), "{}: {b:?}", kind.name());
     // The encoded scene is smaller (how much is a benchmark:
-    // docs/PERFORMANCE.md), and every stored error above the raw scene's
+    // docs/results.md), and every stored error above the raw scene's
     // by at most half the 16-bit grid's step diagonal over its node's
     // box (sqrt(3) / 2 / 65535 of its longest side).
     let (q, r) = (

@@ -1,4 +1,4 @@
-//! Out-of-core walkthroughs (issue 13): the runtime streaming a generated
+//! Out-of-core walkthroughs: the runtime streaming a generated
 //! plant's LODs under a memory budget, against the fully resident runtime.
 
 use std::path::Path;

@@ -1,5 +1,5 @@
 //! What sending culled items to the tiles of a tiled display costs, by
-//! method and tile grid (issue 17; Nirnimesh, Harish and Narayanan's
+//! method and tile grid (Nirnimesh, Harish and Narayanan's
 //! Fig. 4): for each pose, the frustum-culled, LOD-selected items of the
 //! whole view (no occlusion, so most of the model is in play), then each
 //! method's milliseconds (median over poses) for grids 1x1 to 16x16 and

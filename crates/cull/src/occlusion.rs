@@ -160,8 +160,8 @@ pub(crate) fn hides_split(
 }
 
 /// How many times deep [`HzbOcclusion`] splits a box that does not hide.
-/// Measured on the 4M demo and 20M plant walks; see docs/PERFORMANCE.md
-/// "Split boxes".
+/// Measured on the 4M demo and 20M plant walks; see docs/results.md
+/// "The HZB: build and box test".
 pub const SPLITS: u8 = 2;
 
 /// The most splits [`HzbOcclusion::with_splits`] takes.
@@ -196,7 +196,7 @@ fn halves(b: &RelBox) -> [RelBox; 2] {
 /// split in halves may read this many per part. Measured before boxes
 /// were split (640x360, och at 1 px, revision 6 scenes): 16 cells leave 5% (4M plant) and 7% (20M plant) more
 /// triangles than an unlimited refinement, 64 and 256 within 0.2%, with
-/// traversal time unchanged. See docs/PERFORMANCE.md "HZB refinement".
+/// traversal time unchanged. See docs/results.md "The HZB: build and box test".
 pub const REFINE_CELLS: usize = 256;
 
 /// Where a box lands in a `w x h` depth image.

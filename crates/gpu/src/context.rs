@@ -484,6 +484,7 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
 /// or `None` after [`skip_test`] when no adapter qualifies.
 #[cfg(feature = "testing")]
 pub fn devices_or_skip(count: usize, test: &str) -> Option<Vec<GpuContext>> {
+    quiet_headless_probing();
     match open_devices(count) {
         Ok(d) => Some(d),
         Err(GpuError::NoAdapter { .. }) => {
@@ -495,6 +496,39 @@ pub fn devices_or_skip(count: usize, test: &str) -> Option<Vec<GpuContext>> {
         }
         Err(e) => panic!("{test}: {e}"),
     }
+}
+
+/// Gives a test process without a desktop session a private, empty
+/// XDG_RUNTIME_DIR before it first looks for adapters. Enumerating them
+/// asks for a Wayland display (Mesa's Vulkan device-selection layer, EGL's
+/// platform probe), and without XDG_RUNTIME_DIR libwayland-client prints
+/// "error: XDG_RUNTIME_DIR is invalid or not set in the environment." each
+/// time, although nothing failed: a few hundred such lines in a test run.
+/// With a directory that holds no display the probe fails quietly. The
+/// binary quiets the same probe its own way (`NODEVICE_SELECT`, in
+/// tools/gigawalk's main.rs), which its tests check, so this stays out of
+/// the library's paths. Once per process, and before any adapter is
+/// enumerated from this helper, since other threads may read the
+/// environment afterwards.
+#[cfg(feature = "testing")]
+fn quiet_headless_probing() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let set = std::env::var_os("XDG_RUNTIME_DIR")
+            .is_some_and(|d| std::path::Path::new(&d).is_absolute());
+        if set {
+            return;
+        }
+        let dir = std::env::temp_dir().join("gigawalk-tests-runtime-dir");
+        let mut builder = std::fs::DirBuilder::new();
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        // Already there (an earlier test process) is fine; so is failing to
+        // make it: libwayland only needs an absolute path that holds no
+        // display.
+        let _ = builder.create(&dir);
+        std::env::set_var("XDG_RUNTIME_DIR", &dir);
+    });
 }
 
 /// For tests (feature `testing`): `test` cannot run on this machine

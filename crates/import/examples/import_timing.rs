@@ -1,4 +1,4 @@
-//! Import throughput for docs/PERFORMANCE.md: imports a model several times
+//! Import throughput for docs/results.md: imports a model several times
 //! and prints the median time and triangles per second.
 //!
 //! `cargo run --release -p gigawalk-import --example import_timing -- model.glb [runs]`

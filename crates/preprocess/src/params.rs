@@ -75,8 +75,8 @@ pub struct Params {
     /// 4M demo plant's walk (och, 1 px, 640x360, node budget 512): 8
     /// draws 41.4k triangles a frame against 49.6k with 1, at fewer
     /// bound-violating pixels and the same preprocess time; with a 1024
-    /// budget it cost 1.3-2.2x the time (docs/PERFORMANCE.md "Node
-    /// budget and edge collapse").
+    /// budget it cost 1.3-2.2x the time (docs/results.md "Preprocessing
+    /// knobs").
     pub collapse_levels: u32,
     /// Triangles of an inner node's finest HLOD, at most. Its children are
     /// cut at a matching error so they hold about `node_budget / lod_ratio`

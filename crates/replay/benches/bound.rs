@@ -3,7 +3,7 @@
 //! 9, the largest the knob sweep uses).
 //!
 //! Run: `cargo bench -p gigawalk-replay --bench bound -- --noplot`
-//! (figures in docs/PERFORMANCE.md).
+//! (figures in docs/results.md, "What measuring accuracy costs").
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use gigawalk_gpu::DepthImage;

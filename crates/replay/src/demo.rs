@@ -13,8 +13,8 @@ use crate::mode::Mode;
 use crate::replay::ReplayOptions;
 
 /// The demo scene. The defaults are sized so that `gigawalk demo` finishes
-/// in a few minutes on a 2-core machine with lavapipe (docs/PERFORMANCE.md,
-/// "Replay and demo").
+/// in a few minutes on a 2-core machine with lavapipe (docs/results.md,
+/// "The demo plant").
 #[derive(Clone, Debug, PartialEq)]
 pub struct DemoScene {
     pub triangles: u64,

@@ -4,7 +4,7 @@
 //! and pipeline bench table, and [`GpuRun::write`] writes `results.json`
 //! (every figure with its unit) and `summary.md`. Kept in Rust so that the
 //! GPU machine needs nothing but the `gigawalk` binary: no python, no jq.
-//! docs/PERFORMANCE.md ("Real GPU") describes the files.
+//! docs/results.md ("Real GPU") describes the files.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

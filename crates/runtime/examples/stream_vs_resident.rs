@@ -1,7 +1,7 @@
 //! och along a camera path streamed under a memory budget against the
 //! same frames with the whole scene resident, pixel by pixel: per frame,
 //! the stand-ins drawn and the pixels whose depth differs. The 256M check
-//! of docs/PERFORMANCE.md ("Out of core") comes from it.
+//! of docs/results.md ("First frame and memory") comes from it.
 //!
 //! ```text
 //! cargo run --release -p gigawalk-runtime --example stream_vs_resident -- \

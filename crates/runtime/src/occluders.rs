@@ -6,7 +6,7 @@
 //! 5.1.1). Where occlusion hides much (plants with walls), that pays; in an
 //! open hall of dense parts (a factory floor of CAD assemblies) OR can spend
 //! more than RVG saves: 129 ms a frame for 20% fewer triangles on the real
-//! CAD bench (docs/PERFORMANCE.md, "Occluders that pay"). A fixed budget
+//! CAD bench (docs/results.md, "Occluder budget"). A fixed budget
 //! is right for one scene and wrong for the next, and the right budget
 //! changes along a walk.
 //!

@@ -49,7 +49,7 @@ pub enum OccluderBudget {
     /// HLODs whose errors are measured bounds (preprocess revision 3) the
     /// visible set is small, and all occluders made `och` and `occ` faster
     /// than a 30k or 100k budget on the 4M, 20M and 50M plants even on
-    /// lavapipe (docs/PERFORMANCE.md, "Occluder budget").
+    /// lavapipe (docs/results.md, "Occluder budget").
     #[default]
     All,
     /// At most this many triangles, those hiding most per triangle first
@@ -70,7 +70,7 @@ pub enum OccluderBudget {
 /// The budget `OccluderBudget::Auto` uses on CPU rasterizers: on the 4M
 /// demo plant with lavapipe and the estimated LOD errors of preprocess
 /// revision 1, 10k-30k triangles made `och` 1.29x faster than all
-/// occluders (docs/PERFORMANCE.md, "Occluder budget").
+/// occluders (docs/results.md, "Occluder budget").
 pub const CPU_OCCLUDER_BUDGET: u64 = 30_000;
 
 /// An [`OccluderBudget`] as a run on given devices uses it (`Auto`
@@ -145,7 +145,7 @@ impl std::str::FromStr for OccluderBudget {
 }
 
 /// What STC asks the loader for ahead of need when streaming
-/// (docs/PERFORMANCE.md, "Out of core", has what each costs and buys).
+/// (docs/results.md, "Prefetch", has what each costs and buys).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Prefetching {
     /// Nothing: the loader reads what frames had to stand in for.
@@ -323,7 +323,7 @@ pub struct RuntimeOptions {
     /// default: on the 50M plant's walk the band cut frames with a
     /// stand-in (35-38 of 55 instead of 48) but drew more stand-ins and
     /// loaded 30% more; the ring loaded 85% more for no fewer stand-ins
-    /// (docs/PERFORMANCE.md, "Out of core").
+    /// (docs/results.md, "Prefetch").
     pub prefetch: Prefetching,
     /// The occlusion culler (with `traversal.occlusion`).
     pub culler: CullMethod,

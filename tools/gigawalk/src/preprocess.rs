@@ -87,7 +87,7 @@ pub struct Args {
     /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it (with one collapse level, 512 drew 8% and 10% fewer triangles than 1024 at 1 px on the 4M and 20M plants, in a 1.2x smaller scene)
     #[arg(long, default_value_t = Params::default().node_budget)]
     node_budget: u32,
-    /// LOD errors: each stored error is a measured bound on the Hausdorff distance to the full-detail surface; samples cover each surface to this fraction of the distance found. Tighter errors draw fewer triangles at a tolerance and cost preprocess time (4M plant: 0.1 = -2.4% triangles at 1 px, +19% time; 0.5 = +7.6%, -7%; docs/PERFORMANCE.md)
+    /// LOD errors: each stored error is a measured bound on the Hausdorff distance to the full-detail surface; samples cover each surface to this fraction of the distance found. Tighter errors draw fewer triangles at a tolerance and cost preprocess time (4M plant: 0.1 = -2.4% triangles at 1 px, +19% time; 0.5 = +7.6%, -7%; docs/results.md)
     #[arg(long, default_value_t = Params::default().bound_spacing)]
     bound_spacing: f64,
     /// LOD errors: the finest sample cover, as a fraction of the node's box diagonal
@@ -561,7 +561,7 @@ fn threads_within(budget: u64, progress: &Display) {
 
 /// The least memory a worker is given: what one shard of the default size
 /// needs, with the model spilled (about 150 MiB measured on the plants,
-/// docs/PERFORMANCE.md "Memory").
+/// docs/results.md "Memory").
 const MIN_WORKER_BUDGET: u64 = 192 << 20;
 
 /// `jobs`, or fewer when the budget cannot give each worker

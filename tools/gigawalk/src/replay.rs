@@ -115,7 +115,7 @@ pub struct RuntimeArgs {
     /// Speculative RVG (the paper's Section 8 proposal): when STC's list for the next camera is late, draw the last finished list with that camera instead of waiting (extra frames, counted in frames.csv speculative_before); pipelined, synchronous RVG only
     #[arg(long)]
     speculative_rvg: bool,
-    /// Measurement: STC sleeps this many ms a frame (a slow STC, to see what speculative or asynchronous RVG save); hidden from --help, for docs/PERFORMANCE.md's reruns
+    /// Measurement: STC sleeps this many ms a frame (a slow STC, to see what speculative or asynchronous RVG save); hidden from --help, for docs/results.md's reruns
     #[arg(long, default_value_t = 0.0, hide = true)]
     stc_delay_ms: f64,
     /// Tiled display (Nirnimesh et al.): split the viewport into COLSxROWS tiles (1-64 each; e.g. 4x4), each an off-axis frustum from the same eye drawn from its own list under its own scissor; the stitched image is what accuracy compares with the single-view reference

@@ -8,7 +8,7 @@
 # machine floor and a large plant, at 640x360, 1920x1080 and 3840x2160.
 # Every run draws all occluders (`--occluder-budget all`), so runs differ
 # only in what is measured. Prints one line a run and writes each report under OUT_DIR
-# (docs/PERFORMANCE.md, "Frame cost on the CPU").
+# (docs/results.md, "Frame cost on the CPU (null GPU)").
 #
 # Then what the read-back level costs in culling, on a real rasterizer
 # (the best adapter here: lavapipe on a machine without a GPU): och's

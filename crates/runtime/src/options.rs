@@ -262,7 +262,7 @@ pub const MAX_HZB_LEVEL: u32 = 14;
 /// Texels of the level OR reads back by default: the finest level with at
 /// most this many (2^17: 0.5 MiB of f32 depth; level 3 at 3840x2160, 2
 /// at 1920x1080, 1 at 640x360). What each level costs and culls is in
-/// docs/PERFORMANCE.md, "Frame cost on the CPU".
+/// docs/results.md, "Frame cost on the CPU (null GPU)".
 pub const HZB_READ_TEXELS: u64 = 1 << 17;
 
 /// The finest level of a `w x h` depth image's pyramid with at most

@@ -3,7 +3,7 @@
 //! same function, not a copy of its header), in the same order, and its
 //! rows are the demo's modes (`demo::replay_options`).
 
-use gigawalk_replay::Summary;
+use gigawalk_replay::RUN_TABLE_HEADER;
 
 #[test]
 fn the_readme_demo_table_has_the_columns_and_modes_the_demo_prints() {
@@ -52,32 +52,10 @@ fn a_column_the_demo_does_not_print_is_found() {
     assert!(!printed.contains(&header[2]));
 }
 
-/// The header the demo prints above its per-run table, from the function
-/// that prints it (a summary with no runs prints only the header).
+/// The header the demo prints above its per-run table, as the function
+/// that prints it writes it.
 fn summary_table_header() -> String {
-    Summary {
-        scene: String::new(),
-        path: String::new(),
-        frames: 0,
-        width: 0,
-        height: 0,
-        warmup_frames: 0,
-        accuracy_every: 0,
-        complete: true,
-        devices: Vec::new(),
-        schedule: String::new(),
-        occluder_lag: 0,
-        occluder_scale: 1.0,
-        occluder_budget: None,
-        occluder_selection: String::new(),
-        hzb_reduction: String::new(),
-        memory_budget: None,
-        unsettled_reference_frames: 0,
-        seconds: 0.0,
-        culler_settings: Default::default(),
-        modes: Vec::new(),
-    }
-    .table()
+    RUN_TABLE_HEADER.to_string()
 }
 
 /// The first markdown table of `text` whose first column is "mode": its

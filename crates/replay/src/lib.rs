@@ -33,4 +33,4 @@ pub use replay::{
     ReplayError, ReplayOptions, RunRecord, TargetFps, TileFigures,
 };
 pub use report::{markdown, ReportError, Written};
-pub use summary::{median, percentile, ModeSummary, Summary};
+pub use summary::{median, percentile, ModeSummary, Summary, RUN_TABLE_HEADER};

@@ -588,14 +588,15 @@ impl Replay {
     }
 }
 
+/// The header of [`Summary::table`]: its column names and alignment rows.
+pub const RUN_TABLE_HEADER: &str = "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | triangles / px | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | beyond the bound px | PSNR dB |\n\
+     |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+
 impl Summary {
     /// The per-run table of summary.md, also what `gigawalk replay` and
     /// `gigawalk demo` print.
     pub fn table(&self) -> String {
-        let mut s = String::from(
-            "| mode | pixel error | mean fps | median frame ms | p95 frame ms | mean triangles | triangles / px | speed-up vs vfc (mean fps) | mean latency ms | wrongly culled px | differing px | bound-violating px | beyond the bound px | PSNR dB |\n\
-             |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-        );
+        let mut s = String::from(RUN_TABLE_HEADER);
         for m in &self.modes {
             s += &format!(
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",

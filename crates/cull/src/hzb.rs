@@ -494,17 +494,29 @@ fn farther(a: f32, b: f32) -> f32 {
 /// width covering one column.
 #[inline]
 fn reduce_row(r0: &[f32], r1: &[f32], out: &mut [f32]) {
+    reduce_row_with(r0, r1, out, farther)
+}
+
+/// [`reduce_row`] keeping the nearer (larger) of each block.
+#[inline]
+fn reduce_row_near(r0: &[f32], r1: &[f32], out: &mut [f32]) {
+    reduce_row_with(r0, r1, out, nearer)
+}
+
+/// [`reduce_row`] with `pick` choosing one of two depths.
+#[inline(always)]
+fn reduce_row_with(r0: &[f32], r1: &[f32], out: &mut [f32], pick: impl Fn(f32, f32) -> f32) {
     let pairs = r0.len() / 2;
     for ((o, a), b) in out[..pairs]
         .iter_mut()
         .zip(r0.chunks_exact(2))
         .zip(r1.chunks_exact(2))
     {
-        *o = farther(farther(a[0], b[0]), farther(a[1], b[1]));
+        *o = pick(pick(a[0], b[0]), pick(a[1], b[1]));
     }
     if r0.len() % 2 == 1 {
         let last = r0.len() - 1;
-        out[pairs] = farther(r0[last], r1[last]);
+        out[pairs] = pick(r0[last], r1[last]);
     }
 }
 
@@ -519,23 +531,6 @@ type RowPair<'a> = ((&'a mut [f32], &'a mut [f32]), (&'a [f32], &'a [f32]));
 fn row_pair(src: &[f32], w: usize) -> (&[f32], &[f32]) {
     let (r0, r1) = src.split_at(w.min(src.len()));
     (r0, if r1.is_empty() { r0 } else { r1 })
-}
-
-/// [`reduce_row`] keeping the nearer (larger) of each block.
-#[inline]
-fn reduce_row_near(r0: &[f32], r1: &[f32], out: &mut [f32]) {
-    let pairs = r0.len() / 2;
-    for ((o, a), b) in out[..pairs]
-        .iter_mut()
-        .zip(r0.chunks_exact(2))
-        .zip(r1.chunks_exact(2))
-    {
-        *o = nearer(nearer(a[0], b[0]), nearer(a[1], b[1]));
-    }
-    if r0.len() % 2 == 1 {
-        let last = r0.len() - 1;
-        out[pairs] = nearer(r0[last], r1[last]);
-    }
 }
 
 /// Reversed Z: the nearer of two depths is the larger.

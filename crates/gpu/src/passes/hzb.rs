@@ -6,7 +6,7 @@
 //! back is packed tightly there), fragment passes into a texture a level
 //! elsewhere and on GL.
 
-use crate::passes::{fullscreen_pipeline_entry, ReadBack, Rows};
+use crate::passes::{draw_fullscreen, fullscreen_pipeline_entry, ReadBack, Rows};
 use crate::shader_types::HzbLevelUniforms;
 use crate::GpuContext;
 
@@ -265,23 +265,9 @@ impl Pyramid {
                     },
                     Storage::Fragment { textures },
                 ) => {
-                    let view = textures[k as usize - 1].create_view(&Default::default());
-                    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                        label: Some("hzb downsample"),
-                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                            view: &view,
-                            depth_slice: None,
-                            resolve_target: None,
-                            ops: wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                                store: wgpu::StoreOp::Store,
-                            },
-                        })],
-                        ..Default::default()
-                    });
-                    pass.set_pipeline(if k == 1 { from_depth } else { from_level });
-                    pass.set_bind_group(0, bind_group, &[]);
-                    pass.draw(0..3, 0..1);
+                    let pipeline = if k == 1 { from_depth } else { from_level };
+                    let target = &textures[k as usize - 1];
+                    draw_fullscreen(enc, "hzb downsample", target, pipeline, bind_group);
                 }
                 _ => unreachable!("storage is made for the pipelines' path"),
             }

@@ -23,7 +23,7 @@ pub use depth::{DepthLevel, DepthPass};
 pub(crate) use drawer::Drawer;
 pub use hzb::{PyramidPath, HZB_DOWNSAMPLE_WGSL};
 pub(crate) use pipelines::{
-    fullscreen_pipeline, fullscreen_pipeline_entry, pipeline, ScenePipelines,
+    draw_fullscreen, fullscreen_pipeline, fullscreen_pipeline_entry, pipeline, ScenePipelines,
 };
 pub use readback::PassFigures;
 pub(crate) use readback::{device_error, map_and_wait, ms_since, ReadBack, Rows};

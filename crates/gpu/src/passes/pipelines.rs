@@ -89,6 +89,34 @@ pub(crate) fn fullscreen_pipeline(
     fullscreen_pipeline_entry(ctx, label, wgsl, layout, format, "fs_main")
 }
 
+/// Records on `enc` one fullscreen triangle of `pipeline` (bind group 0:
+/// `bind_group`) into `target`, cleared first.
+pub(crate) fn draw_fullscreen(
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    target: &wgpu::Texture,
+    pipeline: &wgpu::RenderPipeline,
+    bind_group: &wgpu::BindGroup,
+) {
+    let view = target.create_view(&Default::default());
+    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        ..Default::default()
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind_group, &[]);
+    pass.draw(0..3, 0..1);
+}
+
 /// [`fullscreen_pipeline`] with the fragment entry point `fragment`.
 pub(crate) fn fullscreen_pipeline_entry(
     ctx: &GpuContext,

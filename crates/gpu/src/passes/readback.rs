@@ -7,7 +7,9 @@
 
 use std::time::Instant;
 
-use crate::passes::{fullscreen_pipeline, target, DepthImage, DEPTH_COPY_FORMAT, DEPTH_COPY_WGSL};
+use crate::passes::{
+    draw_fullscreen, fullscreen_pipeline, target, DepthImage, DEPTH_COPY_FORMAT, DEPTH_COPY_WGSL,
+};
 use crate::{GpuContext, GpuError};
 
 /// What a pass cost the CPU in one frame, step by step (milliseconds),
@@ -377,25 +379,7 @@ impl DepthCopy {
             self.bound = Some((tex.clone(), bind_group, target));
         }
         let (_, bind_group, target) = self.bound.as_ref().expect("bound above");
-        {
-            let view = target.create_view(&Default::default());
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("depth copy"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                ..Default::default()
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.draw(0..3, 0..1);
-        }
+        draw_fullscreen(enc, "depth copy", target, &self.pipeline, bind_group);
         target.clone()
     }
 }

@@ -72,23 +72,24 @@ impl OccluderTarget for CpuRaster<'_> {
         self.raster(lods);
         let whole = self.depth_image();
         let (width, height) = (whole.width, whole.height);
-        let image = match level {
-            0 => whole,
+        let (level, image) = match level {
+            0 => (0, whole),
             k => {
                 let hzb = Hzb::build(width, height, &whole.depth, Reduction::Farthest)
                     .expect("a software depth image of the pass's size");
-                let levels = hzb.levels();
-                let l = &levels[(k as usize).min(levels.len() - 1)];
-                DepthImage {
+                // Past the top reads the top, as on a device.
+                let k = (k as usize).min(hzb.levels().len() - 1);
+                let l = &hzb.levels()[k];
+                let image = DepthImage {
                     width: l.width,
                     height: l.height,
                     depth: l.data.clone(),
-                }
+                };
+                (k as u32, image)
             }
         };
-        let top = gigawalk_cull::level_sizes(width, height).len() as u32 - 1;
         Ok(DepthLevel {
-            level: level.min(top),
+            level,
             width,
             height,
             image,

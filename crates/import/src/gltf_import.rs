@@ -25,6 +25,7 @@ use gltf::Semantic;
 use serde::Deserialize;
 
 use crate::error::ImportError;
+use crate::Identity;
 use crate::gltf_accessors::{bad_accessor, read_floats, read_indices};
 use crate::gltf_buffers::{load_data, Buffer, BufferData};
 use crate::gltf_extensions;
@@ -50,6 +51,7 @@ pub fn import_glb_bytes(bytes: &[u8], name: &str) -> Result<Model, ImportError> 
 /// Node transform fields, as f64. Unknown fields are ignored.
 #[derive(Deserialize)]
 struct RawNode {
+    extras: Option<serde_json::Value>,
     matrix: Option<[f64; 16]>,
     translation: Option<[f64; 3]>,
     rotation: Option<[f64; 4]>,
@@ -223,9 +225,12 @@ fn import_document(
     let mut visited = vec![false; nodes.len()];
     // Depth-first in file order; a node reached twice (a cycle, or two
     // parents, both invalid glTF) is an error rather than endless recursion.
-    let mut stack: Vec<(usize, DMat4)> =
-        roots.iter().rev().map(|&i| (i, DMat4::IDENTITY)).collect();
-    while let Some((ni, parent)) = stack.pop() {
+    let mut stack: Vec<(usize, DMat4, String)> = roots
+        .iter()
+        .rev()
+        .map(|&i| (i, DMat4::IDENTITY, String::new()))
+        .collect();
+    while let Some((ni, parent, parent_path)) = stack.pop() {
         if visited[ni] {
             return Err(ImportError::BadNode {
                 file: file.to_owned(),
@@ -237,14 +242,45 @@ fn import_document(
         visited[ni] = true;
         let world = parent * local_transform(&raw.nodes[ni], ni, file)?;
         let node = &nodes[ni];
+        let step = match node.name() {
+            Some(n) => n.to_owned(),
+            None => format!("#{ni}"),
+        };
+        let path = if parent_path.is_empty() {
+            step
+        } else {
+            format!("{parent_path}/{step}")
+        };
         for c in node.children().collect::<Vec<_>>().iter().rev() {
-            stack.push((c.index(), world));
+            stack.push((c.index(), world, path.clone()));
         }
         let Some(mesh) = node.mesh() else { continue };
+        let identity = Identity {
+            name: node
+                .name()
+                .or(mesh.name())
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("node {ni}")),
+            path,
+            file: file.to_owned(),
+            extras: raw.nodes[ni]
+                .extras
+                .as_ref()
+                .filter(|e| !e.is_null())
+                .map(|e| e.to_string()),
+            node: Some(ni),
+        };
         for prim in mesh.primitives() {
-            if let Some(raw_obj) =
-                read_primitive(node, &mesh, &prim, &world, &data, file, &mut stats)?
-            {
+            if let Some(raw_obj) = read_primitive(
+                node,
+                &mesh,
+                &prim,
+                &world,
+                &data,
+                file,
+                &mut stats,
+                &identity,
+            )? {
                 if let Some(o) = finish(raw_obj, &mut stats) {
                     objects += 1;
                     sink(o)?;
@@ -323,6 +359,7 @@ fn object_label(node: &gltf::Node, mesh: &gltf::Mesh, prim: usize) -> String {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn read_primitive(
     node: &gltf::Node,
     mesh: &gltf::Mesh,
@@ -331,6 +368,7 @@ fn read_primitive(
     data: &BufferData,
     file: &str,
     stats: &mut ImportStats,
+    identity: &Identity,
 ) -> Result<Option<RawObject>, ImportError> {
     let object = object_label(node, mesh, prim.index());
     match prim.mode() {
@@ -457,6 +495,7 @@ fn read_primitive(
     let colour = prim.material().pbr_metallic_roughness().base_color_factor();
     Ok(Some(RawObject {
         name: object,
+        identity: identity.clone(),
         positions,
         normals,
         indices,

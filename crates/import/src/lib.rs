@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 
 pub use error::ImportError;
 pub use gltf_import::{import_glb_bytes, import_gltf_bytes};
-pub use model::{ImportStats, Model, Object};
+pub use model::{Identity, ImportStats, Model, Object};
 pub use obj_import::import_obj_str;
 
 /// Imports a `.gltf`, `.glb` or `.obj` file, chosen by extension

@@ -20,6 +20,37 @@ pub struct Object {
     pub colour: [f32; 4],
     /// Per-vertex colours (linear RGBA), when the file has them; overrides `colour`.
     pub vertex_colours: Option<Vec<[f32; 4]>>,
+    /// What the object is in its file, for the people reviewing the model.
+    pub identity: Identity,
+}
+
+/// Who an object is: what its file calls it and where in the file it is.
+/// Objects with the same file and path are one object to a user (a glTF
+/// node's primitives, each imported as an object of its own).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Identity {
+    /// The file's name for it: the glTF node's name (else its mesh's,
+    /// else `node N`), the OBJ group's.
+    pub name: String,
+    /// Where it is in its file: the glTF node names from the scene root
+    /// down, joined by `/` (an unnamed node as `#N`, its index); the OBJ
+    /// group's name.
+    pub path: String,
+    /// The file it came from, as named on the command line (empty when
+    /// imported from memory).
+    pub file: String,
+    /// The glTF node's `extras`, compact JSON, when it has any.
+    pub extras: Option<String>,
+    /// The glTF node's index (`None` for OBJ): siblings may share a name,
+    /// so this, not the path, tells two nodes apart.
+    pub node: Option<usize>,
+}
+
+impl Identity {
+    /// Whether `self` and `other` name the same object of the model.
+    pub fn same_object(&self, other: &Identity) -> bool {
+        self.node == other.node && self.file == other.file && self.path == other.path
+    }
 }
 
 impl Object {

@@ -144,6 +144,13 @@ pub(crate) fn import_obj_each(
             .map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 1.0])
             .unwrap_or(DEFAULT_COLOUR);
         let raw = RawObject {
+            identity: crate::Identity {
+                name: m.name.clone(),
+                path: m.name.clone(),
+                file: file.to_owned(),
+                extras: None,
+                node: None,
+            },
             name: m.name,
             positions,
             normals,

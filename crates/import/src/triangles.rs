@@ -9,6 +9,7 @@ use crate::model::{ImportStats, Object};
 /// (every index `< positions.len()`), and normals when the file had them.
 pub(crate) struct RawObject {
     pub name: String,
+    pub identity: crate::Identity,
     pub positions: Vec<DVec3>,
     /// World-space normals, not necessarily unit length.
     pub normals: Option<Vec<DVec3>>,
@@ -22,6 +23,7 @@ pub(crate) struct RawObject {
 pub(crate) fn finish(raw: RawObject, stats: &mut ImportStats) -> Option<Object> {
     let RawObject {
         name,
+        identity,
         positions,
         normals,
         mut indices,
@@ -73,6 +75,7 @@ pub(crate) fn finish(raw: RawObject, stats: &mut ImportStats) -> Option<Object> 
     let normals = file_normals.unwrap_or_else(|| area_weighted_normals(&positions, &indices));
     Some(Object {
         name,
+        identity,
         positions,
         normals,
         indices,

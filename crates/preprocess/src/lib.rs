@@ -25,6 +25,7 @@ pub mod cluster;
 pub mod hausdorff;
 pub mod hierarchy;
 pub mod hlod;
+mod identity;
 pub mod occluders;
 pub mod params;
 pub mod partition;
@@ -131,6 +132,17 @@ pub trait LodSink {
     /// Stores one LOD; returns its index. A node's LODs arrive
     /// consecutively, finest first.
     fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error>;
+    /// [`LodSink::add_lod`] for a leaf's full detail, whose triangles
+    /// come in runs (counts, per object) that must stay consecutive and
+    /// in order. A sink that stores triangles as given needs nothing more.
+    fn add_lod_in_runs(
+        &mut self,
+        mesh: &LodMesh,
+        error: f32,
+        _runs: &[u32],
+    ) -> Result<u32, Self::Error> {
+        self.add_lod(mesh, error)
+    }
     /// Every LOD of node `node` has been added (called once per node the
     /// run makes, after its LODs, even when it has none).
     fn node_done(&mut self, _node: u32) -> Result<(), Self::Error> {
@@ -142,6 +154,14 @@ impl LodSink for SceneWriter {
     type Error = WriteError;
     fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
         SceneWriter::add_lod(self, mesh, error)
+    }
+    fn add_lod_in_runs(
+        &mut self,
+        mesh: &LodMesh,
+        error: f32,
+        runs: &[u32],
+    ) -> Result<u32, WriteError> {
+        SceneWriter::add_lod_in_runs(self, mesh, error, runs)
     }
 }
 
@@ -165,6 +185,9 @@ pub enum PreprocessError {
 pub struct Built {
     pub nodes: Vec<Node>,
     pub stats: Stats,
+    /// The object table, with the runs of every leaf's full detail the
+    /// sink took (docs/scene-format.md, "OBJT").
+    pub objects: gigawalk_scene::objects::ObjectTable,
 }
 
 /// How many nodes' LODs are made in parallel before they are handed to
@@ -238,6 +261,9 @@ pub(crate) fn write_scene(
         },
     );
     built.stats.occluder_cells = cells.leaves();
+    let objects = built.objects.encode();
+    built.stats.identity_bytes = objects.len() as u64;
+    writer.add_optional_section(gigawalk_scene::objects::TAG_OBJECTS, objects);
     writer.add_optional_section(
         gigawalk_scene::occluders::TAG_OCCLUDERS,
         gigawalk_scene::occluders::encode_occluders(&occluders),
@@ -276,6 +302,8 @@ pub fn build<S: LodSink>(
 #[derive(Clone)]
 pub(crate) struct Layout {
     parts: Vec<Part>,
+    /// The object table's entries, and which each imported object is.
+    identities: identity::Identities,
     pub(crate) tree: Vec<hierarchy::HNode>,
     resolved: Resolved,
     stats: Stats,
@@ -326,7 +354,7 @@ pub(crate) fn layout(
 
     // 1. Input checks.
     clock.start(Phase::Check, 0);
-    let (parts, dropped) = parts::initial_parts(model)?;
+    let (parts, dropped, identities) = parts::initial_parts_identified(model)?;
     stats.degenerate_dropped = dropped;
     stats.triangles = parts.iter().map(|p| p.triangles as u64).sum();
     stats.input_triangles = stats.triangles + dropped;
@@ -388,8 +416,10 @@ pub(crate) fn layout(
     stats.leaves = tree.iter().filter(|n| n.object.is_some()).count();
     stats.depth = tree.iter().map(|n| n.depth).max().unwrap_or(0);
     clock.finish(&mut stats);
+    stats.objects = identities.len();
     Ok(Layout {
         parts,
+        identities,
         tree,
         resolved,
         stats,
@@ -410,6 +440,7 @@ pub(crate) fn build_role<S: LodSink>(
 ) -> Result<(Built, Vec<(u32, Done)>), PreprocessError> {
     let Layout {
         parts,
+        identities,
         tree,
         resolved,
         stats,
@@ -436,6 +467,7 @@ pub(crate) fn build_role<S: LodSink>(
     let keep = chain.merge_budget();
     let tally = hlod::Tally::default();
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
+    let mut lod_runs: Vec<(u32, Vec<gigawalk_scene::objects::ObjectRun>)> = Vec::new();
     // What each done node leaves for its parent, until the parent is done.
     let mut done: Vec<Option<Done>> = vec![None; tree.len()];
     // Per done node: its finest stored error, or (without stored levels)
@@ -446,10 +478,23 @@ pub(crate) fn build_role<S: LodSink>(
                     per_level: &mut Vec<u64>|
      -> Result<(), PreprocessError> {
         let mut first = None;
+        // A leaf's full detail keeps its triangles in runs per object.
+        let runs = tree[ni]
+            .object
+            .map(|part| identities.runs(&parts[part as usize]));
         for (k, (mesh, error)) in lods.iter().enumerate() {
-            let i = sink
-                .add_lod(mesh, *error)
-                .map_err(|e| PreprocessError::Write(e.into()))?;
+            let i = match &runs {
+                Some(runs) if k == 0 => {
+                    let counts: Vec<u32> = runs.iter().map(|r| r.triangles).collect();
+                    let i = sink.add_lod_in_runs(mesh, *error, &counts);
+                    if let Ok(i) = i {
+                        lod_runs.push((i, runs.clone()));
+                    }
+                    i
+                }
+                _ => sink.add_lod(mesh, *error),
+            }
+            .map_err(|e| PreprocessError::Write(e.into()))?;
             first.get_or_insert(i);
             if per_level.len() <= k {
                 per_level.push(0);
@@ -526,6 +571,8 @@ pub(crate) fn build_role<S: LodSink>(
         }
     }
     stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
+    lod_runs.sort_unstable_by_key(|(lod, _)| *lod);
+    let objects = identities.table(lod_runs);
     stats.certification = tally.snapshot();
     clock.finish(&mut stats);
 
@@ -552,7 +599,14 @@ pub(crate) fn build_role<S: LodSink>(
             .collect(),
         _ => Vec::new(),
     };
-    Ok((Built { nodes, stats }, roots))
+    Ok((
+        Built {
+            nodes,
+            stats,
+            objects,
+        },
+        roots,
+    ))
 }
 
 /// A leaf's levels, and what it leaves for its parent.

@@ -4,6 +4,7 @@
 
 use gigawalk_import::Object;
 
+use crate::identity::{Identities, Seen};
 use crate::source::{Source, SpillError};
 use gigawalk_scene::Aabb;
 use glam::DVec3;
@@ -135,22 +136,37 @@ pub fn triangle(o: &Object, t: u32) -> [DVec3; 3] {
 /// degenerate ones (a repeated vertex or zero area) are dropped and counted.
 /// Returns one part per object that keeps any triangle.
 pub fn initial_parts(model: &dyn Source) -> Result<(Vec<Part>, u64), InputError> {
-    let per_object: Vec<Result<Option<(Part, u64)>, InputError>> = (0..model.len())
+    initial_parts_identified(model).map(|(parts, dropped, _)| (parts, dropped))
+}
+
+/// [`initial_parts`], and who each object is (the scene's object table).
+pub(crate) fn initial_parts_identified(
+    model: &dyn Source,
+) -> Result<(Vec<Part>, u64, Identities), InputError> {
+    let per_object: Vec<Result<Option<(Part, u64, Seen)>, InputError>> = (0..model.len())
         .into_par_iter()
-        .map(|index| check_object(index, &*model.object(index as u32)?))
+        .map(|index| {
+            let o = model.object(index as u32)?;
+            Ok(check_object(index, &o)?.map(|(p, d)| {
+                let seen = Seen::of(index as u32, &o, p.bounds, p.triangles as u64);
+                (p, d, seen)
+            }))
+        })
         .collect();
     let mut parts = Vec::new();
+    let mut seen = Vec::new();
     let mut dropped = 0;
     for r in per_object {
-        if let Some((p, d)) = r? {
+        if let Some((p, d, s)) = r? {
             dropped += d;
             parts.push(p);
+            seen.push(s);
         }
     }
     if parts.is_empty() {
         return Err(InputError::Empty { dropped });
     }
-    Ok((parts, dropped))
+    Ok((parts, dropped, Identities::new(model.len(), seen)))
 }
 
 fn check_object(index: usize, o: &Object) -> Result<Option<(Part, u64)>, InputError> {
@@ -263,6 +279,7 @@ mod tests {
             indices: indices.to_vec(),
             colour: [1.0; 4],
             vertex_colours: None,
+            identity: Default::default(),
         }
     }
 

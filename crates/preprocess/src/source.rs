@@ -17,7 +17,7 @@ use std::os::unix::fs::FileExt as _;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use gigawalk_import::{ImportStats, Model, Object};
+use gigawalk_import::{Identity, ImportStats, Model, Object};
 use glam::{DVec3, Vec3};
 
 /// A model's objects, by index.
@@ -146,7 +146,10 @@ fn resident_bytes(o: &Object) -> u64 {
     } else {
         0
     };
-    (24 + 12) * v + colours + 4 * o.indices.len() as u64 + o.name.len() as u64 + 64
+    (24 + 12) * v + colours + 4 * o.indices.len() as u64 + o.name.len() as u64
+        + o.identity.path.len() as u64
+        + o.identity.extras.as_ref().map_or(0, |e| e.len() as u64)
+        + 64
 }
 
 /// A model imported under a memory budget ([`import_within`]).
@@ -319,7 +322,7 @@ impl std::io::Write for Out {
 }
 
 /// A named spill's first bytes, before the plan id it belongs to.
-const SPILL_MAGIC: &[u8; 8] = b"GWSPILL1";
+const SPILL_MAGIC: &[u8; 8] = b"GWSPILL2";
 
 impl SpillWriter {
     /// An unnamed file in `dir`: the system removes it when the run ends,
@@ -693,7 +696,9 @@ impl Cache {
 }
 
 // One object's bytes, little-endian: name length (u32) and UTF-8 name;
-// colour (4 f32); vertex and index counts (u64 each); a flag (u8, 1 when
+// its identity (name, path, file: each a u32 length and UTF-8; extras the
+// same, length u32::MAX when absent; node index as u64, u64::MAX when
+// absent); colour (4 f32); vertex and index counts (u64 each); a flag (u8, 1 when
 // vertex colours follow); positions (3 f64 each), normals (3 f32 each),
 // indices (u32), vertex colours (4 f32 each).
 
@@ -703,8 +708,20 @@ fn encode(o: &Object) -> Vec<u8> {
     let mut b = Vec::with_capacity(
         4 + o.name.len() + 33 + 36 * nv + 4 * o.indices.len() + vc.map_or(0, |_| 16 * nv),
     );
-    b.extend_from_slice(&(o.name.len() as u32).to_le_bytes());
-    b.extend_from_slice(o.name.as_bytes());
+    let mut string = |s: &str| {
+        b.extend_from_slice(&(s.len() as u32).to_le_bytes());
+        b.extend_from_slice(s.as_bytes());
+    };
+    let id = &o.identity;
+    string(&o.name);
+    string(&id.name);
+    string(&id.path);
+    string(&id.file);
+    match &id.extras {
+        Some(e) => string(e),
+        None => b.extend_from_slice(&u32::MAX.to_le_bytes()),
+    }
+    b.extend_from_slice(&id.node.map_or(u64::MAX, |n| n as u64).to_le_bytes());
     for c in o.colour {
         b.extend_from_slice(&c.to_le_bytes());
     }
@@ -735,8 +752,25 @@ fn encode(o: &Object) -> Vec<u8> {
 /// Reads [`encode`]'s bytes; `None` when they do not fit.
 fn decode(b: &[u8]) -> Option<Object> {
     let mut r = Reader { b, at: 0 };
-    let name_len = u32::from_le_bytes(r.take()?) as usize;
-    let name = String::from_utf8(r.bytes(name_len)?.to_vec()).ok()?;
+    let name = r.string()?;
+    let identity = Identity {
+        name: r.string()?,
+        path: r.string()?,
+        file: r.string()?,
+        extras: {
+            let save = r.at;
+            if u32::from_le_bytes(r.take()?) == u32::MAX {
+                None
+            } else {
+                r.at = save;
+                Some(r.string()?)
+            }
+        },
+        node: match u64::from_le_bytes(r.take()?) {
+            u64::MAX => None,
+            n => Some(usize::try_from(n).ok()?),
+        },
+    };
     let colour = [r.f32()?, r.f32()?, r.f32()?, r.f32()?];
     let nv = usize::try_from(u64::from_le_bytes(r.take()?)).ok()?;
     let ni = usize::try_from(u64::from_le_bytes(r.take()?)).ok()?;
@@ -773,6 +807,7 @@ fn decode(b: &[u8]) -> Option<Object> {
         indices,
         colour,
         vertex_colours,
+        identity,
     })
 }
 
@@ -796,6 +831,10 @@ impl Reader<'_> {
     fn f64(&mut self) -> Option<f64> {
         Some(f64::from_le_bytes(self.take()?))
     }
+    fn string(&mut self) -> Option<String> {
+        let n = u32::from_le_bytes(self.take()?) as usize;
+        String::from_utf8(self.bytes(n)?.to_vec()).ok()
+    }
 }
 
 #[cfg(test)]
@@ -813,6 +852,13 @@ mod tests {
             indices: (0..nv as u32 - 2).flat_map(|i| [0, i + 1, i + 2]).collect(),
             colour: [0.1, 0.2, 0.3, 1.0],
             vertex_colours: colours.then(|| vec![[0.5, 0.25, 1.0, 1.0]; nv]),
+            identity: Identity {
+                name: format!("n{k}"),
+                path: format!("root/n{k}"),
+                file: "f.glb".into(),
+                extras: (k % 2 == 0).then(|| format!("{{\"k\":{k}}}")),
+                node: (k % 3 != 0).then_some(k as usize),
+            },
         }
     }
 

@@ -49,6 +49,12 @@ pub struct Stats {
     /// View cells listing them (OCVC section).
     #[serde(default)]
     pub occluder_cells: usize,
+    /// Entries of the object table (a glTF node or OBJ group each).
+    #[serde(default)]
+    pub objects: usize,
+    /// Bytes of the object table and the leaves' runs (OBJT section).
+    #[serde(default)]
+    pub identity_bytes: u64,
     /// `output_bytes / raw_input_bytes`.
     pub output_ratio: f64,
     /// `output_bytes / triangles`.
@@ -168,6 +174,13 @@ impl Stats {
             s,
             "occluders         {} convex faces (OCCL), listed in {} view cells (OCVC)",
             self.occluders, self.occluder_cells
+        );
+        let _ = writeln!(
+            s,
+            "objects           {} named, {:.1} KiB of identity (OBJT), {:.2}% of the scene",
+            self.objects,
+            self.identity_bytes as f64 / 1024.0,
+            100.0 * self.identity_bytes as f64 / self.output_bytes.max(1) as f64
         );
         let _ = writeln!(
             s,

@@ -13,6 +13,7 @@ fn object(name: &str, positions: Vec<DVec3>, normals: Vec<Vec3>, indices: Vec<u3
         indices,
         colour: [0.5, 0.5, 0.5, 1.0],
         vertex_colours: None,
+        identity: Default::default(),
     }
 }
 

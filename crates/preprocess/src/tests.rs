@@ -104,6 +104,7 @@ fn single_triangle_model() {
         indices: vec![0, 1, 2],
         colour: [1.0, 0.0, 0.0, 1.0],
         vertex_colours: None,
+        identity: Default::default(),
     };
     let model = Model {
         objects: vec![o],

@@ -112,10 +112,24 @@ fn dequantize(origin: [f32; 3], step: [f32; 3], q: [u32; 3]) -> [f32; 3] {
 /// triangles, each with the same corners in the same winding, in the
 /// order the codecs compress best (consecutive triangles share vertices,
 /// consecutive vertices lie near each other). Vertices no triangle uses
-/// keep their order after the rest.
-fn reorder(s: &Streams) -> Streams {
+/// keep their order after the rest. With `runs` (triangle counts that
+/// sum to the LOD's), triangles are reordered only within each run, so a
+/// run's triangles stay consecutive and in place (a leaf's runs per
+/// object, docs/scene-format.md "OBJT").
+fn reorder(s: &Streams, runs: &[u32]) -> Streams {
     let nv = s.positions.len();
-    let indices = meshopt::optimize_vertex_cache(&s.indices, nv);
+    let indices = if runs.is_empty() {
+        meshopt::optimize_vertex_cache(&s.indices, nv)
+    } else {
+        let mut out = Vec::with_capacity(s.indices.len());
+        let mut first = 0usize;
+        for &r in runs {
+            let end = first + 3 * r as usize;
+            out.extend(meshopt::optimize_vertex_cache(&s.indices[first..end], nv));
+            first = end;
+        }
+        out
+    };
     let mut remap = meshopt::optimize_vertex_fetch_remap(&indices, nv);
     let used = remap.iter().filter(|&&r| r != u32::MAX).count() as u32;
     for (r, next) in remap.iter_mut().filter(|r| **r == u32::MAX).zip(used..) {
@@ -152,6 +166,17 @@ fn vertex_codec<T>(v: &[T]) -> meshopt::Result<Vec<u8>> {
 /// [`POSITION_BITS`]). Positions must be finite and indices in range (the
 /// writer checks both first).
 pub fn encode(s: &Streams, bits: u8, normal_bits: u8) -> Result<Encoded, String> {
+    encode_in_runs(s, bits, normal_bits, &[])
+}
+
+/// [`encode`], reordering triangles only within each of `runs` (triangle
+/// counts summing to the LOD's; empty: one run).
+pub fn encode_in_runs(
+    s: &Streams,
+    bits: u8,
+    normal_bits: u8,
+    runs: &[u32],
+) -> Result<Encoded, String> {
     if !POSITION_BITS.contains(&bits) {
         return Err(format!(
             "{bits} position bits is outside {}..={}",
@@ -170,7 +195,13 @@ pub fn encode(s: &Streams, bits: u8, normal_bits: u8) -> Result<Encoded, String>
             s.positions.len()
         ));
     }
-    let s = &reorder(s);
+    if !runs.is_empty() && runs.iter().map(|&r| r as usize).sum::<usize>() != triangles {
+        return Err(format!(
+            "runs of {} triangles for {triangles} triangles",
+            runs.iter().map(|&r| r as u64).sum::<u64>()
+        ));
+    }
+    let s = &reorder(s, runs);
     let top = (1u64 << bits) - 1;
     let (origin, step) = grid(&s.positions, bits);
     let quantized: Vec<[u32; 3]> = s

@@ -21,6 +21,7 @@ pub mod codec;
 mod error;
 mod format;
 mod mesh;
+pub mod objects;
 pub mod occluder_cells;
 pub mod occluders;
 pub mod path;

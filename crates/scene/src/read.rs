@@ -304,7 +304,7 @@ impl<R: ReadAt> SceneReader<R> {
 
     /// Reads every byte: checks the geometry section's checksum, every
     /// optional section's checksum (known to this reader or not), the
-    /// contents of the optional sections it knows (OCCL, OCVC) and every
+    /// contents of the optional sections it knows (OCCL, OCVC, OBJT) and every
     /// LOD. What `gigawalk info --verify` runs.
     pub fn verify(&self) -> Result<(), ReadError> {
         let e = |kind| ReadError {
@@ -337,6 +337,7 @@ impl<R: ReadAt> SceneReader<R> {
         }
         let occluders = self.occluders()?.map_or(0, |o| o.len());
         self.occluder_cells(occluders)?;
+        self.objects()?;
         for lod in 0..self.skeleton.lods().len() as u32 {
             self.read_lod(lod)?;
         }

@@ -222,9 +222,22 @@ impl SceneWriter {
     /// are re-centred on the LOD's box centre; `error` is the object-space
     /// error in model units.
     pub fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
+        self.add_lod_in_runs(mesh, error, &[])
+    }
+
+    /// [`SceneWriter::add_lod`], keeping each of `runs` (consecutive
+    /// triangle counts that sum to the mesh's; empty: no runs) in place:
+    /// the encoder reorders triangles only within a run, so the stored
+    /// LOD's triangles of a run are the run's, consecutive, in run order.
+    pub fn add_lod_in_runs(
+        &mut self,
+        mesh: &LodMesh,
+        error: f32,
+        runs: &[u32],
+    ) -> Result<u32, WriteError> {
         let lod = self.lods.len() as u32;
         let (info, bounds, blob, moved) =
-            encode_lod(mesh, error, self.position_bits, self.normal_bits)
+            encode_lod(mesh, error, self.position_bits, self.normal_bits, runs)
                 .map_err(|detail| WriteError::BadMesh { lod, detail })?;
         let encoded = info.encoded;
         self.lods.push(info);
@@ -424,8 +437,16 @@ fn encode_lod(
     error: f32,
     position_bits: Option<u8>,
     normal_bits: u8,
+    runs: &[u32],
 ) -> Result<(LodInfo, Aabb, Vec<u8>, f64), String> {
     let nv = mesh.positions.len();
+    let triangles: u64 = runs.iter().map(|&r| r as u64).sum();
+    if !runs.is_empty() && triangles != (mesh.indices.len() / 3) as u64 {
+        return Err(format!(
+            "runs of {triangles} triangles for {} triangles",
+            mesh.indices.len() / 3
+        ));
+    }
     if mesh.indices.is_empty() || !mesh.indices.len().is_multiple_of(3) {
         return Err(format!(
             "{} indices is not a positive multiple of 3",
@@ -505,7 +526,7 @@ fn encode_lod(
             },
             indices: mesh.indices.clone(),
         };
-        let e = crate::codec::encode(&streams, bits, normal_bits)?;
+        let e = crate::codec::encode_in_runs(&streams, bits, normal_bits, runs)?;
         return Ok((with_blob(&e.blob), world_box(&e.positions), e.blob, e.moved));
     }
     let bounds = world_box(&stored);

@@ -94,6 +94,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     )?;
     out!("triangles   {}", s.triangles)?;
+    let identity = s
+        .sections
+        .iter()
+        .find(|(n, _)| n == "OBJT")
+        .map_or(0, |(_, b)| *b);
+    match r.objects()? {
+        Some(t) => out!(
+            "objects     {} named ({} of identity, {:.2}% of the file: names, files, paths, \
+             metadata, boxes, and each leaf's runs of triangles per object)",
+            t.objects().len(),
+            human_bytes(identity),
+            100.0 * identity as f64 / s.file_bytes.max(1) as f64
+        )?,
+        None => out!(
+            "objects     none recorded (written before scenes kept object identity: pick, \
+             find and hiding need it; preprocess the model again)"
+        )?,
+    }
     out!(
         "nodes       {} ({} leaves, depth {}, up to {} LODs per node)",
         s.nodes,

@@ -1,0 +1,106 @@
+//! Object identity through preprocessing: the scene's object table
+//! (docs/scene-format.md, "OBJT") and the runs of each leaf's full
+//! detail.
+//!
+//! An imported object is a glTF primitive or an OBJ group; a user's object
+//! is a glTF node or an OBJ group, so consecutive imported objects of the
+//! same node ([`Identity::same_object`]) are one table entry. Partition-I's
+//! pieces keep their imported object's index, and clustering and
+//! Partition-II keep each part's pieces one per imported object in index
+//! order, so a leaf's full-detail mesh ([`crate::hlod::leaf_mesh`]) is its
+//! pieces' triangles in piece order: runs of triangles per entry.
+
+use gigawalk_import::{Identity, Object};
+use gigawalk_scene::objects::{ObjectRecord, ObjectRun, ObjectTable};
+use gigawalk_scene::Aabb;
+
+use crate::parts::Part;
+
+/// What the table needs of one imported object, taken while it is checked.
+#[derive(Clone, Debug)]
+pub(crate) struct Seen {
+    pub index: u32,
+    pub identity: Identity,
+    /// Its object's name in messages, for an identity the file left empty.
+    pub label: String,
+    pub bounds: Aabb,
+    pub triangles: u64,
+}
+
+impl Seen {
+    pub fn of(index: u32, o: &Object, bounds: Aabb, triangles: u64) -> Seen {
+        Seen {
+            index,
+            identity: o.identity.clone(),
+            label: o.name.clone(),
+            bounds,
+            triangles,
+        }
+    }
+}
+
+/// The table's entries and which entry each imported object is.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Identities {
+    /// Imported object -> table entry (`u32::MAX` for an object with no
+    /// triangles left).
+    entry: Vec<u32>,
+    records: Vec<ObjectRecord>,
+}
+
+impl Identities {
+    /// From every imported object that kept triangles, in index order, of
+    /// `objects` in all.
+    pub fn new(objects: usize, seen: Vec<Seen>) -> Identities {
+        let mut entry = vec![u32::MAX; objects];
+        let mut records: Vec<ObjectRecord> = Vec::new();
+        let mut last: Option<Identity> = None;
+        for s in seen {
+            // An identity the importer left empty (objects made in memory)
+            // is an object of its own, named as in messages.
+            let anonymous = s.identity.path.is_empty();
+            let joins = !anonymous && last.as_ref().is_some_and(|l| l.same_object(&s.identity));
+            if joins {
+                let r = records.last_mut().unwrap_or_else(|| unreachable!());
+                r.bounds = r.bounds.union(&s.bounds);
+                r.triangles += s.triangles;
+            } else {
+                let id = &s.identity;
+                records.push(ObjectRecord {
+                    name: if anonymous { s.label.clone() } else { id.name.clone() },
+                    path: if anonymous { s.label.clone() } else { id.path.clone() },
+                    file: id.file.clone(),
+                    metadata: id.extras.clone(),
+                    bounds: s.bounds,
+                    triangles: s.triangles,
+                });
+            }
+            entry[s.index as usize] = records.len() as u32 - 1;
+            last = (!anonymous).then_some(s.identity);
+        }
+        Identities { entry, records }
+    }
+
+    /// A leaf's runs: its pieces' triangles per table entry, in order.
+    pub fn runs(&self, part: &Part) -> Vec<ObjectRun> {
+        let mut runs: Vec<ObjectRun> = Vec::new();
+        for p in &part.pieces {
+            let object = self.entry[p.object as usize];
+            let triangles = p.triangles.len() as u32;
+            match runs.last_mut() {
+                Some(r) if r.object == object => r.triangles += triangles,
+                _ => runs.push(ObjectRun { object, triangles }),
+            }
+        }
+        runs
+    }
+
+    /// The table, with each leaf LOD's runs (LODs ascending).
+    pub fn table(&self, lod_runs: Vec<(u32, Vec<ObjectRun>)>) -> ObjectTable {
+        ObjectTable::new(self.records.clone(), lod_runs)
+    }
+
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+}

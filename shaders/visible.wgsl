@@ -6,6 +6,14 @@ struct VsOut {
     @location(1) colour: vec4<f32>,
 };
 
+// A highlighted draw (the instance offset's w is 1): the selection's tint.
+fn tinted(c: vec4<f32>, offset: vec4<f32>) -> vec4<f32> {
+    if (offset.w > 0.5) {
+        return vec4<f32>(mix(c.rgb, vec3<f32>(1.0, 0.45, 0.05), 0.65), c.a);
+    }
+    return c;
+}
+
 fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     let lo = c / 12.92;
     let hi = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
@@ -22,7 +30,7 @@ fn vs_main(
     var out: VsOut;
     out.clip = frame.view_proj * vec4<f32>(position + offset.xyz, 1.0);
     out.normal = decode_normal(normal);
-    out.colour = vec4<f32>(srgb_to_linear(colour.rgb), colour.a);
+    out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
     return out;
 }
 
@@ -37,7 +45,7 @@ fn vs_compact(
     var out: VsOut;
     out.clip = frame.view_proj * vec4<f32>(compact_position(q, offset, scale), 1.0);
     out.normal = decode_normal(compact_normal(q));
-    out.colour = vec4<f32>(srgb_to_linear(colour.rgb), colour.a);
+    out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
     return out;
 }
 

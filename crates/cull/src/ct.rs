@@ -322,6 +322,12 @@ impl Culler for CtCuller<'_> {
             .into_iter()
             .map(|(_, i, c)| c.map_or(Chosen::Stored(i), Chosen::Clipped))
             .collect();
+        // The stored occluders carry no object identity: with objects
+        // hidden any of them may be one's face, so none is used (culling
+        // only less, never wrongly).
+        if view.visibility().is_some_and(|v| v.counts().0 > 0) {
+            self.chosen.clear();
+        }
         self.stats.occluders = self.chosen.len() as u64;
         self.stats.clipped = self
             .chosen

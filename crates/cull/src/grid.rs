@@ -295,10 +295,16 @@ impl Culler for GridCuller<'_> {
         (v, ())
     }
 
-    fn drawn(&mut self, _: &CullView, item: DrawItem) {
+    fn drawn(&mut self, view: &CullView, item: DrawItem) {
         let t = Instant::now();
         // Traversal's items name the skeleton's own nodes and LODs.
         let lod = self.skeleton.node(item.node).first_lod + item.lod;
+        // A leaf drawn in pieces (some of its objects hidden) is no
+        // occluder: culling only less, never by a hidden object.
+        if view.visibility().is_some_and(|v| v.pieces(lod).is_some()) {
+            self.grid.stats.items_skipped += 1;
+            return;
+        }
         let tris = self.skeleton.lod(lod).triangles as u64;
         let mesh = (self.used.saturating_add(tris) <= self.budget)
             .then(|| self.source.lod_triangles(lod))

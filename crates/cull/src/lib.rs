@@ -41,12 +41,14 @@ mod hzb;
 pub mod lod;
 mod object_space;
 mod occlusion;
+pub mod pick;
 mod raster;
 #[cfg(test)]
 mod test_rng;
 pub mod tiles;
 mod traverse;
 mod view;
+pub mod visibility;
 
 pub use camera::{default_near, Camera, Viewport, NEAR_FRACTION_OF_SCENE};
 pub use ct::{CtCuller, CtStats, PlaneCache, MAX_FRAME_OCCLUDERS};
@@ -59,9 +61,11 @@ pub use hzb::{level_sizes, Hzb, HzbError, HzbLevel, Reduction};
 pub use lod::select_lod;
 pub use object_space::{occlusion, pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
 pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, MAX_SPLITS, SPLITS};
+pub use pick::{pick, PickHit, PickStats, Ray};
 pub use raster::{PixelRect, SoftDepth, DEPTH_REL_SLACK, DEPTH_SLOPE_PX, INNER_MARGIN_PX};
 pub use traverse::{
     reselect_lods, select_occluders, traverse, CullReason, DrawItem, DrawSink, TraversalOptions,
     TraversalStats, Traverser,
 };
 pub use view::{BoxProjection, CullView, RelBox};
+pub use visibility::{NodeShow, Piece, Visibility};

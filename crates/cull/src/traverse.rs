@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use crate::lod::{distance_to_rel_box, select_lod};
 use crate::{
-    BoxTest, Containment, CullView, Culler, OcclusionTest, PlaneMask, Verdict, ALL_PLANES,
+    BoxTest, Containment, CullView, Culler, NodeShow, OcclusionTest, PlaneMask, Verdict, ALL_PLANES,
 };
 
 /// Traversal settings; the modes of GigaWalk Table 2 are combinations of
@@ -75,6 +75,8 @@ pub struct TraversalStats {
     pub occlusion_culled: u64,
     pub drawn_nodes: u64,
     pub drawn_triangles: u64,
+    /// Nodes whose every object is hidden.
+    pub hidden_culled: u64,
 }
 
 /// A queued node, ordered nearest first.
@@ -114,6 +116,8 @@ impl Ord for Entry {
 enum Choice {
     Draw(u32),
     Refine,
+    /// Every object below is hidden.
+    Skip,
 }
 
 /// The one LOD rule, shared by traversal and re-selection so both pick the
@@ -130,6 +134,14 @@ fn choose(
     o: &TraversalOptions,
 ) -> Choice {
     let n = skeleton.node(node);
+    match view.show(node) {
+        NodeShow::Whole => {}
+        NodeShow::Hidden => return Choice::Skip,
+        // No LOD of the node leaves out or tints one object alone: a
+        // leaf draws its full detail in pieces, an inner node refines.
+        NodeShow::Partial if n.is_leaf() => return Choice::Draw(0),
+        NodeShow::Partial => return Choice::Refine,
+    }
     // In the table, and at least one for a leaf: the skeleton is valid.
     let lods = &skeleton.lods()[n.lods()];
     let full_detail = o.pixel_tolerance.is_nan() || o.pixel_tolerance <= 0.0;
@@ -267,6 +279,10 @@ impl Traverser {
         }) = self.heap.pop()
         {
             stats.visited += 1;
+            if view.show(node) == NodeShow::Hidden {
+                stats.hidden_culled += 1;
+                continue;
+            }
             let n = skeleton.node(node);
             let (min, max) = view.rel_f64(&n.bounds);
             let (containment, child_mask) = if mask == 0 {
@@ -300,13 +316,18 @@ impl Traverser {
             match choose(skeleton, node, (min, max), view, options) {
                 Choice::Draw(lod) => {
                     stats.drawn_nodes += 1;
-                    stats.drawn_triangles += skeleton.lod(n.first_lod + lod).triangles as u64;
+                    stats.drawn_triangles +=
+                        match view.visibility().and_then(|v| v.pieces(n.first_lod + lod)) {
+                            Some(p) => p.iter().map(|p| p.triangles as u64).sum(),
+                            None => skeleton.lod(n.first_lod + lod).triangles as u64,
+                        };
                     let item = DrawItem { node, lod };
                     sink.draw(item);
                     if occlusion {
                         culler.drawn(view, item);
                     }
                 }
+                Choice::Skip => {}
                 Choice::Refine => {
                     for child in n.children() {
                         queue(
@@ -378,6 +399,7 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
                     sink.draw(DrawItem { node, lod });
                 }
                 Choice::Refine => stack.extend(n.children()),
+                Choice::Skip => {}
             }
         }
     }

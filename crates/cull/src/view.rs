@@ -24,6 +24,8 @@ pub struct CullView {
     /// |row 3| of `view_proj`: bounds the magnitude of the terms summed into
     /// clip w, for the rounding slack of [`CullView::project_box`].
     w_row_abs: Vec4,
+    /// Hidden and highlighted objects (`None`: every object shows whole).
+    visibility: Option<std::sync::Arc<crate::Visibility>>,
 }
 
 impl CullView {
@@ -43,6 +45,28 @@ impl CullView {
             },
             near: camera.near as f32,
             w_row_abs: view_proj.row(3).abs(),
+            visibility: None,
+        }
+    }
+
+    /// This view with `v`'s hidden and highlighted objects: traversal
+    /// culls hidden subtrees and refines partial nodes
+    /// ([`crate::visibility`]).
+    pub fn with_visibility(mut self, v: Option<std::sync::Arc<crate::Visibility>>) -> Self {
+        self.visibility = v.filter(|v| !v.is_all());
+        self
+    }
+
+    /// The view's hidden and highlighted objects, when any.
+    pub fn visibility(&self) -> Option<&std::sync::Arc<crate::Visibility>> {
+        self.visibility.as_ref()
+    }
+
+    /// What of `node`'s subtree shows.
+    pub fn show(&self, node: u32) -> crate::NodeShow {
+        match &self.visibility {
+            Some(v) => v.node(node),
+            None => crate::NodeShow::Whole,
         }
     }
 

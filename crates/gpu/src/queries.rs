@@ -169,6 +169,17 @@ impl QueryPass {
         }
     }
 
+    /// Which LODs later draws take in pieces (the runs of the objects
+    /// shown of a leaf some of whose objects are hidden or highlighted;
+    /// highlighted pieces tinted where the pass has colour), until set
+    /// again; `None`: every LOD whole.
+    pub fn set_pieces(
+        &mut self,
+        pieces: Option<std::sync::Arc<gigawalk_scene::objects::LodPieces>>,
+    ) {
+        self.drawer.set_pieces(pieces);
+    }
+
     /// Starts a frame: its depth clears with the first round trip.
     pub fn begin(&mut self, ctx: &GpuContext, view: &View) {
         self.drawer.begin(ctx, view, false);

@@ -25,12 +25,12 @@ use gltf::Semantic;
 use serde::Deserialize;
 
 use crate::error::ImportError;
-use crate::Identity;
 use crate::gltf_accessors::{bad_accessor, read_floats, read_indices};
 use crate::gltf_buffers::{load_data, Buffer, BufferData};
 use crate::gltf_extensions;
 use crate::model::{ImportStats, Model, Object};
 use crate::triangles::{finish, RawObject};
+use crate::Identity;
 
 /// Imports glTF from memory, JSON or binary (.glb, recognised by its magic).
 /// `name` appears in error messages. External buffers (file URIs) are
@@ -272,14 +272,7 @@ fn import_document(
         };
         for prim in mesh.primitives() {
             if let Some(raw_obj) = read_primitive(
-                node,
-                &mesh,
-                &prim,
-                &world,
-                &data,
-                file,
-                &mut stats,
-                &identity,
+                node, &mesh, &prim, &world, &data, file, &mut stats, &identity,
             )? {
                 if let Some(o) = finish(raw_obj, &mut stats) {
                     objects += 1;

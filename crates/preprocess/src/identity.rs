@@ -67,8 +67,16 @@ impl Identities {
             } else {
                 let id = &s.identity;
                 records.push(ObjectRecord {
-                    name: if anonymous { s.label.clone() } else { id.name.clone() },
-                    path: if anonymous { s.label.clone() } else { id.path.clone() },
+                    name: if anonymous {
+                        s.label.clone()
+                    } else {
+                        id.name.clone()
+                    },
+                    path: if anonymous {
+                        s.label.clone()
+                    } else {
+                        id.path.clone()
+                    },
                     file: id.file.clone(),
                     metadata: id.extras.clone(),
                     bounds: s.bounds,

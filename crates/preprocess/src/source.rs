@@ -146,7 +146,10 @@ fn resident_bytes(o: &Object) -> u64 {
     } else {
         0
     };
-    (24 + 12) * v + colours + 4 * o.indices.len() as u64 + o.name.len() as u64
+    (24 + 12) * v
+        + colours
+        + 4 * o.indices.len() as u64
+        + o.name.len() as u64
         + o.identity.path.len() as u64
         + o.identity.extras.as_ref().map_or(0, |e| e.len() as u64)
         + 64

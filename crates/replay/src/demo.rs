@@ -191,5 +191,6 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
         warmup: 5,
         target: None,
         adapter: None,
+        visibility: None,
     }
 }

@@ -58,6 +58,10 @@ pub struct ReplayOptions {
     /// Open devices only on an adapter whose name contains this
     /// (case-insensitive; `--adapter`); `None`: the best that qualifies.
     pub adapter: Option<String>,
+    /// Hidden objects (`--hide`, `--isolate`, `--view`), the same for the
+    /// reference and every run, so accuracy is measured against the full
+    /// detail of the objects shown; `None`: every object shows.
+    pub visibility: Option<Arc<gigawalk_cull::Visibility>>,
 }
 
 /// `--target-fps` / `--target-ms`.
@@ -83,6 +87,7 @@ impl Default for ReplayOptions {
             warmup: 5,
             target: None,
             adapter: None,
+            visibility: None,
         }
     }
 }
@@ -103,6 +108,12 @@ pub enum BadOption {
     Near(f64),
     #[error("frames must be at least 1")]
     NoFrames,
+    #[error(
+        "hiding objects needs the scene resident: it does not fit the memory budget, and a \
+         streamed frame's stand-ins (coarser levels, ancestors' HLODs) may hold hidden objects; \
+         raise --memory-budget"
+    )]
+    HiddenWhileStreaming,
 }
 
 /// Why a replay could not run.
@@ -444,6 +455,9 @@ pub fn replay_on(
     if n == 0 {
         return Err(ReplayError::EmptyPath);
     }
+    if opts.visibility.is_some() && rt.is_streaming() {
+        return Err(ReplayError::Options(BadOption::HiddenWhileStreaming));
+    }
     let (w, h) = (opts.runtime.width, opts.runtime.height);
     // The null adapter draws nothing: there is no image to compare.
     let null_adapter = rt.is_null();
@@ -456,7 +470,10 @@ pub fn replay_on(
         .enumerate()
         .map(|(i, p)| {
             let camera = Camera::of_pose(p, Viewport::new(w, h), near);
-            CameraRequest::new(camera, compared_or_next(i, k))
+            CameraRequest {
+                visibility: opts.visibility.clone(),
+                ..CameraRequest::new(camera, compared_or_next(i, k))
+            }
         })
         .collect();
     // The frames the reference renders: each compared frame and the one
@@ -495,7 +512,7 @@ pub fn replay_on(
     if k > 0 {
         let advance = Arc::new(AtomicBool::new(false));
         let mut list = Settle {
-            cameras: ref_frames.iter().map(|&i| cameras[i]).collect(),
+            cameras: ref_frames.iter().map(|&i| cameras[i].clone()).collect(),
             next: 0,
             advance: advance.clone(),
         };
@@ -736,10 +753,10 @@ impl CameraSource for Controlled {
             .ctrl
             .as_ref()
             .and_then(|c| c.lock().ok().map(|c| c.tolerance()));
-        Ok(self
-            .cameras
-            .get(frame as usize)
-            .map(|c| CameraRequest { pixel_error, ..*c }))
+        Ok(self.cameras.get(frame as usize).map(|c| CameraRequest {
+            pixel_error,
+            ..c.clone()
+        }))
     }
 }
 
@@ -759,7 +776,7 @@ impl CameraSource for Settle {
         if frame > 0 && self.advance.load(Ordering::Relaxed) {
             self.next += 1;
         }
-        Ok(self.cameras.get(self.next).copied())
+        Ok(self.cameras.get(self.next).cloned())
     }
 }
 

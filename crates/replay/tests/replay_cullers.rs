@@ -68,6 +68,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
         warmup: 2,
         target: None,
         adapter: None,
+        visibility: None,
     }
 }
 

@@ -84,6 +84,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
         warmup: 3,
         target: None,
         adapter: None,
+        visibility: None,
     }
 }
 
@@ -403,6 +404,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 warmup: 2,
                 target: None,
                 adapter: None,
+                visibility: None,
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             // Frames 0, 4, 8 and the frame after each.

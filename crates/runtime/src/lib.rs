@@ -151,7 +151,7 @@ pub enum CameraError {
 }
 
 /// One camera to render, as a [`CameraSource`] hands it out.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct CameraRequest {
     pub camera: Camera,
     /// Read back this frame's colour and depth (accuracy checks, screenshots).
@@ -167,6 +167,10 @@ pub struct CameraRequest {
     /// `RuntimeOptions::traversal` (a target-frame-rate controller sets it
     /// per frame); `None`: the options'. Must be finite and >= 0.
     pub pixel_error: Option<f64>,
+    /// Hidden and highlighted objects this frame (`None`: every object
+    /// shows whole): OR, STC and RVG all see the same set for a frame, so
+    /// no drawn LOD and no occluder holds a hidden object.
+    pub visibility: Option<std::sync::Arc<gigawalk_cull::Visibility>>,
 }
 
 impl CameraRequest {
@@ -177,6 +181,7 @@ impl CameraRequest {
             hold_culling: false,
             style: DrawStyle::Shaded,
             pixel_error: None,
+            visibility: None,
         }
     }
 }
@@ -237,7 +242,7 @@ impl CameraList {
 
 impl CameraSource for CameraList {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        Ok(self.cameras.get(frame as usize).copied())
+        Ok(self.cameras.get(frame as usize).cloned())
     }
 }
 

@@ -30,6 +30,7 @@ mod skeleton;
 mod squeeze;
 mod stats;
 mod validate;
+pub mod views;
 mod write;
 
 pub use aabb::Aabb;

@@ -58,6 +58,20 @@ pub struct ObjectRun {
     pub triangles: u32,
 }
 
+/// Consecutive triangles of a leaf's full-detail LOD to draw, plain or
+/// highlighted: what is left of a leaf some of whose objects are hidden
+/// or highlighted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Piece {
+    pub first_triangle: u32,
+    pub triangles: u32,
+    pub highlight: bool,
+}
+
+/// The pieces to draw of each LOD drawn in pieces (a leaf's finest); a
+/// LOD not listed is drawn whole.
+pub type LodPieces = HashMap<u32, Vec<Piece>>;
+
 /// The decoded section: the objects, and the runs of every leaf's
 /// full-detail LOD.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -105,9 +119,7 @@ impl ObjectTable {
 
     /// Every LOD with runs, ascending, and its runs.
     pub fn lod_runs(&self) -> impl Iterator<Item = (u32, &[ObjectRun])> + '_ {
-        self.lods
-            .iter()
-            .map(|(l, r)| (*l, &self.runs[r.clone()]))
+        self.lods.iter().map(|(l, r)| (*l, &self.runs[r.clone()]))
     }
 
     /// The object a triangle of a leaf's full-detail LOD belongs to.
@@ -239,11 +251,17 @@ impl ObjectTable {
         let mut r = Reader { b: &body, at: 0 };
         let files = r.u32()? as usize;
         if files > body.len() / 4 + 1 {
-            return Err((0, format!("{files} files in a body of {} bytes", body.len())));
+            return Err((
+                0,
+                format!("{files} files in a body of {} bytes", body.len()),
+            ));
         }
         let files: Vec<String> = (0..files).map(|_| r.string()).collect::<Result<_, _>>()?;
         if count > body.len() / 72 {
-            return Err((0, format!("{count} objects in a body of {} bytes", body.len())));
+            return Err((
+                0,
+                format!("{count} objects in a body of {} bytes", body.len()),
+            ));
         }
         let mut objects = Vec::with_capacity(count);
         for i in 0..count {
@@ -363,10 +381,14 @@ impl Reader<'_> {
         Ok(s)
     }
     fn u32(&mut self) -> Result<u32, (u64, String)> {
-        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap_or_default()))
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().unwrap_or_default(),
+        ))
     }
     fn u64(&mut self) -> Result<u64, (u64, String)> {
-        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap_or_default()))
+        Ok(u64::from_le_bytes(
+            self.take(8)?.try_into().unwrap_or_default(),
+        ))
     }
     fn dvec3(&mut self) -> Result<DVec3, (u64, String)> {
         let b = self.take(24)?;
@@ -390,9 +412,10 @@ impl Reader<'_> {
 }
 
 /// What `find`, `--hide` and the viewer's search match objects by:
-/// case-insensitive; with `*` (any run of characters) or `?` (any one)
-/// the whole name, path or `file/path` must match, else the pattern need
-/// only appear in one of them.
+/// case-insensitive, against an object's name and its path in its file,
+/// and when the pattern holds a `/`, also `file/path`; with `*` (any run
+/// of characters) or `?` (any one) the whole string must match, else the
+/// pattern need only appear in it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Pattern {
     text: Vec<char>,
@@ -417,10 +440,11 @@ impl Pattern {
     }
 
     pub fn matches(&self, o: &ObjectRecord) -> bool {
-        let full = o.full_path();
-        [o.name.as_str(), o.path.as_str(), full.as_str()]
-            .iter()
-            .any(|s| self.matches_str(s))
+        if self.matches_str(&o.name) || self.matches_str(&o.path) {
+            return true;
+        }
+        // The file only when the pattern names one: `unit2.glb/`.
+        self.text.contains(&'/') && self.matches_str(&o.full_path())
     }
 
     fn matches_str(&self, s: &str) -> bool {
@@ -428,7 +452,8 @@ impl Pattern {
         if self.glob {
             glob(&self.text, &s)
         } else {
-            s.windows(self.text.len()).any(|w| w == self.text.as_slice())
+            s.windows(self.text.len())
+                .any(|w| w == self.text.as_slice())
         }
     }
 }
@@ -500,11 +525,23 @@ mod tests {
                 (
                     3,
                     vec![
-                        ObjectRun { object: 0, triangles: 5 },
-                        ObjectRun { object: 2, triangles: 7 },
+                        ObjectRun {
+                            object: 0,
+                            triangles: 5,
+                        },
+                        ObjectRun {
+                            object: 2,
+                            triangles: 7,
+                        },
                     ],
                 ),
-                (9, vec![ObjectRun { object: 1, triangles: 4 }]),
+                (
+                    9,
+                    vec![ObjectRun {
+                        object: 1,
+                        triangles: 4,
+                    }],
+                ),
             ],
         )
     }
@@ -541,7 +578,8 @@ mod tests {
         let find = |p: &str| t.find(&Pattern::new(p).unwrap());
         assert_eq!(find("pipe"), vec![0]);
         assert_eq!(find("PLANT/"), vec![0, 1]);
-        assert_eq!(find("b.glb"), vec![1]);
+        assert_eq!(find("b.glb/"), vec![1]);
+        assert!(find("b.glb").is_empty(), "a file only with a slash");
         assert_eq!(find("*.003"), vec![0]);
         assert_eq!(find("p?mp"), vec![2]);
         assert_eq!(find("a.glb/*"), vec![0]);

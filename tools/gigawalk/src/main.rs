@@ -19,6 +19,7 @@ mod demo;
 mod generate;
 mod gpu_run;
 mod info;
+mod objects;
 mod preprocess;
 mod replay;
 mod signals;
@@ -52,6 +53,10 @@ enum Command {
     Demo(demo::Args),
     /// Walk through a scene in a window: fly, toggle culling and LODs, see what they do
     View(view::Args),
+    /// Which object is under a pixel of a camera path's pose, exact against full detail
+    Pick(objects::PickArgs),
+    /// List the objects whose name or path matches a pattern, with their boxes
+    Find(objects::FindArgs),
     /// benches/gpu-run.sh's last step: results.json and summary.md from its step records
     #[command(hide = true)]
     GpuRunResults(gpu_run::Args),
@@ -100,6 +105,8 @@ fn main() -> std::process::ExitCode {
         Command::Replay(a) => replay::run(a),
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
+        Command::Pick(a) => objects::pick(a),
+        Command::Find(a) => objects::find(a),
         Command::GpuRunResults(a) => gpu_run::run(a),
     };
     // Temporaries of killed gigawalk runs found beside this run's outputs.

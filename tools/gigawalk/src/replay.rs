@@ -20,9 +20,22 @@ use indicatif::{ProgressBar, ProgressStyle};
 pub struct Args {
     /// Scene file (.gwk) from `gigawalk preprocess`
     scene: PathBuf,
-    /// Camera path to replay, one frame per pose (docs/path-format.md)
-    #[arg(long)]
-    path: PathBuf,
+    /// Camera path to replay, one frame per pose (docs/path-format.md);
+    /// with --view and no path, the saved view's camera alone
+    #[arg(long, required_unless_present = "view")]
+    path: Option<PathBuf>,
+    /// Hide the objects whose name or path matches (as `gigawalk find`;
+    /// repeatable): every run and the reference leave them out, so the
+    /// report says what hiding costs in frame time and triangles
+    #[arg(long, value_name = "PATTERN")]
+    hide: Vec<String>,
+    /// Hide every object but those that match (repeatable)
+    #[arg(long, value_name = "PATTERN")]
+    isolate: Vec<String>,
+    /// Replay from a saved view (SCENE.views.json, docs/views-format.md):
+    /// its hidden objects, and its camera when no --path is given
+    #[arg(long, value_name = "NAME")]
+    view: Option<String>,
     /// Report directory: summary.md, summary.json, frames.csv, fps.png, tradeoff.png
     #[arg(long, default_value = "report")]
     out: PathBuf,
@@ -206,8 +219,53 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.pixel_error_max
         );
     }
-    let path = CameraPath::read(&args.path).context("cannot read the camera path")?;
     let scene = SceneReader::open(&args.scene).context("cannot open the scene")?;
+    let view = match &args.view {
+        Some(name) => {
+            let file = gigawalk_scene::views::Views::file_for(&args.scene);
+            let views = gigawalk_scene::views::Views::read(&file)?;
+            Some(views.get(&file, name)?.clone())
+        }
+        None => None,
+    };
+    let (path, path_name) = match (&args.path, &view) {
+        (Some(p), _) => (
+            CameraPath::read(p).context("cannot read the camera path")?,
+            p.display().to_string(),
+        ),
+        (None, Some(v)) => (
+            CameraPath {
+                poses: vec![v
+                    .pose()
+                    .map_err(|e| anyhow::anyhow!("view {:?}: {e}", v.name))?],
+            },
+            format!("view {:?}", v.name),
+        ),
+        (None, None) => anyhow::bail!("replay needs --path or --view"),
+    };
+    let visibility = if args.hide.is_empty() && args.isolate.is_empty() && view.is_none() {
+        None
+    } else {
+        let h = gigawalk_replay::inspect::hidden(
+            &scene,
+            &args.scene,
+            &gigawalk_replay::inspect::HideRequest {
+                hide: args.hide.clone(),
+                isolate: args.isolate.clone(),
+                view: view.clone(),
+            },
+        )?;
+        if !h.missing.is_empty() {
+            eprintln!(
+                "warning: view {:?} names {} object(s) this scene no longer has (left out): {}",
+                args.view.as_deref().unwrap_or(""),
+                h.missing.len(),
+                h.missing.join(", ")
+            );
+        }
+        eprintln!("hiding {} of {} objects", h.hidden, h.objects);
+        Some(h.visibility)
+    };
     let opts = ReplayOptions {
         modes: args.modes,
         pixel_errors: args.pixel_error,
@@ -223,12 +281,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             max_pixel_error: args.pixel_error_max,
         }),
         adapter: args.runtime.adapter.clone(),
+        visibility,
     };
     let replay = run_replay(
         &scene,
         &args.scene.display().to_string(),
         &path,
-        &args.path.display().to_string(),
+        &path_name,
         &opts,
         &args.out,
     )?;

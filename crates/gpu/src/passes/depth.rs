@@ -82,6 +82,17 @@ impl DepthPass {
         Pyramid::path_for(ctx, self.width, self.height)
     }
 
+    /// Which LODs later draws take in pieces (the runs of the objects
+    /// shown of a leaf some of whose objects are hidden or highlighted;
+    /// highlighted pieces tinted where the pass has colour), until set
+    /// again; `None`: every LOD whole.
+    pub fn set_pieces(
+        &mut self,
+        pieces: Option<std::sync::Arc<gigawalk_scene::objects::LodPieces>>,
+    ) {
+        self.drawer.set_pieces(pieces);
+    }
+
     /// Draws the LODs' depth and reads the whole image back (call it on
     /// the OR thread: it blocks only that stage).
     pub fn render(

@@ -3,6 +3,9 @@
 //! each LOD's origin relative to the eye, and the recording of one indexed
 //! draw per LOD, rebinding geometry buffers only when they change.
 
+use std::sync::Arc;
+
+use gigawalk_scene::objects::LodPieces;
 use glam::Vec3;
 
 use crate::passes::{ScenePipelines, View};
@@ -21,6 +24,8 @@ pub(crate) struct Drawer {
     /// Written to `FrameUniforms::params.z` (what shaders that read it
     /// move toward the eye in depth).
     pub(crate) depth_bias: f32,
+    /// LODs drawn in pieces (hidden or highlighted objects), this frame.
+    pieces: Option<Arc<LodPieces>>,
 }
 
 impl Drawer {
@@ -65,6 +70,7 @@ impl Drawer {
             instances: instance_buffer(ctx, 1024),
             used: 0,
             depth_bias: 0.0,
+            pieces: None,
         }
     }
 
@@ -84,6 +90,12 @@ impl Drawer {
         self.used = 0;
     }
 
+    /// Which LODs later draws take in pieces: only each piece's
+    /// triangles, a highlighted piece tinted (`None`: every LOD whole).
+    pub(crate) fn set_pieces(&mut self, pieces: Option<Arc<LodPieces>>) {
+        self.pieces = pieces;
+    }
+
     /// Writes this chunk's instance data; returns the draws with their instance index.
     pub(crate) fn prepare(
         &mut self,
@@ -92,10 +104,31 @@ impl Drawer {
         residency: &dyn Residency,
         lods: &[u32],
     ) -> Vec<(LodRange, u32)> {
-        let mut draws: Vec<LodRange> = lods.iter().filter_map(|&l| residency.range(l)).collect();
+        let mut draws: Vec<(LodRange, bool)> = Vec::with_capacity(lods.len());
+        for &l in lods {
+            let Some(r) = residency.range(l) else {
+                continue;
+            };
+            match self.pieces.as_ref().and_then(|p| p.get(&l)) {
+                None => draws.push((r, false)),
+                Some(pieces) => {
+                    for p in pieces {
+                        let piece = LodRange {
+                            first_index: r.first_index + 3 * p.first_triangle,
+                            index_count: 3 * p.triangles,
+                            ..r
+                        };
+                        // Runs cover the LOD's triangles: never past its range.
+                        if 3 * (p.first_triangle + p.triangles) <= r.index_count {
+                            draws.push((piece, p.highlight));
+                        }
+                    }
+                }
+            }
+        }
         // One pipeline switch at most: draws grouped by layout, in the
         // caller's order within each.
-        draws.sort_by_key(|r| r.layout as u8);
+        draws.sort_by_key(|(r, _)| r.layout as u8);
         let size = std::mem::size_of::<DrawInstance>() as u64;
         let needed = self.used + draws.len() as u64;
         if needed * size > self.instances.size() {
@@ -105,8 +138,12 @@ impl Drawer {
         }
         let data: Vec<DrawInstance> = draws
             .iter()
-            .map(|r| DrawInstance {
-                offset: (r.origin - view.eye).as_vec3().extend(0.0).to_array(),
+            .map(|(r, highlight)| DrawInstance {
+                // w: 1 tints the draw (a highlighted object).
+                offset: (r.origin - view.eye)
+                    .as_vec3()
+                    .extend(if *highlight { 1.0 } else { 0.0 })
+                    .to_array(),
                 scale: [r.scale[0], r.scale[1], r.scale[2], 0.0],
             })
             .collect();
@@ -120,7 +157,7 @@ impl Drawer {
         draws
             .into_iter()
             .enumerate()
-            .map(|(i, r)| (r, first + i as u32))
+            .map(|(i, (r, _))| (r, first + i as u32))
             .collect()
     }
 

@@ -441,6 +441,9 @@ impl Culler for OqCuller<'_, '_> {
             _ => None,
         };
         self.state.visible_now.clear();
+        self.state
+            .pass
+            .set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
         self.state.pass.begin(self.state.ctx, &gpu_view(view));
     }
 

@@ -154,7 +154,7 @@ pub(super) fn next_sample(
     }
     Ok(Some(Sample {
         frame,
-        view: CullView::new(camera, viewport),
+        view: CullView::new(camera, viewport).with_visibility(req.visibility),
         read_back: req.read_back,
         hold: req.hold_culling,
         style: req.style,

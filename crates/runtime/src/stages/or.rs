@@ -52,6 +52,8 @@ impl OccluderTarget for GpuOccluders<'_> {
         level: u32,
     ) -> Result<DepthLevel, RuntimeError> {
         let (ctx, pass) = (self.device.ctx, &mut self.pass);
+        // Leaves with hidden objects: only the runs of those shown.
+        pass.set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
         // Streaming: resident occluders only (culling stays conservative).
         self.device
             .with(frame, lods, Use::Occluders, |residency, lods| {

@@ -50,6 +50,8 @@ pub(super) struct GpuVisible<'a> {
 
 impl VisibleTarget for GpuVisible<'_> {
     fn begin(&mut self, view: &CullView, style: DrawStyle) {
+        self.pass
+            .set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
         self.pass.begin(self.device.ctx, &gpu_view(view), style);
     }
 

@@ -68,6 +68,7 @@ impl CameraSource for LiveSource {
                 hold_culling: false,
                 style,
                 pixel_error,
+                visibility: None,
             }));
         }
         if minimised {
@@ -79,6 +80,7 @@ impl CameraSource for LiveSource {
             hold_culling: frozen,
             style,
             pixel_error,
+            visibility: None,
         }))
     }
 }

@@ -1,0 +1,151 @@
+//! `gigawalk pick` and `gigawalk find`: what is this, and where is it.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use gigawalk_replay::inspect::{self, PickRequest};
+
+#[derive(clap::Args)]
+pub struct PickArgs {
+    /// The scene file (.gwk)
+    scene: PathBuf,
+    /// Camera path file (docs/path-format.md) holding the pose to look from
+    #[arg(long)]
+    path: PathBuf,
+    /// The pose of the path, counting from 0
+    #[arg(long, value_name = "N")]
+    frame: usize,
+    /// The pixel, X,Y from the top-left pixel (0,0), sampled at its centre
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    pixel: (u32, u32),
+    /// Viewport width, as the replay or screenshot the pixel comes from
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    /// Viewport height
+    #[arg(long, default_value_t = 360)]
+    height: u32,
+    /// Near plane distance, model units [default: the scene diagonal's
+    /// fraction replay and the viewer use]
+    #[arg(long)]
+    near: Option<f64>,
+    /// Print one JSON object: `object` (null when nothing is there), `point`
+    /// (world, f64), `distance`, and the leaf, LOD and triangle hit
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("{s:?}: a pixel is X,Y (for example 320,180)"))?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("{s:?}: {v:?} is not a pixel coordinate (0 or more)"))
+    };
+    Ok((n(x)?, n(y)?))
+}
+
+pub fn pick(a: PickArgs) -> anyhow::Result<()> {
+    if a.near.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
+        anyhow::bail!("--near must be a positive distance");
+    }
+    let p = inspect::pick(&PickRequest {
+        scene: a.scene.clone(),
+        path: a.path.clone(),
+        frame: a.frame,
+        pixel: a.pixel,
+        width: a.width,
+        height: a.height,
+        near: a.near,
+    })?;
+    if a.json {
+        let v = serde_json::json!({
+            "pixel": [a.pixel.0, a.pixel.1],
+            "object": p.object.as_ref().map(|(id, o)| inspect::object_json(*id, o)),
+            "point": p.point.map(|q| q.to_array()),
+            "distance": p.distance,
+            "node": p.node,
+            "lod": p.lod,
+            "triangle": p.triangle,
+            "leaves_read": p.stats.leaves_read,
+            "ms": p.ms,
+        });
+        out!(
+            "{}",
+            serde_json::to_string_pretty(&v).context("serialising the pick")?
+        )?;
+        return Ok(());
+    }
+    match (&p.object, p.point) {
+        (Some((id, o)), Some(q)) => {
+            out!("object    {} (#{id})", o.name)?;
+            out!("file      {}", o.file)?;
+            out!("path      {}", o.path)?;
+            out!("metadata  {}", o.metadata.as_deref().unwrap_or("(none)"))?;
+            out!("point     {:.9} {:.9} {:.9}", q.x, q.y, q.z)?;
+            out!("distance  {:.9}", p.distance.unwrap_or(0.0))?;
+        }
+        (None, Some(q)) => {
+            out!("object    (a surface of no recorded object)")?;
+            out!("point     {:.9} {:.9} {:.9}", q.x, q.y, q.z)?;
+        }
+        _ => out!("nothing under pixel {},{}", a.pixel.0, a.pixel.1)?,
+    }
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct FindArgs {
+    /// The scene file (.gwk)
+    scene: PathBuf,
+    /// What to look for, case-insensitive: text that appears in an object's
+    /// name or its path in its file (with a / in it, also in `file/path`,
+    /// so `unit2.glb/` finds a file's objects); with * (any run) or ? (any
+    /// one character) the whole name or path must match
+    pattern: String,
+    /// Print a JSON array of objects (id, name, file, path, metadata,
+    /// triangles, bounds)
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn find(a: FindArgs) -> anyhow::Result<()> {
+    let found = inspect::find(&a.scene, &a.pattern)?;
+    if a.json {
+        let v: Vec<serde_json::Value> = found
+            .iter()
+            .map(|(id, o)| inspect::object_json(*id, o))
+            .collect();
+        out!(
+            "{}",
+            serde_json::to_string_pretty(&v).context("serialising objects")?
+        )?;
+    } else {
+        for (id, o) in &found {
+            let (lo, hi) = (o.bounds.min, o.bounds.max);
+            out!(
+                "#{id:<7} {}  [{:.6} {:.6} {:.6} .. {:.6} {:.6} {:.6}]  {} triangles",
+                o.full_path(),
+                lo.x,
+                lo.y,
+                lo.z,
+                hi.x,
+                hi.y,
+                hi.z,
+                o.triangles
+            )?;
+        }
+    }
+    if found.is_empty() {
+        anyhow::bail!(
+            "no object matches {:?} in {} (patterns are case-insensitive text or globs with * and ?)",
+            a.pattern,
+            a.scene.display()
+        );
+    }
+    if !a.json {
+        eprintln!("{} object(s) match", found.len());
+    }
+    Ok(())
+}

@@ -115,6 +115,7 @@ mod tests {
     fn raw(positions: Vec<DVec3>, indices: Vec<u32>) -> RawObject {
         RawObject {
             name: "t".into(),
+            identity: Default::default(),
             positions,
             normals: None,
             indices,

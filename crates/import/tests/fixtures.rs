@@ -65,7 +65,8 @@ fn cube_glb_keeps_file_normals() {
     }
     // The byte entry point gives the same model.
     let bytes = std::fs::read(data("cube.glb")).unwrap();
-    assert_eq!(import_glb_bytes(&bytes, "cube").unwrap().objects, m.objects);
+    let name = data("cube.glb").display().to_string();
+    assert_eq!(import_glb_bytes(&bytes, &name).unwrap().objects, m.objects);
 }
 
 #[test]
@@ -296,4 +297,38 @@ fn mutated_fixtures_never_panic() {
             let _ = import_glb_bytes(&bytes, "mutated");
         }
     }
+}
+
+#[test]
+fn objects_carry_their_identity_node_path_file_and_extras() {
+    let text = std::fs::read_to_string(data("triangle_embedded.gltf")).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // Two named nodes under a parent, one with extras, two siblings of one
+    // name, and an unnamed node: all sharing the one mesh.
+    doc["nodes"] = serde_json::json!([
+        {"name": "Plant", "children": [1, 2, 3]},
+        {"name": "Pipe.003", "mesh": 0, "extras": {"tag": "P-101", "dn": 50}},
+        {"name": "Bolt", "mesh": 0},
+        {"name": "Bolt", "mesh": 0, "translation": [0, 0, 1]},
+        {"mesh": 0}
+    ]);
+    doc["scenes"] = serde_json::json!([{"nodes": [0, 4]}]);
+    doc["scene"] = serde_json::json!(0);
+    let m = gigawalk_import::import_gltf_bytes(doc.to_string().as_bytes(), "plant.gltf", None).unwrap();
+    let ids: Vec<_> = m.objects.iter().map(|o| &o.identity).collect();
+    assert_eq!(ids.len(), 4);
+    assert_eq!((ids[0].name.as_str(), ids[0].path.as_str()), ("Pipe.003", "Plant/Pipe.003"));
+    assert_eq!(ids[0].file, "plant.gltf");
+    let extras: serde_json::Value = serde_json::from_str(ids[0].extras.as_ref().unwrap()).unwrap();
+    assert_eq!(extras, serde_json::json!({"tag": "P-101", "dn": 50}));
+    // Siblings of one name share a path, not an identity.
+    assert_eq!(ids[1].path, ids[2].path);
+    assert!(!ids[1].same_object(ids[2]));
+    assert!(ids[1].extras.is_none());
+    // An unnamed node is named by its mesh, its path by its index.
+    assert_eq!((ids[3].name.as_str(), ids[3].path.as_str()), ("m", "#4"));
+    // OBJ: the group.
+    let m = import_obj_str("g Valve_7\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "skid.obj").unwrap();
+    let id = &m.objects[0].identity;
+    assert_eq!((id.name.as_str(), id.path.as_str(), id.file.as_str()), ("Valve_7", "Valve_7", "skid.obj"));
 }

@@ -65,8 +65,10 @@ pub mod verify;
 /// (scene format 2), each LOD's error raised by what its vertices moved;
 /// 13: each encoded LOD's position and normal bits in its record (format
 /// 2.1: a runtime sizes its device layout without reading the blob), and
-/// encoded blobs zstd-compressed with a dictionary trained on the scene.
-pub const REVISION: u32 = 13;
+/// encoded blobs zstd-compressed with a dictionary trained on the scene;
+/// 14: object identity (OBJT), each leaf's full detail in runs of
+/// triangles per object.
+pub const REVISION: u32 = 14;
 
 use std::path::Path;
 use std::time::Instant;

@@ -314,10 +314,14 @@ fn objects_carry_their_identity_node_path_file_and_extras() {
     ]);
     doc["scenes"] = serde_json::json!([{"nodes": [0, 4]}]);
     doc["scene"] = serde_json::json!(0);
-    let m = gigawalk_import::import_gltf_bytes(doc.to_string().as_bytes(), "plant.gltf", None).unwrap();
+    let m =
+        gigawalk_import::import_gltf_bytes(doc.to_string().as_bytes(), "plant.gltf", None).unwrap();
     let ids: Vec<_> = m.objects.iter().map(|o| &o.identity).collect();
     assert_eq!(ids.len(), 4);
-    assert_eq!((ids[0].name.as_str(), ids[0].path.as_str()), ("Pipe.003", "Plant/Pipe.003"));
+    assert_eq!(
+        (ids[0].name.as_str(), ids[0].path.as_str()),
+        ("Pipe.003", "Plant/Pipe.003")
+    );
     assert_eq!(ids[0].file, "plant.gltf");
     let extras: serde_json::Value = serde_json::from_str(ids[0].extras.as_ref().unwrap()).unwrap();
     assert_eq!(extras, serde_json::json!({"tag": "P-101", "dn": 50}));
@@ -328,7 +332,14 @@ fn objects_carry_their_identity_node_path_file_and_extras() {
     // An unnamed node is named by its mesh, its path by its index.
     assert_eq!((ids[3].name.as_str(), ids[3].path.as_str()), ("m", "#4"));
     // OBJ: the group.
-    let m = import_obj_str("g Valve_7\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "skid.obj").unwrap();
+    let m = import_obj_str(
+        "g Valve_7\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        "skid.obj",
+    )
+    .unwrap();
     let id = &m.objects[0].identity;
-    assert_eq!((id.name.as_str(), id.path.as_str(), id.file.as_str()), ("Valve_7", "Valve_7", "skid.obj"));
+    assert_eq!(
+        (id.name.as_str(), id.path.as_str(), id.file.as_str()),
+        ("Valve_7", "Valve_7", "skid.obj")
+    );
 }

@@ -21,7 +21,8 @@ use crate::parts::Part;
 pub(crate) struct Seen {
     pub index: u32,
     pub identity: Identity,
-    /// Its object's name in messages, for an identity the file left empty.
+    /// Its object's name in messages, for an identity the file left empty
+    /// (empty otherwise).
     pub label: String,
     pub bounds: Aabb,
     pub triangles: u64,
@@ -32,7 +33,11 @@ impl Seen {
         Seen {
             index,
             identity: o.identity.clone(),
-            label: o.name.clone(),
+            label: if o.identity.path.is_empty() {
+                o.name.clone()
+            } else {
+                String::new()
+            },
             bounds,
             triangles,
         }

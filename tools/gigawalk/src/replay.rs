@@ -219,6 +219,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.pixel_error_max
         );
     }
+    // The path first: a bad one is named before the scene is read.
+    let given_path = match &args.path {
+        Some(p) => Some(CameraPath::read(p).context("cannot read the camera path")?),
+        None => None,
+    };
     let scene = SceneReader::open(&args.scene).context("cannot open the scene")?;
     let view = match &args.view {
         Some(name) => {
@@ -228,12 +233,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let (path, path_name) = match (&args.path, &view) {
-        (Some(p), _) => (
-            CameraPath::read(p).context("cannot read the camera path")?,
-            p.display().to_string(),
-        ),
-        (None, Some(v)) => (
+    let (path, path_name) = match (given_path, &args.path, &view) {
+        (Some(given), Some(p), _) => (given, p.display().to_string()),
+        (_, _, Some(v)) => (
             CameraPath {
                 poses: vec![v
                     .pose()
@@ -241,7 +243,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
             format!("view {:?}", v.name),
         ),
-        (None, None) => anyhow::bail!("replay needs --path or --view"),
+        _ => anyhow::bail!("replay needs --path or --view"),
     };
     let visibility = if args.hide.is_empty() && args.isolate.is_empty() && view.is_none() {
         None

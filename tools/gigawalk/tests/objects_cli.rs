@@ -42,7 +42,11 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         c ^= b as u32;
         for _ in 0..8 {
-            c = if c & 1 != 0 { (c >> 1) ^ 0xEDB8_8320 } else { c >> 1 };
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xEDB8_8320
+            } else {
+                c >> 1
+            };
         }
     }
     !c
@@ -78,17 +82,33 @@ fn pick_and_find_answer_and_bad_input_gets_a_clear_message() {
     let found = found.as_array().unwrap();
     assert!(!found.is_empty());
     for o in found {
-        assert!(o["name"].as_str().unwrap().to_lowercase().contains("pipe") || o["path"].as_str().unwrap().to_lowercase().contains("pipe"));
+        assert!(
+            o["name"].as_str().unwrap().to_lowercase().contains("pipe")
+                || o["path"].as_str().unwrap().to_lowercase().contains("pipe")
+        );
         assert_eq!(o["bounds"]["min"].as_array().unwrap().len(), 3);
     }
     let (ok, _, err) = gigawalk(&["find", s(&gwk), "no-such-object"]);
-    assert!(!ok && err.contains("no object matches \"no-such-object\""), "{err}");
+    assert!(
+        !ok && err.contains("no object matches \"no-such-object\""),
+        "{err}"
+    );
     // Pick: some pixel of the walk's middle pose shows an object.
     let mut hit = None;
     'search: for y in (20..360).step_by(40) {
         for x in (20..640).step_by(60) {
             let pixel = format!("{x},{y}");
-            let out = gigawalk_ok(&["pick", s(&gwk), "--path", s(&path), "--frame", "6", "--pixel", &pixel, "--json"]);
+            let out = gigawalk_ok(&[
+                "pick",
+                s(&gwk),
+                "--path",
+                s(&path),
+                "--frame",
+                "6",
+                "--pixel",
+                &pixel,
+                "--json",
+            ]);
             let v = json(&out.stdout);
             if !v["object"].is_null() {
                 hit = Some((pixel, v));
@@ -97,24 +117,92 @@ fn pick_and_find_answer_and_bad_input_gets_a_clear_message() {
         }
     }
     let (pixel, v) = hit.expect("the walk's middle pose shows something");
-    assert!(v["object"]["name"].is_string() && v["object"]["file"].as_str().unwrap().ends_with("p.glb"));
+    assert!(
+        v["object"]["name"].is_string() && v["object"]["file"].as_str().unwrap().ends_with("p.glb")
+    );
     assert_eq!(v["point"].as_array().unwrap().len(), 3);
     assert!(v["distance"].as_f64().unwrap() > 0.0);
-    let text = gigawalk_ok(&["pick", s(&gwk), "--path", s(&path), "--frame", "6", "--pixel", &pixel]);
-    assert!(text.stdout.contains(v["object"]["name"].as_str().unwrap()), "{}", text.stdout);
+    let text = gigawalk_ok(&[
+        "pick",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--frame",
+        "6",
+        "--pixel",
+        &pixel,
+    ]);
+    assert!(
+        text.stdout.contains(v["object"]["name"].as_str().unwrap()),
+        "{}",
+        text.stdout
+    );
     // Nothing there: looking away from the plant.
     let away = dir.path().join("away.path");
     std::fs::write(&away, "0 500 500 500 0 0 0 1 60\n").unwrap();
-    let out = gigawalk_ok(&["pick", s(&gwk), "--path", s(&away), "--frame", "0", "--pixel", "10,10", "--json"]);
+    let out = gigawalk_ok(&[
+        "pick",
+        s(&gwk),
+        "--path",
+        s(&away),
+        "--frame",
+        "0",
+        "--pixel",
+        "10,10",
+        "--json",
+    ]);
     assert!(json(&out.stdout)["object"].is_null(), "{}", out.stdout);
     // Bad pixels, frames and viewports.
-    let (ok, _, err) = gigawalk(&["pick", s(&gwk), "--path", s(&path), "--frame", "0", "--pixel", "640,10"]);
+    let (ok, _, err) = gigawalk(&[
+        "pick",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--frame",
+        "0",
+        "--pixel",
+        "640,10",
+    ]);
     assert!(!ok && err.contains("outside the 640x360 viewport"), "{err}");
-    let (ok, _, err) = gigawalk(&["pick", s(&gwk), "--path", s(&path), "--frame", "0", "--pixel", "5,5", "--width", "4", "--height", "4"]);
+    let (ok, _, err) = gigawalk(&[
+        "pick",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--frame",
+        "0",
+        "--pixel",
+        "5,5",
+        "--width",
+        "4",
+        "--height",
+        "4",
+    ]);
     assert!(!ok && err.contains("outside the 4x4 viewport"), "{err}");
-    let (ok, _, err) = gigawalk(&["pick", s(&gwk), "--path", s(&path), "--frame", "12", "--pixel", "1,1"]);
-    assert!(!ok && err.contains("pose 12 asked for, the path has 12"), "{err}");
-    let (ok, _, err) = gigawalk(&["pick", s(&gwk), "--path", s(&path), "--frame", "0", "--pixel", "1;1"]);
+    let (ok, _, err) = gigawalk(&[
+        "pick",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--frame",
+        "12",
+        "--pixel",
+        "1,1",
+    ]);
+    assert!(
+        !ok && err.contains("pose 12 asked for, the path has 12"),
+        "{err}"
+    );
+    let (ok, _, err) = gigawalk(&[
+        "pick",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--frame",
+        "0",
+        "--pixel",
+        "1;1",
+    ]);
     assert!(!ok && err.contains("a pixel is X,Y"), "{err}");
     for e in [&err] {
         assert!(!e.contains("panicked"));
@@ -129,15 +217,49 @@ fn a_scene_from_before_object_identity_says_to_preprocess_again() {
     without_identity(&gwk, &old);
     let again = "preprocess the model again";
     let (ok, _, err) = gigawalk(&["find", s(&old), "pipe"]);
-    assert!(!ok && err.contains(again) && err.contains("old.gwk"), "{err}");
-    let (ok, _, err) = gigawalk(&["pick", s(&old), "--path", s(&path), "--frame", "0", "--pixel", "1,1"]);
+    assert!(
+        !ok && err.contains(again) && err.contains("old.gwk"),
+        "{err}"
+    );
+    let (ok, _, err) = gigawalk(&[
+        "pick",
+        s(&old),
+        "--path",
+        s(&path),
+        "--frame",
+        "0",
+        "--pixel",
+        "1,1",
+    ]);
     assert!(!ok && err.contains(again), "{err}");
     // Everything else still works.
     let info = gigawalk_ok(&["info", s(&old), "--verify"]);
     assert!(info.stdout.contains("none recorded"), "{}", info.stdout);
     let out = dir.path().join("report");
-    gigawalk_ok(&["replay", s(&old), "--path", s(&path), "--out", s(&out), "--adapter", "null", "--modes", "vfc"]);
-    let (ok, _, err) = gigawalk(&["replay", s(&old), "--path", s(&path), "--out", s(&out), "--adapter", "null", "--hide", "pipe"]);
+    gigawalk_ok(&[
+        "replay",
+        s(&old),
+        "--path",
+        s(&path),
+        "--out",
+        s(&out),
+        "--adapter",
+        "null",
+        "--modes",
+        "vfc",
+    ]);
+    let (ok, _, err) = gigawalk(&[
+        "replay",
+        s(&old),
+        "--path",
+        s(&path),
+        "--out",
+        s(&out),
+        "--adapter",
+        "null",
+        "--hide",
+        "pipe",
+    ]);
     assert!(!ok && err.contains(again), "{err}");
 }
 
@@ -147,7 +269,16 @@ fn replay_hides_what_is_asked_and_says_what_it_cannot() {
     let (path, gwk) = plant(dir.path());
     let out = dir.path().join("report");
     let replay = |more: &[&str]| {
-        let mut a = vec!["replay", s(&gwk), "--out", s(&out), "--adapter", "null", "--modes", "vfc,och"];
+        let mut a = vec![
+            "replay",
+            s(&gwk),
+            "--out",
+            s(&out),
+            "--adapter",
+            "null",
+            "--modes",
+            "vfc,och",
+        ];
         a.extend_from_slice(more);
         gigawalk(&a)
     };
@@ -157,10 +288,23 @@ fn replay_hides_what_is_asked_and_says_what_it_cannot() {
     let (ok, _, err) = replay(&["--path", s(&path), "--isolate", "pipe"]);
     assert!(ok, "{err}");
     let (ok, _, err) = replay(&["--path", s(&path), "--hide", "no-such-object"]);
-    assert!(!ok && err.contains("\"no-such-object\": matches none of the scene's"), "{err}");
+    assert!(
+        !ok && err.contains("\"no-such-object\": matches none of the scene's"),
+        "{err}"
+    );
     // A streamed scene refuses hiding.
-    let (ok, _, err) = replay(&["--path", s(&path), "--hide", "pipe", "--memory-budget", "64k"]);
-    assert!(!ok && err.contains("hiding objects needs the scene resident"), "{err}");
+    let (ok, _, err) = replay(&[
+        "--path",
+        s(&path),
+        "--hide",
+        "pipe",
+        "--memory-budget",
+        "64k",
+    ]);
+    assert!(
+        !ok && err.contains("hiding objects needs the scene resident"),
+        "{err}"
+    );
     // Saved views: a view replays alone, with its hidden objects; names
     // the scene no longer has are a warning; a corrupt file an error.
     let views = dir.path().join("p.gwk.views.json");
@@ -181,11 +325,21 @@ fn replay_hides_what_is_asked_and_says_what_it_cannot() {
     std::fs::write(&views, serde_json::to_string(&text).unwrap()).unwrap();
     let (ok, _, err) = replay(&["--view", "pipes gone"]);
     assert!(ok, "{err}");
-    assert!(err.contains("names 1 object(s) this scene no longer has") && err.contains("gone.glb/nothing"), "{err}");
+    assert!(
+        err.contains("names 1 object(s) this scene no longer has")
+            && err.contains("gone.glb/nothing"),
+        "{err}"
+    );
     let (ok, _, err) = replay(&["--view", "no such view"]);
-    assert!(!ok && err.contains("no view named \"no such view\"") && err.contains("\"pipes gone\""), "{err}");
+    assert!(
+        !ok && err.contains("no view named \"no such view\"") && err.contains("\"pipes gone\""),
+        "{err}"
+    );
     std::fs::write(&views, "{\"version\": 1, \"views\": [{\"name\": ").unwrap();
     let (ok, _, err) = replay(&["--view", "pipes gone"]);
-    assert!(!ok && err.contains("p.gwk.views.json") && err.contains("not a saved-views file"), "{err}");
+    assert!(
+        !ok && err.contains("p.gwk.views.json") && err.contains("not a saved-views file"),
+        "{err}"
+    );
     assert!(!err.contains("panicked"), "{err}");
 }

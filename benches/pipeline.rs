@@ -107,7 +107,7 @@ fn main() {
             .iter()
             .skip(round * per_round)
             .take(per_round)
-            .copied()
+            .cloned()
             .collect();
         for (k, &(_, schedule, devices)) in schedules.iter().enumerate() {
             let opts = RuntimeOptions {

@@ -143,7 +143,9 @@ pub fn initial_parts(model: &dyn Source) -> Result<(Vec<Part>, u64), InputError>
 pub(crate) fn initial_parts_identified(
     model: &dyn Source,
 ) -> Result<(Vec<Part>, u64, Identities), InputError> {
-    let per_object: Vec<Result<Option<(Part, u64, Seen)>, InputError>> = (0..model.len())
+    /// An object's part, degenerate triangles dropped and identity.
+    type Checked = Option<(Part, u64, Seen)>;
+    let per_object: Vec<Result<Checked, InputError>> = (0..model.len())
         .into_par_iter()
         .map(|index| {
             let o = model.object(index as u32)?;

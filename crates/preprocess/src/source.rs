@@ -859,8 +859,8 @@ mod tests {
                 name: format!("n{k}"),
                 path: format!("root/n{k}"),
                 file: "f.glb".into(),
-                extras: (k % 2 == 0).then(|| format!("{{\"k\":{k}}}")),
-                node: (k % 3 != 0).then_some(k as usize),
+                extras: k.is_multiple_of(2).then(|| format!("{{\"k\":{k}}}")),
+                node: (!k.is_multiple_of(3)).then_some(k as usize),
             },
         }
     }

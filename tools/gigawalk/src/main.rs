@@ -48,7 +48,7 @@ enum Command {
     /// Turn a glTF/OBJ model into a scene file: partition, cluster, AABB hierarchy, HLODs
     Preprocess(preprocess::Args),
     /// Replay a camera path in the Table 2 modes and write a frame-time and accuracy report
-    Replay(replay::Args),
+    Replay(Box<replay::Args>),
     /// The whole story on the built-in plant: generate, preprocess, replay all modes, report
     Demo(demo::Args),
     /// Walk through a scene in a window: fly, toggle culling and LODs, see what they do
@@ -102,7 +102,7 @@ fn main() -> std::process::ExitCode {
         Command::Info(a) => info::run(a),
         Command::Generate(a) => generate::run(a),
         Command::Preprocess(a) => preprocess::run(a),
-        Command::Replay(a) => replay::run(a),
+        Command::Replay(a) => replay::run(*a),
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
         Command::Pick(a) => objects::pick(a),

@@ -220,6 +220,13 @@ pub fn markdown(s: &Summary) -> String {
             "**Null adapter: every GPU operation was free and drew nothing. The frame rates are the CPU's ceiling, what it can feed a GPU, with nothing occluded (depth reads back as zeros, so occlusion culls nothing and traversal and drawing do their most work); accuracy is not measured.**\n"
         );
     }
+    if s.hidden_objects > 0 {
+        let _ = writeln!(
+            m,
+            "**{} objects hidden: the reference and every run leave them out, and the nodes above them are refined to their leaves (what hiding costs is in the triangles and frame times below).**\n",
+            s.hidden_objects
+        );
+    }
     let _ = writeln!(m, "- scene: `{}`", s.scene);
     let _ = writeln!(m, "- path: `{}`, {} frames per run", s.path, s.frames);
     let _ = writeln!(m, "- viewport: {}x{}", s.width, s.height);

@@ -30,6 +30,10 @@ pub struct Summary {
     /// what the CPU can feed, with nothing occluded, and no accuracy.
     #[serde(default)]
     pub null_adapter: bool,
+    /// Objects hidden in the reference and every run (`--hide`,
+    /// `--isolate`, `--view`); 0: every object shown.
+    #[serde(default)]
+    pub hidden_objects: usize,
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
@@ -552,6 +556,7 @@ impl Replay {
             complete: self.complete,
             devices: self.devices.clone(),
             null_adapter: self.null_adapter,
+            hidden_objects: self.options.visibility.as_ref().map_or(0, |v| v.counts().0),
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,

@@ -253,3 +253,87 @@ pub fn resolve(refs: &[ObjectRef], table: &ObjectTable) -> (Vec<u32>, Vec<String
     }
     (found, missing)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::objects::ObjectRecord;
+    use crate::Aabb;
+
+    fn table() -> ObjectTable {
+        let o = |name: &str| ObjectRecord {
+            name: name.into(),
+            path: format!("root/{name}"),
+            file: "a.glb".into(),
+            metadata: None,
+            bounds: Aabb {
+                min: DVec3::ZERO,
+                max: DVec3::ONE,
+            },
+            triangles: 1,
+        };
+        ObjectTable::new(vec![o("pump"), o("valve"), o("pipe")], Vec::new())
+    }
+
+    #[test]
+    fn views_round_trip_and_a_bad_file_is_an_error_not_empty() {
+        let dir = std::env::temp_dir().join(format!("gw-views-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = Views::file_for(&dir.join("plant.gwk"));
+        assert!(file.ends_with("plant.gwk.views.json"));
+        let mut v = Views::read(&file).unwrap();
+        assert!(v.views.is_empty());
+        let pose = Pose {
+            time: 0.0,
+            position: DVec3::new(1e7, 2.0, -3.0),
+            orientation: DQuat::from_rotation_y(0.5),
+            fovy: 1.0,
+        };
+        let mut view = SavedView::new(&v.next_name(), &pose);
+        view.hidden = vec![ObjectRef::of(&table(), 1).unwrap()];
+        v.put(view.clone());
+        assert_eq!(v.next_name(), "view 2");
+        v.write(&file).unwrap();
+        let back = Views::read(&file).unwrap();
+        assert_eq!(back, v);
+        let p = back.get(&file, "view 1").unwrap().pose().unwrap();
+        assert_eq!(p.position, pose.position);
+        assert!(p.orientation.abs_diff_eq(pose.orientation, 1e-12));
+        let e = back.get(&file, "nope").unwrap_err().to_string();
+        assert!(e.contains("\"view 1\""), "{e}");
+        for bad in [
+            "{",
+            "{\"version\": 2, \"views\": []}",
+            "{\"version\": 1, \"views\": [{\"name\": \"x\", \"position\": [0,0,0], \"orientation\": [0,0,0,0], \"fovy_deg\": 60}]}",
+            "{\"version\": 1, \"views\": [{\"name\": \"x\", \"position\": [0,0,0], \"orientation\": [0,0,0,1], \"fovy_deg\": 0}]}",
+        ] {
+            std::fs::write(&file, bad).unwrap();
+            let e = Views::read(&file).unwrap_err().to_string();
+            assert!(e.contains("plant.gwk.views.json"), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn objects_are_found_by_index_then_by_path_and_the_rest_named() {
+        let t = table();
+        let refs = vec![
+            ObjectRef {
+                id: 1,
+                path: "a.glb/root/valve".into(),
+            },
+            // Renumbered: found by its path.
+            ObjectRef {
+                id: 0,
+                path: "a.glb/root/pipe".into(),
+            },
+            ObjectRef {
+                id: 7,
+                path: "a.glb/root/gone".into(),
+            },
+        ];
+        let (found, missing) = resolve(&refs, &t);
+        assert_eq!(found, vec![1, 2]);
+        assert_eq!(missing, vec!["a.glb/root/gone".to_string()]);
+    }
+}

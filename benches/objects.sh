@@ -70,5 +70,9 @@ median() { printf '%s\n' "$@" | sort -g | awk '{a[NR]=$1} END {print (a[int((NR+
 echo "pick ray cast + leaves read: median $(median "${ms[@]}") ms; whole command: median $(median "${wall[@]}") ms"
 
 echo "== 3. hiding on $plant"
+# As the gigawalk binary does without a desktop session: Mesa's Vulkan
+# device-select layer would print an XDG_RUNTIME_DIR error per adapter
+# enumeration.
+[ -n "${XDG_RUNTIME_DIR:-}" ] || export NODEVICE_SELECT=1
 target/release/examples/hide_cost "$scenes/$plant.glb" "$scenes/$plant.gwk" \
   "$scenes/$plant.path" --frames "$frames" --width 640 --height 360

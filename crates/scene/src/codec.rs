@@ -639,6 +639,55 @@ mod tests {
     }
 
     #[test]
+    fn runs_keep_their_triangles_consecutive_and_in_place() {
+        let s = sheet(24, 5.0);
+        let t = (s.indices.len() / 3) as u32;
+        let runs = [7, t - 7 - 100, 100];
+        let e = encode_in_runs(&s, 16, 8, &runs).unwrap();
+        let d = decode(&e.blob, s.positions.len(), t as usize, true).unwrap();
+        // Each decoded vertex is the original nearest it (the sheet's
+        // spacing is far above a 16-bit step).
+        let nearest = |p: &[f32; 3]| -> u32 {
+            (0..s.positions.len() as u32)
+                .min_by(|&a, &b| {
+                    let d = |i: u32| {
+                        let q = s.positions[i as usize];
+                        (0..3).map(|k| (q[k] - p[k]).powi(2)).sum::<f32>()
+                    };
+                    d(a).total_cmp(&d(b))
+                })
+                .unwrap()
+        };
+        let original: Vec<u32> = d.positions.iter().map(nearest).collect();
+        let tris = |idx: &[u32], map: &dyn Fn(u32) -> u32, range: std::ops::Range<usize>| {
+            let mut v: Vec<[u32; 3]> = idx.chunks(3).collect::<Vec<_>>()[range]
+                .iter()
+                .map(|t| {
+                    let mut k = [map(t[0]), map(t[1]), map(t[2])];
+                    k.sort();
+                    k
+                })
+                .collect();
+            v.sort();
+            v
+        };
+        let mut first = 0usize;
+        for &r in &runs {
+            let range = first..first + r as usize;
+            assert_eq!(
+                tris(&d.indices, &|i| original[i as usize], range.clone()),
+                tris(&s.indices, &|i| i, range),
+                "run of {r} from triangle {first}"
+            );
+            first += r as usize;
+        }
+        assert!(
+            encode_in_runs(&s, 16, 8, &[1, 2]).is_err(),
+            "runs must cover the triangles"
+        );
+    }
+
+    #[test]
     fn eight_bit_normals_decode_within_a_degree_in_fewer_bytes() {
         let mut s = sheet(30, 1.0);
         for (i, n) in s.normals.iter_mut().enumerate() {

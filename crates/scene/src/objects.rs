@@ -558,6 +558,36 @@ mod tests {
         let last = flipped.len() - 1;
         flipped[last] ^= 0x40;
         assert!(ObjectTable::decode(&flipped).is_err());
+        // Any byte of the stored (uncompressed) form changed: decoded or
+        // refused, never a panic.
+        let body = {
+            let mut t = t.clone();
+            t.objects[0].name = "x".repeat(3);
+            t
+        };
+        let raw = {
+            let mut b = body.encode();
+            // Stored: compression flag 0, the body as is.
+            if b[12..16] == 1u32.to_le_bytes() {
+                let len = u64::from_le_bytes(b[16..24].try_into().unwrap()) as usize;
+                let plain = zstd::bulk::decompress(&b[24..], len).unwrap();
+                b.truncate(24);
+                b[12..16].copy_from_slice(&0u32.to_le_bytes());
+                b.extend_from_slice(&plain);
+            }
+            b
+        };
+        assert_eq!(ObjectTable::decode(&raw).unwrap(), body);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..4000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let mut m = raw.clone();
+            let at = (seed % m.len() as u64) as usize;
+            m[at] = m[at].wrapping_add((seed >> 32) as u8 | 1);
+            let _ = ObjectTable::decode(&m);
+        }
     }
 
     #[test]

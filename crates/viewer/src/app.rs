@@ -10,9 +10,9 @@
 //! options end the run and start a new one (a thread start and the 2-frame
 //! startup bypass, invisible in a viewer).
 //!
-//! Here: the arguments, the errors, and [`run`], which opens the scene, the
-//! devices and the window and restarts the runtime when a toggle or a
-//! resize needs it. Input is collected in `window` and applied between
+//! Here: the arguments, the errors, and [`run`], which opens the scene
+//! (its object table and saved views too), the devices and the window
+//! and restarts the runtime when a toggle or a resize needs it. Input is collected in `window` and applied between
 //! frames in `frame_loop`; the runtime's camera source and presenter are
 //! `camera_source` and `presenter`.
 
@@ -31,6 +31,7 @@ use gigawalk_gpu::{open_devices_for_window, GpuContext, WindowError};
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{CullMethod, OccluderBudget, Runtime, RuntimeError, RuntimeOptions};
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
+use gigawalk_scene::views::{SavedView, Views};
 use gigawalk_scene::SceneReader;
 use winit::dpi::PhysicalSize;
 use winit::event_loop::EventLoop;
@@ -40,6 +41,7 @@ use crate::boxes::CullSets;
 use crate::controller::FlyController;
 use crate::hud::{FrameClock, ViewerState};
 use crate::image::ScreenshotError;
+use crate::objects::{view_names, Objects, NO_IDENTITY};
 use crate::recorder::{next_free_name, PathRecorder};
 use crate::settings::Settings;
 use camera_source::LiveSource;
@@ -82,6 +84,9 @@ pub struct ViewArgs {
     pub tiles: Option<gigawalk_runtime::TileGrid>,
     /// How items are sent to the tiles.
     pub tile_culling: gigawalk_runtime::TileMethod,
+    /// Start from this saved view (`SCENE.views.json`): its camera
+    /// (unless `path` gives one), selection and hidden objects.
+    pub view: Option<String>,
 }
 
 /// Why the viewer stopped with an error.
@@ -112,6 +117,10 @@ pub enum ViewError {
     NoWireframe { devices: String },
     #[error("the scripted run ended before frame {wanted} (rendered {rendered})")]
     TooFewFrames { wanted: u64, rendered: u64 },
+    #[error(transparent)]
+    Views(#[from] gigawalk_scene::views::ViewsError),
+    #[error("--view {name:?}: {detail}")]
+    BadView { name: String, detail: String },
 }
 
 /// Why no window could be opened ([`ViewError::Display`]).
@@ -154,14 +163,35 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         }
         None => None,
     };
-    let fovy = path
-        .as_ref()
-        .map_or(60f64.to_radians(), |p| p.poses[0].fovy);
-    let controller = match &path {
-        Some(p) => {
-            let q = p.poses[0];
-            FlyController::from_pose(q.position, q.orientation, q.fovy, &skeleton.bounds())
+    // Saved views: the one to start from must be there; otherwise a file
+    // that does not read is only reported (V will not write over it).
+    let views_file = Views::file_for(&args.scene);
+    let mut views_note = None;
+    let (start_view, view_list) = match &args.view {
+        Some(name) => {
+            let views = Views::read(&views_file)?;
+            let view: SavedView = views.get(&views_file, name)?.clone();
+            (Some(view), view_names(&views))
         }
+        None => match Views::read(&views_file) {
+            Ok(views) => (None, view_names(&views)),
+            Err(e) => {
+                views_note = Some(format!("saved views unreadable, V will not save: {e}"));
+                (None, Vec::new())
+            }
+        },
+    };
+    let start_pose = match &start_view {
+        Some(v) => Some(v.pose().map_err(|detail| ViewError::BadView {
+            name: v.name.clone(),
+            detail,
+        })?),
+        None => None,
+    };
+    let start = path.as_ref().map(|p| p.poses[0]).or(start_pose);
+    let fovy = start.map_or(60f64.to_radians(), |p| p.fovy);
+    let controller = match start {
+        Some(q) => FlyController::from_pose(q.position, q.orientation, q.fovy, &skeleton.bounds()),
         None => FlyController::overview(&skeleton.bounds(), fovy),
     }
     .with_units(args.metres_per_unit);
@@ -178,7 +208,10 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         held: HashSet::new(),
         drag: None,
         cursor: None,
-        actions: Vec::new(),
+        press: None,
+        last_click: None,
+        prompt: None,
+        inputs: Vec::new(),
         scroll: 0.0,
         look: (0.0, 0.0),
         resized: None,
@@ -232,6 +265,26 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         start_message = Some((why.clone(), Instant::now()));
         eprintln!("{why}");
     }
+    if let Some(note) = views_note {
+        eprintln!("{note}");
+        start_message = start_message.or(Some((note, Instant::now())));
+    }
+    // Object identity: without it (an older scene, or an unreadable OBJT
+    // section) everything else works and pick, find and hide say why not.
+    let table = match scene.objects() {
+        Ok(Some(t)) => Ok(t),
+        Ok(None) => Err(NO_IDENTITY.to_string()),
+        Err(e) => {
+            let why = format!("object identity unreadable ({e}): pick, find and hide are off");
+            eprintln!("{why}");
+            Err(why)
+        }
+    };
+    let no_hiding = runtime.is_streaming().then(|| {
+        "hiding needs the scene resident: run without --memory-budget \
+         (streamed stand-ins could show hidden objects)"
+            .to_string()
+    });
 
     let scripted = args.frames.map(|n| Script {
         frames: n.max(1),
@@ -249,6 +302,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         message: None,
         error: None,
         target_tolerance: None,
+        visibility: None,
     }));
     let mut source = LiveSource {
         shared: shared.clone(),
@@ -284,7 +338,21 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             FrameRateController::new(1e3 / target_fps, start_tolerance.max(MIN_TOLERANCE), 16.0)
         }),
         last_finish: None,
+        objects: Objects::new(table, no_hiding),
+        visibility: None,
+        flight: None,
+        views_file,
+        view_names: view_list,
+        next_view: 0,
     };
+    if let Some(view) = &start_view {
+        // The controller starts at the view's camera already, unless a
+        // path gave it its first pose.
+        state.apply_view(view, false, Instant::now());
+        state.visibility = state.objects.visibility(skeleton);
+        state.objects.take_changed();
+        shared.lock().expect("viewer state").visibility = state.visibility.clone();
+    }
     loop {
         let render = PhysicalSize::new(app.size.width.max(1), app.size.height.max(1));
         let running = state.settings.clone();
@@ -317,7 +385,8 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
                     app.close = true;
                 }
                 state.rendered += 1;
-                let go_on = state.after_frame(&mut app, &shared, render, scripted.is_some());
+                let go_on =
+                    state.after_frame(&mut app, &shared, &scene, render, scripted.is_some());
                 if !go_on {
                     return false;
                 }
@@ -408,6 +477,8 @@ struct Shared {
     error: Option<ViewError>,
     /// The next frame's pixel error while a target frame rate is held.
     target_tolerance: Option<f64>,
+    /// Hidden and highlighted objects (`None`: all show, none tinted).
+    visibility: Option<Arc<gigawalk_cull::Visibility>>,
 }
 
 /// Loading progress for the terminal: a line a second while the LODs the

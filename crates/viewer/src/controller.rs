@@ -102,6 +102,15 @@ impl FlyController {
         c
     }
 
+    /// Puts the eye at a pose (roll is dropped) and leaves walk mode: a
+    /// saved view's camera. Speed and eye height stay.
+    pub fn set_pose(&mut self, position: DVec3, orientation: DQuat, fovy: f64) {
+        self.position = position;
+        self.fovy = fovy;
+        self.walk_floor = None;
+        self.look_along(orientation * DVec3::NEG_Z);
+    }
+
     fn look_along(&mut self, dir: DVec3) {
         let f = dir.normalize_or(DVec3::NEG_Z);
         self.yaw = (-f.x).atan2(-f.z);
@@ -275,6 +284,22 @@ mod tests {
         assert!(c.position.z < 0.0);
         c.toggle_walk();
         assert!(!c.walking());
+    }
+
+    #[test]
+    fn set_pose_keeps_the_speed_and_leaves_walk_mode() {
+        let mut c = FlyController::from_pose(DVec3::ZERO, DQuat::IDENTITY, 1.0, &scene());
+        c.scroll(2.0);
+        c.toggle_walk();
+        let speed = c.speed;
+        let q = DQuat::from_rotation_y(0.7) * DQuat::from_rotation_x(-0.2);
+        c.set_pose(DVec3::new(3.0, 9.0, -1.0), q, 0.5);
+        assert!(!c.walking());
+        assert_eq!(
+            (c.position, c.fovy, c.speed),
+            (DVec3::new(3.0, 9.0, -1.0), 0.5, speed)
+        );
+        assert!(close(c.camera(1.0, 0.1).forward(), q * DVec3::NEG_Z));
     }
 
     #[test]

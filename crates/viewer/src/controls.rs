@@ -18,6 +18,17 @@ pub enum Action {
     ToggleWireframe,
     ToggleBoxes,
     ToggleFreeze,
+    /// Fly to see the selected object whole.
+    FrameSelection,
+    /// Open the search prompt.
+    Search,
+    /// The last search's next match.
+    NextMatch,
+    Hide,
+    Isolate,
+    ShowAll,
+    SaveView,
+    NextView,
     ToggleRecord,
     Screenshot,
     ToggleHud,
@@ -49,6 +60,8 @@ pub struct Binding {
 pub enum Does {
     Move(Movement),
     Act(Action),
+    /// Restore the saved view the key's digit numbers ([`view_number`]).
+    RestoreView,
 }
 
 use Does::{Act, Move};
@@ -72,17 +85,31 @@ pub const BINDINGS: &[Binding] = &[
     Binding { keys: &[KeyCode::KeyY], label: "Y", what: "async rendering on/off", does: Act(Action::ToggleAsync) },
     Binding { keys: &[KeyCode::KeyT], label: "T", what: "wireframe", does: Act(Action::ToggleWireframe) },
     Binding { keys: &[KeyCode::KeyB], label: "B", what: "bounding boxes on/off", does: Act(Action::ToggleBoxes) },
-    Binding { keys: &[KeyCode::KeyF], label: "F", what: "freeze culling: keep this view's visible set, fly around it", does: Act(Action::ToggleFreeze) },
+    Binding { keys: &[KeyCode::KeyZ], label: "Z", what: "freeze culling: keep this view's visible set, fly around it", does: Act(Action::ToggleFreeze) },
+    Binding { keys: &[KeyCode::KeyF], label: "F", what: "frame the selected object: fly back along the view until it fits", does: Act(Action::FrameSelection) },
+    Binding { keys: &[KeyCode::Slash, KeyCode::NumpadDivide], label: "/", what: "find objects by name or path (* ? wildcards): type, Enter flies to a match, Esc cancels", does: Act(Action::Search) },
+    Binding { keys: &[KeyCode::Enter, KeyCode::NumpadEnter], label: "Enter", what: "fly to the search's next match (k of n)", does: Act(Action::NextMatch) },
+    Binding { keys: &[KeyCode::KeyH], label: "H", what: "hide the selection (after a search: all its matches)", does: Act(Action::Hide) },
+    Binding { keys: &[KeyCode::KeyI], label: "I", what: "isolate the selection (after a search: its matches): hide all else", does: Act(Action::Isolate) },
+    Binding { keys: &[KeyCode::KeyU], label: "U", what: "show every object again", does: Act(Action::ShowAll) },
+    Binding { keys: &[KeyCode::KeyV], label: "V", what: "save the view: camera, selection, hidden objects (SCENE.views.json)", does: Act(Action::SaveView) },
+    Binding { keys: &[KeyCode::KeyN], label: "N", what: "restore the next saved view", does: Act(Action::NextView) },
+    Binding { keys: &[KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5, KeyCode::Digit6, KeyCode::Digit7, KeyCode::Digit8, KeyCode::Digit9], label: "1 - 9", what: "restore saved view 1 to 9", does: Does::RestoreView },
     Binding { keys: &[KeyCode::KeyR], label: "R", what: "record camera path: start / stop and write", does: Act(Action::ToggleRecord) },
     Binding { keys: &[KeyCode::KeyP, KeyCode::F12], label: "P / F12", what: "screenshot to PNG", does: Act(Action::Screenshot) },
     Binding { keys: &[KeyCode::Tab], label: "Tab", what: "HUD on/off", does: Act(Action::ToggleHud) },
-    Binding { keys: &[KeyCode::KeyH, KeyCode::F1], label: "H / F1", what: "this help", does: Act(Action::ToggleHelp) },
+    Binding { keys: &[KeyCode::F1], label: "F1", what: "this help", does: Act(Action::ToggleHelp) },
     Binding { keys: &[KeyCode::Escape], label: "Esc", what: "quit", does: Act(Action::Quit) },
 ];
 
 /// Mouse controls, not in the key table.
 pub const MOUSE_HELP: &[(&str, &str)] = &[
     ("drag (any button)", "look around"),
+    (
+        "click",
+        "select the object under the cursor (on nothing: deselect)",
+    ),
+    ("double click", "select it and frame it"),
     ("scroll", "move speed up / down"),
 ];
 
@@ -92,6 +119,22 @@ pub fn lookup(key: KeyCode) -> Option<&'static Does> {
         .iter()
         .find(|b| b.keys.contains(&key))
         .map(|b| &b.does)
+}
+
+/// The saved view a digit key restores: 1 for `1`, ... 9 for `9`.
+pub fn view_number(key: KeyCode) -> Option<usize> {
+    const DIGITS: [KeyCode; 9] = [
+        KeyCode::Digit1,
+        KeyCode::Digit2,
+        KeyCode::Digit3,
+        KeyCode::Digit4,
+        KeyCode::Digit5,
+        KeyCode::Digit6,
+        KeyCode::Digit7,
+        KeyCode::Digit8,
+        KeyCode::Digit9,
+    ];
+    DIGITS.iter().position(|&k| k == key).map(|i| i + 1)
 }
 
 /// The controls as aligned text lines: on-screen help, `--help` and README.
@@ -122,16 +165,43 @@ mod tests {
     }
 
     #[test]
-    fn wasd_moves_and_f_freezes() {
+    fn wasd_moves_z_freezes_f_frames_and_f1_helps() {
         assert!(matches!(
             lookup(KeyCode::KeyW),
             Some(Does::Move(Movement::Forward))
         ));
         assert!(matches!(
-            lookup(KeyCode::KeyF),
+            lookup(KeyCode::KeyZ),
             Some(Does::Act(Action::ToggleFreeze))
         ));
-        assert!(lookup(KeyCode::KeyZ).is_none());
+        assert!(matches!(
+            lookup(KeyCode::KeyF),
+            Some(Does::Act(Action::FrameSelection))
+        ));
+        assert!(matches!(
+            lookup(KeyCode::KeyH),
+            Some(Does::Act(Action::Hide))
+        ));
+        assert!(matches!(
+            lookup(KeyCode::F1),
+            Some(Does::Act(Action::ToggleHelp))
+        ));
+        assert!(lookup(KeyCode::KeyX).is_none());
+    }
+
+    #[test]
+    fn digits_restore_views_one_to_nine() {
+        assert!(matches!(lookup(KeyCode::Digit5), Some(Does::RestoreView)));
+        assert_eq!(view_number(KeyCode::Digit1), Some(1));
+        assert_eq!(view_number(KeyCode::Digit9), Some(9));
+        assert_eq!(view_number(KeyCode::Digit0), None);
+        assert_eq!(view_number(KeyCode::KeyV), None);
+        // Every key bound to RestoreView has a number.
+        for b in BINDINGS {
+            if matches!(b.does, Does::RestoreView) {
+                assert!(b.keys.iter().all(|&k| view_number(k).is_some()));
+            }
+        }
     }
 
     #[test]

@@ -76,6 +76,12 @@ pub struct ViewerState {
     pub message: Option<String>,
     /// How many occluder triangles OR draws a frame.
     pub occluder_budget: gigawalk_runtime::OccluderSelection,
+    /// The selection, hidden count and search, as HUD lines.
+    pub objects: Vec<String>,
+    /// The search prompt's text while it is open.
+    pub prompt: Option<String>,
+    /// The saved views' names, for the help.
+    pub views: Vec<String>,
 }
 
 pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> Vec<String> {
@@ -174,10 +180,11 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
     if let Some(poses) = v.recording {
         lines.push(format!("* REC path: {poses} poses (R stops)"));
     }
+    lines.extend(v.objects.iter().cloned());
     if let Some(m) = &v.message {
         lines.push(m.clone());
     }
-    lines.push(format!("{}   H: help", v.devices));
+    lines.push(format!("{}   F1: help", v.devices));
     lines
 }
 
@@ -281,6 +288,7 @@ mod tests {
         };
         let v = ViewerState {
             recording: Some(3),
+            objects: vec!["selected: Pump (12 tris; F frames it)".into()],
             occluder_budget: gigawalk_runtime::OccluderSelection::Triangles(30_000),
             ..Default::default()
         };
@@ -297,6 +305,8 @@ mod tests {
             "startup bypass",
             "occluders <= 30,000 tris",
             "oq: queries 1,234, round trips 40, ms 1.500, untested 0",
+            "selected: Pump",
+            "F1: help",
         ] {
             assert!(text.contains(want), "{want:?} missing from\n{text}");
         }

@@ -6,7 +6,8 @@
 //! restarted), [`controls::BINDINGS`] (the key table that input, the
 //! on-screen help and `--help` share), [`PathRecorder`] (camera paths),
 //! [`hud_lines`] (the HUD text), [`overlay_boxes`] (node boxes coloured by
-//! what culling did), [`write_png`] (screenshots), and [`run`], the winit
+//! what culling did), [`Objects`] (the selection, search, hidden objects
+//! and saved views), [`write_png`] (screenshots), and [`run`], the winit
 //! app that feeds live input to the runtime and presents its frames.
 //!
 //! Everything but [`run`] works without a window, so it is unit-tested.
@@ -19,6 +20,7 @@ mod controller;
 pub mod controls;
 mod hud;
 mod image;
+mod objects;
 mod recorder;
 mod settings;
 
@@ -27,5 +29,6 @@ pub use boxes::{overlay_boxes, CullSets};
 pub use controller::{FlyController, EYE_HEIGHT};
 pub use hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
 pub use image::{image_stats, read_png, write_png, ImageStats, ScreenshotError};
+pub use objects::{frame_box, Objects, NO_IDENTITY};
 pub use recorder::{next_free_name, PathRecorder};
 pub use settings::{Settings, PIXEL_ERROR_STEPS};

@@ -8,14 +8,15 @@ use gigawalk_viewer::{controls, Settings, ViewArgs};
 
 /// The controls, for `--help` (the same table as the on-screen help).
 fn controls_help() -> String {
-    let mut s = String::from("Controls (H in the window shows them too):\n");
+    let mut s = String::from("Controls (F1 in the window shows them too):\n");
     for line in controls::help_lines() {
         s.push_str("  ");
         s.push_str(&line);
         s.push('\n');
     }
     s.push_str(
-        "\nScripted run (tests, docs): --frames N --screenshot out.png [--path p.path] renders N frames and exits.",
+        "\nSaved views (V) go to SCENE.views.json beside the scene; --view NAME starts from one.\
+         \nScripted run (tests, docs): --frames N --screenshot out.png [--path p.path] renders N frames and exits.",
     );
     s
 }
@@ -28,6 +29,9 @@ pub struct Args {
     /// Camera path (docs/path-format.md): start at its first pose; with --frames, follow it one pose a frame
     #[arg(long)]
     path: Option<PathBuf>,
+    /// Start from this saved view (V saves them to SCENE.views.json beside the scene): its camera (unless --path is given), selection and hidden objects
+    #[arg(long, value_name = "NAME")]
+    view: Option<String>,
     /// Scripted run: render this many frames, then exit
     #[arg(long)]
     frames: Option<u64>,
@@ -157,6 +161,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         out_dir: a.out_dir,
         tiles: a.tiles,
         tile_culling: a.tile_culling,
+        view: a.view,
     })
     .with_context(|| format!("viewing {}", scene.display()))
 }

@@ -1,9 +1,11 @@
 //! `gigawalk view` under Xvfb on a small generated plant. Scripted: a few
 //! frames and a screenshot that must show the scene (many colours, most of
 //! the image covered), not a blank or background-only frame, and the same
-//! in wireframe. Live: xdotool drives it with keys and the mouse (fly,
-//! look, wireframe, node boxes, freeze culling, record a path, screenshots,
-//! resize, hiding and showing the window, Esc).
+//! in wireframe. Live: xdotool drives it with keys and the mouse (select
+//! an object with a click, hide and show it, save and restore a view,
+//! find an object, fly, look, wireframe, node boxes, freeze culling,
+//! record a path, screenshots, resize, hiding and showing the window,
+//! Esc), then a scripted run starts from the saved view.
 //! Skips loudly without Xvfb, xdotool or a GPU adapter, unless
 //! GIGAWALK_REQUIRE_ADAPTER is set (CI), where all must be there.
 
@@ -142,6 +144,10 @@ fn help_lists_the_controls() {
         "scroll",
         "walk mode",
         "freeze culling",
+        "frame the selected object",
+        "find objects",
+        "save the view",
+        "--view",
         "screenshot",
         "--frames",
         "--screenshot",
@@ -390,6 +396,66 @@ fn differing_fraction(a: &[u8], b: &[u8]) -> f64 {
     n as f64 / (a.len() / 4) as f64
 }
 
+/// Waits up to 30 s for the viewer's log to hold `needle` more than
+/// `before` times; the log then.
+fn wait_for_log(log: &Path, needle: &str, before: usize, viewer: &mut Viewer) -> String {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let text = std::fs::read_to_string(log).unwrap_or_default();
+        if text.matches(needle).count() > before {
+            return text;
+        }
+        if let Ok(Some(status)) = viewer.0.try_wait() {
+            panic!("the viewer exited ({status}) before saying {needle:?}:\n{text}");
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the viewer did not say {needle:?} within 30 s:\n{text}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// The first of a few pixels of pose 0 of `path`, on a `w` x `h` view,
+/// where `gigawalk pick` finds an object: the pixel and the object's name.
+fn pixel_on_an_object(gwk: &Path, path: &Path, w: u32, h: u32) -> ((u32, u32), String) {
+    let candidates = [
+        (w / 2, h / 2),
+        (w / 3, h / 2),
+        (2 * w / 3, h / 2),
+        (w / 2, 2 * h / 3),
+        (w / 2, h / 3),
+    ];
+    let (ws, hs) = (w.to_string(), h.to_string());
+    for (x, y) in candidates {
+        let pixel = format!("{x},{y}");
+        let (ok, out, err) = gigawalk(
+            &[
+                "pick",
+                s(gwk),
+                "--path",
+                s(path),
+                "--frame",
+                "0",
+                "--pixel",
+                &pixel,
+                "--width",
+                &ws,
+                "--height",
+                &hs,
+                "--json",
+            ],
+            None,
+        );
+        assert!(ok, "gigawalk pick: {err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        if let Some(name) = v["object"]["name"].as_str() {
+            return ((x, y), name.to_string());
+        }
+    }
+    panic!("no object under any of {candidates:?} of the path's first pose");
+}
+
 /// A live session driven like a person would: keys held to fly, a mouse
 /// drag to look, toggles, a recorded path, screenshots, a resize, the
 /// window hidden and shown, and Esc to quit.
@@ -491,6 +557,102 @@ fn live_keys_and_mouse_drive_the_viewer() {
 
     let (w0, h0, start) = shot(&mut viewer);
     assert_eq!((w0, h0), (480, 300));
+
+    // Objects, while the camera is still at the path's first pose: a
+    // click selects what `gigawalk pick` sees at that pixel, tinted.
+    let ((px, py), name) = pixel_on_an_object(&gwk, &path, 480, 300);
+    let said = |needle: &str| {
+        std::fs::read_to_string(&view_log)
+            .unwrap_or_default()
+            .matches(needle)
+            .count()
+    };
+    let selected_line = format!("selected: {name} (");
+    let before = said(&selected_line);
+    xdotool(
+        d,
+        &["mousemove", "--window", w, &px.to_string(), &py.to_string()],
+    );
+    xdotool(d, &["click", "1"]);
+    wait_for_log(&view_log, &selected_line, before, &mut viewer);
+    let (_, _, selected) = shot(&mut viewer);
+    let tinted: Vec<(&[u8], &[u8])> = start
+        .chunks(4)
+        .zip(selected.chunks(4))
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert!(!tinted.is_empty(), "selecting {name} changed no pixel");
+    // The tint mixes orange in: changed pixels gain red over blue.
+    let redder = tinted
+        .iter()
+        .filter(|(a, b)| b[0] as i32 - b[2] as i32 > a[0] as i32 - a[2] as i32)
+        .count();
+    assert!(
+        redder * 2 > tinted.len(),
+        "{redder} of {} changed pixels turned more orange",
+        tinted.len()
+    );
+    // H hides it (and ends the selection), V saves that, U shows all:
+    // the start's image again.
+    key("h");
+    let (_, _, hidden) = shot(&mut viewer);
+    let gone = differing_fraction(&selected, &hidden);
+    assert!(gone > 0.0005, "hiding {name} changed {gone:.4} of the view");
+    let views_file = gwk.with_file_name("p.gwk.views.json");
+    key("v");
+    wait_for(&views_file, &mut viewer);
+    let views = gigawalk_scene::views::Views::read(&views_file).unwrap();
+    assert_eq!(views.views.len(), 1);
+    let saved = &views.views[0];
+    assert_eq!(saved.name, "view 1");
+    assert_eq!(saved.hidden.len(), 1, "{saved:?}");
+    assert!(saved.hidden[0].path.ends_with(&name), "{saved:?}");
+    key("u");
+    let (_, _, shown) = shot(&mut viewer);
+    let left = differing_fraction(&start, &shown);
+    assert!(
+        left < 0.002,
+        "after U {left:.4} of the view differs from the start"
+    );
+    // 1 restores view 1: hidden again.
+    let before = said("restored \"view 1\"");
+    key("1");
+    wait_for_log(&view_log, "restored \"view 1\"", before, &mut viewer);
+    let (_, _, restored) = shot(&mut viewer);
+    let off = differing_fraction(&hidden, &restored);
+    assert!(
+        off < 0.002,
+        "view 1 restored differs from it in {off:.4} of the view"
+    );
+    key("u");
+    // / opens the search prompt; Esc there cancels it (and does not quit).
+    key("slash");
+    xdotool(d, &["type", "--window", w, "zz"]);
+    key("Escape");
+    // / NAME Enter selects the first object it matches (the name may
+    // appear in others') and flies to frame it.
+    let before = said("selected: ");
+    key("slash");
+    xdotool(d, &["type", "--window", w, &name]);
+    key("Return");
+    let log = wait_for_log(&view_log, "selected: ", before, &mut viewer);
+    let found = log.lines().rfind(|l| l.starts_with("selected: ")).unwrap();
+    assert!(
+        found.to_lowercase().contains(&name.to_lowercase()),
+        "searching {name:?} selected {found:?}"
+    );
+    let (_, _, framed) = shot(&mut viewer);
+    let flew = differing_fraction(&start, &framed);
+    assert!(flew > 0.01, "framing {name} changed {flew:.4} of the view");
+    // Back to the start's camera for what follows; nothing hidden.
+    key("1");
+    key("u");
+    let (_, _, back_at_start) = shot(&mut viewer);
+    let off = differing_fraction(&start, &back_at_start);
+    assert!(
+        off < 0.002,
+        "view 1 is not the start's camera: {off:.4} differs"
+    );
     // W held: the view moves forward.
     hold("w", 1500);
     let (_, _, forward) = shot(&mut viewer);
@@ -543,8 +705,8 @@ fn live_keys_and_mouse_drive_the_viewer() {
         "no green (drawn) box pixels among {}",
         changed.len()
     );
-    // F: freeze culling, then fly: the view moves over the frozen set.
-    key("f");
+    // Z: freeze culling, then fly: the view moves over the frozen set.
+    key("z");
     hold("w", 800);
     let (_, _, frozen) = shot(&mut viewer);
     let moved = differing_fraction(&boxed, &frozen);
@@ -552,7 +714,7 @@ fn live_keys_and_mouse_drive_the_viewer() {
         moved > 0.01,
         "flying while frozen changed {moved:.3} of the view"
     );
-    key("f");
+    key("z");
     key("b");
     // R, look around with a drag, strafe, R: a recorded path.
     key("r");
@@ -611,4 +773,43 @@ fn live_keys_and_mouse_drive_the_viewer() {
     let log = std::fs::read_to_string(dir.path().join("view.log")).unwrap();
     assert!(status.success(), "the viewer failed:\n{log}");
     assert!(!log.contains("panicked"), "{log}");
+
+    // --view: a scripted run from the saved view shows what the live one
+    // did with it (its camera, the object hidden).
+    let png = dir.path().join("from-view.png");
+    let (ok, _, err) = gigawalk(
+        &[
+            "view",
+            s(&gwk),
+            "--view",
+            "view 1",
+            "--frames",
+            "4",
+            "--screenshot",
+            s(&png),
+            "--width",
+            "480",
+            "--height",
+            "300",
+            "--no-hud",
+        ],
+        Some(d),
+    );
+    assert!(ok, "gigawalk view --view: {err}");
+    let (_, _, from_view) = gigawalk_viewer::read_png(&png).unwrap();
+    let off = differing_fraction(&hidden, &from_view);
+    assert!(
+        off < 0.002,
+        "--view \"view 1\" differs from it live in {off:.4} of the view"
+    );
+    let (ok, _, err) = gigawalk(
+        &["view", s(&gwk), "--view", "view 7", "--frames", "1"],
+        Some(d),
+    );
+    assert!(!ok);
+    assert!(
+        err.contains("no view named \"view 7\" (the file has: \"view 1\")"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
 }

@@ -25,7 +25,7 @@ pub(super) struct LiveSource {
 
 impl CameraSource for LiveSource {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        let (camera, frozen, style, quit, minimised, pixel_error) = {
+        let (camera, frozen, style, quit, minimised, pixel_error, visibility) = {
             let s = self.shared.lock().map_err(|_| CameraError::Source {
                 frame,
                 source: "the window's state is poisoned: its thread panicked".into(),
@@ -41,6 +41,7 @@ impl CameraSource for LiveSource {
                 s.quit,
                 s.window_size.0 == 0 || s.window_size.1 == 0,
                 s.target_tolerance.filter(|_| s.settings.target),
+                s.visibility.clone(),
             )
         };
         if quit {
@@ -68,7 +69,7 @@ impl CameraSource for LiveSource {
                 hold_culling: false,
                 style,
                 pixel_error,
-                visibility: None,
+                visibility,
             }));
         }
         if minimised {
@@ -80,7 +81,7 @@ impl CameraSource for LiveSource {
             hold_culling: frozen,
             style,
             pixel_error,
-            visibility: None,
+            visibility,
         }))
     }
 }

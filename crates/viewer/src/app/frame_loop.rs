@@ -1,21 +1,28 @@
 //! The frame loop's side of input: between frames it applies what the
-//! window collected (actions, movement, mouse look), steers the target
-//! frame rate, records the camera path, and publishes the next camera and
-//! what the HUD shows.
+//! window collected (actions, clicks, searches, movement, mouse look),
+//! steers the target frame rate, records the camera path, and publishes
+//! the next camera, the hidden and highlighted objects, and what the HUD
+//! shows.
 
 use std::path::PathBuf;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use gigawalk_cull::{NodeShow, Viewport, Visibility};
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{CullMethod, OccluderSelection};
+use gigawalk_scene::path::Pose;
+use gigawalk_scene::views::{SavedView, Views};
+use gigawalk_scene::SceneReader;
+use glam::DVec3;
 use winit::dpi::PhysicalSize;
 
-use super::window::App;
+use super::window::{App, Input};
 use super::{aspect, Shared};
 use crate::controller::FlyController;
 use crate::controls::Action;
 use crate::hud::ViewerState;
+use crate::objects::{frame_box, save_view, view_names, Objects};
 use crate::recorder::{next_free_name, PathRecorder};
 use crate::settings::Settings;
 
@@ -24,6 +31,29 @@ const WIREFRAME_UNSUPPORTED: &str =
     "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
 /// How long HUD messages (screenshot written, path saved) stay up.
 const MESSAGE_TIME: Duration = Duration::from_secs(4);
+/// How long framing an object takes to fly there: long enough to see
+/// where the camera went, short enough not to wait for it.
+const FLIGHT_TIME: Duration = Duration::from_millis(400);
+
+/// The camera on its way to frame an object; a movement key ends it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Flight {
+    from: DVec3,
+    to: DVec3,
+    start: Instant,
+}
+
+impl Flight {
+    /// Where the eye is at `now` (smoothstep from `from` to `to`), and
+    /// whether it has arrived.
+    fn at(&self, now: Instant) -> (DVec3, bool) {
+        let t = (now.saturating_duration_since(self.start).as_secs_f64()
+            / FLIGHT_TIME.as_secs_f64())
+        .clamp(0.0, 1.0);
+        let s = t * t * (3.0 - 2.0 * t);
+        (self.from.lerp(self.to, s), t >= 1.0)
+    }
+}
 
 /// The frame loop's own state (this thread).
 pub(super) struct LoopState {
@@ -47,6 +77,16 @@ pub(super) struct LoopState {
     /// when the last frame finished.
     pub(super) target: Option<FrameRateController>,
     pub(super) last_finish: Option<Instant>,
+    /// Selection, search and hidden set.
+    pub(super) objects: Objects,
+    /// What the passes draw of the objects (`None`: all, none tinted).
+    pub(super) visibility: Option<Arc<Visibility>>,
+    pub(super) flight: Option<Flight>,
+    /// `SCENE.views.json`, and the names of its views (help lists them).
+    pub(super) views_file: PathBuf,
+    pub(super) view_names: Vec<String>,
+    /// The view `N` restores next, counting from 0.
+    pub(super) next_view: usize,
 }
 
 impl LoopState {
@@ -79,12 +119,29 @@ impl LoopState {
         &mut self,
         app: &mut App,
         shared: &Mutex<Shared>,
+        scene: &SceneReader,
         render: PhysicalSize<u32>,
         scripted: bool,
     ) -> bool {
         let now = Instant::now();
         let mut capture = None;
-        for a in std::mem::take(&mut app.actions) {
+        for input in std::mem::take(&mut app.inputs) {
+            let a = match input {
+                Input::Act(a) => a,
+                Input::Click { x, y, double } => {
+                    self.click(scene, (x, y), app.size, render, double, now);
+                    continue;
+                }
+                Input::Find(text) => {
+                    let found = self.objects.find(&text);
+                    self.fly_to_match(found, render, now);
+                    continue;
+                }
+                Input::RestoreView(n) => {
+                    self.restore_view(Some(n), now);
+                    continue;
+                }
+            };
             match a {
                 Action::Quit => app.close = true,
                 Action::ToggleWalk => self.controller.toggle_walk(),
@@ -126,12 +183,47 @@ impl LoopState {
                     capture = Some(next_free_name(&self.out_dir, "gigawalk-view", "png"))
                 }
                 Action::ToggleRecord => self.toggle_record(now),
+                Action::FrameSelection => self.frame_selection(render, now),
+                // The window opens the prompt; nothing to do here.
+                Action::Search => {}
+                Action::NextMatch => {
+                    let found = self.objects.next_match();
+                    self.fly_to_match(found, render, now);
+                }
+                Action::Hide => {
+                    let r = self.objects.hide();
+                    self.say_result(r, now);
+                }
+                Action::Isolate => {
+                    let r = self.objects.isolate();
+                    self.say_result(r, now);
+                }
+                Action::ShowAll => {
+                    let r = self.objects.show_all();
+                    self.say_result(r, now);
+                }
+                Action::SaveView => self.save_view(now),
+                Action::NextView => self.restore_view(None, now),
             }
+        }
+        if self.objects.take_changed() {
+            self.visibility = self.objects.visibility(scene.skeleton());
         }
         if !scripted {
             let (dx, dy) = std::mem::take(&mut app.look);
             self.controller.look(dx, dy);
             self.controller.scroll(std::mem::take(&mut app.scroll));
+            if let Some(f) = self.flight {
+                if app.held.is_empty() {
+                    let (at, arrived) = f.at(now);
+                    self.controller.position = at;
+                    if arrived {
+                        self.flight = None;
+                    }
+                } else {
+                    self.flight = None;
+                }
+            }
             self.controller
                 .update((now - self.last_update).as_secs_f64(), &app.held);
         }
@@ -160,7 +252,11 @@ impl LoopState {
             devices: self.devices.clone(),
             message: self.message.as_ref().map(|(m, _)| m.clone()),
             occluder_budget: self.occluder_budget,
+            objects: self.objects.hud_lines(),
+            prompt: app.prompt.clone(),
+            views: self.view_names.clone(),
         };
+        s.visibility = self.visibility.clone();
         s.camera = camera;
         s.frozen = self.settings.frozen;
         s.settings = self.settings.clone();
@@ -170,6 +266,211 @@ impl LoopState {
         }
         s.quit = app.close;
         !app.close
+    }
+
+    /// A HUD message.
+    fn say(&mut self, text: String, now: Instant) {
+        self.message = Some((text, now));
+    }
+
+    /// A HUD message that is also printed (what a terminal user, or a
+    /// script, wants to keep: selections, saved and restored views).
+    fn announce(&mut self, text: String, now: Instant) {
+        eprintln!("{text}");
+        self.say(text, now);
+    }
+
+    fn say_result(&mut self, r: Result<String, String>, now: Instant) {
+        match r {
+            Ok(m) | Err(m) => self.say(m, now),
+        }
+    }
+
+    /// A click at window pixel `at`: selects the object the full-detail
+    /// image shows there (hidden ones skipped), or nothing; a double click
+    /// also frames it.
+    fn click(
+        &mut self,
+        scene: &SceneReader,
+        at: (f64, f64),
+        window: PhysicalSize<u32>,
+        render: PhysicalSize<u32>,
+        double: bool,
+        now: Instant,
+    ) {
+        if self.objects.take_changed() {
+            // Input earlier in this batch changed what is hidden.
+            self.visibility = self.objects.visibility(scene.skeleton());
+        }
+        let table = match self.objects.table() {
+            Ok(t) => t,
+            Err(why) => return self.say(why, now),
+        };
+        // The window shows the render target scaled to fit, so the click's
+        // place in the window is its place in the image.
+        let camera = self.controller.camera(aspect(render), self.near);
+        let viewport = Viewport::new(window.width.max(1), window.height.max(1));
+        // The pointer names a pixel; cast through its centre, as
+        // `gigawalk pick` does.
+        let (x, y) = (at.0.floor() + 0.5, at.1.floor() + 0.5);
+        let Some(ray) = camera.pixel_ray(viewport, x, y) else {
+            return;
+        };
+        let vis = self.visibility.as_deref();
+        let objects = &self.objects;
+        let picked = gigawalk_cull::pick(
+            scene.skeleton(),
+            Some(table),
+            &ray,
+            &|node| vis.is_some_and(|v| v.node(node) == NodeShow::Hidden),
+            &|o| objects.is_hidden(o),
+            &mut |lod| scene.read_lod(lod),
+        );
+        let hit = match picked {
+            Ok((hit, _)) => hit.and_then(|h| h.object.map(|o| (o, h.point))),
+            Err(e) => return self.announce(format!("pick failed: {e}"), now),
+        };
+        let had = self.objects.selection();
+        self.objects.click(hit);
+        // Said once per new selection (a double click's second click hits
+        // the same point).
+        if self.objects.selection() != had {
+            match self.objects.describe_selection() {
+                Some(text) => self.announce(text, now),
+                None => self.announce("selection cleared".into(), now),
+            }
+        }
+        if double && hit.is_some() {
+            self.frame_selection(render, now);
+        }
+    }
+
+    /// `F`: fly back along the view until the selected object fits.
+    fn frame_selection(&mut self, render: PhysicalSize<u32>, now: Instant) {
+        let bounds = match self.objects.selected_bounds() {
+            Ok(b) => b,
+            Err(why) => return self.say(why, now),
+        };
+        let camera = self.controller.camera(aspect(render), self.near);
+        let Some(to) = frame_box(
+            &bounds,
+            camera.forward(),
+            camera.fovy,
+            camera.aspect,
+            self.near,
+        ) else {
+            return;
+        };
+        // Framing leaves the floor: walk mode would pull the eye back down.
+        if self.controller.walking() {
+            self.controller.toggle_walk();
+        }
+        self.flight = Some(Flight {
+            from: self.controller.position,
+            to,
+            start: now,
+        });
+    }
+
+    /// After a search's Enter: frame the match it selected, or say why not.
+    fn fly_to_match(
+        &mut self,
+        found: Result<u32, String>,
+        render: PhysicalSize<u32>,
+        now: Instant,
+    ) {
+        match found {
+            Ok(_) => {
+                if let Some(text) = self.objects.describe_selection() {
+                    eprintln!("{text}");
+                }
+                self.frame_selection(render, now);
+            }
+            Err(why) => self.say(why, now),
+        }
+    }
+
+    /// `V`: the camera, selection and hidden objects as `view N` in the
+    /// scene's views file (a file that does not read is left alone).
+    fn save_view(&mut self, now: Instant) {
+        let c = &self.controller;
+        let pose = Pose {
+            time: 0.0,
+            position: c.position,
+            orientation: c.orientation(),
+            fovy: c.fovy,
+        };
+        let objects = &self.objects;
+        match save_view(&self.views_file, |name| objects.saved_view(name, &pose)) {
+            Ok((name, names)) => {
+                let n = names.len();
+                self.view_names = names;
+                let key = if n <= 9 {
+                    format!("{n} restores it")
+                } else {
+                    "N cycles views".to_string()
+                };
+                self.announce(
+                    format!(
+                        "saved view {name:?} to {} ({key})",
+                        self.views_file.display()
+                    ),
+                    now,
+                );
+            }
+            Err(e) => self.announce(format!("view NOT saved: {e}"), now),
+        }
+    }
+
+    /// `1`-`9` (`Some(n)`, counting from 1) or `N` (`None`: the next one):
+    /// restores a saved view, read afresh from the file.
+    fn restore_view(&mut self, number: Option<usize>, now: Instant) {
+        let views = match Views::read(&self.views_file) {
+            Ok(v) => v,
+            Err(e) => return self.announce(format!("no view restored: {e}"), now),
+        };
+        self.view_names = view_names(&views);
+        let count = views.views.len();
+        if count == 0 {
+            return self.say(
+                format!(
+                    "no saved views in {} yet: V saves one",
+                    self.views_file.display()
+                ),
+                now,
+            );
+        }
+        let index = match number {
+            Some(n) if n >= 1 && n <= count => n - 1,
+            Some(n) => {
+                return self.say(
+                    format!(
+                        "no saved view {n}: {} has {count}",
+                        self.views_file.display()
+                    ),
+                    now,
+                )
+            }
+            None => self.next_view % count,
+        };
+        self.next_view = index + 1;
+        self.apply_view(&views.views[index], true, now);
+    }
+
+    /// A saved view's selection and hidden objects, and its camera when
+    /// `camera`.
+    pub(super) fn apply_view(&mut self, view: &SavedView, camera: bool, now: Instant) {
+        if camera {
+            match view.pose() {
+                Ok(p) => {
+                    self.flight = None;
+                    self.controller.set_pose(p.position, p.orientation, p.fovy);
+                }
+                Err(e) => return self.say(format!("view {:?} not restored: {e}", view.name), now),
+            }
+        }
+        let text = self.objects.restore(view);
+        self.announce(text, now);
     }
 
     fn toggle_record(&mut self, now: Instant) {

@@ -13,6 +13,7 @@ use crate::boxes::{overlay_boxes, CullSets};
 use crate::controls;
 use crate::hud::{hud_lines, FrameClock, FrameNumbers};
 use crate::image::write_png;
+use crate::objects::hud_text;
 
 /// HUD text is drawn 2x on windows at least this tall (8-pixel glyphs are
 /// hard to read on large screens), else 1x.
@@ -101,11 +102,33 @@ impl Presenter for ViewerPresenter<'_> {
                 background: [0.0, 0.0, 0.0, 0.55],
             });
         }
+        if let Some(text) = &viewer.prompt {
+            // The prompt shows with the HUD off too: it is what you type.
+            overlay.text.push(OverlayText {
+                x: glyph,
+                y: (h as f32 - 3.0 * glyph).max(glyph),
+                scale,
+                lines: vec![hud_text(&format!(
+                    "find: {text}_   (Enter: fly to a match, Esc: cancel)"
+                ))],
+                colour: [1.0, 0.9, 0.6, 1.0],
+                background: [0.0, 0.0, 0.0, 0.75],
+            });
+        }
         if settings.help {
             let lines: Vec<String> = std::iter::once("gigawalk view: controls".to_string())
                 .chain(std::iter::once(String::new()))
                 .chain(controls::help_lines())
+                .chain(std::iter::once(String::new()))
+                .chain(saved_view_lines(&viewer.views))
                 .collect();
+            // The help is long: 2x only where it fits the window's height.
+            let scale = if (lines.len() as u32 + 2) * 8 * scale <= h {
+                scale
+            } else {
+                1
+            };
+            let glyph = (8 * scale) as f32;
             let cols = lines.iter().map(|l| l.len()).max().unwrap_or(0) as f32;
             overlay.text.push(OverlayText {
                 x: (w as f32 - cols * glyph - glyph).max(glyph),
@@ -132,6 +155,23 @@ impl Presenter for ViewerPresenter<'_> {
         }
         Ok(())
     }
+}
+
+/// The help's list of saved views: the keys that restore them.
+fn saved_view_lines(names: &[String]) -> Vec<String> {
+    if names.is_empty() {
+        return vec!["saved views: none yet (V saves one)".into()];
+    }
+    std::iter::once("saved views (1 - 9 restore, N cycles):".to_string())
+        .chain(names.iter().enumerate().map(|(i, n)| {
+            let key = if i < 9 {
+                (i + 1).to_string()
+            } else {
+                "N".into()
+            };
+            hud_text(&format!("  {key:>2}  {n}"))
+        }))
+        .collect()
 }
 
 fn cull_sets(report: &FrameReport) -> CullSets {

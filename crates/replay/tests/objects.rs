@@ -83,6 +83,21 @@ fn brute_force(model: &Model, ray: &Ray) -> Option<((f64, String), f64)> {
     Some(((first.0, first.1.to_string()), second))
 }
 
+/// The pick of `ray` on `b`'s scene, skipping objects `skip` names.
+fn pick_in(b: &Built, ray: &Ray, skip: &dyn Fn(u32) -> bool) -> Option<gigawalk_cull::PickHit> {
+    let skeleton = b.reader.skeleton();
+    pick(
+        skeleton,
+        Some(&b.table),
+        ray,
+        &|_| false,
+        skip,
+        &mut |lod| b.reader.read_lod(lod),
+    )
+    .unwrap()
+    .0
+}
+
 #[test]
 fn a_pick_is_the_object_a_brute_force_ray_cast_through_the_model_finds() {
     let dir = tempfile::tempdir().unwrap();
@@ -146,15 +161,7 @@ fn a_pick_is_the_object_a_brute_force_ray_cast_through_the_model_finds() {
                     if !robust {
                         continue;
                     }
-                    let (hit, _) = pick(
-                        skeleton,
-                        Some(&b.table),
-                        &ray,
-                        &|_| false,
-                        &|_| false,
-                        &mut |lod| b.reader.read_lod(lod),
-                    )
-                    .unwrap();
+                    let hit = pick_in(&b, &ray, &|_| false);
                     compared += 1;
                     match (&truth, hit) {
                         (None, None) => {}
@@ -326,15 +333,7 @@ fn a_hidden_object_leaves_exactly_its_pixels_and_culling_stays_conservative() {
             let ray = middle
                 .pixel_ray(vp, px as f64 + 0.5, py as f64 + 0.5)
                 .unwrap();
-            let (hit, _) = pick(
-                skeleton,
-                Some(&b.table),
-                &ray,
-                &|_| false,
-                &|_| false,
-                &mut |lod| b.reader.read_lod(lod),
-            )
-            .unwrap();
+            let hit = pick_in(&b, &ray, &|_| false);
             if let Some(o) = hit.and_then(|h| h.object) {
                 *seen.entry(o).or_default() += 1;
             }
@@ -372,28 +371,12 @@ fn a_hidden_object_leaves_exactly_its_pixels_and_culling_stays_conservative() {
             let ray = camera
                 .pixel_ray(vp, px as f64 + 0.5, py as f64 + 0.5)
                 .unwrap();
-            let (h, _) = pick(
-                skeleton,
-                Some(&b.table),
-                &ray,
-                &|_| false,
-                &|_| false,
-                &mut |lod| b.reader.read_lod(lod),
-            )
-            .unwrap();
+            let h = pick_in(&b, &ray, &|_| false);
             let on_x = h.and_then(|h| h.object) == Some(x);
             // Where the object lies on another's surface (a depth tie the
             // rasterizer may break either way), it may be what was drawn.
             let tie = || {
-                let (only_x, _) = pick(
-                    skeleton,
-                    Some(&b.table),
-                    &ray,
-                    &|_| false,
-                    &|o| o != x,
-                    &mut |lod| b.reader.read_lod(lod),
-                )
-                .unwrap();
+                let only_x = pick_in(&b, &ray, &|o| o != x);
                 let tied = match (h, only_x) {
                     (Some(h), Some(hx)) => (hx.distance - h.distance).abs() <= 1e-4 * h.distance,
                     _ => false,
@@ -406,15 +389,7 @@ fn a_hidden_object_leaves_exactly_its_pixels_and_culling_stays_conservative() {
                         let r = camera
                             .pixel_ray(vp, px as f64 + 0.5 + dx, py as f64 + 0.5 + dy)
                             .unwrap();
-                        let (j, _) = pick(
-                            skeleton,
-                            Some(&b.table),
-                            &r,
-                            &|_| false,
-                            &|_| false,
-                            &mut |lod| b.reader.read_lod(lod),
-                        )
-                        .unwrap();
+                        let j = pick_in(&b, &r, &|_| false);
                         j.and_then(|j| j.object) == Some(x)
                     })
             };

@@ -32,6 +32,29 @@ fn plant(dir: &Path) -> (PathBuf, PathBuf) {
     (path, gwk)
 }
 
+/// The arguments of `gigawalk pick SCENE --path PATH --frame FRAME
+/// --pixel PIXEL MORE...`.
+fn pick_args<'a>(
+    gwk: &'a Path,
+    path: &'a Path,
+    frame: &'a str,
+    pixel: &'a str,
+    more: &[&'a str],
+) -> Vec<&'a str> {
+    let mut a = vec![
+        "pick",
+        s(gwk),
+        "--path",
+        s(path),
+        "--frame",
+        frame,
+        "--pixel",
+        pixel,
+    ];
+    a.extend_from_slice(more);
+    a
+}
+
 fn json(text: &str) -> serde_json::Value {
     serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
@@ -98,17 +121,7 @@ fn pick_and_find_answer_and_bad_input_gets_a_clear_message() {
     'search: for y in (20..360).step_by(40) {
         for x in (20..640).step_by(60) {
             let pixel = format!("{x},{y}");
-            let out = gigawalk_ok(&[
-                "pick",
-                s(&gwk),
-                "--path",
-                s(&path),
-                "--frame",
-                "6",
-                "--pixel",
-                &pixel,
-                "--json",
-            ]);
+            let out = gigawalk_ok(&pick_args(&gwk, &path, "6", &pixel, &["--json"]));
             let v = json(&out.stdout);
             if !v["object"].is_null() {
                 hit = Some((pixel, v));
@@ -122,16 +135,7 @@ fn pick_and_find_answer_and_bad_input_gets_a_clear_message() {
     );
     assert_eq!(v["point"].as_array().unwrap().len(), 3);
     assert!(v["distance"].as_f64().unwrap() > 0.0);
-    let text = gigawalk_ok(&[
-        "pick",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--frame",
-        "6",
-        "--pixel",
-        &pixel,
-    ]);
+    let text = gigawalk_ok(&pick_args(&gwk, &path, "6", &pixel, &[]));
     assert!(
         text.stdout.contains(v["object"]["name"].as_str().unwrap()),
         "{}",
@@ -140,69 +144,25 @@ fn pick_and_find_answer_and_bad_input_gets_a_clear_message() {
     // Nothing there: looking away from the plant.
     let away = dir.path().join("away.path");
     std::fs::write(&away, "0 500 500 500 0 0 0 1 60\n").unwrap();
-    let out = gigawalk_ok(&[
-        "pick",
-        s(&gwk),
-        "--path",
-        s(&away),
-        "--frame",
-        "0",
-        "--pixel",
-        "10,10",
-        "--json",
-    ]);
+    let out = gigawalk_ok(&pick_args(&gwk, &away, "0", "10,10", &["--json"]));
     assert!(json(&out.stdout)["object"].is_null(), "{}", out.stdout);
     // Bad pixels, frames and viewports.
-    let (ok, _, err) = gigawalk(&[
-        "pick",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--frame",
-        "0",
-        "--pixel",
-        "640,10",
-    ]);
+    let (ok, _, err) = gigawalk(&pick_args(&gwk, &path, "0", "640,10", &[]));
     assert!(!ok && err.contains("outside the 640x360 viewport"), "{err}");
-    let (ok, _, err) = gigawalk(&[
-        "pick",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--frame",
+    let (ok, _, err) = gigawalk(&pick_args(
+        &gwk,
+        &path,
         "0",
-        "--pixel",
         "5,5",
-        "--width",
-        "4",
-        "--height",
-        "4",
-    ]);
+        &["--width", "4", "--height", "4"],
+    ));
     assert!(!ok && err.contains("outside the 4x4 viewport"), "{err}");
-    let (ok, _, err) = gigawalk(&[
-        "pick",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--frame",
-        "12",
-        "--pixel",
-        "1,1",
-    ]);
+    let (ok, _, err) = gigawalk(&pick_args(&gwk, &path, "12", "1,1", &[]));
     assert!(
         !ok && err.contains("pose 12 asked for, the path has 12"),
         "{err}"
     );
-    let (ok, _, err) = gigawalk(&[
-        "pick",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--frame",
-        "0",
-        "--pixel",
-        "1;1",
-    ]);
+    let (ok, _, err) = gigawalk(&pick_args(&gwk, &path, "0", "1;1", &[]));
     assert!(!ok && err.contains("a pixel is X,Y"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }
@@ -219,16 +179,7 @@ fn a_scene_from_before_object_identity_says_to_preprocess_again() {
         !ok && err.contains(again) && err.contains("old.gwk"),
         "{err}"
     );
-    let (ok, _, err) = gigawalk(&[
-        "pick",
-        s(&old),
-        "--path",
-        s(&path),
-        "--frame",
-        "0",
-        "--pixel",
-        "1,1",
-    ]);
+    let (ok, _, err) = gigawalk(&pick_args(&old, &path, "0", "1,1", &[]));
     assert!(!ok && err.contains(again), "{err}");
     // Everything else still works.
     let info = gigawalk_ok(&["info", s(&old), "--verify"]);

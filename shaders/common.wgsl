@@ -9,11 +9,49 @@ struct FrameUniforms {
     // Direction the head light shines (the view direction), world axes.
     light_dir: vec4<f32>,
     // x: ambient term, y: 1 to draw the unlit object colour (wireframe),
-    // z: depth bias toward the eye (query boxes), w: unused.
+    // z: depth bias toward the eye (query boxes), w: how many of clip
+    // the section uses.
     params: vec4<f32>,
+    // The section's half-spaces, camera-relative: a point p (relative to
+    // the eye) is kept when dot(xyz, p) + w >= 0 for each one used.
+    clip: array<vec4<f32>, 12>,
 };
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
+
+// Whether the section keeps the camera-relative point p.
+fn section_keeps(p: vec3<f32>) -> bool {
+    let count = u32(frame.params.w);
+    for (var i = 0u; i < count; i = i + 1u) {
+        let h = frame.clip[i];
+        if (dot(h.xyz, p) + h.w < 0.0) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The half-space through whose plane the ray from the eye to the kept
+// point p enters the kept region (the last one crossed), or -1 when the
+// eye is kept by all of them (the ray crosses no cut).
+fn section_entry(p: vec3<f32>) -> i32 {
+    let count = u32(frame.params.w);
+    var entry = -1;
+    var t_entry = 0.0;
+    for (var i = 0u; i < count; i = i + 1u) {
+        let h = frame.clip[i];
+        // The eye is on the removed side: the ray crosses this plane at
+        // t = -w / dot(n, p) in (0, 1].
+        if (h.w < 0.0) {
+            let t = -h.w / max(dot(h.xyz, p), 1e-30);
+            if (t >= t_entry) {
+                t_entry = t;
+                entry = i32(i);
+            }
+        }
+    }
+    return entry;
+}
 
 // The compact vertex layout (CompactVertex): grid coordinates in xyz,
 // scaled per draw by the instance's scale (the grid's step) and moved by

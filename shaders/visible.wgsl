@@ -4,6 +4,8 @@ struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) colour: vec4<f32>,
+    // Camera-relative position, for the section's clip test.
+    @location(2) rel: vec3<f32>,
 };
 
 // A highlighted draw (the instance offset's w is 1): the selection's tint.
@@ -28,7 +30,8 @@ fn vs_main(
     @location(3) offset: vec4<f32>,
 ) -> VsOut {
     var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(position + offset.xyz, 1.0);
+    out.rel = position + offset.xyz;
+    out.clip = frame.view_proj * vec4<f32>(out.rel, 1.0);
     out.normal = decode_normal(normal);
     out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
     return out;
@@ -43,10 +46,18 @@ fn vs_compact(
     @location(4) scale: vec4<f32>,
 ) -> VsOut {
     var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(compact_position(q, offset, scale), 1.0);
+    out.rel = compact_position(q, offset, scale);
+    out.clip = frame.view_proj * vec4<f32>(out.rel, 1.0);
     out.normal = decode_normal(compact_normal(q));
     out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
     return out;
+}
+
+fn lit(colour: vec3<f32>, normal: vec3<f32>) -> vec4<f32> {
+    // Two-sided: imported models' winding and normals are not trusted.
+    let lambert = abs(dot(normalize(normal), -frame.light_dir.xyz));
+    let ambient = frame.params.x;
+    return vec4<f32>(colour * (ambient + (1.0 - ambient) * lambert), 1.0);
 }
 
 @fragment
@@ -55,8 +66,29 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     if (frame.params.y > 0.5) {
         return vec4<f32>(in.colour.rgb, 1.0);
     }
-    // Two-sided: imported models' winding and normals are not trusted.
-    let lambert = abs(dot(normalize(in.normal), -frame.light_dir.xyz));
-    let ambient = frame.params.x;
-    return vec4<f32>(in.colour.rgb * (ambient + (1.0 - ambient) * lambert), 1.0);
+    return lit(in.colour.rgb, in.normal);
 }
+
+// With a section: what it removes is discarded, and the inside of a cut
+// solid (its back faces, by the model's winding, seen through a cut the
+// eye looks in by) is the cap: the object's colour darkened, lit as the
+// cutting plane, so the cut reads as a filled face.
+@fragment
+fn fs_section(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    if (!section_keeps(in.rel)) {
+        discard;
+    }
+    if (frame.params.y > 0.5) {
+        return vec4<f32>(in.colour.rgb, 1.0);
+    }
+    if (!front) {
+        let entry = section_entry(in.rel);
+        if (entry >= 0) {
+            return lit(in.colour.rgb * CAP_DARKEN, frame.clip[entry].xyz);
+        }
+    }
+    return lit(in.colour.rgb, in.normal);
+}
+
+// How much darker a cap is than its object.
+const CAP_DARKEN: f32 = 0.5;

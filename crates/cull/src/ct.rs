@@ -288,16 +288,29 @@ impl Culler for CtCuller<'_> {
         self.stats.candidates = candidates.len() as u64;
         let mut scored: Vec<(f64, u32, Option<ConvexOccluder>)> = Vec::new();
         for &i in candidates {
-            let Some(o) = self.occluders.get(i as usize) else {
+            let Some(stored) = self.occluders.get(i as usize) else {
                 continue;
             };
+            // With a section, only the part it keeps occludes.
+            let cut = match view.section() {
+                None => None,
+                Some(s) => match section_part(stored, s, eye) {
+                    SectionPart::Whole => None,
+                    SectionPart::Part(c) => Some(c),
+                    SectionPart::Gone => continue,
+                },
+            };
+            let o = cut.as_ref().unwrap_or(stored);
             let depth = |v: DVec3| (v - eye).dot(forward);
             let (area, centroid, clipped) = if o.vertices().all(|v| depth(v) > clip_at) {
-                (
-                    self.areas.get(i as usize).copied().unwrap_or(0.0),
-                    o.centroid(),
-                    None,
-                )
+                match &cut {
+                    None => (
+                        self.areas.get(i as usize).copied().unwrap_or(0.0),
+                        o.centroid(),
+                        None,
+                    ),
+                    Some(c) => (c.area(), c.centroid(), Some(c.clone())),
+                }
             } else if !self.clip || o.vertices().all(|v| depth(v) <= clip_at) {
                 continue;
             } else {
@@ -366,6 +379,36 @@ impl Culler for CtCuller<'_> {
             (Verdict::Visible, dropped)
         }
     }
+}
+
+/// What of a convex occluder a section keeps.
+enum SectionPart {
+    Whole,
+    Part(ConvexOccluder),
+    Gone,
+}
+
+/// The occluder clipped by each of the section's half-spaces: a convex
+/// polygon stays convex, and what is left lies on the kept part of the
+/// surface it stands for, so it still hides what it covers. Each plane is
+/// moved into the kept side by the GPU's rounding slack
+/// ([`crate::view::SECTION_REL_SLACK`] of the distances from the eye), so
+/// no occluder covers a sliver the GPU discards.
+fn section_part(o: &ConvexOccluder, section: &crate::Section, eye: DVec3) -> SectionPart {
+    let reach = o.vertices().map(|v| (v - eye).length()).fold(0.0, f64::max);
+    let mut cut: Option<ConvexOccluder> = None;
+    for h in section.half_spaces() {
+        let slack = crate::view::SECTION_REL_SLACK * (h.distance(eye).abs() + reach);
+        let current = cut.as_ref().unwrap_or(o);
+        if current.vertices().all(|v| h.distance(v) >= slack) {
+            continue;
+        }
+        match current.clipped(h.normal * (slack - h.d), h.normal) {
+            Some(c) => cut = Some(c),
+            None => return SectionPart::Gone,
+        }
+    }
+    cut.map_or(SectionPart::Whole, SectionPart::Part)
 }
 
 #[cfg(test)]

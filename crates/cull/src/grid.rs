@@ -305,6 +305,15 @@ impl Culler for GridCuller<'_> {
             self.grid.stats.items_skipped += 1;
             return;
         }
+        // Nor is an item the section cuts: its removed part must not
+        // hide what the cut reveals (one wholly kept occludes whole).
+        if view.section().is_some() {
+            let (min, max) = view.rel_f64(&self.skeleton.node(item.node).bounds);
+            if view.section_side(min, max) != crate::BoxSide::Kept {
+                self.grid.stats.items_skipped += 1;
+                return;
+            }
+        }
         let tris = self.skeleton.lod(lod).triangles as u64;
         let mesh = (self.used.saturating_add(tris) <= self.budget)
             .then(|| self.source.lod_triangles(lod))

@@ -54,6 +54,9 @@ pub use camera::{default_near, Camera, Viewport, NEAR_FRACTION_OF_SCENE};
 pub use ct::{CtCuller, CtStats, PlaneCache, MAX_FRAME_OCCLUDERS};
 pub use culler::{BoxTest, Culler, Verdict};
 pub use frustum::{Containment, Frustum, PlaneMask, ALL_PLANES};
+pub use gigawalk_scene::section::{
+    classify as section_classify, BoxSide, HalfSpace, Section, SectionError, SectionSpec,
+};
 pub use grid::{
     GridCuller, GridStats, LodTriangles, OcclusionGrid, TriangleSource, DEFAULT_GRID_CELL,
 };

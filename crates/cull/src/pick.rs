@@ -13,15 +13,35 @@ use gigawalk_scene::objects::ObjectTable;
 use gigawalk_scene::{LodMesh, Skeleton};
 use glam::DVec3;
 
-use crate::{Camera, Viewport};
+use crate::{Camera, Section, Viewport};
 
-/// A ray in world coordinates: points `origin + t dir` for `t >= t_min`.
+/// A ray in world coordinates: points `origin + t dir` for `t_min <= t
+/// <= t_max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub origin: DVec3,
     /// Unit length.
     pub dir: DVec3,
     pub t_min: f64,
+    /// Infinite unless a section cuts the ray ([`Ray::clipped`]).
+    pub t_max: f64,
+}
+
+impl Ray {
+    /// The part of the ray `section` keeps (one interval: the kept region
+    /// is convex), so a pick finds the nearest surface the cut image
+    /// shows; `None` when it keeps none of it.
+    pub fn clipped(&self, section: Option<&Section>) -> Option<Ray> {
+        let Some(s) = section else {
+            return Some(*self);
+        };
+        let (t_min, t_max) = s.clip_ray(self.origin, self.dir, self.t_min, self.t_max)?;
+        Some(Ray {
+            t_min,
+            t_max,
+            ..*self
+        })
+    }
 }
 
 impl Camera {
@@ -43,6 +63,7 @@ impl Camera {
             origin: self.position,
             dir,
             t_min: self.near / dir.dot(forward),
+            t_max: f64::INFINITY,
         })
     }
 }
@@ -119,7 +140,7 @@ pub fn pick<E>(
         let lo = t0.min(t1);
         let hi = t0.max(t1);
         let near = lo.max_element().max(ray.t_min);
-        let far = hi.min_element();
+        let far = hi.min_element().min(ray.t_max);
         (near <= far).then_some(near)
     };
     if let Some(t) = enter(0) {
@@ -207,7 +228,7 @@ pub fn intersect(ray: &Ray, a: DVec3, b: DVec3, c: DVec3) -> Option<(f64, DVec3)
         return None;
     }
     let t = e2.dot(q) * inv;
-    if t < ray.t_min || !t.is_finite() {
+    if t < ray.t_min || t > ray.t_max || !t.is_finite() {
         return None;
     }
     let n = e1.cross(e2).normalize_or_zero();
@@ -250,6 +271,7 @@ mod tests {
             origin: DVec3::new(0.2, 0.2, 5.0),
             dir: DVec3::NEG_Z,
             t_min: 0.0,
+            t_max: f64::INFINITY,
         };
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
         let (t, n) = intersect(&ray, a, b, c).unwrap();
@@ -261,5 +283,16 @@ mod tests {
         assert!(intersect(&miss, a, b, c).is_none());
         let near = Ray { t_min: 6.0, ..ray };
         assert!(intersect(&near, a, b, c).is_none());
+        let short = Ray { t_max: 4.0, ..ray };
+        assert!(intersect(&short, a, b, c).is_none());
+        // A section keeping z <= 2 leaves the ray from t = 3 on.
+        let cut = Section::parse(&["0 0 -1 2".into()], None).unwrap();
+        let kept = ray.clipped(Some(&cut)).unwrap();
+        assert_eq!((kept.t_min, kept.t_max), (3.0, f64::INFINITY));
+        let (t, _) = intersect(&kept, a, b, c).unwrap();
+        assert!((t - 5.0).abs() < 1e-12);
+        // Keeping z >= 1 removes the triangle at z = 0.
+        let above = Section::parse(&["0 0 1 -1".into()], None).unwrap();
+        assert!(intersect(&ray.clipped(Some(&above)).unwrap(), a, b, c).is_none());
     }
 }

@@ -8,6 +8,7 @@ use gigawalk_scene::Skeleton;
 use glam::DVec3;
 
 use crate::lod::{distance_to_rel_box, select_lod};
+use crate::BoxSide;
 use crate::{
     BoxTest, Containment, CullView, Culler, NodeShow, OcclusionTest, PlaneMask, Verdict, ALL_PLANES,
 };
@@ -77,6 +78,8 @@ pub struct TraversalStats {
     pub drawn_triangles: u64,
     /// Nodes whose every object is hidden.
     pub hidden_culled: u64,
+    /// Nodes wholly on the removed side of the section.
+    pub section_culled: u64,
 }
 
 /// A queued node, ordered nearest first.
@@ -285,6 +288,10 @@ impl Traverser {
             }
             let n = skeleton.node(node);
             let (min, max) = view.rel_f64(&n.bounds);
+            if view.section_side(min, max) == BoxSide::Removed {
+                stats.section_culled += 1;
+                continue;
+            }
             let (containment, child_mask) = if mask == 0 {
                 (Containment::Inside, 0)
             } else {
@@ -390,7 +397,9 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
         while let Some(node) = stack.pop() {
             let n = skeleton.node(node);
             let (min, max) = view.rel_f64(&n.bounds);
-            if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside {
+            if view.frustum.test(min, max, ALL_PLANES).0 == Containment::Outside
+                || view.section_side(min, max) == BoxSide::Removed
+            {
                 continue;
             }
             match choose(skeleton, node, (min, max), view, options) {

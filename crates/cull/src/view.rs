@@ -1,7 +1,14 @@
 //! One frame's culling view: a camera and viewport with everything the box
 //! tests precompute, camera-relative boxes, and conservative box projection.
 
+use gigawalk_scene::section::{BoxSide, HalfSpace, Section};
 use gigawalk_scene::Aabb;
+
+/// Relative slack of [`CullView::section_side`]: the GPU's clip test
+/// rounds a relative plane's offset and a position's coordinates to f32
+/// (2^-24 each) and sums three products; 1e-6 of their magnitude is
+/// several times that.
+pub const SECTION_REL_SLACK: f64 = 1e-6;
 use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use crate::{Camera, Frustum, Viewport};
@@ -26,6 +33,10 @@ pub struct CullView {
     w_row_abs: Vec4,
     /// Hidden and highlighted objects (`None`: every object shows whole).
     visibility: Option<std::sync::Arc<crate::Visibility>>,
+    /// Section planes and box (`None`: nothing is cut), and their
+    /// half-spaces relative to the eye in f64.
+    section: Option<std::sync::Arc<Section>>,
+    section_rel: Vec<HalfSpace>,
 }
 
 impl CullView {
@@ -46,7 +57,46 @@ impl CullView {
             near: camera.near as f32,
             w_row_abs: view_proj.row(3).abs(),
             visibility: None,
+            section: None,
+            section_rel: Vec::new(),
         }
+    }
+
+    /// This view cut by `section`: traversal drops what lies wholly on
+    /// its removed side and the passes clip every fragment by it.
+    pub fn with_section(mut self, section: Option<std::sync::Arc<Section>>) -> Self {
+        self.section = section.filter(|s| !s.is_empty());
+        self.section_rel = match &self.section {
+            Some(s) => s
+                .half_spaces()
+                .iter()
+                .map(|h| h.relative_to(self.camera.position))
+                .collect(),
+            None => Vec::new(),
+        };
+        self
+    }
+
+    /// The view's section, when one cuts.
+    pub fn section(&self) -> Option<&std::sync::Arc<Section>> {
+        self.section.as_ref()
+    }
+
+    /// Where a camera-relative box lies against the section (`Kept` when
+    /// there is none). `Removed` is certain: the slack covers the f32
+    /// rounding of the GPU's per-fragment test (relative half-spaces and
+    /// positions rounded once each), so no fragment of the box can pass it.
+    pub fn section_side(&self, min: DVec3, max: DVec3) -> BoxSide {
+        if self.section_rel.is_empty() {
+            return BoxSide::Kept;
+        }
+        let extent = min.abs().max(max.abs()).max_element();
+        let offset = self
+            .section_rel
+            .iter()
+            .fold(0.0f64, |m, h| m.max(h.d.abs()));
+        let slack = SECTION_REL_SLACK * (extent + offset);
+        crate::section_classify(&self.section_rel, min, max, slack)
     }
 
     /// This view with `v`'s hidden and highlighted objects: traversal

@@ -35,8 +35,8 @@ pub use context::{
 pub use context::{devices_or_skip, skip_test};
 pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
 pub use passes::{
-    DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, PassFigures, PyramidPath, View,
-    VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL,
+    ClipPlanes, DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, PassFigures, PyramidPath,
+    View, VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL,
 };
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};

@@ -318,6 +318,7 @@ pub fn query_counts(ctx: &GpuContext) -> Result<QueryCounts, GpuError> {
             glam::Vec4::new(0.0, 0.0, 0.1, 0.0),
         ),
         forward: Vec3::NEG_Z,
+        clip: crate::passes::ClipPlanes::NONE,
     };
     pass.begin(ctx, &view);
     let b = QueryBox::new(Vec3::new(-0.5, -0.5, -1.0), Vec3::new(0.5, 0.5, -1.0));

@@ -14,9 +14,17 @@ pub struct FrameUniforms {
     pub light_dir: [f32; 4],
     /// x: ambient term; y: 1 for the unlit object colour (wireframe); z:
     /// depth bias toward the eye (query boxes: twice the device's depth
-    /// error, 0 elsewhere); w: unused.
+    /// error, 0 elsewhere); w: how many of `clip` the section uses.
     pub params: [f32; 4],
+    /// The section's half-spaces, camera-relative: a fragment at `p`
+    /// (relative to the eye) is kept when `dot(xyz, p) + w >= 0` for the
+    /// first `params.w` of them.
+    pub clip: [[f32; 4]; MAX_CLIP_PLANES],
 }
+
+/// The most half-spaces a section clips by: six planes and a box's six
+/// faces (`gigawalk_scene::section::Section::MAX_HALF_SPACES`).
+pub const MAX_CLIP_PLANES: usize = 12;
 
 /// What one step of OR's HZB pyramid reads (WGSL `Level` in
 /// shaders/hzb_downsample.wgsl): the source and destination level sizes

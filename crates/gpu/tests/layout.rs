@@ -51,6 +51,7 @@ fn frame_uniforms_match_wgsl() {
             ("view_proj", std::mem::offset_of!(FrameUniforms, view_proj)),
             ("light_dir", std::mem::offset_of!(FrameUniforms, light_dir)),
             ("params", std::mem::offset_of!(FrameUniforms, params)),
+            ("clip", std::mem::offset_of!(FrameUniforms, clip)),
         ];
         assert_eq!(members.len(), rust.len());
         for ((wname, woff), (rname, roff)) in members.iter().zip(rust) {

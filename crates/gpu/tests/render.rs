@@ -4,8 +4,8 @@
 
 use gigawalk_cull::{Camera, Hzb, Reduction};
 use gigawalk_gpu::{
-    devices_or_skip, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, HostGeometry,
-    PyramidPath, ResidentGeometry, VertexLayout, View, VisiblePass,
+    devices_or_skip, ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext,
+    HostGeometry, PyramidPath, ResidentGeometry, VertexLayout, View, VisiblePass,
 };
 use gigawalk_scene::{Aabb, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use gigawalk_testkit::box_mesh;
@@ -86,6 +86,7 @@ fn view(shift: DVec3, w: u32, h: u32) -> View {
         eye: cam.position,
         view_proj: cam.view_projection_rel(),
         forward: cam.forward().as_vec3(),
+        clip: ClipPlanes::NONE,
     }
 }
 

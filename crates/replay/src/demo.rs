@@ -192,5 +192,6 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
         target: None,
         adapter: None,
         visibility: None,
+        section: None,
     }
 }

@@ -70,14 +70,16 @@ pub fn find(scene: &Path, pattern_text: &str) -> Result<Vec<(u32, ObjectRecord)>
         .collect())
 }
 
-/// A pick's question: pixel `(x, y)` of pose `frame` of a camera path,
-/// rendered at `width` x `height`.
+/// A pick's question: pixels `(x, y)` of pose `frame` of a camera path,
+/// rendered at `width` x `height`, with what `section` keeps.
 #[derive(Clone, Debug)]
 pub struct PickRequest {
     pub scene: PathBuf,
     pub path: PathBuf,
     pub frame: usize,
-    pub pixel: (u32, u32),
+    pub pixels: Vec<(u32, u32)>,
+    /// Section planes and box: a pick finds the nearest surface they keep.
+    pub section: Option<std::sync::Arc<gigawalk_cull::Section>>,
     pub width: u32,
     pub height: u32,
     /// The near plane; `None`: [`default_near`] of the scene, as replay.
@@ -102,9 +104,9 @@ pub struct Picked {
     pub ms: f64,
 }
 
-/// Answers `req`: the object the full-detail image shows at the pixel's
-/// centre.
-pub fn pick(req: &PickRequest) -> Result<Picked, InspectError> {
+/// Answers `req`: for each pixel, the object the full-detail image (cut
+/// by the section) shows at the pixel's centre.
+pub fn pick(req: &PickRequest) -> Result<Vec<Picked>, InspectError> {
     let (w, h) = (req.width, req.height);
     if w == 0 || h == 0 {
         return Err(InspectError::Viewport {
@@ -112,14 +114,15 @@ pub fn pick(req: &PickRequest) -> Result<Picked, InspectError> {
             height: h,
         });
     }
-    let (x, y) = req.pixel;
-    if x >= w || y >= h {
-        return Err(InspectError::Pixel {
-            x,
-            y,
-            width: w,
-            height: h,
-        });
+    for &(x, y) in &req.pixels {
+        if x >= w || y >= h {
+            return Err(InspectError::Pixel {
+                x,
+                y,
+                width: w,
+                height: h,
+            });
+        }
     }
     let path = CameraPath::read(&req.path)?;
     let pose = path.poses.get(req.frame).ok_or(InspectError::NoPose {
@@ -134,11 +137,15 @@ pub fn pick(req: &PickRequest) -> Result<Picked, InspectError> {
         .near
         .unwrap_or_else(|| default_near(&reader.skeleton().bounds()));
     let camera = Camera::of_pose(pose, viewport, near);
-    pick_with(&reader, &table, &camera, viewport, (x, y), &|_| false)
+    let section = req.section.as_deref();
+    req.pixels
+        .iter()
+        .map(|&p| pick_with(&reader, &table, &camera, viewport, p, &|_| false, section))
+        .collect()
 }
 
 /// Pixel `(x, y)` (its centre) of `camera` on `viewport`, objects
-/// `hidden` says skipped.
+/// `hidden` says skipped, only what `section` keeps.
 pub fn pick_with(
     reader: &SceneReader,
     table: &ObjectTable,
@@ -146,6 +153,7 @@ pub fn pick_with(
     viewport: Viewport,
     (x, y): (u32, u32),
     hidden: &dyn Fn(u32) -> bool,
+    section: Option<&gigawalk_cull::Section>,
 ) -> Result<Picked, InspectError> {
     let t = Instant::now();
     let ray = camera
@@ -156,6 +164,19 @@ pub fn pick_with(
             width: viewport.width,
             height: viewport.height,
         })?;
+    let Some(ray) = ray.clipped(section) else {
+        // The section keeps nothing along this ray.
+        return Ok(Picked {
+            object: None,
+            point: None,
+            distance: None,
+            node: None,
+            lod: None,
+            triangle: None,
+            stats: PickStats::default(),
+            ms: t.elapsed().as_secs_f64() * 1e3,
+        });
+    };
     let (hit, stats) = gigawalk_cull::pick(
         reader.skeleton(),
         Some(table),

@@ -62,6 +62,10 @@ pub struct ReplayOptions {
     /// reference and every run, so accuracy is measured against the full
     /// detail of the objects shown; `None`: every object shows.
     pub visibility: Option<Arc<gigawalk_cull::Visibility>>,
+    /// Section planes and box (`--section`, `--section-box`, `--view`),
+    /// the same for the reference and every run: accuracy is measured
+    /// against the full detail of what the section keeps.
+    pub section: Option<Arc<gigawalk_cull::Section>>,
 }
 
 /// `--target-fps` / `--target-ms`.
@@ -88,6 +92,7 @@ impl Default for ReplayOptions {
             target: None,
             adapter: None,
             visibility: None,
+            section: None,
         }
     }
 }
@@ -178,6 +183,9 @@ pub struct FrameRecord {
     pub visited: u64,
     pub frustum_culled: u64,
     pub occlusion_culled: u64,
+    /// Nodes wholly on the removed side of the section.
+    #[serde(default)]
+    pub section_culled: u64,
     pub drawn_nodes: u64,
     pub drawn_triangles: u64,
     pub occlusion_used: bool,
@@ -472,6 +480,7 @@ pub fn replay_on(
             let camera = Camera::of_pose(p, Viewport::new(w, h), near);
             CameraRequest {
                 visibility: opts.visibility.clone(),
+                section: opts.section.clone(),
                 ..CameraRequest::new(camera, compared_or_next(i, k))
             }
         })
@@ -643,6 +652,7 @@ pub fn replay_on(
                 visited: r.stats.visited,
                 frustum_culled: r.stats.frustum_culled,
                 occlusion_culled: r.stats.occlusion_culled,
+                section_culled: r.stats.section_culled,
                 drawn_nodes: r.stats.drawn_nodes,
                 drawn_triangles: r.stats.drawn_triangles,
                 occlusion_used: r.occlusion_used,

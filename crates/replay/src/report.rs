@@ -92,7 +92,8 @@ impl Replay {
              max_tile_triangles,mean_tile_triangles,pixel_error_used,popping,speculative_before,rvg_wait_ms,\
              bound_exceeding_pixels,bound_exceeding_fraction,occluder_triangles,occluder_limit,\
              hzb_level,or_encode_ms,or_submit_ms,or_wait_ms,or_copy_ms,traversal_ms,cull_test_ms,\
-             rvg_encode_ms,rvg_submit_ms,rvg_device_wait_ms,rvg_copy_ms,or_read_bytes,rvg_read_bytes,device_waits\n",
+             rvg_encode_ms,rvg_submit_ms,rvg_device_wait_ms,rvg_copy_ms,or_read_bytes,rvg_read_bytes,device_waits,\
+             section_culled\n",
             csv_counters().map(|(_, _, k)| format!("{},", k.name)).collect::<String>(),
         );
         for run in &self.runs {
@@ -154,7 +155,7 @@ impl Replay {
                 let c = &f.cpu;
                 let _ = writeln!(
                     s,
-                    ",{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{}",
+                    ",{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{}",
                     c.hzb_level,
                     c.or_encode_ms,
                     c.or_submit_ms,
@@ -169,6 +170,7 @@ impl Replay {
                     c.or_read_bytes,
                     c.rvg_read_bytes,
                     c.device_waits,
+                    f.section_culled,
                 );
             }
         }
@@ -218,6 +220,12 @@ pub fn markdown(s: &Summary) -> String {
         let _ = writeln!(
             m,
             "**Null adapter: every GPU operation was free and drew nothing. The frame rates are the CPU's ceiling, what it can feed a GPU, with nothing occluded (depth reads back as zeros, so occlusion culls nothing and traversal and drawing do their most work); accuracy is not measured.**\n"
+        );
+    }
+    if let Some(section) = &s.section {
+        let _ = writeln!(
+            m,
+            "**Section: {section}. The reference and every run draw only what it keeps; nodes wholly on its removed side are dropped (`mean_section_culled`).**\n"
         );
     }
     if s.hidden_objects > 0 {

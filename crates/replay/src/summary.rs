@@ -34,6 +34,10 @@ pub struct Summary {
     /// `--isolate`, `--view`); 0: every object shown.
     #[serde(default)]
     pub hidden_objects: usize,
+    /// The section's planes and box, in the reference and every run
+    /// (`--section`, `--section-box`); null: nothing cut.
+    #[serde(default)]
+    pub section: Option<String>,
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
@@ -87,6 +91,9 @@ pub struct ModeSummary {
     pub mean_drawn_nodes: f64,
     pub mean_visited: f64,
     pub mean_occlusion_culled: f64,
+    /// Nodes a frame dropped as wholly on the section's removed side.
+    #[serde(default)]
+    pub mean_section_culled: f64,
     /// mean_fps / vfc's mean_fps (null without a vfc run).
     pub speedup_vs_vfc: Option<f64>,
     /// vfc's median frame ms / this run's median frame ms.
@@ -312,6 +319,7 @@ fn summarise(
         mean_drawn_nodes: mean(m.iter().map(|f| f.drawn_nodes as f64)),
         mean_visited: mean(m.iter().map(|f| f.visited as f64)),
         mean_occlusion_culled: mean(m.iter().map(|f| f.occlusion_culled as f64)),
+        mean_section_culled: mean(m.iter().map(|f| f.section_culled as f64)),
         speedup_vs_vfc: None,
         median_speedup_vs_vfc: None,
         mean_latency_ms: mean(m.iter().map(|f| f.latency_ms)),
@@ -557,6 +565,7 @@ impl Replay {
             devices: self.devices.clone(),
             null_adapter: self.null_adapter,
             hidden_objects: self.options.visibility.as_ref().map_or(0, |v| v.counts().0),
+            section: self.options.section.as_ref().map(|s| s.describe()),
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,
@@ -878,6 +887,7 @@ mod tests {
             visited: 10,
             frustum_culled: 0,
             occlusion_culled: 0,
+            section_culled: 0,
             drawn_nodes: 5,
             drawn_triangles: triangles,
             occlusion_used: false,

@@ -85,6 +85,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
         target: None,
         adapter: None,
         visibility: None,
+        section: None,
     }
 }
 

@@ -70,6 +70,10 @@ pub(crate) fn gpu_view(v: &gigawalk_cull::CullView) -> gigawalk_gpu::View {
         eye: v.camera.position,
         view_proj: v.camera.view_projection_rel(),
         forward: v.camera.forward().as_vec3(),
+        clip: v
+            .section()
+            .and_then(|s| gigawalk_gpu::ClipPlanes::new(&s.relative_to(v.camera.position)))
+            .unwrap_or(gigawalk_gpu::ClipPlanes::NONE),
     }
 }
 
@@ -171,6 +175,11 @@ pub struct CameraRequest {
     /// shows whole): OR, STC and RVG all see the same set for a frame, so
     /// no drawn LOD and no occluder holds a hidden object.
     pub visibility: Option<std::sync::Arc<gigawalk_cull::Visibility>>,
+    /// Section planes and box this frame (`None`: nothing cut): traversal
+    /// drops what lies wholly on the removed side, and OR, RVG and the
+    /// query pass clip every fragment by it, so nothing removed is drawn
+    /// or occludes.
+    pub section: Option<std::sync::Arc<gigawalk_cull::Section>>,
 }
 
 impl CameraRequest {
@@ -182,6 +191,7 @@ impl CameraRequest {
             style: DrawStyle::Shaded,
             pixel_error: None,
             visibility: None,
+            section: None,
         }
     }
 }

@@ -50,6 +50,9 @@ pub struct SavedView {
     /// When set, every object but these is hidden too (isolate).
     #[serde(default)]
     pub isolated: Option<Vec<ObjectRef>>,
+    /// Section planes and box in effect ([`crate::section`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub section: Option<crate::section::SectionSpec>,
 }
 
 impl SavedView {
@@ -89,6 +92,7 @@ impl SavedView {
             selected: Vec::new(),
             hidden: Vec::new(),
             isolated: None,
+            section: None,
         }
     }
 }

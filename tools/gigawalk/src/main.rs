@@ -22,6 +22,7 @@ mod info;
 mod objects;
 mod preprocess;
 mod replay;
+mod section;
 mod signals;
 mod view;
 

@@ -15,9 +15,10 @@ pub struct PickArgs {
     /// The pose of the path, counting from 0
     #[arg(long, value_name = "N")]
     frame: usize,
-    /// The pixel, X,Y from the top-left pixel (0,0), sampled at its centre
-    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
-    pixel: (u32, u32),
+    /// The pixel, X,Y from the top-left pixel (0,0), sampled at its centre;
+    /// twice to measure the distance between the two points hit
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel, required = true, num_args = 1)]
+    pixel: Vec<(u32, u32)>,
     /// Viewport width, as the replay or screenshot the pixel comes from
     #[arg(long, default_value_t = 640)]
     width: u32,
@@ -28,8 +29,16 @@ pub struct PickArgs {
     /// fraction replay and the viewer use]
     #[arg(long)]
     near: Option<f64>,
+    #[command(flatten)]
+    section: crate::section::SectionArgs,
+    /// The model's length unit, for distances also given in metres: m,
+    /// mm, cm, km, um, in, ft or yd (glTF is in metres)
+    #[arg(long, default_value = "m")]
+    units: gigawalk_scene::units::Units,
     /// Print one JSON object: `object` (null when nothing is there), `point`
-    /// (world, f64), `distance`, and the leaf, LOD and triangle hit
+    /// (world, f64), `distance` (from the eye), and the leaf, LOD and
+    /// triangle hit; with two pixels, `picks` (both) and `distance`
+    /// between their points, `distance_m` in metres and `units`
     #[arg(long)]
     json: bool,
 }
@@ -50,18 +59,30 @@ pub fn pick(a: PickArgs) -> anyhow::Result<()> {
     if a.near.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
         anyhow::bail!("--near must be a positive distance");
     }
-    let p = inspect::pick(&PickRequest {
+    if a.pixel.len() > 2 {
+        anyhow::bail!(
+            "--pixel given {} times: one picks, two measure the distance between their points",
+            a.pixel.len()
+        );
+    }
+    let bounds = gigawalk_scene::SceneReader::open(&a.scene)
+        .context("cannot open the scene")?
+        .skeleton()
+        .bounds();
+    let section = a.section.section(None, &bounds)?;
+    let picks = inspect::pick(&PickRequest {
         scene: a.scene.clone(),
         path: a.path.clone(),
         frame: a.frame,
-        pixel: a.pixel,
+        pixels: a.pixel.clone(),
+        section,
         width: a.width,
         height: a.height,
         near: a.near,
     })?;
-    if a.json {
-        let v = serde_json::json!({
-            "pixel": [a.pixel.0, a.pixel.1],
+    let pick_json = |pixel: (u32, u32), p: &inspect::Picked| {
+        serde_json::json!({
+            "pixel": [pixel.0, pixel.1],
             "object": p.object.as_ref().map(|(id, o)| inspect::object_json(*id, o)),
             "point": p.point.map(|q| q.to_array()),
             "distance": p.distance,
@@ -70,13 +91,56 @@ pub fn pick(a: PickArgs) -> anyhow::Result<()> {
             "triangle": p.triangle,
             "leaves_read": p.stats.leaves_read,
             "ms": p.ms,
-        });
+        })
+    };
+    if let ([pa, pb], [first, second]) = (a.pixel.as_slice(), picks.as_slice()) {
+        let (pa, pb) = (*pa, *pb);
+        let d = match (first.point, second.point) {
+            (Some(p), Some(q)) => Some(q - p),
+            _ => None,
+        };
+        let length = d.map(|d| d.length());
+        if a.json {
+            let v = serde_json::json!({
+                "picks": [pick_json(pa, first), pick_json(pb, second)],
+                "distance": length,
+                "distance_m": length.map(|l| l * a.units.metres),
+                "units": a.units.name,
+                "delta": d.map(|d| d.to_array()),
+            });
+            out!(
+                "{}",
+                serde_json::to_string_pretty(&v).context("serialising the picks")?
+            )?;
+            return Ok(());
+        }
+        for (pixel, p) in [(pa, first), (pb, second)] {
+            out!("pixel {},{}", pixel.0, pixel.1)?;
+            print_pick(pixel, p)?;
+        }
+        match (length, d) {
+            (Some(l), Some(d)) => {
+                out!("measured  {}", a.units.format(l))?;
+                out!("delta     {:.9} {:.9} {:.9}", d.x, d.y, d.z)?;
+            }
+            _ => out!("measured  nothing: a pixel shows no surface")?,
+        }
+        return Ok(());
+    }
+
+    let p = &picks[0];
+    if a.json {
         out!(
             "{}",
-            serde_json::to_string_pretty(&v).context("serialising the pick")?
+            serde_json::to_string_pretty(&pick_json(a.pixel[0], p))
+                .context("serialising the pick")?
         )?;
         return Ok(());
     }
+    print_pick(a.pixel[0], p)
+}
+
+fn print_pick(pixel: (u32, u32), p: &inspect::Picked) -> anyhow::Result<()> {
     match (&p.object, p.point) {
         (Some((id, o)), Some(q)) => {
             out!("object    {} (#{id})", o.name)?;
@@ -90,7 +154,7 @@ pub fn pick(a: PickArgs) -> anyhow::Result<()> {
             out!("object    (a surface of no recorded object)")?;
             out!("point     {:.9} {:.9} {:.9}", q.x, q.y, q.z)?;
         }
-        _ => out!("nothing under pixel {},{}", a.pixel.0, a.pixel.1)?,
+        _ => out!("nothing under pixel {},{}", pixel.0, pixel.1)?,
     }
     Ok(())
 }

@@ -36,6 +36,8 @@ pub struct Args {
     /// its hidden objects, and its camera when no --path is given
     #[arg(long, value_name = "NAME")]
     view: Option<String>,
+    #[command(flatten)]
+    section: crate::section::SectionArgs,
     /// Report directory: summary.md, summary.json, frames.csv, fps.png, tradeoff.png
     #[arg(long, default_value = "report")]
     out: PathBuf,
@@ -284,6 +286,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }),
         adapter: args.runtime.adapter.clone(),
         visibility,
+        section: args.section.section(
+            view.as_ref().and_then(|v| v.section.as_ref()),
+            &scene.skeleton().bounds(),
+        )?,
     };
     let replay = run_replay(
         &scene,

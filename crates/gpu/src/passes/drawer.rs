@@ -26,6 +26,8 @@ pub(crate) struct Drawer {
     pub(crate) depth_bias: f32,
     /// LODs drawn in pieces (hidden or highlighted objects), this frame.
     pieces: Option<Arc<LodPieces>>,
+    /// This frame's view has a section: draw with the clipping pipelines.
+    section: bool,
 }
 
 impl Drawer {
@@ -71,6 +73,7 @@ impl Drawer {
             used: 0,
             depth_bias: 0.0,
             pieces: None,
+            section: false,
         }
     }
 
@@ -83,8 +86,15 @@ impl Drawer {
                 .normalize_or(Vec3::NEG_Z)
                 .extend(0.0)
                 .to_array(),
-            params: [0.25, if unlit { 1.0 } else { 0.0 }, self.depth_bias, 0.0],
+            params: [
+                0.25,
+                if unlit { 1.0 } else { 0.0 },
+                self.depth_bias,
+                view.clip.count() as f32,
+            ],
+            clip: view.clip.planes(),
         };
+        self.section = view.clip.count() > 0;
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         self.used = 0;
@@ -175,7 +185,7 @@ impl Drawer {
         let (mut layout, mut vertices, mut indices) = (None, None, None);
         for (r, instance) in draws {
             if layout != Some(r.layout) {
-                pass.set_pipeline(pipelines.get(r.layout));
+                pass.set_pipeline(pipelines.get(r.layout, self.section));
                 layout = Some(r.layout);
             }
             if vertices != Some(r.buffer) || indices != Some((r.buffer, r.index_format)) {

@@ -17,6 +17,7 @@ mod visible;
 
 use glam::{DVec3, Mat4, Vec3};
 
+use crate::shader_types::MAX_CLIP_PLANES;
 use crate::GpuContext;
 
 pub use depth::{DepthLevel, DepthPass};
@@ -37,6 +38,47 @@ pub struct View {
     pub view_proj: Mat4,
     /// Direction the camera looks (the head light's direction).
     pub forward: Vec3,
+    /// The section's half-spaces relative to the eye (none: nothing cut).
+    pub clip: ClipPlanes,
+}
+
+/// Up to [`MAX_CLIP_PLANES`] half-spaces, camera-relative: a point `p`
+/// relative to the eye is kept when `dot(xyz, p) + w >= 0` for each.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClipPlanes {
+    planes: [[f32; 4]; MAX_CLIP_PLANES],
+    count: u32,
+}
+
+impl ClipPlanes {
+    /// Nothing cut.
+    pub const NONE: ClipPlanes = ClipPlanes {
+        planes: [[0.0; 4]; MAX_CLIP_PLANES],
+        count: 0,
+    };
+
+    /// These half-spaces; `None` when there are more than
+    /// [`MAX_CLIP_PLANES`].
+    pub fn new(half_spaces: &[[f32; 4]]) -> Option<ClipPlanes> {
+        if half_spaces.len() > MAX_CLIP_PLANES {
+            return None;
+        }
+        let mut planes = [[0.0; 4]; MAX_CLIP_PLANES];
+        planes[..half_spaces.len()].copy_from_slice(half_spaces);
+        Some(ClipPlanes {
+            planes,
+            count: half_spaces.len() as u32,
+        })
+    }
+
+    pub fn count(&self) -> usize {
+        self.count as usize
+    }
+
+    /// All [`MAX_CLIP_PLANES`] slots, those past `count` zero.
+    pub fn planes(&self) -> [[f32; 4]; MAX_CLIP_PLANES] {
+        self.planes
+    }
 }
 
 /// A depth image as read back: row-major, row 0 at the top, reversed-Z

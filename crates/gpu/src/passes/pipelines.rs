@@ -7,12 +7,21 @@ use crate::shader_types::{self, VertexLayout};
 use crate::GpuContext;
 
 /// A scene pipeline for each vertex layout (the same pass, the entry
-/// point that reads that layout).
-pub(crate) struct ScenePipelines([wgpu::RenderPipeline; 2]);
+/// point that reads that layout), without and with a section (the
+/// fragment entry point `fs_section`, which discards what the section
+/// removes; kept apart so frames without one keep early depth tests).
+pub(crate) struct ScenePipelines {
+    plain: [wgpu::RenderPipeline; 2],
+    section: [wgpu::RenderPipeline; 2],
+}
 
 impl ScenePipelines {
-    pub(crate) fn get(&self, layout: VertexLayout) -> &wgpu::RenderPipeline {
-        &self.0[layout as usize]
+    pub(crate) fn get(&self, layout: VertexLayout, section: bool) -> &wgpu::RenderPipeline {
+        if section {
+            &self.section[layout as usize]
+        } else {
+            &self.plain[layout as usize]
+        }
     }
 }
 
@@ -30,12 +39,18 @@ pub(crate) fn pipeline(
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(shader_types::shader_source(wgsl).into()),
         });
-    let targets = [colour.map(|format| wgpu::ColorTargetState {
-        format,
-        blend: None,
-        write_mask: wgpu::ColorWrites::ALL,
-    })];
-    ScenePipelines(VertexLayout::ALL.map(|layout| {
+    let targets: Vec<_> = colour
+        .map(|format| wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })
+        .into_iter()
+        .map(Some)
+        .collect();
+    // Without a section a depth-only pass has no fragment stage.
+    let plain = colour.map(|_| "fs_main");
+    let build = |layout: VertexLayout, fragment: Option<&str>| {
         ctx.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -64,16 +79,20 @@ pub(crate) fn pipeline(
                     bias: Default::default(),
                 }),
                 multisample: Default::default(),
-                fragment: colour.map(|_| wgpu::FragmentState {
+                fragment: fragment.map(|entry| wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(entry),
                     compilation_options: Default::default(),
                     targets: &targets,
                 }),
                 multiview_mask: None,
                 cache: None,
             })
-    }))
+    };
+    ScenePipelines {
+        plain: VertexLayout::ALL.map(|layout| build(layout, plain)),
+        section: VertexLayout::ALL.map(|layout| build(layout, Some("fs_section"))),
+    }
 }
 
 /// A pipeline that draws one fullscreen triangle (`vs_main`, no vertex

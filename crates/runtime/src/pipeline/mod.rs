@@ -154,7 +154,9 @@ pub(super) fn next_sample(
     }
     Ok(Some(Sample {
         frame,
-        view: CullView::new(camera, viewport).with_visibility(req.visibility),
+        view: CullView::new(camera, viewport)
+            .with_visibility(req.visibility)
+            .with_section(req.section),
         read_back: req.read_back,
         hold: req.hold_culling,
         style: req.style,

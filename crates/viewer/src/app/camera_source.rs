@@ -70,6 +70,7 @@ impl CameraSource for LiveSource {
                 style,
                 pixel_error,
                 visibility,
+                section: None,
             }));
         }
         if minimised {
@@ -82,6 +83,7 @@ impl CameraSource for LiveSource {
             style,
             pixel_error,
             visibility,
+            section: None,
         }))
     }
 }

@@ -669,4 +669,31 @@ mod tests {
     fn far_from_the_origin_too() {
         run(DVec3::new(1e7, 2e6, -3e7));
     }
+
+    #[test]
+    fn a_section_clips_an_occluder_to_what_it_keeps() {
+        let square = ConvexOccluder::new(&[
+            DVec3::new(0.0, 0.0, -5.0),
+            DVec3::new(4.0, 0.0, -5.0),
+            DVec3::new(4.0, 4.0, -5.0),
+            DVec3::new(0.0, 4.0, -5.0),
+        ])
+        .unwrap();
+        let eye = DVec3::ZERO;
+        let section = |p: &str| crate::Section::parse(&[p.to_string()], None).unwrap();
+        assert!(matches!(
+            section_part(&square, &section("-1 0 0 10"), eye),
+            SectionPart::Whole
+        ));
+        assert!(matches!(
+            section_part(&square, &section("1 0 0 -10"), eye),
+            SectionPart::Gone
+        ));
+        // Keeping x <= 1 leaves a 1 x 4 strip, a hair narrower (the slack).
+        let SectionPart::Part(strip) = section_part(&square, &section("-1 0 0 1"), eye) else {
+            panic!("the square is cut");
+        };
+        assert!(strip.vertices().all(|v| v.x <= 1.0));
+        assert!((strip.area() - 4.0).abs() < 1e-3, "{}", strip.area());
+    }
 }

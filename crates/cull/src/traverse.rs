@@ -573,6 +573,44 @@ mod tests {
     }
 
     #[test]
+    fn a_section_drops_what_it_removes_wholly_and_keeps_what_it_cuts() {
+        let s = two_leaves();
+        let cut = |planes: &[&str]| {
+            let planes: Vec<String> = planes.iter().map(|p| p.to_string()).collect();
+            view_from([0.0; 3]).with_section(Some(std::sync::Arc::new(
+                crate::Section::parse(&planes, None).unwrap(),
+            )))
+        };
+        // Keeping x <= 0 removes the right leaf (x 0.5..2) whole; the root
+        // is cut, so refined; the left leaf is drawn.
+        let full = TraversalOptions {
+            pixel_tolerance: 0.0,
+            ..Default::default()
+        };
+        let (items, stats) = run(&s, &cut(&["-1 0 0 0"]), full);
+        assert_eq!(items, [DrawItem { node: 1, lod: 0 }]);
+        assert_eq!(stats.section_culled, 1);
+        // A plane a hair inside the right leaf's box (by less than the
+        // GPU's rounding slack) keeps it: only certain removals count.
+        let (items, stats) = run(&s, &cut(&["-1 0 0 0.5000000001"]), full);
+        assert_eq!((items.len(), stats.section_culled), (2, 0));
+        // Keeping z >= 0 removes everything, the root first.
+        let (items, stats) = run(&s, &cut(&["0 0 1 0"]), full);
+        assert!(items.is_empty());
+        assert_eq!((stats.section_culled, stats.visited), (1, 1));
+        // Re-selection drops removed occluders too.
+        let mut kept = Vec::new();
+        let n = reselect_lods(
+            &s,
+            &cut(&["-1 0 0 0"]),
+            &full,
+            &[DrawItem { node: 0, lod: 0 }],
+            &mut |i| kept.push(i),
+        );
+        assert_eq!((n, kept), (1, vec![DrawItem { node: 1, lod: 0 }]));
+    }
+
+    #[test]
     fn acceptable_hlod_is_emitted_and_children_not_visited() {
         // Distance 10: root's errors are 0.625 and 5 pixels; tolerance 1 takes level 0.
         let (items, stats) = run(

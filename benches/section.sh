@@ -9,10 +9,10 @@
 #         (about half of it).
 # On the best adapter here (`best`: lavapipe on a machine without a GPU) and on
 # the null adapter (every GPU operation free: the CPU's share), each set
-# run twice, interleaved (none, all, half, none, all, half), since times
-# on shared machines drift; prints one line a run (median frame ms, mean
-# triangles, nodes dropped by the section a frame) and the ratios of the
-# medians of each pair against none.
+# run three times, interleaved (none, all, half, none, all, half, ...),
+# since times on shared machines drift; prints one line a run (median
+# frame ms, mean triangles, nodes dropped by the section a frame) and,
+# per set, the median of its runs' ratios to the `none` run beside them.
 #
 # Usage: benches/section.sh [OUT_DIR] [--quick]   (--quick: 40 poses)
 set -euo pipefail
@@ -61,7 +61,7 @@ PY
 }
 
 for adapter in best null; do
-  for rep in 1 2; do
+  for rep in 1 2 3; do
     for set in none all half; do
       run "$adapter" "$set" "$rep" | tee -a "$out/runs.txt"
     done
@@ -74,13 +74,14 @@ for adapter in ["best", "null"]:
     fig = {}
     for st in ["none", "all", "half"]:
         ms, tris = [], []
-        for rep in [1, 2]:
+        for rep in [1, 2, 3]:
             m = json.load(open(f"{out}/{adapter}-{st}-{rep}/summary.json"))["modes"][0]
             ms.append(m["median_frame_ms"]); tris.append(m["mean_triangles"])
         fig[st] = (statistics.median(ms), statistics.median(tris), ms)
     n = fig["none"]
     for st in ["all", "half"]:
         f = fig[st]
-        pairs = " ".join(f"{a / b:.3f}" for a, b in zip(f[2], n[2]))
-        print(f"{adapter:8} {st:5} vs none: frame time {f[0] / n[0]:.3f}x (pairs {pairs}), triangles {f[1] / n[1]:.3f}x")
+        ratios = [a / b for a, b in zip(f[2], n[2])]
+        pairs = " ".join(f"{r:.3f}" for r in ratios)
+        print(f"{adapter:8} {st:5} vs none: frame time {statistics.median(ratios):.3f}x (runs {pairs}), triangles {f[1] / n[1]:.3f}x")
 PY

@@ -31,6 +31,19 @@ fn section_keeps(p: vec3<f32>) -> bool {
     return true;
 }
 
+// The signed distances of the camera-relative point p from the first
+// eight half-spaces (1 past the section's count), for the rasterizer's
+// clip distances.
+fn section_distances(p: vec3<f32>) -> array<f32, 8> {
+    let count = u32(frame.params.w);
+    var d = array<f32, 8>(1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0);
+    for (var i = 0u; i < min(count, 8u); i = i + 1u) {
+        let h = frame.clip[i];
+        d[i] = dot(h.xyz, p) + h.w;
+    }
+    return d;
+}
+
 // The half-space through whose plane the ray from the eye to the kept
 // point p enters the kept region (the last one crossed), or -1 when the
 // eye is kept by all of them (the ray crosses no cut).

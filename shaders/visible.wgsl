@@ -22,6 +22,16 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(hi, lo, c <= vec3<f32>(0.04045));
 }
 
+// A vertex at `rel` (camera-relative) with its normal and sRGB colour.
+fn visible_out(rel: vec3<f32>, normal: vec3<f32>, colour: vec4<f32>, offset: vec4<f32>) -> VsOut {
+    var out: VsOut;
+    out.rel = rel;
+    out.clip = frame.view_proj * vec4<f32>(rel, 1.0);
+    out.normal = normal;
+    out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
+    return out;
+}
+
 @vertex
 fn vs_main(
     @location(0) position: vec3<f32>,
@@ -29,12 +39,7 @@ fn vs_main(
     @location(2) colour: vec4<f32>,
     @location(3) offset: vec4<f32>,
 ) -> VsOut {
-    var out: VsOut;
-    out.rel = position + offset.xyz;
-    out.clip = frame.view_proj * vec4<f32>(out.rel, 1.0);
-    out.normal = decode_normal(normal);
-    out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
-    return out;
+    return visible_out(position + offset.xyz, decode_normal(normal), colour, offset);
 }
 
 // The compact layout: grid coordinates and snorm8 normals (common.wgsl).
@@ -45,12 +50,12 @@ fn vs_compact(
     @location(3) offset: vec4<f32>,
     @location(4) scale: vec4<f32>,
 ) -> VsOut {
-    var out: VsOut;
-    out.rel = compact_position(q, offset, scale);
-    out.clip = frame.view_proj * vec4<f32>(out.rel, 1.0);
-    out.normal = decode_normal(compact_normal(q));
-    out.colour = tinted(vec4<f32>(srgb_to_linear(colour.rgb), colour.a), offset);
-    return out;
+    return visible_out(
+        compact_position(q, offset, scale),
+        decode_normal(compact_normal(q)),
+        colour,
+        offset,
+    );
 }
 
 fn lit(colour: vec3<f32>, normal: vec3<f32>) -> vec4<f32> {
@@ -78,6 +83,17 @@ fn fs_section(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec
     if (!section_keeps(in.rel)) {
         discard;
     }
+    return cut_surface(in, front);
+}
+
+// With a section the rasterizer already clipped (clip distances,
+// visible_clip.wgsl): caps only, no discard, so depth tests stay early.
+@fragment
+fn fs_cap(in: VsOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    return cut_surface(in, front);
+}
+
+fn cut_surface(in: VsOut, front: bool) -> vec4<f32> {
     if (frame.params.y > 0.5) {
         return vec4<f32>(in.colour.rgb, 1.0);
     }

@@ -37,6 +37,9 @@ pub struct CullView {
     /// half-spaces relative to the eye in f64.
     section: Option<std::sync::Arc<Section>>,
     section_rel: Vec<HalfSpace>,
+    /// The largest |offset| of `section_rel` (the eye's distance from the
+    /// farthest plane), for the slack of [`CullView::section_side`].
+    section_offset: f64,
 }
 
 impl CullView {
@@ -59,6 +62,7 @@ impl CullView {
             visibility: None,
             section: None,
             section_rel: Vec::new(),
+            section_offset: 0.0,
         }
     }
 
@@ -74,6 +78,10 @@ impl CullView {
                 .collect(),
             None => Vec::new(),
         };
+        self.section_offset = self
+            .section_rel
+            .iter()
+            .fold(0.0f64, |m, h| m.max(h.d.abs()));
         self
     }
 
@@ -91,11 +99,7 @@ impl CullView {
             return BoxSide::Kept;
         }
         let extent = min.abs().max(max.abs()).max_element();
-        let offset = self
-            .section_rel
-            .iter()
-            .fold(0.0f64, |m, h| m.max(h.d.abs()));
-        let slack = SECTION_REL_SLACK * (extent + offset);
+        let slack = SECTION_REL_SLACK * (extent + self.section_offset);
         crate::section_classify(&self.section_rel, min, max, slack)
     }
 

@@ -104,6 +104,14 @@ impl GpuContext {
     }
 
     /// Whether RVG can draw [`crate::DrawStyle::Wireframe`] here.
+    /// Whether the rasterizer clips by user planes (sections clip there
+    /// rather than discarding fragments).
+    pub fn supports_clip_distances(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::CLIP_DISTANCES)
+    }
+
     pub fn supports_wireframe(&self) -> bool {
         self.device
             .features()
@@ -447,7 +455,9 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some(&label),
         // Line mode for the viewer's wireframe, where the adapter has it.
-        required_features: adapter.features() & wgpu::Features::POLYGON_MODE_LINE,
+        // Clip distances for sections, where the adapter has them.
+        required_features: adapter.features()
+            & (wgpu::Features::POLYGON_MODE_LINE | wgpu::Features::CLIP_DISTANCES),
         required_limits: limits,
         ..Default::default()
     }))

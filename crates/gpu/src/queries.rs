@@ -102,7 +102,10 @@ impl QueryPass {
             ctx,
             &drawer,
             "query depth",
-            shader_types::OCCLUDER_DEPTH_WGSL,
+            (
+                shader_types::OCCLUDER_DEPTH_WGSL,
+                shader_types::OCCLUDER_DEPTH_CLIP_WGSL,
+            ),
             None,
             wgpu::PolygonMode::Fill,
         );

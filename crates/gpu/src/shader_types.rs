@@ -171,7 +171,17 @@ pub const COMMON_WGSL: &str = include_str!("../../../shaders/common.wgsl");
 pub const OCCLUDER_DEPTH_WGSL: &str = include_str!("../../../shaders/occluder_depth.wgsl");
 pub const VISIBLE_WGSL: &str = include_str!("../../../shaders/visible.wgsl");
 
+pub const OCCLUDER_DEPTH_CLIP_WGSL: &str =
+    include_str!("../../../shaders/occluder_depth_clip.wgsl");
+pub const VISIBLE_CLIP_WGSL: &str = include_str!("../../../shaders/visible_clip.wgsl");
+
 /// A pass's full WGSL: the shared declarations, then the pass.
 pub fn shader_source(pass: &str) -> String {
     format!("{COMMON_WGSL}\n{pass}")
+}
+
+/// A pass's WGSL with its clip-distance entry points (`clip`), for
+/// devices with `Features::CLIP_DISTANCES`.
+pub fn clip_shader_source(pass: &str, clip: &str) -> String {
+    format!("enable clip_distances;\n{COMMON_WGSL}\n{pass}\n{clip}")
 }

@@ -197,6 +197,30 @@ fn every_shader_in_the_tree_parses_and_validates() {
             validate_alone(src);
         }
     }
+    // The clip-distance variants, appended to their pass.
+    let clip_passes = [
+        (
+            "occluder_depth_clip.wgsl",
+            shader_types::OCCLUDER_DEPTH_WGSL,
+            shader_types::OCCLUDER_DEPTH_CLIP_WGSL,
+        ),
+        (
+            "visible_clip.wgsl",
+            shader_types::VISIBLE_WGSL,
+            shader_types::VISIBLE_CLIP_WGSL,
+        ),
+    ];
+    for (_, pass, clip) in clip_passes {
+        let src = shader_types::clip_shader_source(pass, clip);
+        let module = naga::front::wgsl::parse_str(&src)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::CLIP_DISTANCES,
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{e:?}"));
+    }
     // Every file in shaders/ is one of them (common.wgsl is the prefix).
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders");
     let mut files: Vec<String> = std::fs::read_dir(dir)
@@ -205,7 +229,11 @@ fn every_shader_in_the_tree_parses_and_validates() {
         .filter(|n| n.ends_with(".wgsl") && n != "common.wgsl")
         .collect();
     files.sort();
-    let mut named: Vec<String> = passes.iter().map(|p| p.0.to_string()).collect();
+    let mut named: Vec<String> = passes
+        .iter()
+        .map(|p| p.0.to_string())
+        .chain(clip_passes.iter().map(|p| p.0.to_string()))
+        .collect();
     named.sort();
     assert_eq!(files, named, "a shader no test validates");
 }

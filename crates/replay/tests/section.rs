@@ -81,8 +81,9 @@ fn options(schedule: Schedule, culler: CullMethod, mode: Mode, tolerance: f64) -
     }
 }
 
-/// A tilted plane through the middle of `b` and a box around its middle
-/// third.
+/// A tilted plane through the middle of `b`, a box around its middle
+/// third, and that box with three planes (nine half-spaces: more than the
+/// rasterizer's clip distances hold, so the fragment stage discards).
 fn sections(b: &Aabb) -> Vec<Arc<Section>> {
     let c = b.center();
     let n = DVec3::new(0.3, -0.2, 0.93).normalize();
@@ -100,6 +101,24 @@ fn sections(b: &Aabb) -> Vec<Arc<Section>> {
             Section::new(gigawalk_cull::SectionSpec {
                 planes: vec![],
                 bbox: Some([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]),
+            })
+            .unwrap(),
+        ),
+        Arc::new(
+            Section::new(gigawalk_cull::SectionSpec {
+                planes: vec![
+                    [n.x, n.y, n.z, -n.dot(c)],
+                    [0.0, -1.0, 0.0, c.y + e.y],
+                    [-0.6, 0.0, 0.8, 0.6 * c.x - 0.8 * c.z + e.x],
+                ],
+                bbox: Some([
+                    lo.x - e.x,
+                    lo.y - e.y,
+                    lo.z - e.z,
+                    hi.x + e.x,
+                    hi.y + e.y,
+                    hi.z + e.z,
+                ]),
             })
             .unwrap(),
         ),

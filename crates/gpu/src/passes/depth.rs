@@ -49,7 +49,10 @@ impl DepthPass {
             ctx,
             &drawer,
             "occluder depth",
-            shader_types::OCCLUDER_DEPTH_WGSL,
+            (
+                shader_types::OCCLUDER_DEPTH_WGSL,
+                shader_types::OCCLUDER_DEPTH_CLIP_WGSL,
+            ),
             None,
             wgpu::PolygonMode::Fill,
         );

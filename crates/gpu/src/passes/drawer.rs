@@ -26,8 +26,8 @@ pub(crate) struct Drawer {
     pub(crate) depth_bias: f32,
     /// LODs drawn in pieces (hidden or highlighted objects), this frame.
     pieces: Option<Arc<LodPieces>>,
-    /// This frame's view has a section: draw with the clipping pipelines.
-    section: bool,
+    /// How this frame clips by its view's section.
+    clip_planes: usize,
 }
 
 impl Drawer {
@@ -73,7 +73,7 @@ impl Drawer {
             used: 0,
             depth_bias: 0.0,
             pieces: None,
-            section: false,
+            clip_planes: 0,
         }
     }
 
@@ -94,7 +94,7 @@ impl Drawer {
             ],
             clip: view.clip.planes(),
         };
-        self.section = view.clip.count() > 0;
+        self.clip_planes = view.clip.count();
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         self.used = 0;
@@ -185,7 +185,7 @@ impl Drawer {
         let (mut layout, mut vertices, mut indices) = (None, None, None);
         for (r, instance) in draws {
             if layout != Some(r.layout) {
-                pass.set_pipeline(pipelines.get(r.layout, self.section));
+                pass.set_pipeline(pipelines.get(r.layout, pipelines.clipping(self.clip_planes)));
                 layout = Some(r.layout);
             }
             if vertices != Some(r.buffer) || indices != Some((r.buffer, r.index_format)) {

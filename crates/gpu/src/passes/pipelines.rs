@@ -6,21 +6,50 @@ use crate::passes::{Drawer, DEPTH_COMPARE, DEPTH_FORMAT};
 use crate::shader_types::{self, VertexLayout};
 use crate::GpuContext;
 
+/// How a draw clips by the frame's section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Clipping {
+    /// No section.
+    None,
+    /// The rasterizer clips (clip distances: at most
+    /// [`HARDWARE_CLIP_PLANES`] half-spaces, on devices with
+    /// `Features::CLIP_DISTANCES`); the fragment stage never discards.
+    Hardware,
+    /// The fragment stage discards what the section removes.
+    Discard,
+}
+
+/// The most half-spaces the rasterizer clips by (WGSL's `clip_distances`
+/// holds at most eight).
+pub(crate) const HARDWARE_CLIP_PLANES: usize = 8;
+
 /// A scene pipeline for each vertex layout (the same pass, the entry
-/// point that reads that layout), without and with a section (the
-/// fragment entry point `fs_section`, which discards what the section
-/// removes; kept apart so frames without one keep early depth tests).
+/// point that reads that layout), for each way of clipping by a section:
+/// none (no discard, so frames without a section keep early depth
+/// tests), the rasterizer's clip distances where the device has them,
+/// and discarding in the fragment stage (`fs_section`) everywhere.
 pub(crate) struct ScenePipelines {
     plain: [wgpu::RenderPipeline; 2],
-    section: [wgpu::RenderPipeline; 2],
+    discard: [wgpu::RenderPipeline; 2],
+    hardware: Option<[wgpu::RenderPipeline; 2]>,
 }
 
 impl ScenePipelines {
-    pub(crate) fn get(&self, layout: VertexLayout, section: bool) -> &wgpu::RenderPipeline {
-        if section {
-            &self.section[layout as usize]
-        } else {
-            &self.plain[layout as usize]
+    pub(crate) fn get(&self, layout: VertexLayout, clipping: Clipping) -> &wgpu::RenderPipeline {
+        let set = match clipping {
+            Clipping::None => &self.plain,
+            Clipping::Hardware => self.hardware.as_ref().unwrap_or(&self.discard),
+            Clipping::Discard => &self.discard,
+        };
+        &set[layout as usize]
+    }
+
+    /// How to clip by `half_spaces` of a section (0: none).
+    pub(crate) fn clipping(&self, half_spaces: usize) -> Clipping {
+        match half_spaces {
+            0 => Clipping::None,
+            n if n <= HARDWARE_CLIP_PLANES && self.hardware.is_some() => Clipping::Hardware,
+            _ => Clipping::Discard,
         }
     }
 }
@@ -29,7 +58,7 @@ pub(crate) fn pipeline(
     ctx: &GpuContext,
     drawer: &Drawer,
     label: &str,
-    wgsl: &str,
+    (wgsl, clip_wgsl): (&str, &str),
     colour: Option<wgpu::TextureFormat>,
     polygon_mode: wgpu::PolygonMode,
 ) -> ScenePipelines {
@@ -39,6 +68,15 @@ pub(crate) fn pipeline(
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(shader_types::shader_source(wgsl).into()),
         });
+    let clip_module = ctx.supports_clip_distances().then(|| {
+        ctx.device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(
+                    shader_types::clip_shader_source(wgsl, clip_wgsl).into(),
+                ),
+            })
+    });
     let targets: Vec<_> = colour
         .map(|format| wgpu::ColorTargetState {
             format,
@@ -50,14 +88,20 @@ pub(crate) fn pipeline(
         .collect();
     // Without a section a depth-only pass has no fragment stage.
     let plain = colour.map(|_| "fs_main");
-    let build = |layout: VertexLayout, fragment: Option<&str>| {
+    // `suffix`: "" for the plain entry points, "_clip" for those writing
+    // clip distances.
+    let build = |module: &wgpu::ShaderModule,
+                 layout: VertexLayout,
+                 suffix: &str,
+                 fragment: Option<&str>| {
+        let vertex = format!("{}{suffix}", layout.entry_point());
         ctx.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&drawer.layout),
                 vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(layout.entry_point()),
+                    module,
+                    entry_point: Some(&vertex),
                     compilation_options: Default::default(),
                     buffers: &[
                         Some(layout.buffer_layout()),
@@ -80,7 +124,7 @@ pub(crate) fn pipeline(
                 }),
                 multisample: Default::default(),
                 fragment: fragment.map(|entry| wgpu::FragmentState {
-                    module: &module,
+                    module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
                     targets: &targets,
@@ -90,8 +134,10 @@ pub(crate) fn pipeline(
             })
     };
     ScenePipelines {
-        plain: VertexLayout::ALL.map(|layout| build(layout, plain)),
-        section: VertexLayout::ALL.map(|layout| build(layout, Some("fs_section"))),
+        plain: VertexLayout::ALL.map(|l| build(&module, l, "", plain)),
+        discard: VertexLayout::ALL.map(|l| build(&module, l, "", Some("fs_section"))),
+        hardware: clip_module
+            .map(|m| VertexLayout::ALL.map(|l| build(&m, l, "_clip", colour.map(|_| "fs_cap")))),
     }
 }
 

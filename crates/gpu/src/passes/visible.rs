@@ -56,7 +56,7 @@ impl VisiblePass {
                 ctx,
                 &drawer,
                 label,
-                shader_types::VISIBLE_WGSL,
+                (shader_types::VISIBLE_WGSL, shader_types::VISIBLE_CLIP_WGSL),
                 Some(COLOUR_FORMAT),
                 mode,
             )

@@ -69,6 +69,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
         target: None,
         adapter: None,
         visibility: None,
+        section: None,
     }
 }
 

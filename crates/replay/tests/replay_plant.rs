@@ -406,6 +406,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 target: None,
                 adapter: None,
                 visibility: None,
+                section: None,
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             // Frames 0, 4, 8 and the frame after each.

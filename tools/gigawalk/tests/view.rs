@@ -1121,9 +1121,17 @@ fn live_sections_and_a_measurement() {
     // same plane on the command line.
     let p = section.planes[0];
     let plane = format!("{} {} {} {}", p[0], p[1], p[2], p[3]);
+    // The path's first pose alone: a scripted run follows its path.
+    let mut first = gigawalk_scene::path::CameraPath::read(&path).unwrap();
+    first.poses.truncate(1);
+    let first_path = dir.path().join("first.path");
+    first.write(&first_path).unwrap();
     for (what, extra) in [
         ("--view", vec!["--view", "view 1"]),
-        ("--section", vec!["--path", s(&path), "--section", &plane]),
+        (
+            "--section",
+            vec!["--path", s(&first_path), "--section", &plane],
+        ),
     ] {
         let png = dir.path().join("scripted.png");
         let mut args = vec![

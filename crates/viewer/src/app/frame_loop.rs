@@ -168,7 +168,7 @@ impl LoopState {
                 // Esc first clears a measurement, as in other viewers.
                 Action::Quit if self.measure.is_active() => {
                     let m = self.measure.toggle();
-                    self.say(m, now);
+                    self.announce(m, now);
                 }
                 Action::Quit => app.close = true,
                 Action::ToggleWalk => self.controller.toggle_walk(),
@@ -253,7 +253,7 @@ impl LoopState {
                 }
                 Action::Measure => {
                     let m = self.measure.toggle();
-                    self.say(m, now);
+                    self.announce(m, now);
                 }
             }
         }

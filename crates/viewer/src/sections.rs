@@ -293,7 +293,8 @@ fn normalised(p: [f64; 4]) -> Option<[f64; 4]> {
 /// `depth` (the distance of the surface under the screen's centre), met
 /// with the scene's `bounds`. `None` when they do not meet.
 pub fn view_box(camera: &Camera, depth: f64, bounds: &Aabb) -> Option<Aabb> {
-    if !(depth.is_finite() && depth > 0.0) || !bounds.is_valid() {
+    let usable = depth.is_finite() && depth > 0.0 && bounds.is_valid();
+    if !usable {
         return None;
     }
     let far = (depth * VIEW_BOX_DEPTH).max(camera.near * 2.0);

@@ -5,7 +5,9 @@
 //! an object with a click, hide and show it, save and restore a view,
 //! find an object, fly, look, wireframe, node boxes, freeze culling,
 //! record a path, screenshots, resize, hiding and showing the window,
-//! Esc), then a scripted run starts from the saved view.
+//! Esc), then a scripted run starts from the saved view; and a second
+//! session cuts the model with section planes and a box and measures a
+//! distance (checked against `gigawalk pick`).
 //! Skips loudly without Xvfb, xdotool or a GPU adapter, unless
 //! GIGAWALK_REQUIRE_ADAPTER is set (CI), where all must be there.
 
@@ -147,6 +149,12 @@ fn help_lists_the_controls() {
         "frame the selected object",
         "find objects",
         "save the view",
+        "section plane at the cursor",
+        "Shift+scroll",
+        "measure: click two points",
+        "--section",
+        "--section-box",
+        "--units",
         "--view",
         "screenshot",
         "--frames",

@@ -33,7 +33,9 @@ pub use context::{
 };
 #[cfg(feature = "testing")]
 pub use context::{devices_or_skip, skip_test};
-pub use overlay::{OverlayBox, OverlayFrame, OverlayText, OverlayUniforms, OVERLAY_WGSL};
+pub use overlay::{
+    OverlayBox, OverlayFrame, OverlayLine, OverlayText, OverlayUniforms, OVERLAY_WGSL,
+};
 pub use passes::{
     ClipPlanes, DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, PassFigures, PyramidPath,
     View, VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL,

@@ -1,8 +1,9 @@
 //! The viewer's overlays, drawn over the RVG image before it is shown:
 //! node bounding boxes as coloured lines (drawn / frustum-culled /
-//! occlusion-culled, like Figure 13 of Coorg and Teller's paper) and HUD
-//! text in an 8x8 bitmap font (public-domain font8x8), each line on a
-//! translucent panel so it reads over any scene.
+//! occlusion-culled, like Figure 13 of Coorg and Teller's paper), lines
+//! of a given width in pixels (a measurement), and HUD text in an 8x8
+//! bitmap font (public-domain font8x8), each line on a translucent panel
+//! so it reads over any scene.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
@@ -31,12 +32,23 @@ pub struct OverlayText {
     pub background: [f32; 4],
 }
 
+/// A line in pixels (row 0 at the top), `width` pixels wide: a thin
+/// quad, drawn under the text (the caller projects and clips its ends).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OverlayLine {
+    pub from: [f32; 2],
+    pub to: [f32; 2],
+    pub width: f32,
+    pub colour: [f32; 4],
+}
+
 /// What to draw over one frame.
 #[derive(Clone, Debug, Default)]
 pub struct OverlayFrame {
     /// The camera's projection x rotation, as [`crate::View::view_proj`].
     pub view_proj: Mat4,
     pub boxes: Vec<OverlayBox>,
+    pub lines: Vec<OverlayLine>,
     pub text: Vec<OverlayText>,
 }
 
@@ -215,7 +227,7 @@ impl OverlayRenderer {
         size: (u32, u32),
         frame: &OverlayFrame,
     ) {
-        if frame.boxes.is_empty() && frame.text.is_empty() {
+        if frame.boxes.is_empty() && frame.lines.is_empty() && frame.text.is_empty() {
             return;
         }
         let u = OverlayUniforms {
@@ -225,7 +237,10 @@ impl OverlayRenderer {
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         let lines = box_lines(&frame.boxes);
-        let quads = text_quads(&frame.text);
+        // Lines first, so labels read over them; both are solid-glyph
+        // and glyph quads of the text pipeline.
+        let mut quads = line_quads(&frame.lines);
+        quads.extend(text_quads(&frame.text));
         let vertex_buffer = |label: &str, bytes: &[u8]| {
             let b = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -299,6 +314,41 @@ fn box_lines(boxes: &[OverlayBox]) -> Vec<LineVertex> {
                 });
             }
         }
+    }
+    out
+}
+
+/// Two triangles per line, a quad `width` wide around it sampling the
+/// solid glyph; a line of no length draws nothing.
+fn line_quads(lines: &[OverlayLine]) -> Vec<TextVertex> {
+    let mut out = Vec::with_capacity(lines.len() * 6);
+    let cell = [
+        (SOLID as u32 % ATLAS_COLUMNS * GLYPH) as f32 + 0.5 * GLYPH as f32,
+        (SOLID as u32 / ATLAS_COLUMNS * GLYPH) as f32 + 0.5 * GLYPH as f32,
+    ];
+    for l in lines {
+        let (dx, dy) = (l.to[0] - l.from[0], l.to[1] - l.from[1]);
+        let len = (dx * dx + dy * dy).sqrt();
+        if !(len > 0.0 && len.is_finite()) {
+            continue;
+        }
+        // Half the width along the line's normal.
+        let h = 0.5 * l.width.max(1.0);
+        let (nx, ny) = (-dy / len * h, dx / len * h);
+        let v = |x: f32, y: f32| TextVertex {
+            pixel: [x, y],
+            texel: cell,
+            colour: l.colour,
+        };
+        let (a, b) = (l.from, l.to);
+        out.extend([
+            v(a[0] + nx, a[1] + ny),
+            v(b[0] + nx, b[1] + ny),
+            v(a[0] - nx, a[1] - ny),
+            v(a[0] - nx, a[1] - ny),
+            v(b[0] + nx, b[1] + ny),
+            v(b[0] - nx, b[1] - ny),
+        ]);
     }
     out
 }
@@ -459,6 +509,27 @@ mod tests {
         assert_eq!(q.len(), 6 * 3);
         // Second glyph ('b') starts two 16-pixel cells to the right.
         assert_eq!(q[12].pixel, [10.0 + 32.0, 20.0]);
+    }
+
+    #[test]
+    fn a_line_is_one_quad_of_its_width_on_the_solid_glyph() {
+        let l = OverlayLine {
+            from: [10.0, 20.0],
+            to: [30.0, 20.0],
+            width: 4.0,
+            colour: [1.0; 4],
+        };
+        let q = line_quads(&[l]);
+        assert_eq!(q.len(), 6);
+        let ys: Vec<f32> = q.iter().map(|v| v.pixel[1]).collect();
+        assert!(ys.iter().all(|&y| y == 18.0 || y == 22.0), "{ys:?}");
+        let xs: Vec<f32> = q.iter().map(|v| v.pixel[0]).collect();
+        assert!(xs.iter().all(|&x| x == 10.0 || x == 30.0), "{xs:?}");
+        // Every vertex samples inside the solid block (code 127).
+        let t = q[0].texel;
+        assert_eq!(((t[0] / 8.0) as u32, (t[1] / 8.0) as u32), (15, 7));
+        let dot = OverlayLine { to: l.from, ..l };
+        assert!(line_quads(&[dot]).is_empty());
     }
 
     #[test]

@@ -27,10 +27,12 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gigawalk_cull::Camera;
+use gigawalk_cull::Section;
 use gigawalk_gpu::{open_devices_for_window, GpuContext, WindowError};
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{CullMethod, OccluderBudget, Runtime, RuntimeError, RuntimeOptions};
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
+use gigawalk_scene::units::Units;
 use gigawalk_scene::views::{SavedView, Views};
 use gigawalk_scene::SceneReader;
 use winit::dpi::PhysicalSize;
@@ -41,8 +43,10 @@ use crate::boxes::CullSets;
 use crate::controller::FlyController;
 use crate::hud::{FrameClock, ViewerState};
 use crate::image::ScreenshotError;
+use crate::measure::Measure;
 use crate::objects::{view_names, Objects, NO_IDENTITY};
 use crate::recorder::{next_free_name, PathRecorder};
+use crate::sections::Sections;
 use crate::settings::Settings;
 use camera_source::LiveSource;
 use frame_loop::LoopState;
@@ -68,9 +72,9 @@ pub struct ViewArgs {
     /// Near plane, model units; `None`: `gigawalk_cull::default_near` of
     /// the scene's bounds.
     pub near: Option<f64>,
-    /// Metres per model unit (1 for glTF's metres, 0.001 for a model in
-    /// millimetres): walk mode's eye height follows.
-    pub metres_per_unit: f64,
+    /// The model's unit (metres for glTF, millimetres for many CAD
+    /// exports): walk mode's eye height and measurements follow.
+    pub units: Units,
     /// Occluder triangles OR draws a frame (`auto`: 30k on CPU rasterizers).
     pub occluder_budget: OccluderBudget,
     /// Geometry memory a device may hold (`all`: the whole scene).
@@ -85,8 +89,10 @@ pub struct ViewArgs {
     /// How items are sent to the tiles.
     pub tile_culling: gigawalk_runtime::TileMethod,
     /// Start from this saved view (`SCENE.views.json`): its camera
-    /// (unless `path` gives one), selection and hidden objects.
+    /// (unless `path` gives one), selection, hidden objects and section.
     pub view: Option<String>,
+    /// Start with this section (over the saved view's).
+    pub section: Option<Arc<Section>>,
 }
 
 /// Why the viewer stopped with an error.
@@ -188,13 +194,23 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         })?),
         None => None,
     };
+    if let Some(spec) = start_view.as_ref().and_then(|v| v.section.as_ref()) {
+        if args.section.is_none() {
+            if let Err(e) = Section::new(spec.clone()) {
+                return Err(ViewError::BadView {
+                    name: args.view.clone().unwrap_or_default(),
+                    detail: format!("its section: {e}"),
+                });
+            }
+        }
+    }
     let start = path.as_ref().map(|p| p.poses[0]).or(start_pose);
     let fovy = start.map_or(60f64.to_radians(), |p| p.fovy);
     let controller = match start {
         Some(q) => FlyController::from_pose(q.position, q.orientation, q.fovy, &skeleton.bounds()),
         None => FlyController::overview(&skeleton.bounds(), fovy),
     }
-    .with_units(args.metres_per_unit);
+    .with_units(args.units.metres);
     let near = args
         .near
         .unwrap_or_else(|| gigawalk_cull::default_near(&skeleton.bounds()));
@@ -213,6 +229,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         prompt: None,
         inputs: Vec::new(),
         scroll: 0.0,
+        shift: false,
         look: (0.0, 0.0),
         resized: None,
         close: false,
@@ -303,6 +320,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         error: None,
         target_tolerance: None,
         visibility: None,
+        section: None,
     }));
     let mut source = LiveSource {
         shared: shared.clone(),
@@ -344,6 +362,10 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         views_file,
         view_names: view_list,
         next_view: 0,
+        sections: Sections::default(),
+        measure: Measure::default(),
+        units: args.units,
+        scene_bounds: skeleton.bounds(),
     };
     if let Some(view) = &start_view {
         // The controller starts at the view's camera already, unless a
@@ -353,6 +375,25 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         state.objects.take_changed();
         shared.lock().expect("viewer state").visibility = state.visibility.clone();
     }
+    if let Some(section) = &args.section {
+        // The command line's section over the saved view's.
+        state.sections.set_spec(section.spec());
+    }
+    if let Some(section) = state.sections.current() {
+        if !section.keeps_any_of(&skeleton.bounds()) {
+            let b = skeleton.bounds();
+            let why = format!(
+                "the section ({}) keeps nothing of the model, whose bounds are {:.6?} .. {:.6?}: \
+                 0 turns it off, Delete clears it",
+                section.describe(),
+                b.min.to_array(),
+                b.max.to_array()
+            );
+            eprintln!("warning: {why}");
+            state.message = Some((why, Instant::now()));
+        }
+    }
+    shared.lock().expect("viewer state").section = state.sections.current();
     loop {
         let render = PhysicalSize::new(app.size.width.max(1), app.size.height.max(1));
         let running = state.settings.clone();
@@ -479,6 +520,8 @@ struct Shared {
     target_tolerance: Option<f64>,
     /// Hidden and highlighted objects (`None`: all show, none tinted).
     visibility: Option<Arc<gigawalk_cull::Visibility>>,
+    /// What the section keeps (`None`: everything).
+    section: Option<Arc<Section>>,
 }
 
 /// Loading progress for the terminal: a line a second while the LODs the

@@ -29,6 +29,20 @@ pub enum Action {
     ShowAll,
     SaveView,
     NextView,
+    /// A section plane through the point under the cursor, facing the
+    /// camera.
+    SectionPlane,
+    /// Move the active section plane along its normal (cutting more
+    /// away) or back.
+    SectionForward,
+    SectionBack,
+    FlipSection,
+    /// A section box around the selection, or around what is in view.
+    SectionBox,
+    ToggleSections,
+    ClearSections,
+    /// Start a measurement, or clear it.
+    Measure,
     ToggleRecord,
     Screenshot,
     ToggleHud,
@@ -95,11 +109,19 @@ pub const BINDINGS: &[Binding] = &[
     Binding { keys: &[KeyCode::KeyV], label: "V", what: "save the view: camera, selection, hidden objects (SCENE.views.json)", does: Act(Action::SaveView) },
     Binding { keys: &[KeyCode::KeyN], label: "N", what: "restore the next saved view", does: Act(Action::NextView) },
     Binding { keys: &[KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5, KeyCode::Digit6, KeyCode::Digit7, KeyCode::Digit8, KeyCode::Digit9], label: "1 - 9", what: "restore saved view 1 to 9", does: Does::RestoreView },
+    Binding { keys: &[KeyCode::KeyX], label: "X", what: "section plane at the cursor, facing you: cuts away what is in front (6 at most)", does: Act(Action::SectionPlane) },
+    Binding { keys: &[KeyCode::BracketRight], label: "]", what: "move the last section plane away along its normal (Shift+scroll up too)", does: Act(Action::SectionForward) },
+    Binding { keys: &[KeyCode::BracketLeft], label: "[", what: "move the last section plane back (Shift+scroll down too)", does: Act(Action::SectionBack) },
+    Binding { keys: &[KeyCode::Backslash], label: "\\", what: "flip the last section plane: keep the other side", does: Act(Action::FlipSection) },
+    Binding { keys: &[KeyCode::KeyJ], label: "J", what: "section box around the selection, or around what is in view", does: Act(Action::SectionBox) },
+    Binding { keys: &[KeyCode::Digit0], label: "0", what: "sections on/off", does: Act(Action::ToggleSections) },
+    Binding { keys: &[KeyCode::Delete], label: "Delete", what: "clear every section plane and the box", does: Act(Action::ClearSections) },
+    Binding { keys: &[KeyCode::KeyM], label: "M", what: "measure: click two points for their distance (M or Esc clears)", does: Act(Action::Measure) },
     Binding { keys: &[KeyCode::KeyR], label: "R", what: "record camera path: start / stop and write", does: Act(Action::ToggleRecord) },
     Binding { keys: &[KeyCode::KeyP, KeyCode::F12], label: "P / F12", what: "screenshot to PNG", does: Act(Action::Screenshot) },
     Binding { keys: &[KeyCode::Tab], label: "Tab", what: "HUD on/off", does: Act(Action::ToggleHud) },
     Binding { keys: &[KeyCode::F1], label: "F1", what: "this help", does: Act(Action::ToggleHelp) },
-    Binding { keys: &[KeyCode::Escape], label: "Esc", what: "quit", does: Act(Action::Quit) },
+    Binding { keys: &[KeyCode::Escape], label: "Esc", what: "clear the measurement; with none, quit", does: Act(Action::Quit) },
 ];
 
 /// Mouse controls, not in the key table.
@@ -111,6 +133,7 @@ pub const MOUSE_HELP: &[(&str, &str)] = &[
     ),
     ("double click", "select it and frame it"),
     ("scroll", "move speed up / down"),
+    ("Shift+scroll", "move the last section plane away / back"),
 ];
 
 /// What a key does, if anything.
@@ -186,7 +209,15 @@ mod tests {
             lookup(KeyCode::F1),
             Some(Does::Act(Action::ToggleHelp))
         ));
-        assert!(lookup(KeyCode::KeyX).is_none());
+        assert!(matches!(
+            lookup(KeyCode::KeyX),
+            Some(Does::Act(Action::SectionPlane))
+        ));
+        assert!(matches!(
+            lookup(KeyCode::KeyM),
+            Some(Does::Act(Action::Measure))
+        ));
+        assert!(lookup(KeyCode::F2).is_none());
     }
 
     #[test]

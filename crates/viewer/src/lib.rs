@@ -7,7 +7,9 @@
 //! on-screen help and `--help` share), [`PathRecorder`] (camera paths),
 //! [`hud_lines`] (the HUD text), [`overlay_boxes`] (node boxes coloured by
 //! what culling did), [`Objects`] (the selection, search, hidden objects
-//! and saved views), [`write_png`] (screenshots), and [`run`], the winit
+//! and saved views), [`Sections`] (section planes and box), [`Measure`]
+//! (a distance between two picked points), [`write_png`] (screenshots),
+//! and [`run`], the winit
 //! app that feeds live input to the runtime and presents its frames.
 //!
 //! Everything but [`run`] works without a window, so it is unit-tested.
@@ -20,8 +22,10 @@ mod controller;
 pub mod controls;
 mod hud;
 mod image;
+mod measure;
 mod objects;
 mod recorder;
+mod sections;
 mod settings;
 
 pub use app::{run, DisplayError, ViewArgs, ViewError};
@@ -29,6 +33,8 @@ pub use boxes::{overlay_boxes, CullSets};
 pub use controller::{FlyController, EYE_HEIGHT};
 pub use hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
 pub use image::{image_stats, read_png, write_png, ImageStats, ScreenshotError};
+pub use measure::{screen_segment, Measure};
 pub use objects::{frame_box, Objects, NO_IDENTITY};
 pub use recorder::{next_free_name, PathRecorder};
+pub use sections::{view_box, Sections};
 pub use settings::{Settings, PIXEL_ERROR_STEPS};

@@ -2,8 +2,11 @@
 //! the viewer (window, input, HUD, runtime wiring) is gigawalk-viewer.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use anyhow::Context as _;
+use gigawalk_scene::section::Section;
+use gigawalk_scene::units::Units;
 use gigawalk_viewer::{controls, Settings, ViewArgs};
 
 /// The controls, for `--help` (the same table as the on-screen help).
@@ -15,7 +18,7 @@ fn controls_help() -> String {
         s.push('\n');
     }
     s.push_str(
-        "\nSaved views (V) go to SCENE.views.json beside the scene; --view NAME starts from one.\
+        "\nSaved views (V) go to SCENE.views.json beside the scene, with the section; --view NAME starts from one.\
          \nScripted run (tests, docs): --frames N --screenshot out.png [--path p.path] renders N frames and exits.",
     );
     s
@@ -29,7 +32,7 @@ pub struct Args {
     /// Camera path (docs/path-format.md): start at its first pose; with --frames, follow it one pose a frame
     #[arg(long)]
     path: Option<PathBuf>,
-    /// Start from this saved view (V saves them to SCENE.views.json beside the scene): its camera (unless --path is given), selection and hidden objects
+    /// Start from this saved view (V saves them to SCENE.views.json beside the scene): its camera (unless --path is given), selection, hidden objects and section (unless --section or --section-box is given)
     #[arg(long, value_name = "NAME")]
     view: Option<String>,
     /// Scripted run: render this many frames, then exit
@@ -96,9 +99,11 @@ pub struct Args {
     /// Near plane distance in model units [default: 1e-5 of the scene's bounding-box diagonal]
     #[arg(long)]
     near: Option<f64>,
-    /// The model's unit, for walk mode's 1.7 m eye height: m (glTF's), cm, mm, km, in, ft, or metres per unit
+    /// The model's unit, for walk mode's 1.7 m eye height and measurements (M) shown in metres too: m (glTF's), mm, cm, km, um, in, ft, yd, or a number of metres per unit
     #[arg(long, default_value = "m", value_parser = parse_units)]
-    units: f64,
+    units: Units,
+    #[command(flatten)]
+    section: crate::section::SectionArgs,
     /// Directory for recorded paths and screenshots taken with keys
     #[arg(long, default_value = ".")]
     out_dir: PathBuf,
@@ -122,6 +127,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.width == 0 || a.height == 0 {
         anyhow::bail!("--width and --height must be at least 1");
     }
+    // Checked here, before a window opens; over a --view's own section.
+    let section = if a.section.planes.is_empty() && a.section.section_box.is_none() {
+        None
+    } else {
+        Some(Arc::new(Section::parse(
+            &a.section.planes,
+            a.section.section_box.as_deref(),
+        )?))
+    };
     if let Some(null) = a
         .adapter
         .as_deref()
@@ -142,7 +156,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         devices: a.devices as usize,
         adapter: a.adapter,
         near: a.near,
-        metres_per_unit: a.units,
+        units: a.units,
         occluder_budget: a.occluder_budget,
         memory_budget: a.memory_budget,
         settings: Settings {
@@ -162,25 +176,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         tiles: a.tiles,
         tile_culling: a.tile_culling,
         view: a.view,
+        section,
     })
     .with_context(|| format!("viewing {}", scene.display()))
 }
 
-/// `--units`: a unit name or metres per model unit.
-fn parse_units(s: &str) -> Result<f64, String> {
-    let m = match s {
-        "m" => 1.0,
-        "cm" => 0.01,
-        "mm" => 0.001,
-        "km" => 1000.0,
-        "in" => 0.0254,
-        "ft" => 0.3048,
-        _ => s.parse().map_err(|_| {
-            format!("{s:?} is not m, cm, mm, km, in, ft or a number of metres per unit")
-        })?,
-    };
-    if m > 0.0 && f64::is_finite(m) {
-        Ok(m)
+/// `--units`: a unit's name, or a number of metres per model unit
+/// (measurements then read "12 units (0.3 m)").
+fn parse_units(s: &str) -> Result<Units, String> {
+    if let Ok(u) = s.parse::<Units>() {
+        return Ok(u);
+    }
+    let m: f64 = s.trim().parse().map_err(|_| {
+        format!("{s:?} is not m, mm, cm, km, um, in, ft, yd or a number of metres per unit")
+    })?;
+    if m > 0.0 && m.is_finite() {
+        Ok(Units {
+            name: "units",
+            metres: m,
+        })
     } else {
         Err(format!(
             "{s:?}: metres per unit must be a finite number > 0"

@@ -5,7 +5,9 @@
 //! an object with a click, hide and show it, save and restore a view,
 //! find an object, fly, look, wireframe, node boxes, freeze culling,
 //! record a path, screenshots, resize, hiding and showing the window,
-//! Esc), then a scripted run starts from the saved view.
+//! Esc), then a scripted run starts from the saved view; and a second
+//! session cuts the model with section planes and a box and measures a
+//! distance (checked against `gigawalk pick`).
 //! Skips loudly without Xvfb, xdotool or a GPU adapter, unless
 //! GIGAWALK_REQUIRE_ADAPTER is set (CI), where all must be there.
 
@@ -147,6 +149,12 @@ fn help_lists_the_controls() {
         "frame the selected object",
         "find objects",
         "save the view",
+        "section plane at the cursor",
+        "Shift+scroll",
+        "measure: click two points",
+        "--section",
+        "--section-box",
+        "--units",
         "--view",
         "screenshot",
         "--frames",
@@ -456,6 +464,45 @@ fn pixel_on_an_object(gwk: &Path, path: &Path, w: u32, h: u32) -> ((u32, u32), S
     panic!("no object under any of {candidates:?} of the path's first pose");
 }
 
+/// The viewer's window id on display `d`, once it is mapped (the viewer
+/// logs to `log`).
+fn wait_for_window(d: &str, viewer: &mut Viewer, log: &Path) -> String {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let found = Command::new("xdotool")
+            .args(["search", "--onlyvisible", "--name", "gigawalk"])
+            .env("DISPLAY", d)
+            .output()
+            .unwrap();
+        let id = String::from_utf8_lossy(&found.stdout);
+        if let Some(id) = id.lines().next() {
+            return id.to_string();
+        }
+        let log = || std::fs::read_to_string(log).unwrap_or_default();
+        if let Some(status) = viewer.0.try_wait().unwrap() {
+            panic!(
+                "the viewer on {d} exited ({status}) before its window showed:\n{}\nX servers: {:?}",
+                log(),
+                Command::new("pgrep")
+                    .args(["-a", "Xvfb"])
+                    .output()
+                    .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+            );
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no visible gigawalk window after 30 s; windows named gigawalk: {:?}; viewer log:\n{}",
+            Command::new("xdotool")
+                .args(["search", "--name", "gigawalk"])
+                .env("DISPLAY", d)
+                .output()
+                .map(|o| String::from_utf8_lossy(&o.stdout).into_owned()),
+            log()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
 /// A live session driven like a person would: keys held to fly, a mouse
 /// drag to look, toggles, a recorded path, screenshots, a resize, the
 /// window hidden and shown, and Esc to quit.
@@ -489,41 +536,7 @@ fn live_keys_and_mouse_drive_the_viewer() {
             .spawn()
             .unwrap(),
     );
-    // The window, once it is mapped.
-    let deadline = Instant::now() + Duration::from_secs(30);
-    let window = loop {
-        let found = Command::new("xdotool")
-            .args(["search", "--onlyvisible", "--name", "gigawalk"])
-            .env("DISPLAY", d)
-            .output()
-            .unwrap();
-        let id = String::from_utf8_lossy(&found.stdout);
-        if let Some(id) = id.lines().next() {
-            break id.to_string();
-        }
-        let log = || std::fs::read_to_string(dir.path().join("view.log")).unwrap_or_default();
-        if let Some(status) = viewer.0.try_wait().unwrap() {
-            panic!(
-                "the viewer on {d} exited ({status}) before its window showed:\n{}\nX servers: {:?}",
-                log(),
-                Command::new("pgrep")
-                    .args(["-a", "Xvfb"])
-                    .output()
-                    .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
-            );
-        }
-        assert!(
-            Instant::now() < deadline,
-            "no visible gigawalk window after 30 s; windows named gigawalk: {:?}; viewer log:\n{}",
-            Command::new("xdotool")
-                .args(["search", "--name", "gigawalk"])
-                .env("DISPLAY", d)
-                .output()
-                .map(|o| String::from_utf8_lossy(&o.stdout).into_owned()),
-            log()
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
+    let window = wait_for_window(d, &mut viewer, &dir.path().join("view.log"));
     let w = window.as_str();
     // Keyboard focus, as a click would give it (Xvfb runs no window manager).
     xdotool(d, &["windowfocus", "--sync", w]);
@@ -812,4 +825,341 @@ fn live_keys_and_mouse_drive_the_viewer() {
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn bad_sections_are_clear_errors() {
+    for (args, says) in [
+        (&["--section", "0 0 0 1"][..], "normal is zero"),
+        (&["--section", "1 0 0"], "3 numbers"),
+        (
+            &["--section-box", "0 0 0 -1 1 1"],
+            "inverted: min x 0 is greater than max x -1",
+        ),
+    ] {
+        let mut all = vec!["view", "x.gwk", "--frames", "1"];
+        all.extend_from_slice(args);
+        let (ok, _, err) = gigawalk(&all, None);
+        assert!(!ok, "{args:?}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let seven: Vec<&str> = ["--section", "1 0 0 0"].repeat(7);
+    let mut all = vec!["view", "x.gwk"];
+    all.extend(seven);
+    let (ok, _, err) = gigawalk(&all, None);
+    assert!(!ok);
+    assert!(err.contains("at most 6"), "{err}");
+}
+
+/// Yellow pixels: the measurement's line and label (and little else in
+/// the plant's greys, blues and greens).
+fn measure_yellow(rgba: &[u8]) -> usize {
+    rgba.chunks(4)
+        .filter(|p| p[0] > 200 && p[1] > 170 && p[2] < 90)
+        .count()
+}
+
+/// `gigawalk pick` between two pixels of the path's first pose on a 480
+/// x 300 view, in millimetres: the distance, when both pixels show a
+/// surface.
+fn picked_distance(gwk: &Path, path: &Path, a: (u32, u32), b: (u32, u32)) -> Option<f64> {
+    let (pa, pb) = (format!("{},{}", a.0, a.1), format!("{},{}", b.0, b.1));
+    let (ok, out, err) = gigawalk(
+        &[
+            "pick",
+            s(gwk),
+            "--path",
+            s(path),
+            "--frame",
+            "0",
+            "--pixel",
+            &pa,
+            "--pixel",
+            &pb,
+            "--width",
+            "480",
+            "--height",
+            "300",
+            "--units",
+            "mm",
+            "--json",
+        ],
+        None,
+    );
+    assert!(ok, "gigawalk pick: {err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    v["distance"].as_f64()
+}
+
+/// Sections and a measurement, live: X places a plane at the cursor, ]
+/// and Shift+scroll move it, \ flips it, 0 turns sections off and on, V
+/// saves it into a view, Delete clears it, J boxes the selection; M and
+/// two clicks measure what `gigawalk pick` measures between the same
+/// pixels, drawn as a yellow line and label until M (or Esc) clears it.
+/// Then scripted runs from the saved view and from `--section` show the
+/// live cut.
+#[test]
+fn live_sections_and_a_measurement() {
+    if gigawalk_gpu::devices_or_skip(1, "gigawalk view (sections)").is_none() {
+        return;
+    }
+    if Command::new("xdotool").arg("version").output().is_err() {
+        skip("no xdotool binary (apt-get install xdotool)");
+        return;
+    }
+    let Some(x) = start_xvfb() else {
+        skip("no Xvfb binary (apt-get install xvfb)");
+        return;
+    };
+    let d = x.display.as_str();
+    let dir = tempfile::tempdir().unwrap();
+    let (gwk, path) = small_plant(dir.path());
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let view_log = dir.path().join("view.log");
+    let log = std::fs::File::create(&view_log).unwrap();
+    let mut viewer = Viewer(
+        Command::new(common::BIN)
+            .args(["view", s(&gwk), "--path", s(&path), "--no-hud"])
+            .args(["--width", "480", "--height", "300", "--out-dir", s(&out)])
+            .args(["--units", "mm"])
+            .env("DISPLAY", d)
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(log.try_clone().unwrap())
+            .stderr(log)
+            .spawn()
+            .unwrap(),
+    );
+    let window = wait_for_window(d, &mut viewer, &view_log);
+    let w = window.as_str();
+    xdotool(d, &["windowfocus", "--sync", w]);
+    let key = |k: &str| {
+        if let Err(e) = try_xdotool(d, &["key", "--window", w, k]) {
+            panic!(
+                "{e}\nthe viewer's output:\n{}",
+                std::fs::read_to_string(&view_log).unwrap_or_default()
+            );
+        }
+    };
+    let said = |needle: &str| {
+        std::fs::read_to_string(&view_log)
+            .unwrap_or_default()
+            .matches(needle)
+            .count()
+    };
+    let click_at = |(x, y): (u32, u32)| {
+        xdotool(
+            d,
+            &["mousemove", "--window", w, &x.to_string(), &y.to_string()],
+        );
+        xdotool(d, &["click", "1"]);
+    };
+    let mut shots = 0;
+    let mut shot = |viewer: &mut Viewer| {
+        std::thread::sleep(Duration::from_millis(400));
+        key("p");
+        shots += 1;
+        let file = out.join(format!("gigawalk-view-{shots}.png"));
+        wait_for(&file, viewer);
+        gigawalk_viewer::read_png(&file).unwrap().2
+    };
+    let start = shot(&mut viewer);
+    let ((px, py), _) = pixel_on_an_object(&gwk, &path, 480, 300);
+
+    // X at an object: a plane through it facing the camera cuts away
+    // what is in front.
+    xdotool(
+        d,
+        &["mousemove", "--window", w, &px.to_string(), &py.to_string()],
+    );
+    key("x");
+    wait_for_log(&view_log, "section plane 1 of 6", 0, &mut viewer);
+    let cut = shot(&mut viewer);
+    let changed = differing_fraction(&start, &cut);
+    assert!(changed > 0.01, "the plane changed {changed:.4} of the view");
+    // ] moves it along its normal: more is cut away.
+    for _ in 0..3 {
+        key("bracketright");
+    }
+    let moved = shot(&mut viewer);
+    let changed = differing_fraction(&cut, &moved);
+    assert!(changed > 0.001, "moving the plane changed {changed:.4}");
+    // Shift+scroll moves it too (XTEST, so the modifier state changes).
+    xdotool(d, &["keydown", "shift"]);
+    for _ in 0..3 {
+        xdotool(d, &["click", "4"]);
+    }
+    xdotool(d, &["keyup", "shift"]);
+    let scrolled = shot(&mut viewer);
+    let changed = differing_fraction(&moved, &scrolled);
+    assert!(changed > 0.001, "Shift+scroll changed {changed:.4}");
+    // \ flips it: the other side shows.
+    key("backslash");
+    let flipped = shot(&mut viewer);
+    let changed = differing_fraction(&scrolled, &flipped);
+    assert!(changed > 0.01, "flipping changed {changed:.4}");
+    // 0: off shows the whole view again; on cuts again.
+    key("0");
+    let off = shot(&mut viewer);
+    let left = differing_fraction(&start, &off);
+    assert!(
+        left < 0.002,
+        "sections off: {left:.4} differs from the start"
+    );
+    key("0");
+    let on = shot(&mut viewer);
+    let off_by = differing_fraction(&flipped, &on);
+    assert!(off_by < 0.002, "sections on again: {off_by:.4} differs");
+    // V saves the plane with the view.
+    let views_file = gwk.with_file_name("p.gwk.views.json");
+    key("v");
+    wait_for(&views_file, &mut viewer);
+    let views = gigawalk_scene::views::Views::read(&views_file).unwrap();
+    let section = views.views[0].section.clone().expect("the view's section");
+    assert_eq!(section.planes.len(), 1, "{section:?}");
+    assert_eq!(section.bbox, None);
+    // Delete clears it.
+    let before = said("sections cleared");
+    key("Delete");
+    wait_for_log(&view_log, "sections cleared", before, &mut viewer);
+    let cleared = shot(&mut viewer);
+    let left = differing_fraction(&start, &cleared);
+    assert!(
+        left < 0.002,
+        "after Delete {left:.4} differs from the start"
+    );
+
+    // J with an object selected: a box around it; most of the plant goes.
+    let before = said("selected: ");
+    click_at((px, py));
+    wait_for_log(&view_log, "selected: ", before, &mut viewer);
+    let selected = shot(&mut viewer);
+    key("j");
+    wait_for_log(&view_log, "section box", 0, &mut viewer);
+    let boxed = shot(&mut viewer);
+    let changed = differing_fraction(&selected, &boxed);
+    assert!(changed > 0.01, "the box changed {changed:.4} of the view");
+    key("Delete");
+    // H ends the selection, U shows the object again; J with nothing
+    // selected boxes what is in view.
+    key("h");
+    key("u");
+    let before = said("section box");
+    key("j");
+    wait_for_log(&view_log, "section box", before, &mut viewer);
+    let before = said("sections cleared");
+    key("Delete");
+    wait_for_log(&view_log, "sections cleared", before, &mut viewer);
+
+    // M, then two clicks: the distance `gigawalk pick` measures between
+    // the same pixels of the same camera.
+    let (a, b, want) = [
+        (px, py / 2),
+        (px / 2, py),
+        (px, (py + 300) / 2),
+        (480 - px / 2, py),
+    ]
+    .into_iter()
+    .filter(|&b| b != (px, py))
+    .find_map(|b| picked_distance(&gwk, &path, (px, py), b).map(|l| ((px, py), b, l)))
+    .expect("a second pixel that shows a surface");
+    let before_measure = shot(&mut viewer);
+    key("m");
+    let before = said("measured ");
+    click_at(a);
+    // Apart in time: two clicks close together would be a double click.
+    std::thread::sleep(Duration::from_millis(500));
+    click_at(b);
+    let text = wait_for_log(&view_log, "measured ", before, &mut viewer);
+    let line = text.lines().rfind(|l| l.starts_with("measured ")).unwrap();
+    let got: f64 = line["measured ".len()..]
+        .split(' ')
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no number in {line:?}"));
+    assert!(
+        (got - want).abs() <= 1e-5 * want.max(1e-9),
+        "the viewer measured {got} ({line:?}), gigawalk pick {want}"
+    );
+    assert!(
+        line.contains(" mm (") && line.contains(" m) between"),
+        "{line}"
+    );
+    let measured = shot(&mut viewer);
+    let (y0, y1) = (measure_yellow(&before_measure), measure_yellow(&measured));
+    assert!(
+        y1 > y0 + 100,
+        "the line and label added {} yellow pixels",
+        y1 as i64 - y0 as i64
+    );
+    // M clears it: the view as before.
+    key("m");
+    let cleared = shot(&mut viewer);
+    let left = differing_fraction(&before_measure, &cleared);
+    assert!(
+        left < 0.002,
+        "after M {left:.4} differs from before measuring"
+    );
+    // Esc clears a measurement rather than quitting; the next Esc quits.
+    key("m");
+    click_at(a);
+    std::thread::sleep(Duration::from_millis(500));
+    let before = said("measured ");
+    click_at(b);
+    wait_for_log(&view_log, "measured ", before, &mut viewer);
+    let before = said("measurement cleared");
+    key("Escape");
+    wait_for_log(&view_log, "measurement cleared", before, &mut viewer);
+    assert!(viewer.0.try_wait().unwrap().is_none(), "Esc quit");
+    key("Escape");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let status = loop {
+        if let Some(status) = viewer.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "Esc did not quit within 30 s");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let log = std::fs::read_to_string(&view_log).unwrap();
+    assert!(status.success(), "the viewer failed:\n{log}");
+    assert!(!log.contains("panicked"), "{log}");
+
+    // Scripted runs show the live cut: from the saved view, and from the
+    // same plane on the command line.
+    let p = section.planes[0];
+    let plane = format!("{} {} {} {}", p[0], p[1], p[2], p[3]);
+    // The path's first pose alone: a scripted run follows its path.
+    let mut first = gigawalk_scene::path::CameraPath::read(&path).unwrap();
+    first.poses.truncate(1);
+    let first_path = dir.path().join("first.path");
+    first.write(&first_path).unwrap();
+    for (what, extra) in [
+        ("--view", vec!["--view", "view 1"]),
+        (
+            "--section",
+            vec!["--path", s(&first_path), "--section", &plane],
+        ),
+    ] {
+        let png = dir.path().join("scripted.png");
+        let mut args = vec![
+            "view",
+            s(&gwk),
+            "--frames",
+            "4",
+            "--screenshot",
+            s(&png),
+            "--width",
+            "480",
+            "--height",
+            "300",
+            "--no-hud",
+        ];
+        args.extend(extra);
+        let (ok, _, err) = gigawalk(&args, Some(d));
+        assert!(ok, "gigawalk view {what}: {err}");
+        let scripted = gigawalk_viewer::read_png(&png).unwrap().2;
+        let off = differing_fraction(&flipped, &scripted);
+        assert!(off < 0.002, "{what}: {off:.4} differs from the live cut");
+    }
 }

@@ -25,7 +25,7 @@ pub(super) struct LiveSource {
 
 impl CameraSource for LiveSource {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        let (camera, frozen, style, quit, minimised, pixel_error, visibility) = {
+        let (camera, frozen, style, quit, minimised, pixel_error, visibility, section) = {
             let s = self.shared.lock().map_err(|_| CameraError::Source {
                 frame,
                 source: "the window's state is poisoned: its thread panicked".into(),
@@ -42,6 +42,7 @@ impl CameraSource for LiveSource {
                 s.window_size.0 == 0 || s.window_size.1 == 0,
                 s.target_tolerance.filter(|_| s.settings.target),
                 s.visibility.clone(),
+                s.section.clone(),
             )
         };
         if quit {
@@ -70,7 +71,7 @@ impl CameraSource for LiveSource {
                 style,
                 pixel_error,
                 visibility,
-                section: None,
+                section,
             }));
         }
         if minimised {
@@ -83,7 +84,7 @@ impl CameraSource for LiveSource {
             style,
             pixel_error,
             visibility,
-            section: None,
+            section,
         }))
     }
 }

@@ -1,18 +1,20 @@
 //! The frame loop's side of input: between frames it applies what the
 //! window collected (actions, clicks, searches, movement, mouse look),
 //! steers the target frame rate, records the camera path, and publishes
-//! the next camera, the hidden and highlighted objects, and what the HUD
-//! shows.
+//! the next camera, the hidden and highlighted objects, the section, and
+//! what the HUD and the measurement overlay show.
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use gigawalk_cull::{NodeShow, Viewport, Visibility};
+use gigawalk_cull::{NodeShow, PickHit, Viewport, Visibility};
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{CullMethod, OccluderSelection};
 use gigawalk_scene::path::Pose;
+use gigawalk_scene::units::Units;
 use gigawalk_scene::views::{SavedView, Views};
+use gigawalk_scene::Aabb;
 use gigawalk_scene::SceneReader;
 use glam::DVec3;
 use winit::dpi::PhysicalSize;
@@ -22,8 +24,10 @@ use super::{aspect, Shared};
 use crate::controller::FlyController;
 use crate::controls::Action;
 use crate::hud::ViewerState;
+use crate::measure::Measure;
 use crate::objects::{frame_box, save_view, view_names, Objects};
 use crate::recorder::{next_free_name, PathRecorder};
+use crate::sections::{view_box, Sections, VIEW_BOX_DEPTH};
 use crate::settings::Settings;
 
 /// Shown when wireframe is asked for on a device without line mode.
@@ -31,6 +35,8 @@ const WIREFRAME_UNSUPPORTED: &str =
     "wireframe: this GPU has no line mode (POLYGON_MODE_LINE); drawing shaded";
 /// How long HUD messages (screenshot written, path saved) stay up.
 const MESSAGE_TIME: Duration = Duration::from_secs(4);
+/// Said when a plane key finds no plane.
+const NO_PLANE: &str = "no section plane: X places one at the cursor";
 /// How long framing an object takes to fly there: long enough to see
 /// where the camera went, short enough not to wait for it.
 const FLIGHT_TIME: Duration = Duration::from_millis(400);
@@ -87,6 +93,14 @@ pub(super) struct LoopState {
     pub(super) view_names: Vec<String>,
     /// The view `N` restores next, counting from 0.
     pub(super) next_view: usize,
+    /// Section planes and box, published with every camera.
+    pub(super) sections: Sections,
+    pub(super) measure: Measure,
+    /// The model's unit, for measurements.
+    pub(super) units: Units,
+    /// The scene's box: section boxes stay within it, plane steps scale
+    /// with it.
+    pub(super) scene_bounds: Aabb,
 }
 
 impl LoopState {
@@ -141,8 +155,21 @@ impl LoopState {
                     self.restore_view(Some(n), now);
                     continue;
                 }
+                Input::SectionPlane { at } => {
+                    self.place_section_plane(scene, at, app.size, render, now);
+                    continue;
+                }
+                Input::MoveSection(notches) => {
+                    self.move_section(notches, now);
+                    continue;
+                }
             };
             match a {
+                // Esc first clears a measurement, as in other viewers.
+                Action::Quit if self.measure.is_active() => {
+                    let m = self.measure.toggle();
+                    self.announce(m, now);
+                }
                 Action::Quit => app.close = true,
                 Action::ToggleWalk => self.controller.toggle_walk(),
                 Action::ToggleOcclusion => self.settings.occlusion ^= true,
@@ -204,6 +231,30 @@ impl LoopState {
                 }
                 Action::SaveView => self.save_view(now),
                 Action::NextView => self.restore_view(None, now),
+                // The window sends `Input::SectionPlane` with the cursor.
+                Action::SectionPlane => {}
+                Action::SectionForward => self.move_section(1.0, now),
+                Action::SectionBack => self.move_section(-1.0, now),
+                Action::FlipSection => {
+                    if self.sections.flip_active() {
+                        self.say("section plane flipped".into(), now);
+                    } else {
+                        self.say(NO_PLANE.into(), now);
+                    }
+                }
+                Action::SectionBox => self.section_box(scene, render, now),
+                Action::ToggleSections => {
+                    let m = self.sections.toggle();
+                    self.say(m, now);
+                }
+                Action::ClearSections => {
+                    let m = self.sections.clear();
+                    self.announce(m, now);
+                }
+                Action::Measure => {
+                    let m = self.measure.toggle();
+                    self.announce(m, now);
+                }
             }
         }
         if self.objects.take_changed() {
@@ -242,6 +293,9 @@ impl LoopState {
         {
             self.message = None;
         }
+        let mut objects = self.objects.hud_lines();
+        objects.extend(self.sections.hud_line());
+        objects.extend(self.measure.hud_line(&self.units));
         s.viewer = ViewerState {
             walking: self.controller.walking(),
             speed: self.controller.speed,
@@ -252,11 +306,14 @@ impl LoopState {
             devices: self.devices.clone(),
             message: self.message.as_ref().map(|(m, _)| m.clone()),
             occluder_budget: self.occluder_budget,
-            objects: self.objects.hud_lines(),
+            objects,
             prompt: app.prompt.clone(),
             views: self.view_names.clone(),
+            measure_points: self.measure.points(),
+            measure_label: self.measure.label(&self.units),
         };
         s.visibility = self.visibility.clone();
+        s.section = self.sections.current();
         s.camera = camera;
         s.frozen = self.settings.frozen;
         s.settings = self.settings.clone();
@@ -298,37 +355,21 @@ impl LoopState {
         double: bool,
         now: Instant,
     ) {
-        if self.objects.take_changed() {
-            // Input earlier in this batch changed what is hidden.
-            self.visibility = self.objects.visibility(scene.skeleton());
+        if self.measure.wants_click() {
+            // Measuring picks points on any surface, identity or not.
+            let hit = match self.pick_at(scene, at, window, render) {
+                Ok(h) => h,
+                Err(e) => return self.announce(e, now),
+            };
+            let m = self.measure.click(hit.map(|h| h.point), &self.units);
+            return self.announce(m, now);
         }
-        let table = match self.objects.table() {
-            Ok(t) => t,
-            Err(why) => return self.say(why, now),
-        };
-        // The window shows the render target scaled to fit, so the click's
-        // place in the window is its place in the image.
-        let camera = self.controller.camera(aspect(render), self.near);
-        let viewport = Viewport::new(window.width.max(1), window.height.max(1));
-        // The pointer names a pixel; cast through its centre, as
-        // `gigawalk pick` does.
-        let (x, y) = (at.0.floor() + 0.5, at.1.floor() + 0.5);
-        let Some(ray) = camera.pixel_ray(viewport, x, y) else {
-            return;
-        };
-        let vis = self.visibility.as_deref();
-        let objects = &self.objects;
-        let picked = gigawalk_cull::pick(
-            scene.skeleton(),
-            Some(table),
-            &ray,
-            &|node| vis.is_some_and(|v| v.node(node) == NodeShow::Hidden),
-            &|o| objects.is_hidden(o),
-            &mut |lod| scene.read_lod(lod),
-        );
-        let hit = match picked {
-            Ok((hit, _)) => hit.and_then(|h| h.object.map(|o| (o, h.point))),
-            Err(e) => return self.announce(format!("pick failed: {e}"), now),
+        if let Err(why) = self.objects.table() {
+            return self.say(why, now);
+        }
+        let hit = match self.pick_at(scene, at, window, render) {
+            Ok(hit) => hit.and_then(|h| h.object.map(|o| (o, h.point))),
+            Err(e) => return self.announce(e, now),
         };
         let had = self.objects.selection();
         self.objects.click(hit);
@@ -342,6 +383,124 @@ impl LoopState {
         }
         if double && hit.is_some() {
             self.frame_selection(render, now);
+        }
+    }
+
+    /// What the full-detail image shows at window pixel `at`: the nearest
+    /// surface the section keeps, hidden objects skipped. `Ok(None)`:
+    /// nothing there (or outside the image).
+    fn pick_at(
+        &mut self,
+        scene: &SceneReader,
+        at: (f64, f64),
+        window: PhysicalSize<u32>,
+        render: PhysicalSize<u32>,
+    ) -> Result<Option<PickHit>, String> {
+        if self.objects.take_changed() {
+            // Input earlier in this batch changed what is hidden.
+            self.visibility = self.objects.visibility(scene.skeleton());
+        }
+        // The window shows the render target scaled to fit, so the click's
+        // place in the window is its place in the image.
+        let camera = self.controller.camera(aspect(render), self.near);
+        let viewport = Viewport::new(window.width.max(1), window.height.max(1));
+        // The pointer names a pixel; cast through its centre, as
+        // `gigawalk pick` does.
+        let (x, y) = (at.0.floor() + 0.5, at.1.floor() + 0.5);
+        let section = self.sections.current();
+        // What the section cuts away shows nothing to pick.
+        let Some(ray) = camera
+            .pixel_ray(viewport, x, y)
+            .and_then(|r| r.clipped(section.as_deref()))
+        else {
+            return Ok(None);
+        };
+        let vis = self.visibility.as_deref();
+        let objects = &self.objects;
+        gigawalk_cull::pick(
+            scene.skeleton(),
+            objects.table().ok(),
+            &ray,
+            &|node| vis.is_some_and(|v| v.node(node) == NodeShow::Hidden),
+            &|o| objects.is_hidden(o),
+            &mut |lod| scene.read_lod(lod),
+        )
+        .map(|(hit, _)| hit)
+        .map_err(|e| format!("pick failed: {e}"))
+    }
+
+    /// `X`: a section plane through the surface under the cursor (the
+    /// window's centre when the cursor is outside), facing the camera.
+    fn place_section_plane(
+        &mut self,
+        scene: &SceneReader,
+        at: Option<(f64, f64)>,
+        window: PhysicalSize<u32>,
+        render: PhysicalSize<u32>,
+        now: Instant,
+    ) {
+        let at = at.unwrap_or((window.width as f64 * 0.5, window.height as f64 * 0.5));
+        let hit = match self.pick_at(scene, at, window, render) {
+            Ok(Some(h)) => h,
+            Ok(None) => {
+                return self.say(
+                    "section plane: no surface under the cursor to cut at".into(),
+                    now,
+                )
+            }
+            Err(e) => return self.announce(e, now),
+        };
+        let forward = self.controller.camera(aspect(render), self.near).forward();
+        let r = self.sections.place_plane(hit.point, forward);
+        match r {
+            Ok(m) => self.announce(m, now),
+            Err(m) => self.say(m, now),
+        }
+    }
+
+    /// `]`, `[`, Shift+wheel: the active plane along its normal.
+    fn move_section(&mut self, steps: f64, now: Instant) {
+        let eye = self.controller.position;
+        if !self
+            .sections
+            .move_active(steps, eye, self.scene_bounds.diagonal())
+        {
+            self.say(NO_PLANE.into(), now);
+        }
+    }
+
+    /// `J`: a section box around the selection, or with none, around what
+    /// is in view: up to a few times the distance of the surface under
+    /// the window's centre (the scene's far side when there is none).
+    fn section_box(&mut self, scene: &SceneReader, render: PhysicalSize<u32>, now: Instant) {
+        let diagonal = self.scene_bounds.diagonal();
+        let around = if self.objects.selection().is_some() {
+            match self.objects.selected_bounds() {
+                Ok(b) => b,
+                Err(why) => return self.say(why, now),
+            }
+        } else {
+            let centre = (render.width as f64 * 0.5, render.height as f64 * 0.5);
+            let camera = self.controller.camera(aspect(render), self.near);
+            let depth = match self.pick_at(scene, centre, render, render) {
+                Ok(Some(h)) => h.distance,
+                Ok(None) => {
+                    // Nothing under the centre: as deep as the scene goes.
+                    let b = &self.scene_bounds;
+                    ((b.center() - camera.position).length() + 0.5 * diagonal) / VIEW_BOX_DEPTH
+                }
+                Err(e) => return self.announce(e, now),
+            };
+            match view_box(&camera, depth, &self.scene_bounds) {
+                Some(b) => b,
+                None => {
+                    return self.say("section box: the view shows none of the scene".into(), now)
+                }
+            }
+        };
+        match self.sections.box_around(&around, diagonal) {
+            Ok(m) => self.announce(m, now),
+            Err(m) => self.say(m, now),
         }
     }
 
@@ -390,7 +549,7 @@ impl LoopState {
         }
     }
 
-    /// `V`: the camera, selection and hidden objects as `view N` in the
+    /// `V`: the camera, selection, hidden objects and section as `view N` in the
     /// scene's views file (a file that does not read is left alone).
     fn save_view(&mut self, now: Instant) {
         let c = &self.controller;
@@ -400,8 +559,13 @@ impl LoopState {
             orientation: c.orientation(),
             fovy: c.fovy,
         };
-        let objects = &self.objects;
-        match save_view(&self.views_file, |name| objects.saved_view(name, &pose)) {
+        let (objects, section) = (&self.objects, self.sections.saved());
+        let make = |name: &str| {
+            let mut v = objects.saved_view(name, &pose);
+            v.section = section;
+            v
+        };
+        match save_view(&self.views_file, make) {
             Ok((name, names)) => {
                 let n = names.len();
                 self.view_names = names;
@@ -457,8 +621,8 @@ impl LoopState {
         self.apply_view(&views.views[index], true, now);
     }
 
-    /// A saved view's selection and hidden objects, and its camera when
-    /// `camera`.
+    /// A saved view's selection, hidden objects and section, and its
+    /// camera when `camera`.
     pub(super) fn apply_view(&mut self, view: &SavedView, camera: bool, now: Instant) {
         if camera {
             match view.pose() {
@@ -469,7 +633,8 @@ impl LoopState {
                 Err(e) => return self.say(format!("view {:?} not restored: {e}", view.name), now),
             }
         }
-        let text = self.objects.restore(view);
+        let mut text = self.objects.restore(view);
+        text.push_str(&self.sections.restore(view.section.as_ref()));
         self.announce(text, now);
     }
 

@@ -40,6 +40,14 @@ pub(super) enum Input {
         y: f64,
         double: bool,
     },
+    /// `X` with the cursor at this window pixel (`None`: outside the
+    /// window, so the window's centre).
+    SectionPlane {
+        at: Option<(f64, f64)>,
+    },
+    /// Shift+wheel: move the active section plane this many notches
+    /// along its normal.
+    MoveSection(f64),
 }
 
 /// The left button held: how far the cursor moved since it went down.
@@ -67,6 +75,8 @@ pub(super) struct App {
     pub(super) prompt: Option<String>,
     pub(super) inputs: Vec<Input>,
     pub(super) scroll: f64,
+    /// Shift is held (Shift+wheel moves a section plane).
+    pub(super) shift: bool,
     pub(super) look: (f64, f64),
     /// When the window last changed size.
     pub(super) resized: Option<Instant>,
@@ -102,6 +112,7 @@ impl ApplicationHandler for App {
             }
             WindowEvent::Focused(false) => {
                 self.held.clear();
+                self.shift = false;
                 self.drag = None;
                 self.press = None;
             }
@@ -121,6 +132,9 @@ impl ApplicationHandler for App {
                         } else {
                             self.held.remove(m);
                         }
+                    }
+                    Some(Does::Act(Action::SectionPlane)) if pressed => {
+                        self.inputs.push(Input::SectionPlane { at: self.cursor })
                     }
                     Some(Does::Act(Action::Search)) if pressed => {
                         // Typing must not fly: keys held now are let go.
@@ -170,12 +184,18 @@ impl ApplicationHandler for App {
                 self.cursor = Some(p);
             }
             WindowEvent::CursorLeft { .. } => self.cursor = None,
+            WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
             WindowEvent::MouseWheel { delta, .. } => {
-                self.scroll += match delta {
+                let notches = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y as f64,
                     // Touchpads: ~50 pixels a notch, as browsers count.
                     MouseScrollDelta::PixelDelta(p) => p.y / 50.0,
                 };
+                if self.shift {
+                    self.inputs.push(Input::MoveSection(notches));
+                } else {
+                    self.scroll += notches;
+                }
             }
             _ => {}
         }

@@ -26,8 +26,11 @@ pub(crate) struct Drawer {
     pub(crate) depth_bias: f32,
     /// LODs drawn in pieces (hidden or highlighted objects), this frame.
     pieces: Option<Arc<LodPieces>>,
-    /// How this frame clips by its view's section.
+    /// How this frame clips by its view's section: how many half-spaces,
+    /// and whether the eye is on one's removed side (a cut can be looked
+    /// into, so caps can show).
     clip_planes: usize,
+    caps: bool,
 }
 
 impl Drawer {
@@ -74,6 +77,7 @@ impl Drawer {
             depth_bias: 0.0,
             pieces: None,
             clip_planes: 0,
+            caps: false,
         }
     }
 
@@ -95,6 +99,7 @@ impl Drawer {
             clip: view.clip.planes(),
         };
         self.clip_planes = view.clip.count();
+        self.caps = view.clip.eye_removed();
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
         self.used = 0;
@@ -185,7 +190,9 @@ impl Drawer {
         let (mut layout, mut vertices, mut indices) = (None, None, None);
         for (r, instance) in draws {
             if layout != Some(r.layout) {
-                pass.set_pipeline(pipelines.get(r.layout, pipelines.clipping(self.clip_planes)));
+                pass.set_pipeline(
+                    pipelines.get(r.layout, pipelines.clipping(self.clip_planes, self.caps)),
+                );
                 layout = Some(r.layout);
             }
             if vertices != Some(r.buffer) || indices != Some((r.buffer, r.index_format)) {

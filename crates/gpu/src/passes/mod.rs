@@ -75,6 +75,12 @@ impl ClipPlanes {
         self.count as usize
     }
 
+    /// Whether the eye lies on some half-space's removed side (only then
+    /// can a cut be looked into and a cap show).
+    pub fn eye_removed(&self) -> bool {
+        self.planes[..self.count()].iter().any(|p| p[3] < 0.0)
+    }
+
     /// All [`MAX_CLIP_PLANES`] slots, those past `count` zero.
     pub fn planes(&self) -> [[f32; 4]; MAX_CLIP_PLANES] {
         self.planes
@@ -170,5 +176,32 @@ pub(crate) fn depth_attachment(
             store: wgpu::StoreOp::Store,
         }),
         stencil_ops: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn caps_are_needed_only_where_the_eye_is_on_a_removed_side() {
+        assert!(!ClipPlanes::NONE.eye_removed());
+        // Keeps x >= -2 relative to the eye: the eye is kept.
+        let kept = ClipPlanes::new(&[[1.0, 0.0, 0.0, 2.0]]).unwrap();
+        assert!(!kept.eye_removed());
+        // A box around the eye, then one face moved past it.
+        let mut faces = [[0.0f32; 4]; 6];
+        for (i, face) in faces.iter_mut().enumerate() {
+            face[i / 2] = if i % 2 == 0 { 1.0 } else { -1.0 };
+            face[3] = 1.0;
+        }
+        assert!(!ClipPlanes::new(&faces).unwrap().eye_removed());
+        faces[3][3] = -0.5;
+        assert!(ClipPlanes::new(&faces).unwrap().eye_removed());
+        // Slots past the count do not count.
+        let mut one = ClipPlanes::new(&[[0.0, 1.0, 0.0, 3.0]]).unwrap();
+        one.planes[5] = [0.0, 0.0, 1.0, -1.0];
+        assert!(!one.eye_removed());
+        assert!(ClipPlanes::new(&[[0.0; 4]; MAX_CLIP_PLANES + 1]).is_none());
     }
 }

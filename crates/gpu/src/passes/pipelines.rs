@@ -13,8 +13,10 @@ pub(crate) enum Clipping {
     None,
     /// The rasterizer clips (clip distances: at most
     /// [`HARDWARE_CLIP_PLANES`] half-spaces, on devices with
-    /// `Features::CLIP_DISTANCES`); the fragment stage never discards.
-    Hardware,
+    /// `Features::CLIP_DISTANCES`); the fragment stage never discards,
+    /// and paints caps only when `caps` (the eye is on some half-space's
+    /// removed side; from a kept eye no cut can be looked into).
+    Hardware { caps: bool },
     /// The fragment stage discards what the section removes.
     Discard,
 }
@@ -31,24 +33,32 @@ pub(crate) const HARDWARE_CLIP_PLANES: usize = 8;
 pub(crate) struct ScenePipelines {
     plain: [wgpu::RenderPipeline; 2],
     discard: [wgpu::RenderPipeline; 2],
-    hardware: Option<[wgpu::RenderPipeline; 2]>,
+    /// Clip distances with the plain fragment stage, and with caps
+    /// (`fs_cap`; the same pipelines for a pass without colour).
+    hardware: Option<[[wgpu::RenderPipeline; 2]; 2]>,
 }
 
 impl ScenePipelines {
     pub(crate) fn get(&self, layout: VertexLayout, clipping: Clipping) -> &wgpu::RenderPipeline {
         let set = match clipping {
             Clipping::None => &self.plain,
-            Clipping::Hardware => self.hardware.as_ref().unwrap_or(&self.discard),
+            Clipping::Hardware { caps } => self
+                .hardware
+                .as_ref()
+                .map_or(&self.discard, |h| &h[caps as usize]),
             Clipping::Discard => &self.discard,
         };
         &set[layout as usize]
     }
 
-    /// How to clip by `half_spaces` of a section (0: none).
-    pub(crate) fn clipping(&self, half_spaces: usize) -> Clipping {
+    /// How to clip by `half_spaces` of a section (0: none), `caps`
+    /// when a cut can be looked into.
+    pub(crate) fn clipping(&self, half_spaces: usize, caps: bool) -> Clipping {
         match half_spaces {
             0 => Clipping::None,
-            n if n <= HARDWARE_CLIP_PLANES && self.hardware.is_some() => Clipping::Hardware,
+            n if n <= HARDWARE_CLIP_PLANES && self.hardware.is_some() => {
+                Clipping::Hardware { caps }
+            }
             _ => Clipping::Discard,
         }
     }
@@ -136,8 +146,10 @@ pub(crate) fn pipeline(
     ScenePipelines {
         plain: VertexLayout::ALL.map(|l| build(&module, l, "", plain)),
         discard: VertexLayout::ALL.map(|l| build(&module, l, "", Some("fs_section"))),
-        hardware: clip_module
-            .map(|m| VertexLayout::ALL.map(|l| build(&m, l, "_clip", colour.map(|_| "fs_cap")))),
+        hardware: clip_module.map(|m| {
+            [plain, colour.map(|_| "fs_cap")]
+                .map(|fragment| VertexLayout::ALL.map(|l| build(&m, l, "_clip", fragment)))
+        }),
     }
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# What a section costs and saves (docs/PERFORMANCE.md, "Sections"): the
+# What a section costs and saves (docs/results.md, "Sections: cut and measure"): the
 # demo plant (4M triangles, seed 1) along the demo's walk at 640x360, och
 # at 1 px, with
 #   none: no section;

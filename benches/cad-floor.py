@@ -607,16 +607,37 @@ def build_pool(root, per_lib, stats):
     return pool
 
 
-def load_engine(path):
-    """Reads the engine glTF: its meshes (degenerate triangles dropped) and
-    the flattened list of (mesh, 4x4 matrix) part instances."""
-    with open(path) as fh:
-        g = json.load(fh)
-    base = os.path.dirname(path)
-    bufs = []
-    for b in g["buffers"]:
-        with open(os.path.join(base, b["uri"]), "rb") as fh:
-            bufs.append(fh.read())
+def read_gltf(path):
+    """A .gltf (buffers in files beside it) or .glb: its JSON and buffers."""
+    with open(path, "rb") as fh:
+        data = fh.read()
+    if data[:4] != b"glTF":
+        g = json.loads(data)
+        bufs = []
+        for b in g["buffers"]:
+            with open(os.path.join(os.path.dirname(path), b["uri"]), "rb") as fh:
+                bufs.append(fh.read())
+        return g, bufs
+    _, _, total = struct.unpack_from("<III", data, 0)
+    g, bufs, off = None, [], 12
+    while off + 8 <= min(total, len(data)):
+        ln, kind = struct.unpack_from("<II", data, off)
+        chunk = data[off + 8:off + 8 + ln]
+        if kind == 0x4E4F534A:
+            g = json.loads(chunk)
+        elif kind == 0x004E4942:
+            bufs.append(chunk)
+        off += 8 + ln
+    if g is None:
+        sys.exit(f"{path}: a GLB without a JSON chunk")
+    return g, bufs
+
+
+def load_engine(path, prefix="2CylinderEngine"):
+    """Reads a CAD assembly (the engine glTF, or any .gltf/.glb): its meshes
+    (degenerate triangles dropped) and the flattened list of (mesh, 4x4
+    matrix) part instances."""
+    g, bufs = read_gltf(path)
     size = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
     dt = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
           5125: np.uint32, 5126: np.float32}
@@ -651,7 +672,7 @@ def load_engine(path):
             idx = drop_degenerate(pos, idx)
             if len(idx):
                 prims.append(Prim(pos, idx, rgba, nrm))
-        meshes.append(Mesh(f"2CylinderEngine/{m.get('name', mi)}", prims) if prims else None)
+        meshes.append(Mesh(f"{prefix}/{m.get('name', mi)}", prims) if prims else None)
 
     def local(n):
         if "matrix" in n:
@@ -751,11 +772,15 @@ class Builder:
     def __init__(self, args, pool, engine, stats):
         self.args = args
         self.pool = pool
-        self.engine_parts, self.engine_lo, self.engine_hi = engine
+        # engine: one (parts, lo, hi) for the 2CylinderEngine; with --models
+        # a list of (parts, lo, hi, label), one per assembly file
+        self.machines = engine if args.models else None
+        if not args.models:
+            self.engine_parts, self.engine_lo, self.engine_hi = engine
         self.stats = stats
         self.by_cat = [[(m, w) for (ci, m, w) in pool if ci == k] for k in range(len(CATEGORIES))]
         self.cat_w = [c[1] if self.by_cat[k] else 0 for k, c in enumerate(CATEGORIES)]
-        if not any(self.cat_w):
+        if not any(self.cat_w) and not args.models:
             sys.exit("no KiCad component models found: see --kicad-dir / --kicad-deb")
         grey = srgb_to_linear([0.28, 0.29, 0.30]).tolist() + [1.0]
         self.rack_box = box_mesh("rack_steel", grey)
@@ -912,9 +937,17 @@ class Builder:
     # ---- engines --------------------------------------------------------
 
     def engine(self, rng):
-        L = rng.uniform(2.0, 3.0)
-        lo, hi = self.engine_lo, self.engine_hi
-        s = L / (hi[0] - lo[0])
+        """A machine on a plinth: the engine 2-3 m long, or (--models) one of
+        the assemblies, its longest side 1.8-3 m, narrow enough for its row
+        at any yaw."""
+        if self.machines is None:
+            L = rng.uniform(2.0, 3.0)
+            parts, lo, hi, label = self.engine_parts, self.engine_lo, self.engine_hi, "engine"
+            s = L / (hi[0] - lo[0])
+        else:
+            parts, lo, hi, label = self.machines[rng.randrange(len(self.machines))]
+            L = rng.uniform(1.8, 3.0)
+            s = min(L / max(hi - lo), (ROW_DEPTH - 0.5) / math.hypot(hi[0] - lo[0], hi[2] - lo[2]))
         c = (lo + hi) / 2
         plinth_h = rng.uniform(0.3, 0.5)
         ext = (hi - lo) * s
@@ -924,11 +957,11 @@ class Builder:
         E[:3, 3] = [-c[0] * s, plinth_h - lo[1] * s, -c[2] * s]
         kids = [box_node(self.plinth_box, (-ext[0] / 2 - 0.15, 0, -ext[2] / 2 - 0.15),
                          (ext[0] / 2 + 0.15, plinth_h, ext[2] / 2 + 0.15))]
-        kids += [N(m, m=E @ W) for (m, W) in self.engine_parts]
+        kids += [N(m, m=E @ W) for (m, W) in parts]
         half = np.array([ext[0] / 2 + 0.15, ext[2] / 2 + 0.15])
         cy, sy = abs(math.cos(yaw)), abs(math.sin(yaw))
         foot = (half[0] * cy + half[1] * sy, half[0] * sy + half[1] * cy)   # half extents x, z
-        return kids, yaw, foot, L, plinth_h + ext[1]
+        return kids, yaw, foot, L, plinth_h + ext[1], label
 
     # ---- blocks ---------------------------------------------------------
 
@@ -965,8 +998,8 @@ class Builder:
             else:
                 engine = rng.random() < p_engine
             if engine:
-                kids, yaw, foot, L, top = self.engine(rng)
-                slot = ("engine", 2 * foot[0], (kids, yaw, foot, L, top))
+                kids, yaw, foot, L, top, label = self.engine(rng)
+                slot = ("engine", 2 * foot[0], (kids, yaw, foot, L, top, label))
             else:
                 slot = ("bank", CAB_W, 1)
             need = used + (SLOT_GAP if slots else 0) + slot[1]
@@ -985,11 +1018,11 @@ class Builder:
         out = []
         for si, (kind, length, payload) in enumerate(slots):
             if kind == "engine":
-                kids, yaw, foot, L, top = payload
+                kids, yaw, foot, L, top, label = payload
                 cx = x + length / 2
-                name = f"engine.r{r}b{b}s{si}"
+                name = f"{label}.r{r}b{b}s{si}"
                 node = N(m=yaw_matrix(yaw, (cx, 0, zc)), name=name, children=kids)
-                out.append(self._assembly("engine", name, node,
+                out.append(self._assembly(label, name, node,
                                           (cx - foot[0], zc - foot[1], cx + foot[0], zc + foot[1]),
                                           parts=len(kids) - 1, top=top))
             else:
@@ -1322,34 +1355,8 @@ def parse_range(s):
     return a, b
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    ap.add_argument("-o", "--output", required=True, help="output .glb")
-    ap.add_argument("--triangles", type=parse_count, default=parse_count("10M"),
-                    help="triangle budget of the (1x) scene; rows and blocks are chosen to come closest")
-    ap.add_argument("--double", action="store_true",
-                    help="the 2x variant: rows added behind the walked region until the triangles double")
-    ap.add_argument("--extra-rows-behind", type=int, default=0, metavar="K",
-                    help="add K rows behind the walked region (instead of --double)")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--path", help="also write a camera path here (docs/path-format.md)")
-    ap.add_argument("--poses", type=int, default=240, help="poses in the path (10 a second)")
-    ap.add_argument("--engine", default="/work/cad/engine/" + ENGINE_FILE,
-                    help="2CylinderEngine.gltf (with its 2CylinderEngine0.bin next to it)")
-    ap.add_argument("--kicad-dir", default="/work/cad/kicad",
-                    help="kicad-packages3d 3dmodels directory, or the directory it was extracted into")
-    ap.add_argument("--kicad-deb", help="kicad-packages3d .deb: extract the needed libraries into --kicad-dir first if missing")
-    ap.add_argument("--per-lib", type=int, default=12, help="component models taken from each KiCad library")
-    ap.add_argument("--boards", type=parse_range, default=(6, 12), help="PCBs per cabinet, MIN-MAX")
-    ap.add_argument("--parts", type=parse_range, default=(30, 200), help="components per PCB, MIN-MAX")
-    ap.add_argument("--cabinet-share", type=float, default=0.6, help="fraction of assemblies that are cabinets")
-    ap.add_argument("--summary", help="also write the summary as JSON here")
-    ap.add_argument("--cache", help="keep the parsed component pool in this directory (a pickle) for faster reruns")
-    args = ap.parse_args()
-    T0 = time.time()
-
-    stats = {"skipped": {}, "missing_libs": [], "unparsed_files": [], "rejected_models": 0}
+def kicad_inputs(args, stats):
+    """The engine and the KiCad component pool (the default assemblies)."""
     root = kicad_root(args.kicad_dir)
     missing = [lib for lib in ALL_LIBS if root is None or not os.path.isdir(os.path.join(root, lib + ".3dshapes"))]
     if missing and args.kicad_deb:
@@ -1402,6 +1409,67 @@ def main():
         log("  VRML skips: " + ", ".join(f"{k}: {v}" for k, v in sorted(stats["skipped"].items())))
     for u in stats["unparsed_files"][:5]:
         log(f"  not parsed: {u}")
+    return engine, pool
+
+
+def load_models(d):
+    """Every .glb/.gltf below d (sorted): (parts, lo, hi, label) each, the
+    label its file's name without the extension."""
+    files = sorted(os.path.join(r, f) for r, _, fs in os.walk(d) for f in fs
+                   if f.lower().endswith((".glb", ".gltf")) and not f.startswith("."))
+    if not files:
+        sys.exit(f"no .glb or .gltf files under {d}")
+    machines = []
+    for f in files:
+        label = os.path.splitext(os.path.basename(f))[0]
+        parts, lo, hi = load_engine(f, prefix=label)
+        if not parts:
+            sys.exit(f"{f}: no triangles")
+        tris = sum(m.tris for m, _ in parts)
+        log(f"assembly {label}: {len(parts)} part instances, {tris} triangles, "
+            f"extent {np.round(hi - lo, 3).tolist()}")
+        machines.append((parts, lo, hi, label))
+    return machines
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap.add_argument("-o", "--output", required=True, help="output .glb")
+    ap.add_argument("--triangles", type=parse_count, default=parse_count("10M"),
+                    help="triangle budget of the (1x) scene; rows and blocks are chosen to come closest")
+    ap.add_argument("--double", action="store_true",
+                    help="the 2x variant: rows added behind the walked region until the triangles double")
+    ap.add_argument("--times", type=float, default=None, metavar="F",
+                    help="like --double, rows added behind until the triangles are closest to F times the 1x floor's")
+    ap.add_argument("--extra-rows-behind", type=int, default=0, metavar="K",
+                    help="add K rows behind the walked region (instead of --double)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--path", help="also write a camera path here (docs/path-format.md)")
+    ap.add_argument("--poses", type=int, default=240, help="poses in the path (10 a second)")
+    ap.add_argument("--engine", default="/work/cad/engine/" + ENGINE_FILE,
+                    help="2CylinderEngine.gltf (with its 2CylinderEngine0.bin next to it)")
+    ap.add_argument("--kicad-dir", default="/work/cad/kicad",
+                    help="kicad-packages3d 3dmodels directory, or the directory it was extracted into")
+    ap.add_argument("--kicad-deb", help="kicad-packages3d .deb: extract the needed libraries into --kicad-dir first if missing")
+    ap.add_argument("--per-lib", type=int, default=12, help="component models taken from each KiCad library")
+    ap.add_argument("--boards", type=parse_range, default=(6, 12), help="PCBs per cabinet, MIN-MAX")
+    ap.add_argument("--parts", type=parse_range, default=(30, 200), help="components per PCB, MIN-MAX")
+    ap.add_argument("--cabinet-share", type=float, default=0.6, help="fraction of assemblies that are cabinets")
+    ap.add_argument("--summary", help="also write the summary as JSON here")
+    ap.add_argument("--models", metavar="DIR",
+                    help="machines from every .glb/.gltf below DIR (e.g. ../shared/models), "
+                         "one picked at random per slot, instead of engines and KiCad cabinets")
+    ap.add_argument("--cache", help="keep the parsed component pool in this directory (a pickle) for faster reruns")
+    args = ap.parse_args()
+    T0 = time.time()
+
+    stats = {"skipped": {}, "missing_libs": [], "unparsed_files": [], "rejected_models": 0}
+    if args.models:
+        engine, pool = load_models(args.models), []
+        args.cabinet_share = 0.0
+    else:
+        engine, pool = kicad_inputs(args, stats)
 
     b = Builder(args, pool, engine, stats)
     # ---- choose blocks per row (B) and rows (R1) for the budget -----------
@@ -1464,10 +1532,10 @@ def main():
     if not cells:   # a budget below one assembly
         cells, T1, R1 = [(0, 0, 1)], block_tris(0, 0, 1), 1
     R = R1
-    if args.double:
+    if args.double or args.times:
         # rows behind the 1x floor (its last row stays as it is) until the
-        # triangles are closest to twice the 1x floor's
-        cells, _, R = add_rows(cells, T1, 2 * T1, R1)
+        # triangles are closest to twice (--times F: F times) the 1x floor's
+        cells, _, R = add_rows(cells, T1, (args.times or 2.0) * T1, R1)
     elif args.extra_rows_behind:
         cells += [(r, bb, 0) for r in range(R1, R1 + args.extra_rows_behind) for bb in range(B)]
         R += args.extra_rows_behind
@@ -1568,9 +1636,10 @@ def main():
     if cabs:
         log(f"  cabinets: {sum(a['boards'] for a in cabs)} PCBs ({sum(1 for a in cabs if a['vertical'])} "
             f"card-cage cabinets, {sum(1 for a in cabs if not a['vertical'])} shelf cabinets)")
+    eng_used = sum(1 for m in w.meshes if m["name"].startswith("2CylinderEngine/"))
+    box_used = sum(1 for m in w.meshes if "/" not in m["name"])
     log(f"assemblies: {len(assemblies)}; distinct meshes: {distinct} ({kicad_used} KiCad, "
-        f"{sum(1 for m in w.meshes if m['name'].startswith('2CylinderEngine/'))} engine, "
-        f"{distinct - kicad_used - sum(1 for m in w.meshes if m['name'].startswith('2CylinderEngine/'))} boxes); "
+        f"{eng_used} engine, {distinct - kicad_used - eng_used - box_used} of --models, {box_used} boxes); "
         f"nodes: {len(w.nodes)}; instances (mesh nodes): {instances}; objects after expansion: {total_objs}")
     log(f"triangles after instance expansion: {total_tris}")
     log(f"bounds: min {np.round(lo3, 2).tolist()} max {np.round(hi3, 2).tolist()} (m)")

@@ -362,7 +362,7 @@ pub(crate) fn layout(
     stats.input_triangles = stats.triangles + dropped;
     stats.objects_init = parts.len();
     let scene = parts.iter().fold(Aabb::EMPTY, |a, p| a.union(&p.bounds));
-    let resolved = params.resolve(&scene);
+    let resolved = params.resolve(&scene, stats.triangles);
     clock.finish(&mut stats);
 
     let split = |parts, (max_triangles, max_diagonal, max_aspect, at)| {

@@ -38,6 +38,17 @@ pub struct Params {
     /// Maximum cluster volume V as a fraction of the scene box volume
     /// (6.3.1: V = 1e-3 x total scene bounding box volume).
     pub v: f64,
+    /// Clustering's volume cap by density instead: when set, V is the
+    /// volume that this many triangles fill at the model's mean density
+    /// (the scene box's volume x this / the model's triangles), so the
+    /// cap, and the clusters and leaves near any eye, stay the same where
+    /// the model grows by more of the same (rows added behind a floor,
+    /// units added to a plant); `v`, a fraction of the whole scene's
+    /// volume, makes every cluster bigger as the model grows. 4000 is the
+    /// paper's V on a 4M-triangle model (docs/results.md, "The far field
+    /// on real CAD").
+    #[serde(default)]
+    pub v_triangles: Option<u64>,
     /// Felzenszwalb-Huttenlocher constant K (6.3.1: 1500), in thousandths of
     /// the edge's D. The criterion compares an edge weight w (a length, at most D) with
     /// I(C) + K/|C|, so K must be a length; the paper's bare 1500 would be
@@ -175,6 +186,7 @@ impl Default for Params {
             r1: 2.5,
             d: 0.1,
             v: 1e-3,
+            v_triangles: None,
             k: 1500.0,
             t2_factor: 1.0,
             s2_factor: 2.0,
@@ -236,6 +248,13 @@ impl Params {
         }
         positive("d", self.d)?;
         positive("v", self.v)?;
+        if self.v_triangles == Some(0) {
+            return Err(ParamError {
+                name: "v_triangles",
+                value: 0.0,
+                why: "must be at least 1",
+            });
+        }
         positive("k", self.k)?;
         positive("t2-factor", self.t2_factor)?;
         positive("s2-factor", self.s2_factor)?;
@@ -326,7 +345,7 @@ impl Params {
     /// The Partition-I thresholds and the scene measures everything scales
     /// with. D depends on the objects after Partition-I, so it is resolved
     /// later by [`Resolved::with_d`].
-    pub fn resolve(&self, scene: &Aabb) -> Resolved {
+    pub fn resolve(&self, scene: &Aabb, triangles: u64) -> Resolved {
         let extent = scene.extent();
         let model_size = scene.diagonal();
         // A flat scene (a city with no height, a single plate) has zero
@@ -344,7 +363,10 @@ impl Params {
             s1,
             r1: self.r1,
             d: 0.0,
-            v: self.v * scene_volume,
+            v: match self.v_triangles {
+                Some(n) => scene_volume * n as f64 / triangles.max(1) as f64,
+                None => self.v * scene_volume,
+            },
             k: 0.0,
             t2: (self.t2_factor * t1 as f64).round().max(1.0) as usize,
             s2: self.s2_factor * s1,
@@ -378,7 +400,13 @@ impl Params {
             "compress": if self.compress { "zstd" } else { "none" },
         });
         match v {
-            Value::Object(m) => m,
+            Value::Object(mut m) => {
+                // Only when set, so scenes made without it keep their bytes.
+                if let Some(n) = self.v_triangles {
+                    m.insert("v_triangles".into(), json!(n));
+                }
+                m
+            }
             _ => unreachable!("json! of an object literal is an object"),
         }
     }
@@ -428,11 +456,43 @@ mod tests {
     use glam::DVec3;
 
     #[test]
+    fn a_cap_by_density_stays_the_same_where_the_model_grows_by_more_of_the_same() {
+        let p = Params {
+            v_triangles: Some(4000),
+            ..Params::default()
+        };
+        p.validate().unwrap();
+        let floor = Aabb::new(DVec3::ZERO, DVec3::new(48.0, 3.0, 48.0));
+        let deeper = Aabb::new(DVec3::ZERO, DVec3::new(48.0, 3.0, 96.0));
+        let (one, two) = (
+            p.resolve(&floor, 10_000_000),
+            p.resolve(&deeper, 20_000_000),
+        );
+        assert!((one.v - 48.0 * 3.0 * 48.0 * 4e-4).abs() < 1e-9, "{}", one.v);
+        assert!((two.v / one.v - 1.0).abs() < 1e-12);
+        // By volume, it doubles; at 4M triangles both agree.
+        let paper = Params::default();
+        assert!((paper.resolve(&deeper, 1).v / paper.resolve(&floor, 1).v - 2.0).abs() < 1e-12);
+        let at_4m = p.resolve(&floor, 4_000_000).v / paper.resolve(&floor, 4_000_000).v;
+        assert!((at_4m - 1.0).abs() < 1e-12, "{at_4m}");
+        // No triangles: no division by zero.
+        assert!(p.resolve(&floor, 0).v.is_finite());
+        // Zero is refused; the provenance names it only when set.
+        let zero = Params {
+            v_triangles: Some(0),
+            ..Params::default()
+        };
+        assert_eq!(zero.validate().unwrap_err().name, "v_triangles");
+        assert_eq!(p.to_json()["v_triangles"], 4000);
+        assert!(!paper.to_json().contains_key("v_triangles"));
+    }
+
+    #[test]
     fn defaults_are_valid_and_scale_with_the_model() {
         let p = Params::default();
         p.validate().unwrap();
-        let small = p.resolve(&Aabb::new(DVec3::ZERO, DVec3::splat(1.0)));
-        let big = p.resolve(&Aabb::new(DVec3::ZERO, DVec3::splat(1000.0)));
+        let small = p.resolve(&Aabb::new(DVec3::ZERO, DVec3::splat(1.0)), 1_000);
+        let big = p.resolve(&Aabb::new(DVec3::ZERO, DVec3::splat(1000.0)), 1_000);
         assert!((big.s1 / small.s1 - 1000.0).abs() < 1e-9);
         assert!((big.v / small.v - 1e9).abs() < 1e-3);
         assert_eq!(small.t2, 1_000);
@@ -509,7 +569,10 @@ mod tests {
 
     #[test]
     fn flat_scene_has_a_volume() {
-        let r = Params::default().resolve(&Aabb::new(DVec3::ZERO, DVec3::new(100.0, 0.0, 100.0)));
+        let r = Params::default().resolve(
+            &Aabb::new(DVec3::ZERO, DVec3::new(100.0, 0.0, 100.0)),
+            1_000,
+        );
         assert!(r.scene_volume > 0.0);
         assert!(r.v > 0.0);
     }

@@ -63,12 +63,9 @@ pub struct Args {
     /// Clustering: largest cluster box volume as a fraction of the scene box volume (6.3.1: V = 1e-3 x scene volume)
     #[arg(long, default_value_t = Params::default().v)]
     v: f64,
-    /// Clustering: the volume cap by density instead of --v: the volume this
-    /// many triangles fill at the model's mean density (scene volume x N /
-    /// triangles), so clusters near the eye stay the same as the model grows
-    /// (4000 = --v's default on a 4M-triangle model)
-    #[arg(long, value_name = "N")]
-    v_triangles: Option<u64>,
+    /// Clustering: the cluster volume is also at most what N triangles fill at the model's mean density (scene volume x N / triangles), so clusters and leaves near the eye stay the same as the model grows; 4000 binds above 4M triangles, where it is --v's default; 0: --v alone (the paper)
+    #[arg(long, value_name = "N", default_value_t = Params::default().v_triangles.unwrap_or(0))]
+    v_triangles: u64,
     /// Clustering: Felzenszwalb-Huttenlocher K, in thousandths of D (6.3.1: K = 1500; see docs/preprocess.md for the units)
     #[arg(long, default_value_t = Params::default().k)]
     k: f64,
@@ -133,7 +130,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         r1: args.r1,
         d: args.d,
         v: args.v,
-        v_triangles: args.v_triangles,
+        v_triangles: (args.v_triangles > 0).then_some(args.v_triangles),
         k: args.k,
         t2_factor: args.t2_factor,
         s2_factor: args.s2_factor,

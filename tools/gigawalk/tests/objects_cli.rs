@@ -6,31 +6,9 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use common::{gigawalk, gigawalk_ok, s};
-
-/// A generated plant with a 12-pose walk, preprocessed in `dir`: its path
-/// and scene files.
-fn plant(dir: &Path) -> (PathBuf, PathBuf) {
-    let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
-    gigawalk_ok(&[
-        "generate",
-        "plant",
-        "--triangles",
-        "8k",
-        "--seed",
-        "2",
-        "-o",
-        s(&glb),
-        "--path",
-        s(&path),
-        "--poses",
-        "12",
-    ]);
-    gigawalk_ok(&["preprocess", s(&glb), "-o", s(&gwk)]);
-    (path, gwk)
-}
+use common::{gigawalk, gigawalk_ok, json, s, small_plant as plant};
 
 /// The arguments of `gigawalk pick SCENE --path PATH --frame FRAME
 /// --pixel PIXEL MORE...`.
@@ -53,10 +31,6 @@ fn pick_args<'a>(
     ];
     a.extend_from_slice(more);
     a
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
 
 /// CRC-32 (IEEE), as the scene header and table of contents use.

@@ -6,33 +6,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-
-use common::{gigawalk, gigawalk_ok, s};
-
-fn plant(dir: &Path) -> (PathBuf, PathBuf) {
-    let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
-    gigawalk_ok(&[
-        "generate",
-        "plant",
-        "--triangles",
-        "8k",
-        "--seed",
-        "2",
-        "-o",
-        s(&glb),
-        "--path",
-        s(&path),
-        "--poses",
-        "12",
-    ]);
-    gigawalk_ok(&["preprocess", s(&glb), "-o", s(&gwk)]);
-    (path, gwk)
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
-}
+use common::{gigawalk, json, s, small_plant as plant};
 
 fn point(v: &serde_json::Value) -> [f64; 3] {
     let p = v["point"].as_array().unwrap();

@@ -23,3 +23,31 @@ pub fn gigawalk(args: &[&str]) -> (bool, String, String) {
 pub fn gigawalk_ok(args: &[&str]) -> Output {
     cli::run_ok(BIN, args)
 }
+
+/// A generated plant (8k triangles, seed 2) with a 12-pose walk,
+/// preprocessed in `dir`: its path and scene files.
+pub fn small_plant(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
+    gigawalk_ok(&[
+        "generate",
+        "plant",
+        "--triangles",
+        "8k",
+        "--seed",
+        "2",
+        "-o",
+        s(&glb),
+        "--path",
+        s(&path),
+        "--poses",
+        "12",
+    ]);
+    gigawalk_ok(&["preprocess", s(&glb), "-o", s(&gwk)]);
+    (path, gwk)
+}
+
+/// A command's JSON output, or a panic showing the text.
+#[track_caller]
+pub fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
+}

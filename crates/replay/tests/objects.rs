@@ -6,10 +6,13 @@
 //! (lavapipe or any adapter); find matches glTF node names and OBJ groups
 //! of several files made one model.
 
+mod common;
+
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 use std::sync::Arc;
 
+use common::render;
 use gigawalk_cull::{
     default_near, pick, traverse, Camera, CullView, NoOcclusion, NodeShow, Ray, TraversalOptions,
     Viewport, Visibility,
@@ -18,7 +21,7 @@ use gigawalk_gpu::devices_or_skip;
 use gigawalk_import::Model;
 use gigawalk_procgen::{generate, Generated, Kind};
 use gigawalk_replay::Mode;
-use gigawalk_runtime::{CameraList, CameraRequest, CullMethod, Runtime, RuntimeOptions, Schedule};
+use gigawalk_runtime::{CameraRequest, CullMethod, Runtime, RuntimeOptions, Schedule};
 use gigawalk_scene::objects::{ObjectTable, Pattern};
 use gigawalk_scene::SceneReader;
 use glam::DVec3;
@@ -281,28 +284,6 @@ fn no_drawn_lod_stands_for_a_hidden_object_at_any_tolerance() {
         pieces > 0,
         "no leaf was drawn in pieces: the test means little"
     );
-}
-
-/// Renders `cameras` (read back) with `opts`; the depth bits and colour
-/// of each frame.
-fn render(
-    rt: &Runtime,
-    opts: &RuntimeOptions,
-    cameras: Vec<CameraRequest>,
-) -> Vec<(Vec<u32>, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut source = CameraList { cameras };
-    rt.run(opts, &mut source, &mut |r| {
-        if let Some(img) = r.image {
-            out.push((
-                img.depth.depth.iter().map(|d| d.to_bits()).collect(),
-                img.colour,
-            ));
-        }
-        true
-    })
-    .unwrap();
-    out
 }
 
 #[test]

@@ -8,15 +8,18 @@
 //! distance between the hit points a brute-force ray cast through the
 //! input model's triangles finds.
 
+mod common;
+
 use std::path::Path;
 use std::sync::Arc;
 
+use common::render;
 use gigawalk_cull::{default_near, pick, Camera, Ray, Section, Viewport};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_import::{Model, Object};
 use gigawalk_procgen::{generate, Generated, Kind};
 use gigawalk_replay::Mode;
-use gigawalk_runtime::{CameraList, CameraRequest, CullMethod, Runtime, RuntimeOptions, Schedule};
+use gigawalk_runtime::{CameraRequest, CullMethod, Runtime, RuntimeOptions, Schedule};
 use gigawalk_scene::{Aabb, SceneReader};
 use glam::{DQuat, DVec3};
 
@@ -47,27 +50,6 @@ fn generated(dir: &Path, kind: Kind, triangles: u64, seed: u64) -> (SceneReader,
     let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), "m.glb").unwrap();
     let reader = preprocess(dir, &format!("{kind:?}-{seed}"), &model, Default::default());
     (reader, g, model)
-}
-
-/// Renders `cameras` (read back); the depth bits and colour of each frame.
-fn render(
-    rt: &Runtime,
-    opts: &RuntimeOptions,
-    cameras: Vec<CameraRequest>,
-) -> Vec<(Vec<u32>, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut source = CameraList { cameras };
-    rt.run(opts, &mut source, &mut |r| {
-        if let Some(img) = r.image {
-            out.push((
-                img.depth.depth.iter().map(|d| d.to_bits()).collect(),
-                img.colour,
-            ));
-        }
-        true
-    })
-    .unwrap();
-    out
 }
 
 fn options(schedule: Schedule, culler: CullMethod, mode: Mode, tolerance: f64) -> RuntimeOptions {

@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{gigawalk, gigawalk_ok, json, s, small_plant as plant};
+use common::{gigawalk, gigawalk_ok, json, null_replay, s, small_plant as plant};
 
 /// The arguments of `gigawalk pick SCENE --path PATH --frame FRAME
 /// --pixel PIXEL MORE...`.
@@ -191,20 +191,7 @@ fn replay_hides_what_is_asked_and_says_what_it_cannot() {
     let dir = tempfile::tempdir().unwrap();
     let (path, gwk) = plant(dir.path());
     let out = dir.path().join("report");
-    let replay = |more: &[&str]| {
-        let mut a = vec![
-            "replay",
-            s(&gwk),
-            "--out",
-            s(&out),
-            "--adapter",
-            "null",
-            "--modes",
-            "vfc,och",
-        ];
-        a.extend_from_slice(more);
-        gigawalk(&a)
-    };
+    let replay = |more: &[&str]| null_replay(&gwk, &out, more);
     let (ok, _, err) = replay(&["--path", s(&path), "--hide", "pipe"]);
     assert!(ok, "{err}");
     assert!(err.contains("hiding ") && err.contains(" objects"), "{err}");

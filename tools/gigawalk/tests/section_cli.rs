@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{gigawalk, json, s, small_plant as plant};
+use common::{gigawalk, json, null_replay, s, small_plant as plant};
 
 fn point(v: &serde_json::Value) -> [f64; 3] {
     let p = v["point"].as_array().unwrap();
@@ -118,20 +118,7 @@ fn replay_reports_the_section_also_from_a_saved_view() {
     let dir = tempfile::tempdir().unwrap();
     let (path, gwk) = plant(dir.path());
     let out = dir.path().join("report");
-    let replay = |more: &[&str]| {
-        let mut a = vec![
-            "replay",
-            s(&gwk),
-            "--out",
-            s(&out),
-            "--adapter",
-            "null",
-            "--modes",
-            "vfc,och",
-        ];
-        a.extend_from_slice(more);
-        gigawalk(&a)
-    };
+    let replay = |more: &[&str]| null_replay(&gwk, &out, more);
     let summary = || json(&std::fs::read_to_string(out.join("summary.json")).unwrap());
     let (ok, _, err) = replay(&["--path", s(&path)]);
     assert!(ok, "{err}");

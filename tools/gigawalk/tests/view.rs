@@ -76,6 +76,21 @@ impl Drop for Xvfb {
 /// Starts Xvfb on a display it picks itself (`-displayfd`: tests running
 /// at once must not race for the same number) and waits until it is ready;
 /// None when there is no Xvfb binary.
+/// What a live test needs: a GPU adapter, xdotool and a started Xvfb
+/// server (returned), or `None` with the test skipped and why.
+fn live_display(what: &str) -> Option<Xvfb> {
+    gigawalk_gpu::devices_or_skip(1, what)?;
+    if Command::new("xdotool").arg("version").output().is_err() {
+        skip("no xdotool binary (apt-get install xdotool)");
+        return None;
+    }
+    let x = start_xvfb();
+    if x.is_none() {
+        skip("no Xvfb binary (apt-get install xvfb)");
+    }
+    x
+}
+
 fn start_xvfb() -> Option<Xvfb> {
     use std::io::BufRead as _;
     // One server starts at a time: two starting together can both clear
@@ -508,15 +523,7 @@ fn wait_for_window(d: &str, viewer: &mut Viewer, log: &Path) -> String {
 /// window hidden and shown, and Esc to quit.
 #[test]
 fn live_keys_and_mouse_drive_the_viewer() {
-    if gigawalk_gpu::devices_or_skip(1, "gigawalk view (live)").is_none() {
-        return;
-    }
-    if Command::new("xdotool").arg("version").output().is_err() {
-        skip("no xdotool binary (apt-get install xdotool)");
-        return;
-    }
-    let Some(x) = start_xvfb() else {
-        skip("no Xvfb binary (apt-get install xvfb)");
+    let Some(x) = live_display("gigawalk view (live)") else {
         return;
     };
     let d = x.display.as_str();
@@ -901,15 +908,7 @@ fn picked_distance(gwk: &Path, path: &Path, a: (u32, u32), b: (u32, u32)) -> Opt
 /// live cut.
 #[test]
 fn live_sections_and_a_measurement() {
-    if gigawalk_gpu::devices_or_skip(1, "gigawalk view (sections)").is_none() {
-        return;
-    }
-    if Command::new("xdotool").arg("version").output().is_err() {
-        skip("no xdotool binary (apt-get install xdotool)");
-        return;
-    }
-    let Some(x) = start_xvfb() else {
-        skip("no Xvfb binary (apt-get install xvfb)");
+    let Some(x) = live_display("gigawalk view (sections)") else {
         return;
     };
     let d = x.display.as_str();

@@ -51,3 +51,24 @@ pub fn small_plant(dir: &std::path::Path) -> (std::path::PathBuf, std::path::Pat
 pub fn json(text: &str) -> serde_json::Value {
     serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
+
+/// Runs `gigawalk replay GWK --out OUT --adapter null --modes vfc,och
+/// MORE...` (no GPU work): whether it succeeded, its stdout and stderr.
+pub fn null_replay(
+    gwk: &std::path::Path,
+    out: &std::path::Path,
+    more: &[&str],
+) -> (bool, String, String) {
+    let mut a = vec![
+        "replay",
+        s(gwk),
+        "--out",
+        s(out),
+        "--adapter",
+        "null",
+        "--modes",
+        "vfc,och",
+    ];
+    a.extend_from_slice(more);
+    gigawalk(&a)
+}

@@ -365,10 +365,10 @@ impl Params {
             s1,
             r1: self.r1,
             d: 0.0,
-            v: match self.v_triangles {
-                Some(n) => scene_volume * self.v.min(n as f64 / triangles.max(1) as f64),
-                None => self.v * scene_volume,
-            },
+            v: scene_volume
+                * self
+                    .v_triangles
+                    .map_or(self.v, |n| self.v.min(n as f64 / triangles.max(1) as f64)),
             k: 0.0,
             t2: (self.t2_factor * t1 as f64).round().max(1.0) as usize,
             s2: self.s2_factor * s1,
@@ -403,7 +403,8 @@ impl Params {
         });
         match v {
             Value::Object(mut m) => {
-                // Only when set, so scenes made without it keep their bytes.
+                // Only when set: a scene made with `v` alone (the paper's
+                // rule) keeps the provenance, and bytes, it had before.
                 if let Some(n) = self.v_triangles {
                     m.insert("v_triangles".into(), json!(n));
                 }

@@ -28,6 +28,7 @@ use std::path::PathBuf;
 use gigawalk_cull::{
     default_near, traverse, Camera, CullView, DrawItem, NoOcclusion, TraversalOptions, Viewport,
 };
+use gigawalk_replay::percentile;
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::{SceneReader, Skeleton, NO_NODE};
 
@@ -104,14 +105,6 @@ fn heights(s: &Skeleton) -> Vec<u32> {
         }
     }
     h
-}
-
-fn percentile(v: &mut [f64], p: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() - 1) as f64 * p).round() as usize]
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
@@ -228,7 +221,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "kind", "band", "tris/pose", "share", "nodes", "dens p50", "dens p90"
     );
     let mut rows = Vec::new();
-    for ((kind, band), cell) in &mut cells {
+    for ((kind, band), cell) in &cells {
         let lo = if *band == 0 { 0.0 } else { BANDS[band - 1] };
         let band_label = if BANDS[*band].is_finite() {
             format!("{lo:.0}-{:.0}", BANDS[*band])
@@ -236,8 +229,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             format!("{lo:.0}+")
         };
         let (p50, p90) = (
-            percentile(&mut cell.density, 0.5),
-            percentile(&mut cell.density, 0.9),
+            percentile(&cell.density, 50.0),
+            percentile(&cell.density, 90.0),
         );
         println!(
             "{:<22} {:>10} {:>12.0} {:>6.1}% {:>9.1} {:>10.3} {:>10.3}",
@@ -270,10 +263,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     let n_gaps = floor.gaps.len();
-    let gaps = [0.5, 0.9, 0.99].map(|p| percentile(&mut floor.gaps, p));
+    let gaps = [50.0, 90.0, 99.0].map(|p| percentile(&floor.gaps, p));
     println!(
-        "leaf floors drawn: {} a pose whose parent has levels (parent's finest error over \
-         the allowed: p50 {:.2}, p90 {:.2}, p99 {:.2}); {} a pose ({:.0} triangles) whose \
+        "leaf floors drawn: {:.1} a pose whose parent has levels (parent's finest error over \
+         the allowed: p50 {:.2}, p90 {:.2}, p99 {:.2}); {:.1} a pose ({:.0} triangles) whose \
          parent stores no level",
         n_gaps as f64 / poses_f,
         gaps[0],
@@ -283,8 +276,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         floor.triangles_parent_without_levels as f64 / poses_f
     );
     let n_full = full.next_error.len();
-    let next_error = [0.5, 0.9].map(|p| percentile(&mut full.next_error, p));
-    let next_share = [0.5, 0.9].map(|p| percentile(&mut full.next_share, p));
+    let next_error = [50.0, 90.0].map(|p| percentile(&full.next_error, p));
+    let next_share = [50.0, 90.0].map(|p| percentile(&full.next_share, p));
     println!(
         "leaves at full detail from band {:.0} on: {:.0} triangles a pose; {:.1} a pose \
          with a coarser level (its error over the allowed: p50 {:.2}, p90 {:.2}; its \

@@ -134,6 +134,10 @@ pub struct Nearest {
 
 impl Nearest {
     pub fn new(s: Surface<'_>) -> Self {
+        crate::spent::timed(crate::spent::Kind::Bvh, || Self::build(s))
+    }
+
+    fn build(s: Surface<'_>) -> Self {
         let tris: Vec<[Vec3A; 3]> = (0..s.triangles()).map(|t| s.triangle(t)).collect();
         let boxes: Vec<BvhAabb> = tris
             .iter()
@@ -205,7 +209,9 @@ impl Nearest {
     fn flat(&mut self, corners: &[Vec3A; 3], near: &[u32], limit: f32) -> f64 {
         let tris = &self.tris;
         self.planar
-            .get_or_insert_with(|| Planar::new(tris))
+            .get_or_insert_with(|| {
+                crate::spent::timed(crate::spent::Kind::Planar, || Planar::new(tris))
+            })
             .bound(corners, near, f64::from(limit))
     }
 
@@ -708,20 +714,25 @@ pub fn symmetric_within(
     sampling: &Sampling,
     limit: f32,
 ) -> Within {
+    use crate::spent::{timed, Kind};
     let mut to_lod = Nearest::new(lod);
-    let backward = one_sided_in(lod, &to_lod.bvh, reference_queries, sampling, limit, known);
+    let backward = timed(Kind::Backward, || {
+        one_sided_in(lod, &to_lod.bvh, reference_queries, sampling, limit, known)
+    });
     let backward = match backward.decision(limit) {
         Within::Yes(b) => b,
         no => return no,
     };
-    let forward = one_sided_in(
-        reference,
-        &reference_queries.bvh,
-        &mut to_lod,
-        sampling,
-        limit,
-        None,
-    );
+    let forward = timed(Kind::Forward, || {
+        one_sided_in(
+            reference,
+            &reference_queries.bvh,
+            &mut to_lod,
+            sampling,
+            limit,
+            None,
+        )
+    });
     match forward.decision(limit) {
         Within::Yes(f) => Within::Yes(f.max(backward)),
         no => no,

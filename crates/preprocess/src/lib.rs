@@ -31,8 +31,10 @@ pub mod params;
 pub mod partition;
 pub mod parts;
 mod planar;
+mod schedule;
 pub mod shards;
 pub mod source;
+mod spent;
 pub mod stats;
 #[cfg(test)]
 mod test_models;
@@ -131,19 +133,24 @@ impl Progress for NoProgress {}
 /// Where LODs go as they are made: a scene file, or memory in tests.
 pub trait LodSink {
     type Error: std::error::Error + Send + Sync + 'static;
-    /// Stores one LOD; returns its index. A node's LODs arrive
+    /// A LOD made ready to store on the thread that made it.
+    type Prepared: Send;
+    /// Prepares LODs on any thread: the part of storing a LOD that does
+    /// not depend on the LODs before it (for a scene file: quantizing,
+    /// encoding, compressing), so it runs on every core rather than on
+    /// the one that stores. `runs`: for a leaf's full detail, its
+    /// triangles' counts per object, which must stay consecutive and in
+    /// order (empty otherwise); a sink that stores triangles as given
+    /// needs nothing more.
+    #[allow(clippy::type_complexity)]
+    fn preparer(&self) -> Box<dyn Fn(&LodMesh, f32, &[u32]) -> Self::Prepared + Send + Sync>;
+    /// Stores one prepared LOD; returns its index. A node's LODs arrive
     /// consecutively, finest first.
-    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error>;
-    /// [`LodSink::add_lod`] for a leaf's full detail, whose triangles
-    /// come in runs (counts, per object) that must stay consecutive and
-    /// in order. A sink that stores triangles as given needs nothing more.
-    fn add_lod_in_runs(
-        &mut self,
-        mesh: &LodMesh,
-        error: f32,
-        _runs: &[u32],
-    ) -> Result<u32, Self::Error> {
-        self.add_lod(mesh, error)
+    fn add_prepared(&mut self, lod: Self::Prepared) -> Result<u32, Self::Error>;
+    /// Prepares and stores one LOD on this thread.
+    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Self::Error> {
+        let lod = self.preparer()(mesh, error, &[]);
+        self.add_prepared(lod)
     }
     /// Every LOD of node `node` has been added (called once per node the
     /// run makes, after its LODs, even when it has none).
@@ -154,16 +161,13 @@ pub trait LodSink {
 
 impl LodSink for SceneWriter {
     type Error = WriteError;
-    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, WriteError> {
-        SceneWriter::add_lod(self, mesh, error)
+    type Prepared = gigawalk_scene::EncodedLod;
+    fn preparer(&self) -> Box<dyn Fn(&LodMesh, f32, &[u32]) -> Self::Prepared + Send + Sync> {
+        let encoder = self.encoder();
+        Box::new(move |mesh, error, runs| encoder.encode(mesh, error, runs))
     }
-    fn add_lod_in_runs(
-        &mut self,
-        mesh: &LodMesh,
-        error: f32,
-        runs: &[u32],
-    ) -> Result<u32, WriteError> {
-        SceneWriter::add_lod_in_runs(self, mesh, error, runs)
+    fn add_prepared(&mut self, lod: Self::Prepared) -> Result<u32, WriteError> {
+        self.add_encoded(lod)
     }
 }
 
@@ -191,12 +195,6 @@ pub struct Built {
     /// sink took (docs/scene-format.md, "OBJT").
     pub objects: gigawalk_scene::objects::ObjectTable,
 }
-
-/// How many nodes' LODs are made in parallel before they are handed to
-/// the sink: enough to keep every core busy, few enough that their
-/// geometry (at most t2 triangles each, twice over for the chain) stays a
-/// small fraction of the input.
-const HLOD_BATCH: usize = 256;
 
 /// Runs the whole pipeline into `output` (atomically: nothing appears at
 /// `output` unless everything succeeds). `source` names the input for the
@@ -470,42 +468,28 @@ pub(crate) fn build_role<S: LodSink>(
     let tally = hlod::Tally::default();
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];
     let mut lod_runs: Vec<(u32, Vec<gigawalk_scene::objects::ObjectRun>)> = Vec::new();
-    // What each done node leaves for its parent, until the parent is done.
-    let mut done: Vec<Option<Done>> = vec![None; tree.len()];
-    // Per done node: its finest stored error, or (without stored levels)
-    // the largest such error below it.
-    let mut lowest = vec![0.0f32; tree.len()];
+    let prepare = sink.preparer();
     let mut emit = |ni: usize,
-                    lods: Vec<(LodMesh, f32)>,
+                    lods: Vec<Prepared<S::Prepared>>,
                     per_level: &mut Vec<u64>|
      -> Result<(), PreprocessError> {
-        let mut first = None;
-        // A leaf's full detail keeps its triangles in runs per object.
-        let runs = tree[ni]
-            .object
-            .map(|part| identities.runs(&parts[part as usize]));
-        for (k, (mesh, error)) in lods.iter().enumerate() {
-            let i = match &runs {
-                Some(runs) if k == 0 => {
-                    let counts: Vec<u32> = runs.iter().map(|r| r.triangles).collect();
-                    let i = sink.add_lod_in_runs(mesh, *error, &counts);
-                    if let Ok(i) = i {
-                        lod_runs.push((i, runs.clone()));
-                    }
-                    i
-                }
-                _ => sink.add_lod(mesh, *error),
+        let (mut first, count) = (None, lods.len() as u32);
+        for (k, lod) in lods.into_iter().enumerate() {
+            let i = sink
+                .add_prepared(lod.lod)
+                .map_err(|e| PreprocessError::Write(e.into()))?;
+            if let Some(runs) = lod.runs {
+                lod_runs.push((i, runs));
             }
-            .map_err(|e| PreprocessError::Write(e.into()))?;
             first.get_or_insert(i);
             if per_level.len() <= k {
                 per_level.push(0);
             }
-            per_level[k] += mesh.triangle_count() as u64;
+            per_level[k] += lod.triangles;
         }
         sink.node_done(ni as u32)
             .map_err(|e| PreprocessError::Write(e.into()))?;
-        lod_ranges[ni] = (first.unwrap_or(0), lods.len() as u32);
+        lod_ranges[ni] = (first.unwrap_or(0), count);
         Ok(())
     };
     // Unit by unit, so the levels and full detail that wait for a parent
@@ -518,60 +502,96 @@ pub(crate) fn build_role<S: LodSink>(
         let p = tree[ni].parent;
         p != gigawalk_scene::NO_NODE && below[p as usize] <= EXACT_REFERENCE as u64
     };
-    for stage in order(tree, &below) {
-        let stage: Vec<usize> = stage.into_iter().filter(|&i| mine(i, &role)).collect();
-        let leaves = stage.first().is_some_and(|&i| tree[i].object.is_some());
-        for batch in stage.chunks(HLOD_BATCH) {
-            let made: Vec<Result<Finished, SpillError>> = batch
-                .par_iter()
-                .filter(|&&ni| !given(ni, &role))
-                .map(|&ni| match tree[ni].object {
-                    Some(object) => make_leaf(
-                        model,
-                        &parts[object as usize],
-                        &tree[ni],
-                        &chain,
-                        &tally,
-                        keep,
-                        wanted(ni),
-                    ),
-                    None => Ok(make_inner(
-                        &tree[ni],
-                        &done,
-                        &lowest,
-                        (&chain, &tally),
-                        keep,
-                        wanted(ni),
-                    )),
-                })
-                .collect();
-            let mut made = made.into_iter();
-            for &ni in batch {
-                let (lods, d) = match take(&mut role, ni)? {
-                    Some(f) => f,
-                    None => made
-                        .next()
-                        .expect("one made per node not given")
-                        .map_err(InputError::from)?,
-                };
-                let node = &tree[ni];
-                if leaves {
-                    emit(ni, lods, &mut stats.leaf_lod_triangles)?;
-                } else {
-                    lowest[ni] = match lods.first() {
-                        Some(l) => l.1,
-                        None => lowest_below(&lowest, node),
-                    };
-                    emit(ni, lods, &mut stats.inner_lod_triangles)?;
-                    for ch in node.first_child..node.first_child + node.child_count {
-                        done[ch as usize] = None;
-                    }
+    // Children before parents, in the order the sink sees them.
+    let sequence: Vec<usize> = order(tree, &below)
+        .into_iter()
+        .flatten()
+        .filter(|&i| mine(i, &role))
+        .collect();
+    let made: Vec<bool> = (0..tree.len()).map(|i| !given(i, &role)).collect();
+    let window = (rayon::current_num_threads() as u64 + 1) * UNIT_TRIANGLES;
+    let cost = |ni: usize| match tree[ni].object {
+        Some(_) => below[ni],
+        None => 0,
+    };
+    // A node's levels made ready for the sink; a leaf's full detail keeps
+    // its triangles in runs per object.
+    let ready = |ni: usize, lods: Lods| -> Vec<Prepared<S::Prepared>> {
+        let mut runs = tree[ni]
+            .object
+            .map(|part| identities.runs(&parts[part as usize]));
+        lods.into_iter()
+            .map(|(mesh, error)| {
+                let runs = runs.take();
+                let counts: Vec<u32> = runs.iter().flatten().map(|r| r.triangles).collect();
+                Prepared {
+                    lod: spent::timed(spent::Kind::Prepare, || prepare(&mesh, error, &counts)),
+                    triangles: mesh.triangle_count() as u64,
+                    runs,
                 }
-                done[ni] = Some(d);
+            })
+            .collect()
+    };
+    let make = |ni: usize,
+                children: Vec<ForParent>|
+     -> Result<(ForParent, Vec<Prepared<S::Prepared>>), PreprocessError> {
+        let ((lods, d), lowest) = match tree[ni].object {
+            Some(object) => (
+                make_leaf(
+                    model,
+                    &parts[object as usize],
+                    &tree[ni],
+                    &chain,
+                    &tally,
+                    keep,
+                    wanted(ni),
+                )
+                .map_err(InputError::from)?,
+                0.0,
+            ),
+            None => {
+                let made = make_inner(&tree[ni], &children, (&chain, &tally), keep, wanted(ni));
+                let lowest = lowest_of(&made.0, &children);
+                (made, lowest)
             }
-            progress.advance(batch.len() as u64);
+        };
+        Ok(((d, lowest), ready(ni, lods)))
+    };
+    let mut hand_on = |ni: usize,
+                       lods: Option<Vec<Prepared<S::Prepared>>>,
+                       children: Vec<ForParent>|
+     -> Result<Option<ForParent>, PreprocessError> {
+        let (lods, own) = match lods {
+            Some(lods) => (lods, None),
+            None => {
+                let (lods, d) = take(&mut role, ni)?.ok_or_else(|| PreprocessError::Shard {
+                    node: ni as u32,
+                    reason: "neither made here nor given by a shard".into(),
+                })?;
+                let lowest = match tree[ni].object {
+                    Some(_) => 0.0,
+                    None => lowest_of(&lods, &children),
+                };
+                (ready(ni, lods), Some((d, lowest)))
+            }
+        };
+        match tree[ni].object {
+            Some(_) => emit(ni, lods, &mut stats.leaf_lod_triangles)?,
+            None => emit(ni, lods, &mut stats.inner_lod_triangles)?,
         }
-    }
+        progress.advance(1);
+        Ok(own)
+    };
+    let (mut left, work) = schedule::run(
+        tree,
+        &sequence,
+        window,
+        &cost,
+        &|ni| made[ni],
+        &make,
+        &mut hand_on,
+    )?;
+    stats.schedule = Some(stats::Schedule::of(&work, tree));
     stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
     lod_runs.sort_unstable_by_key(|(lod, _)| *lod);
     let objects = identities.table(lod_runs);
@@ -595,7 +615,7 @@ pub(crate) fn build_role<S: LodSink>(
         Role::Shard { roots, .. } => roots
             .iter()
             .map(|&r| {
-                let d = done[r as usize].take().expect("a shard's roots are done");
+                let (d, _) = left[r as usize].take().expect("a shard's roots are done");
                 (r, d)
             })
             .collect(),
@@ -621,30 +641,28 @@ fn make_leaf(
     keep: usize,
     full_wanted: bool,
 ) -> Result<Finished, SpillError> {
-    let mesh = hlod::leaf_mesh(model, part, node.bounds.center())?;
+    let mesh = spent::timed(spent::Kind::Read, || {
+        hlod::leaf_mesh(model, part, node.bounds.center())
+    })?;
     let full = (full_wanted && mesh.triangles() <= EXACT_REFERENCE).then(|| mesh.clone());
     let lods = hlod::leaf_lods(mesh, node.bounds.diagonal(), chain, tally);
     let (out, levels) = finish_chain(lods, keep);
     Ok((out, Done { levels, full }))
 }
 
-/// An inner node's levels (its children are done), and what it leaves
-/// for its parent.
+/// An inner node's levels (its children are done: what they left for it,
+/// in child order), and what it leaves for its parent.
 fn make_inner(
     node: &hierarchy::HNode,
-    done: &[Option<Done>],
-    lowest: &[f32],
+    below: &[ForParent],
     (chain, tally): (&ChainParams, &hlod::Tally),
     keep: usize,
     full_wanted: bool,
 ) -> Finished {
-    let below: Vec<&Done> = (node.first_child..node.first_child + node.child_count)
-        .filter_map(|c| done[c as usize].as_ref())
-        .collect();
-    let children: Vec<&[Lod]> = below.iter().map(|d| d.levels.as_slice()).collect();
+    let children: Vec<&[Lod]> = below.iter().map(|(d, _)| d.levels.as_slice()).collect();
     // Every child's full detail, or none: a reference missing a child
     // would not bound the node.
-    let full: Option<Vec<&hlod::WorkMesh>> = below.iter().map(|d| d.full.as_ref()).collect();
+    let full: Option<Vec<&hlod::WorkMesh>> = below.iter().map(|(d, _)| d.full.as_ref()).collect();
     let full = full
         .filter(|b| b.len() == node.child_count as usize)
         .filter(|b| b.iter().map(|m| m.triangles()).sum::<usize>() <= EXACT_REFERENCE)
@@ -660,9 +678,9 @@ fn make_inner(
     // Never claim less error than a stored level below (the scene file's
     // rule: errors do not decrease from a node to its nearest ancestor
     // with LODs).
-    let below = lowest_below(lowest, node);
+    let lowest = lowest_below(below);
     for l in &mut lods {
-        l.error = l.error.max(below);
+        l.error = l.error.max(lowest);
     }
     let stored = hlod::worth_drawing(&lods, &children);
     let (out, levels) = finish_chain(lods, keep);
@@ -778,9 +796,26 @@ fn take(role: &mut Role, ni: usize) -> Result<Option<Finished>, PreprocessError>
     Ok(Some((lods, done)))
 }
 
+/// A node's levels in the scene file's form.
+type Lods = Vec<(LodMesh, f32)>;
+
+/// A level made ready for the sink ([`LodSink::preparer`]), with what the
+/// run records of it: its triangles, and a leaf's full detail's runs per
+/// object.
+struct Prepared<P> {
+    lod: P,
+    triangles: u64,
+    runs: Option<Vec<gigawalk_scene::objects::ObjectRun>>,
+}
+
 /// A node's levels in the scene file's form, and what it leaves for its
 /// parent.
-type Finished = (Vec<(LodMesh, f32)>, Done);
+type Finished = (Lods, Done);
+
+/// What a done node leaves for its parent: its [`Done`], and its finest
+/// stored error (0 for a leaf, whose finest level is its full detail), or
+/// without stored levels the largest such error below it.
+type ForParent = (Done, f32);
 
 /// What a done node leaves for its parent's HLODs.
 #[derive(Clone, Debug, PartialEq)]
@@ -798,13 +833,20 @@ pub(crate) struct Done {
 /// that compounds with every level of the tree.
 const EXACT_REFERENCE: usize = 1 << 16;
 
-/// The largest of `node`'s children's `lowest` errors: what the node may
+/// The largest of a node's children's `lowest` errors: what the node may
 /// never claim less than (the scene file's rule that errors do not
 /// decrease from a node to its nearest ancestor with LODs).
-fn lowest_below(lowest: &[f32], node: &hierarchy::HNode) -> f32 {
-    (node.first_child..node.first_child + node.child_count)
-        .map(|c| lowest[c as usize])
-        .fold(0.0f32, f32::max)
+fn lowest_below(children: &[ForParent]) -> f32 {
+    children.iter().map(|c| c.1).fold(0.0f32, f32::max)
+}
+
+/// An inner node's `lowest`: its finest stored error, or (without stored
+/// levels) the largest below it.
+fn lowest_of(lods: &[(LodMesh, f32)], children: &[ForParent]) -> f32 {
+    match lods.first() {
+        Some(l) => l.1,
+        None => lowest_below(children),
+    }
 }
 
 /// The scene-file form of every level, and the levels kept for the

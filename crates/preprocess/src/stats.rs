@@ -72,6 +72,10 @@ pub struct Stats {
     /// merge of shards counts only the levels it made).
     #[serde(default)]
     pub certification: Certification,
+    /// The HLOD phase's work and critical path, and the speed-ups they
+    /// allow (`None` when no level was made).
+    #[serde(default)]
+    pub schedule: Option<Schedule>,
     /// Peak resident memory of the process (Linux VmHWM), when known.
     pub peak_memory_bytes: Option<u64>,
     /// The thresholds in model units.
@@ -90,6 +94,59 @@ pub struct Certification {
     pub rivals_won: u64,
     /// Rivals whose measurement stopped as soon as they had lost.
     pub rivals_stopped: u64,
+}
+
+/// The HLOD phase as a graph of tasks: every node's levels are one task,
+/// after its children's; handing the levels to the sink is one serial
+/// stream beside them. Seconds are each task's time on its thread.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Schedule {
+    /// Nodes whose levels this run made.
+    pub tasks: usize,
+    /// W: every task's seconds, and the sink's.
+    pub work_seconds: f64,
+    /// S: the costliest chain of tasks from a leaf to a root, or the
+    /// sink's serial seconds if longer.
+    pub span_seconds: f64,
+    /// Seconds the sink took (encoding, compressing and writing levels),
+    /// on the calling thread.
+    pub sink_seconds: f64,
+    /// The costliest single task's seconds.
+    pub largest_task_seconds: f64,
+    /// Seconds of W by kind of work, each charged once (a BVH built for
+    /// a measurement is not also the measurement's), and `other` for the
+    /// rest (merging, cutting, covering what vanished, copies).
+    pub seconds_by_kind: Vec<(String, f64)>,
+    /// W / max(W / N, S) for N cores: the speed-up over one core the
+    /// work and the critical path allow the phase, by N.
+    pub speedup: Vec<(usize, f64)>,
+}
+
+impl Schedule {
+    /// The figures of a run's [`crate::schedule::Work`].
+    pub(crate) fn of(work: &crate::schedule::Work, tree: &[crate::hierarchy::HNode]) -> Self {
+        Schedule {
+            tasks: work.node_seconds.iter().filter(|&&s| s > 0.0).count(),
+            work_seconds: work.total(),
+            span_seconds: work.span(tree),
+            sink_seconds: work.emit_seconds,
+            largest_task_seconds: work.node_seconds.iter().copied().fold(0.0, f64::max),
+            seconds_by_kind: {
+                let mut by: Vec<(String, f64)> = crate::spent::KINDS
+                    .iter()
+                    .zip(&work.spent)
+                    .map(|((_, name), &s)| (name.to_string(), s))
+                    .collect();
+                let charged: f64 = work.spent.iter().sum();
+                by.push(("other".into(), (work.total() - charged).max(0.0)));
+                by
+            },
+            speedup: [2, 4, 8, 16, 32]
+                .into_iter()
+                .map(|n| (n, work.speedup(tree, n)))
+                .collect(),
+        }
+    }
 }
 
 /// The raw size of a model's geometry (see [`Stats::raw_input_bytes`]).
@@ -198,6 +255,25 @@ impl Stats {
             "time total        {:>9.3} s  ({:.0} triangles/s)",
             self.total_seconds, self.triangles_per_second
         );
+        if let Some(w) = &self.schedule {
+            let _ = writeln!(
+                s,
+                "hlod work         W {:.1} s in {} tasks (largest {:.2} s) + sink {:.1} s; critical path S {:.2} s",
+                w.work_seconds, w.tasks, w.largest_task_seconds, w.sink_seconds, w.span_seconds
+            );
+            let ups: Vec<String> = w
+                .speedup
+                .iter()
+                .map(|(n, x)| format!("{n} cores {x:.1}x"))
+                .collect();
+            let _ = writeln!(s, "hlod speed-up     W / max(W/N, S): {}", ups.join(", "));
+            let kinds: Vec<String> = w
+                .seconds_by_kind
+                .iter()
+                .map(|(k, x)| format!("{k} {x:.1} s"))
+                .collect();
+            let _ = writeln!(s, "hlod work by kind {}", kinds.join(", "));
+        }
         if let Some(p) = self.peak_memory_bytes {
             let _ = writeln!(s, "peak memory       {:.1} MiB", mib(p));
         }

@@ -17,8 +17,12 @@ struct MemorySink(Vec<(LodMesh, f32)>);
 
 impl LodSink for MemorySink {
     type Error = Infallible;
-    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, Infallible> {
-        self.0.push((mesh.clone(), error));
+    type Prepared = (LodMesh, f32);
+    fn preparer(&self) -> Box<dyn Fn(&LodMesh, f32, &[u32]) -> (LodMesh, f32) + Send + Sync> {
+        Box::new(|mesh, error, _| (mesh.clone(), error))
+    }
+    fn add_prepared(&mut self, lod: (LodMesh, f32)) -> Result<u32, Infallible> {
+        self.0.push(lod);
         Ok(self.0.len() as u32 - 1)
     }
 }

@@ -48,4 +48,4 @@ pub use skeleton::{
     GridBits, IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE,
 };
 pub use stats::{DepthLevels, NodeSwitch, PositionStats, SceneStats, SwitchFactors};
-pub use write::{SceneWriter, WriteSummary, DEFAULT_POSITION_BITS};
+pub use write::{EncodedLod, LodEncoder, SceneWriter, WriteSummary, DEFAULT_POSITION_BITS};

@@ -43,33 +43,42 @@ impl Dictionary {
 pub struct Squeezer {
     compressor: zstd::bulk::Compressor<'static>,
     pub dictionary: Option<Vec<u8>>,
+    /// Unique in the process: which compressor [`compress_with`] keeps.
+    pub id: u64,
+}
+
+/// A compressor with the writer's settings and `dictionary`.
+fn compressor(dictionary: Option<&[u8]>) -> Result<zstd::bulk::Compressor<'static>, String> {
+    let err = |e: std::io::Error| format!("zstd: {e}");
+    let mut compressor = match dictionary {
+        Some(d) => zstd::bulk::Compressor::with_dictionary(LEVEL, d),
+        None => zstd::bulk::Compressor::new(LEVEL),
+    }
+    .map_err(err)?;
+    // The LOD's CRC covers the stored bytes, and the reader needs the
+    // size to allocate; the dictionary is the file's only one.
+    for p in [
+        CParameter::ChecksumFlag(false),
+        CParameter::ContentSizeFlag(true),
+        CParameter::DictIdFlag(false),
+    ] {
+        compressor.set_parameter(p).map_err(err)?;
+    }
+    Ok(compressor)
 }
 
 impl Squeezer {
     pub fn train(samples: &[&[u8]]) -> Result<Squeezer, String> {
+        static NEXT: AtomicU64 = AtomicU64::new(1);
         // zstd's trainer refuses too few or too small samples: then
         // every blob is compressed alone.
         let dictionary = zstd::dict::from_samples(samples, DICT_BYTES)
             .ok()
             .filter(|d| !d.is_empty());
-        let err = |e: std::io::Error| format!("zstd: {e}");
-        let mut compressor = match &dictionary {
-            Some(d) => zstd::bulk::Compressor::with_dictionary(LEVEL, d),
-            None => zstd::bulk::Compressor::new(LEVEL),
-        }
-        .map_err(err)?;
-        // The LOD's CRC covers the stored bytes, and the reader needs the
-        // size to allocate; the dictionary is the file's only one.
-        for p in [
-            CParameter::ChecksumFlag(false),
-            CParameter::ContentSizeFlag(true),
-            CParameter::DictIdFlag(false),
-        ] {
-            compressor.set_parameter(p).map_err(err)?;
-        }
         Ok(Squeezer {
-            compressor,
+            compressor: compressor(dictionary.as_deref())?,
             dictionary,
+            id: NEXT.fetch_add(1, Ordering::Relaxed),
         })
     }
 
@@ -78,6 +87,26 @@ impl Squeezer {
             .compress(blob)
             .map_err(|e| format!("zstd: {e}"))
     }
+}
+
+thread_local! {
+    /// A compressor with the dictionary of the last [`Squeezer`] id this
+    /// thread compressed for.
+    static SQUEEZER: RefCell<Option<(u64, zstd::bulk::Compressor<'static>)>> =
+        const { RefCell::new(None) };
+}
+
+/// [`Squeezer::compress`] for the squeezer `id` (with `dictionary`) on any
+/// thread: the same bytes.
+pub fn compress_with(id: u64, dictionary: Option<&[u8]>, blob: &[u8]) -> Result<Vec<u8>, String> {
+    SQUEEZER.with(|c| {
+        let mut c = c.borrow_mut();
+        if c.as_ref().is_none_or(|(have, _)| *have != id) {
+            *c = Some((id, compressor(dictionary)?));
+        }
+        let (_, z) = c.as_mut().expect("set above");
+        z.compress(blob).map_err(|e| format!("zstd: {e}"))
+    })
 }
 
 thread_local! {

@@ -6,6 +6,7 @@
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
 
 use glam::{DVec3, Vec3};
 
@@ -44,6 +45,69 @@ pub struct SceneWriter {
     normal_bits: u8,
     /// zstd over encoded blobs.
     squeeze: Squeeze,
+    /// The trained compressor's settings, for [`LodEncoder`]s on other
+    /// threads, once trained.
+    trained: Arc<OnceLock<Trained>>,
+}
+
+/// What a [`LodEncoder`] compresses with: the writer's dictionary (none:
+/// each blob alone), and an id unique in the process.
+struct Trained {
+    id: u64,
+    dictionary: Option<Vec<u8>>,
+}
+
+/// Encodes LODs for one [`SceneWriter`] on any thread
+/// ([`SceneWriter::encoder`]): checked, re-centred, quantized and
+/// meshopt-encoded with the writer's settings, and compressed once the
+/// writer's dictionary is trained. [`SceneWriter::add_encoded`] stores
+/// the result exactly as [`SceneWriter::add_lod_in_runs`] would have, so
+/// a file is the same bytes whichever thread encoded what.
+#[derive(Clone)]
+pub struct LodEncoder {
+    position_bits: Option<u8>,
+    normal_bits: u8,
+    trained: Arc<OnceLock<Trained>>,
+}
+
+/// One LOD as [`LodEncoder::encode`] left it, for [`SceneWriter::add_encoded`].
+pub struct EncodedLod(Result<Encoded, String>);
+
+struct Encoded {
+    info: LodInfo,
+    bounds: Aabb,
+    blob: Vec<u8>,
+    moved: f64,
+    /// The blob compressed with the dictionary of this id.
+    squeezed: Option<(u64, Vec<u8>)>,
+}
+
+impl LodEncoder {
+    /// [`SceneWriter::add_lod_in_runs`]'s work, short of storing: `runs`
+    /// as there. An invalid mesh is reported when the result is added.
+    pub fn encode(&self, mesh: &LodMesh, error: f32, runs: &[u32]) -> EncodedLod {
+        EncodedLod(
+            encode_lod(mesh, error, self.position_bits, self.normal_bits, runs).map(
+                |(info, bounds, blob, moved)| {
+                    let squeezed = match self.trained.get() {
+                        Some(t) if info.encoded => {
+                            crate::squeeze::compress_with(t.id, t.dictionary.as_deref(), &blob)
+                                .ok()
+                                .map(|b| (t.id, b))
+                        }
+                        _ => None,
+                    };
+                    Encoded {
+                        info,
+                        bounds,
+                        blob,
+                        moved,
+                        squeezed,
+                    }
+                },
+            ),
+        )
+    }
 }
 
 /// Where the writer's zstd stage stands.
@@ -98,7 +162,18 @@ impl SceneWriter {
             position_bits: Some(DEFAULT_POSITION_BITS),
             normal_bits: 16,
             squeeze: Squeeze::Off,
+            trained: Arc::new(OnceLock::new()),
         })
+    }
+
+    /// An encoder with this writer's settings (those set so far: set
+    /// them first) for other threads.
+    pub fn encoder(&self) -> LodEncoder {
+        LodEncoder {
+            position_bits: self.position_bits,
+            normal_bits: self.normal_bits,
+            trained: self.trained.clone(),
+        }
     }
 
     /// Compresses the encoded blobs of LODs added after this with zstd,
@@ -143,16 +218,21 @@ impl SceneWriter {
         Ok(())
     }
 
-    /// Compresses `blob` and writes whichever is smaller.
+    /// Compresses `blob` (unless an encoder did, with this squeezer's
+    /// settings) and writes whichever is smaller.
     fn put_squeezed(
         &mut self,
         squeezer: &mut crate::squeeze::Squeezer,
         lod: u32,
         blob: &[u8],
+        squeezed: Option<(u64, Vec<u8>)>,
     ) -> Result<(), WriteError> {
-        let small = squeezer
-            .compress(blob)
-            .map_err(|detail| WriteError::BadMesh { lod, detail })?;
+        let small = match squeezed {
+            Some((id, small)) if id == squeezer.id => small,
+            _ => squeezer
+                .compress(blob)
+                .map_err(|detail| WriteError::BadMesh { lod, detail })?,
+        };
         if small.len() < blob.len() {
             self.put_blob(lod, &small, true)
         } else {
@@ -175,8 +255,14 @@ impl SceneWriter {
                 lod: pending.first().map_or(0, |p| p.0),
                 detail,
             })?;
+        // Encoders on other threads compress with the same settings from
+        // now on.
+        let _ = self.trained.set(Trained {
+            id: squeezer.id,
+            dictionary: squeezer.dictionary.clone(),
+        });
         for (lod, blob) in pending {
-            self.put_squeezed(&mut squeezer, lod, &blob)?;
+            self.put_squeezed(&mut squeezer, lod, &blob, None)?;
         }
         self.squeeze = Squeeze::On {
             squeezer,
@@ -235,10 +321,24 @@ impl SceneWriter {
         error: f32,
         runs: &[u32],
     ) -> Result<u32, WriteError> {
+        let encoded = self.encoder().encode(mesh, error, runs);
+        self.add_encoded(encoded)
+    }
+
+    /// Appends one LOD an [`LodEncoder`] of this writer encoded (on any
+    /// thread) and returns its index in the LOD table, as
+    /// [`SceneWriter::add_lod_in_runs`] does.
+    pub fn add_encoded(&mut self, lod_encoded: EncodedLod) -> Result<u32, WriteError> {
         let lod = self.lods.len() as u32;
-        let (info, bounds, blob, moved) =
-            encode_lod(mesh, error, self.position_bits, self.normal_bits, runs)
-                .map_err(|detail| WriteError::BadMesh { lod, detail })?;
+        let Encoded {
+            info,
+            bounds,
+            blob,
+            moved,
+            squeezed,
+        } = lod_encoded
+            .0
+            .map_err(|detail| WriteError::BadMesh { lod, detail })?;
         let encoded = info.encoded;
         self.lods.push(info);
         self.lod_bounds.push(bounds);
@@ -259,7 +359,7 @@ impl SceneWriter {
                 mut squeezer,
                 active: true,
             } if encoded => {
-                let put = self.put_squeezed(&mut squeezer, lod, &blob);
+                let put = self.put_squeezed(&mut squeezer, lod, &blob, squeezed);
                 self.squeeze = Squeeze::On {
                     squeezer,
                     active: true,

@@ -25,6 +25,12 @@ pub(super) struct Simplifier<'a> {
 
 impl<'a> Simplifier<'a> {
     pub(super) fn new(mesh: &'a WorkMesh, keep_pieces: bool) -> Self {
+        crate::spent::timed(crate::spent::Kind::Simplify, || {
+            Self::welded(mesh, keep_pieces)
+        })
+    }
+
+    fn welded(mesh: &'a WorkMesh, keep_pieces: bool) -> Self {
         let welded: Vec<u32> = match Self::adapter(mesh) {
             Some(adapter) => {
                 let weld = meshopt::generate_position_remap(&adapter);
@@ -65,6 +71,12 @@ impl<'a> Simplifier<'a> {
     /// The simplifier's own error estimate only guides: errors are
     /// measured.
     pub(super) fn step(&self, target: usize, max_error: f32, sloppy: bool) -> Option<WorkMesh> {
+        crate::spent::timed(crate::spent::Kind::Simplify, || {
+            self.simplified(target, max_error, sloppy)
+        })
+    }
+
+    fn simplified(&self, target: usize, max_error: f32, sloppy: bool) -> Option<WorkMesh> {
         if self.welded.is_empty() {
             return None;
         }

@@ -120,9 +120,18 @@ impl ShardWriter {
 
 impl crate::LodSink for ShardWriter {
     type Error = ShardError;
-    fn add_lod(&mut self, mesh: &LodMesh, error: f32) -> Result<u32, ShardError> {
-        self.node.f32(error);
-        self.node.lod_mesh(mesh);
+    /// The LOD as the shard file stores it.
+    type Prepared = Vec<u8>;
+    fn preparer(&self) -> Box<dyn Fn(&LodMesh, f32, &[u32]) -> Vec<u8> + Send + Sync> {
+        Box::new(|mesh, error, _| {
+            let mut p = Put(Vec::new());
+            p.f32(error);
+            p.lod_mesh(mesh);
+            p.0
+        })
+    }
+    fn add_prepared(&mut self, lod: Vec<u8>) -> Result<u32, ShardError> {
+        self.node.0.extend_from_slice(&lod);
         self.count += 1;
         Ok(0)
     }

@@ -228,8 +228,33 @@ pub(crate) fn write_scene(
         .and_then(|()| writer.set_normal_bits(params.normal_bits))
         .and_then(|()| writer.set_compression(params.compress))
         .map_err(|e| PreprocessError::Write(e.into()))?;
-    let (mut built, _) = build_role(model, params, &layout, &mut writer, progress, role)?;
-    let t = Instant::now();
+    // The occluders depend on the model alone: found beside the levels,
+    // on the same threads, rather than after them on fewer.
+    let (built, found) = std::thread::scope(|s| {
+        let found = s.spawn(|| {
+            let occluders = occluders::scene_occluders(model)?;
+            let bounds =
+                occluders::model_bounds(model).unwrap_or((glam::DVec3::ZERO, glam::DVec3::ZERO));
+            let cells = occluders::occluder_cells(
+                &occluders,
+                bounds,
+                &occluders::CellParams {
+                    height: params.cell_height,
+                    k: params.cell_occluders,
+                    directions: params.cell_directions,
+                },
+            );
+            Ok::<_, SpillError>((occluders, cells))
+        });
+        let built = build_role(model, params, &layout, &mut writer, progress, role);
+        let found = found
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (built, found)
+    });
+    let (mut built, _) = built?;
+    let (occluders, cells) = found.map_err(InputError::from)?;
+    let (t, cpu) = (Instant::now(), stats::process_cpu_seconds());
     progress.start(Phase::Write, 0);
     let mut parameters = params.to_json();
     if let Some(r) = &built.stats.resolved {
@@ -248,18 +273,7 @@ pub(crate) fn write_scene(
         ),
         parameters,
     };
-    let occluders = occluders::scene_occluders(model).map_err(InputError::from)?;
     built.stats.occluders = occluders.len();
-    let bounds = occluders::model_bounds(model).unwrap_or((glam::DVec3::ZERO, glam::DVec3::ZERO));
-    let cells = occluders::occluder_cells(
-        &occluders,
-        bounds,
-        &occluders::CellParams {
-            height: params.cell_height,
-            k: params.cell_occluders,
-            directions: params.cell_directions,
-        },
-    );
     built.stats.occluder_cells = cells.leaves();
     let objects = built.objects.encode();
     built.stats.identity_bytes = objects.len() as u64;
@@ -279,6 +293,13 @@ pub(crate) fn write_scene(
     progress.finish(Phase::Write, secs);
     let stats = &mut built.stats;
     stats.phase_seconds.push((Phase::Write.name().into(), secs));
+    if let (Some(a), Some(b)) = (cpu, stats::process_cpu_seconds()) {
+        if secs > 0.0 {
+            stats
+                .phase_cores
+                .push((Phase::Write.name().into(), (b - a) / secs));
+        }
+    }
     stats.output_bytes = summary.bytes;
     stats.finish();
     Ok(built.stats)
@@ -912,6 +933,7 @@ struct PhaseClock<'a> {
     progress: &'a dyn Progress,
     phase: Phase,
     started: Instant,
+    cpu: Option<f64>,
 }
 
 impl<'a> PhaseClock<'a> {
@@ -920,11 +942,13 @@ impl<'a> PhaseClock<'a> {
             progress,
             phase: Phase::Check,
             started: Instant::now(),
+            cpu: None,
         }
     }
     fn start(&mut self, phase: Phase, total: u64) {
         self.phase = phase;
         self.started = Instant::now();
+        self.cpu = stats::process_cpu_seconds();
         self.progress.start(phase, total);
     }
     fn finish(&mut self, stats: &mut Stats) {
@@ -932,5 +956,12 @@ impl<'a> PhaseClock<'a> {
         self.progress.finish(self.phase, secs);
         tracing::info!(phase = self.phase.name(), seconds = secs, "phase done");
         stats.phase_seconds.push((self.phase.name().into(), secs));
+        if let (Some(a), Some(b)) = (self.cpu, stats::process_cpu_seconds()) {
+            if secs > 0.0 {
+                stats
+                    .phase_cores
+                    .push((self.phase.name().into(), (b - a) / secs));
+            }
+        }
     }
 }

@@ -117,10 +117,15 @@ impl Planar {
             })
             .collect();
         let adj = adjacency(&tv);
-        let normal = |t: &[u32; 3]| {
-            let [a, b, c] = t.map(|i| pos[i as usize]);
-            (b - a).cross(c - a)
-        };
+        // Each triangle's unit normal, once (a triangle is looked at from
+        // each of its neighbours).
+        let unit: Vec<Option<DVec3>> = tv
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| pos[i as usize]);
+                (b - a).cross(c - a).try_normalize()
+            })
+            .collect();
         let mut seen = vec![false; tris.len()];
         // Per triangle: the seed of the patch it was last put in.
         let mut patch = vec![u32::MAX; tris.len()];
@@ -129,7 +134,7 @@ impl Planar {
                 continue;
             }
             seen[seed] = true;
-            let Some(n) = normal(&tv[seed]).try_normalize() else {
+            let Some(n) = unit[seed] else {
                 continue;
             };
             let d = n.dot(pos[tv[seed][0] as usize]);
@@ -149,9 +154,7 @@ impl Planar {
                         continue;
                     }
                     let j = j as usize;
-                    let coplanar = normal(&tv[j])
-                        .try_normalize()
-                        .is_some_and(|m| m.dot(n) > 1.0 - 1e-12)
+                    let coplanar = unit[j].is_some_and(|m| m.dot(n) > 1.0 - 1e-12)
                         && tv[j]
                             .iter()
                             .all(|&i| (n.dot(pos[i as usize]) - d).abs() <= FLAT * size);

@@ -16,7 +16,7 @@
 //! ([`Work`]): on N cores the phase takes at least max(W / N, S).
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
 use std::time::Instant;
 
@@ -48,6 +48,8 @@ struct Shared<'a, P, L, E> {
     /// Nanoseconds by kind of work ([`spent`]), over every task and
     /// the calling thread's `emit`.
     spent: Vec<AtomicU64>,
+    /// Nodes started or waiting to start and not yet ended.
+    queued: AtomicUsize,
     /// Set on the first failure: nodes not yet started are skipped.
     cancelled: AtomicBool,
     tx: Mutex<mpsc::Sender<Message<L, E>>>,
@@ -73,7 +75,11 @@ impl<'a, P: Send, L: Send, E: Send> Shared<'a, P, L, E> {
         'a: 's,
     {
         if self.pending.0[ni].fetch_sub(1, Ordering::AcqRel) == 1 && (self.made_here)(ni) {
-            scope.spawn(move |s| self.run(s, ni));
+            self.queued.fetch_add(1, Ordering::Relaxed);
+            scope.spawn(move |s| {
+                self.run(s, ni);
+                self.queued.fetch_sub(1, Ordering::Relaxed);
+            });
         }
     }
 
@@ -144,6 +150,11 @@ pub(crate) struct Work {
     pub(crate) node_seconds: Vec<f64>,
     /// Seconds the calling thread spent in `emit`: serial, in sequence.
     pub(crate) emit_seconds: f64,
+    /// Seconds the window was full while fewer nodes were running or
+    /// waiting to run than there are threads: cores idle because no
+    /// further leaf could start (as seen at each result the sink waited
+    /// for).
+    pub(crate) window_starved_seconds: f64,
     /// Seconds by kind of work ([`spent::KINDS`]), tasks and `emit`
     /// together.
     pub(crate) spent: Vec<f64>,
@@ -217,6 +228,7 @@ pub(crate) fn run<P: Send, L: Send, E: Send>(
         slots: (0..tree.len()).map(|_| Mutex::new(None)).collect(),
         nanos: (0..tree.len()).map(|_| AtomicU64::new(0)).collect(),
         spent: spent::KINDS.iter().map(|_| AtomicU64::new(0)).collect(),
+        queued: AtomicUsize::new(0),
         cancelled: AtomicBool::new(false),
         tx: Mutex::new(tx),
     };
@@ -225,7 +237,8 @@ pub(crate) fn run<P: Send, L: Send, E: Send>(
             .map(|ni| AtomicU32::new(shared.children(ni).count() as u32 + 1))
             .collect(),
     );
-    let mut emit_seconds = 0.0;
+    let (mut emit_seconds, mut window_starved_seconds) = (0.0, 0.0);
+    let threads = rayon::current_num_threads();
     let outcome = rayon::in_place_scope(|scope| -> Result<(), E> {
         let shared = &shared;
         // Whatever ends the loop early stops what has not started.
@@ -248,8 +261,16 @@ pub(crate) fn run<P: Send, L: Send, E: Send>(
                 admitted += 1;
             }
             let result = if made_here(ni) {
+                let full = admitted < sequence.len();
+                let mut since = Instant::now();
                 while !waiting.contains_key(&ni) {
-                    match receive(&rx) {
+                    let starved = full && shared.queued.load(Ordering::Relaxed) < threads;
+                    let message = receive(&rx);
+                    if starved {
+                        window_starved_seconds += since.elapsed().as_secs_f64();
+                    }
+                    since = Instant::now();
+                    match message {
                         Message::Made(m, l) => {
                             waiting.insert(m, l);
                         }
@@ -288,6 +309,7 @@ pub(crate) fn run<P: Send, L: Send, E: Send>(
             .map(|n| n.load(Ordering::Relaxed) as f64 * 1e-9)
             .collect(),
         emit_seconds,
+        window_starved_seconds,
         spent: shared
             .spent
             .iter()
@@ -566,6 +588,7 @@ mod tests {
         let work = Work {
             node_seconds,
             emit_seconds: 1.0,
+            window_starved_seconds: 0.0,
             spent: Vec::new(),
         };
         assert_eq!(work.total(), 15.0);

@@ -117,6 +117,11 @@ pub struct Schedule {
     pub sink_seconds: f64,
     /// The costliest single task's seconds.
     pub largest_task_seconds: f64,
+    /// Seconds the window of units in flight was full while fewer nodes
+    /// were running or waiting to run than there are threads: cores idle
+    /// because no further leaf could start.
+    #[serde(default)]
+    pub window_starved_seconds: f64,
     /// Seconds of W by kind of work, each charged once (a BVH built for
     /// a measurement is not also the measurement's), and `other` for the
     /// rest (merging, cutting, covering what vanished, copies).
@@ -124,6 +129,11 @@ pub struct Schedule {
     /// W / max(W / N, S) for N cores: the speed-up over one core the
     /// work and the critical path allow the phase, by N.
     pub speedup: Vec<(usize, f64)>,
+    /// The same for the whole run, the other phases taken as serial at
+    /// the CPU seconds they used (their seconds x cores busy): (W + R) /
+    /// (max(W / N, S) + R). Filled when the run is done.
+    #[serde(default)]
+    pub run_speedup: Vec<(usize, f64)>,
 }
 
 impl Schedule {
@@ -135,6 +145,7 @@ impl Schedule {
             span_seconds: work.span(tree),
             sink_seconds: work.emit_seconds,
             largest_task_seconds: work.node_seconds.iter().copied().fold(0.0, f64::max),
+            window_starved_seconds: work.window_starved_seconds,
             seconds_by_kind: {
                 let mut by: Vec<(String, f64)> = crate::spent::KINDS
                     .iter()
@@ -149,6 +160,7 @@ impl Schedule {
                 .into_iter()
                 .map(|n| (n, work.speedup(tree, n)))
                 .collect(),
+            run_speedup: Vec::new(),
         }
     }
 }
@@ -213,6 +225,24 @@ impl Stats {
             self.bytes_per_triangle = self.output_bytes as f64 / self.triangles as f64;
         }
         self.peak_memory_bytes = peak_memory_bytes();
+        // The phases other than the levels, as serial CPU seconds.
+        let rest: f64 = self
+            .phase_seconds
+            .iter()
+            .filter(|(p, _)| p != "hlod")
+            .map(|(p, secs)| {
+                let cores = self.phase_cores.iter().find(|(q, _)| q == p);
+                secs * cores.map_or(1.0, |c| c.1.max(1.0))
+            })
+            .sum();
+        if let Some(w) = &mut self.schedule {
+            let (work, span) = (w.work_seconds, w.span_seconds);
+            w.run_speedup = w
+                .speedup
+                .iter()
+                .map(|&(n, _)| (n, (work + rest) / ((work / n as f64).max(span) + rest)))
+                .collect();
+        }
     }
 
     /// A plain-text table for people.
@@ -280,8 +310,13 @@ impl Stats {
         if let Some(w) = &self.schedule {
             let _ = writeln!(
                 s,
-                "hlod work         W {:.1} s in {} tasks (largest {:.2} s) + sink {:.1} s; critical path S {:.2} s",
-                w.work_seconds, w.tasks, w.largest_task_seconds, w.sink_seconds, w.span_seconds
+                "hlod work         W {:.1} s in {} tasks (largest {:.2} s) + sink {:.1} s; critical path S {:.2} s; window starved {:.1} s",
+                w.work_seconds,
+                w.tasks,
+                w.largest_task_seconds,
+                w.sink_seconds,
+                w.span_seconds,
+                w.window_starved_seconds
             );
             let ups: Vec<String> = w
                 .speedup
@@ -289,6 +324,18 @@ impl Stats {
                 .map(|(n, x)| format!("{n} cores {x:.1}x"))
                 .collect();
             let _ = writeln!(s, "hlod speed-up     W / max(W/N, S): {}", ups.join(", "));
+            if !w.run_speedup.is_empty() {
+                let ups: Vec<String> = w
+                    .run_speedup
+                    .iter()
+                    .map(|(n, x)| format!("{n} cores {x:.1}x"))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "run speed-up      the other phases serial: {}",
+                    ups.join(", ")
+                );
+            }
             let kinds: Vec<String> = w
                 .seconds_by_kind
                 .iter()

@@ -279,6 +279,63 @@ fn lod_health_in_info_and_preprocess_stats() {
     assert_eq!(st["nodes"], info["nodes"]);
     assert_eq!(st["triangles"], info["triangles"]);
     assert!(st["phase_seconds"].is_array() && st["output_bytes"].as_u64() > Some(0));
+
+    // The HLOD phase as tasks: one per node, the work at least the
+    // critical path, the work by kind adding up to the work, and the
+    // speed-ups what W / max(W / N, S) gives.
+    let w = &st["schedule"];
+    assert_eq!(w["tasks"], st["nodes"], "{w}");
+    let (work, span) = (
+        w["work_seconds"].as_f64().unwrap(),
+        w["span_seconds"].as_f64().unwrap(),
+    );
+    assert!(work > 0.0 && span > 0.0 && span <= work, "{w}");
+    assert!(span >= w["largest_task_seconds"].as_f64().unwrap(), "{w}");
+    assert!(span >= w["sink_seconds"].as_f64().unwrap(), "{w}");
+    let kinds: Vec<(String, f64)> = serde_json::from_value(w["seconds_by_kind"].clone()).unwrap();
+    let names: Vec<&str> = kinds.iter().map(|(k, _)| k.as_str()).collect();
+    for k in [
+        "simplify",
+        "certify level->reference",
+        "certify reference->level",
+        "BVH builds",
+        "other",
+    ] {
+        assert!(names.contains(&k), "{names:?}");
+    }
+    let by_kind: f64 = kinds.iter().map(|(_, s)| s).sum();
+    assert!(
+        (by_kind - work).abs() <= 1e-6 * work.max(1.0) + 1e-9,
+        "{by_kind} vs {work}"
+    );
+    let ups: Vec<(usize, f64)> = serde_json::from_value(w["speedup"].clone()).unwrap();
+    for (n, x) in ups {
+        let expected = work / (work / n as f64).max(span);
+        assert!(
+            (x - expected).abs() < 1e-9 && x <= n as f64 + 1e-9,
+            "{n}: {x}"
+        );
+    }
+    assert!(pre.contains("hlod speed-up     W / max(W/N, S)"), "{pre}");
+    // The whole run, with the other phases serial, gains less.
+    let run: Vec<(usize, f64)> = serde_json::from_value(w["run_speedup"].clone()).unwrap();
+    let phase: Vec<(usize, f64)> = serde_json::from_value(w["speedup"].clone()).unwrap();
+    assert_eq!(run.len(), phase.len());
+    for ((n, r), (m, p)) in run.iter().zip(&phase) {
+        assert!(
+            n == m && *r >= 1.0 - 1e-9 && r <= p,
+            "{n}: run {r}, phase {p}"
+        );
+    }
+    // Cores busy per phase, on Linux.
+    if cfg!(target_os = "linux") {
+        let cores: Vec<(String, f64)> = serde_json::from_value(st["phase_cores"].clone()).unwrap();
+        let hlod = cores
+            .iter()
+            .find(|(p, _)| p == "hlod")
+            .expect("hlod's cores");
+        assert!(hlod.1 >= 0.0, "{cores:?}");
+    }
 }
 
 /// One occluder over the first leaf and one view cell listing it, as OCCL

@@ -379,6 +379,16 @@ mod tests {
 
     const SEQUENCE: [usize; 8] = [3, 4, 5, 6, 7, 1, 2, 0];
 
+    /// [`run`] over [`SEQUENCE`], every node made here, the window open.
+    #[allow(clippy::type_complexity)]
+    fn run_all(
+        tree: &[HNode],
+        make: &(dyn Fn(usize, Vec<u32>) -> Result<(u32, String), String> + Sync),
+        emit: &mut dyn FnMut(usize, Option<String>, Vec<u32>) -> Result<Option<u32>, String>,
+    ) -> Result<(Vec<Option<u32>>, Work), String> {
+        run(tree, &SEQUENCE, u64::MAX, &|_| 1, &|_| true, make, emit)
+    }
+
     /// Each node's part is the number of leaves below it; its result
     /// names it and what its children left.
     fn count(
@@ -504,18 +514,10 @@ mod tests {
             count(&tree)(ni, children)
         };
         let mut handed = Vec::new();
-        let err = run(
-            &tree,
-            &SEQUENCE,
-            u64::MAX,
-            &|_| 1,
-            &|_| true,
-            &make,
-            &mut |ni, _: Option<String>, _: Vec<u32>| {
-                handed.push(ni);
-                Ok(None)
-            },
-        )
+        let err = run_all(&tree, &make, &mut |ni, _, _| {
+            handed.push(ni);
+            Ok(None)
+        })
         .unwrap_err();
         assert_eq!(err, "node 6 is broken");
         // Node 2 and the root wait for node 6 and are never made; nothing
@@ -527,21 +529,13 @@ mod tests {
     #[test]
     fn an_error_from_the_sink_stops_the_run() {
         let tree = tree();
-        let err = run(
-            &tree,
-            &SEQUENCE,
-            u64::MAX,
-            &|_| 1,
-            &|_| true,
-            &count(&tree),
-            &mut |ni, _: Option<String>, _: Vec<u32>| {
-                if ni == 5 {
-                    Err("disk full".to_string())
-                } else {
-                    Ok(None)
-                }
-            },
-        )
+        let err = run_all(&tree, &count(&tree), &mut |ni, _, _| {
+            if ni == 5 {
+                Err("disk full".to_string())
+            } else {
+                Ok(None)
+            }
+        })
         .unwrap_err();
         assert_eq!(err, "disk full");
     }
@@ -550,18 +544,11 @@ mod tests {
     fn a_panic_while_making_a_node_reaches_the_caller() {
         let tree = tree();
         let r = catch_unwind(AssertUnwindSafe(|| {
-            run(
-                &tree,
-                &SEQUENCE,
-                u64::MAX,
-                &|_| 1,
-                &|_| true,
-                &|ni, children: Vec<u32>| {
-                    assert_ne!(ni, 1, "node 1 cannot be made");
-                    count(&tree)(ni, children)
-                },
-                &mut |_, _: Option<String>, _: Vec<u32>| Ok(None),
-            )
+            let make = |ni, children| {
+                assert_ne!(ni, 1, "node 1 cannot be made");
+                count(&tree)(ni, children)
+            };
+            run_all(&tree, &make, &mut |_, _, _| Ok(None))
         }));
         let panic = r.unwrap_err();
         let message = panic.downcast_ref::<String>().cloned().unwrap_or_default();

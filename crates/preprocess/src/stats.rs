@@ -318,22 +318,18 @@ impl Stats {
                 w.span_seconds,
                 w.window_starved_seconds
             );
-            let ups: Vec<String> = w
-                .speedup
-                .iter()
-                .map(|(n, x)| format!("{n} cores {x:.1}x"))
-                .collect();
-            let _ = writeln!(s, "hlod speed-up     W / max(W/N, S): {}", ups.join(", "));
-            if !w.run_speedup.is_empty() {
-                let ups: Vec<String> = w
-                    .run_speedup
-                    .iter()
+            let ups = |v: &[(usize, f64)]| {
+                v.iter()
                     .map(|(n, x)| format!("{n} cores {x:.1}x"))
-                    .collect();
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let _ = writeln!(s, "hlod speed-up     W / max(W/N, S): {}", ups(&w.speedup));
+            if !w.run_speedup.is_empty() {
                 let _ = writeln!(
                     s,
                     "run speed-up      the other phases serial: {}",
-                    ups.join(", ")
+                    ups(&w.run_speedup)
                 );
             }
             let kinds: Vec<String> = w

@@ -352,8 +352,8 @@ pub(crate) enum Role<'a> {
 }
 
 /// Levels made by shards, for the merge: where each node's LODs are in
-/// the (checked) shard files, read when the node's turn comes so only a
-/// batch of them is in memory; and the shard roots' [`Done`].
+/// the (checked) shard files, read when the node's turn in the sequence
+/// comes so only one node's are in memory; and the shard roots' [`Done`].
 #[derive(Default)]
 pub(crate) struct Given {
     pub(crate) files: Vec<std::fs::File>,

@@ -254,8 +254,8 @@ pub(crate) fn write_scene(
     });
     let (mut built, _) = built?;
     let (occluders, cells) = found.map_err(InputError::from)?;
-    let (t, cpu) = (Instant::now(), stats::process_cpu_seconds());
-    progress.start(Phase::Write, 0);
+    let mut clock = PhaseClock::new(progress);
+    clock.start(Phase::Write, 0);
     let mut parameters = params.to_json();
     if let Some(r) = &built.stats.resolved {
         if let Ok(serde_json::Value::Object(m)) = serde_json::to_value(r) {
@@ -289,17 +289,8 @@ pub(crate) fn write_scene(
     let summary = writer
         .finish(built.nodes, provenance)
         .map_err(|e| PreprocessError::Write(e.into()))?;
-    let secs = t.elapsed().as_secs_f64();
-    progress.finish(Phase::Write, secs);
     let stats = &mut built.stats;
-    stats.phase_seconds.push((Phase::Write.name().into(), secs));
-    if let (Some(a), Some(b)) = (cpu, stats::process_cpu_seconds()) {
-        if secs > 0.0 {
-            stats
-                .phase_cores
-                .push((Phase::Write.name().into(), (b - a) / secs));
-        }
-    }
+    clock.finish(stats);
     stats.output_bytes = summary.bytes;
     stats.finish();
     Ok(built.stats)
@@ -513,8 +504,6 @@ pub(crate) fn build_role<S: LodSink>(
         lod_ranges[ni] = (first.unwrap_or(0), count);
         Ok(())
     };
-    // Unit by unit, so the levels and full detail that wait for a parent
-    // stay a unit's worth ([`order`]).
     let below = subtree_triangles(tree, parts);
     // A node's full detail is kept for its parent only when the parent
     // will be measured against it: when the parent has at most
@@ -556,26 +545,20 @@ pub(crate) fn build_role<S: LodSink>(
     let make = |ni: usize,
                 children: Vec<ForParent>|
      -> Result<(ForParent, Vec<Prepared<S::Prepared>>), PreprocessError> {
-        let ((lods, d), lowest) = match tree[ni].object {
-            Some(object) => (
-                make_leaf(
-                    model,
-                    &parts[object as usize],
-                    &tree[ni],
-                    &chain,
-                    &tally,
-                    keep,
-                    wanted(ni),
-                )
-                .map_err(InputError::from)?,
-                0.0,
-            ),
-            None => {
-                let made = make_inner(&tree[ni], &children, (&chain, &tally), keep, wanted(ni));
-                let lowest = lowest_of(&made.0, &children);
-                (made, lowest)
-            }
+        let (lods, d) = match tree[ni].object {
+            Some(object) => make_leaf(
+                model,
+                &parts[object as usize],
+                &tree[ni],
+                &chain,
+                &tally,
+                keep,
+                wanted(ni),
+            )
+            .map_err(InputError::from)?,
+            None => make_inner(&tree[ni], &children, (&chain, &tally), keep, wanted(ni)),
         };
+        let lowest = lowest_of(&tree[ni], &lods, &children);
         Ok(((d, lowest), ready(ni, lods)))
     };
     let mut hand_on = |ni: usize,
@@ -589,10 +572,7 @@ pub(crate) fn build_role<S: LodSink>(
                     node: ni as u32,
                     reason: "neither made here nor given by a shard".into(),
                 })?;
-                let lowest = match tree[ni].object {
-                    Some(_) => 0.0,
-                    None => lowest_of(&lods, &children),
-                };
+                let lowest = lowest_of(&tree[ni], &lods, &children);
                 (ready(ni, lods), Some((d, lowest)))
             }
         };
@@ -861,12 +841,14 @@ fn lowest_below(children: &[ForParent]) -> f32 {
     children.iter().map(|c| c.1).fold(0.0f32, f32::max)
 }
 
-/// An inner node's `lowest`: its finest stored error, or (without stored
+/// A node's `lowest`: 0 for a leaf (its finest level is its full
+/// detail); an inner node's finest stored error, or (without stored
 /// levels) the largest below it.
-fn lowest_of(lods: &[(LodMesh, f32)], children: &[ForParent]) -> f32 {
-    match lods.first() {
-        Some(l) => l.1,
-        None => lowest_below(children),
+fn lowest_of(node: &hierarchy::HNode, lods: &[(LodMesh, f32)], children: &[ForParent]) -> f32 {
+    match (node.object, lods.first()) {
+        (Some(_), _) => 0.0,
+        (None, Some(l)) => l.1,
+        (None, None) => lowest_below(children),
     }
 }
 

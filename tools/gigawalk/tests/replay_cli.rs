@@ -16,24 +16,7 @@ fn replay(gwk: &Path, path: &Path, out: &Path, more: &[&str]) -> (bool, String, 
 /// A generated plant of `triangles` with a 12-pose walk, preprocessed in
 /// `dir`: its path and scene files, and a report directory.
 fn plant(dir: &Path, triangles: &str) -> (PathBuf, PathBuf, PathBuf) {
-    let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
-    let (ok, _, err) = gigawalk(&[
-        "generate",
-        "plant",
-        "--triangles",
-        triangles,
-        "--seed",
-        "2",
-        "-o",
-        s(&glb),
-        "--path",
-        s(&path),
-        "--poses",
-        "12",
-    ]);
-    assert!(ok, "{err}");
-    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&gwk)]);
-    assert!(ok, "{err}");
+    let (path, gwk) = common::plant(dir, triangles);
     (path, gwk, dir.join("report"))
 }
 

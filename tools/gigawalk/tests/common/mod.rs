@@ -27,12 +27,18 @@ pub fn gigawalk_ok(args: &[&str]) -> Output {
 /// A generated plant (8k triangles, seed 2) with a 12-pose walk,
 /// preprocessed in `dir`: its path and scene files.
 pub fn small_plant(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    plant(dir, "8k")
+}
+
+/// A generated plant of `triangles` (seed 2) with a 12-pose walk,
+/// preprocessed in `dir`: its path and scene files.
+pub fn plant(dir: &std::path::Path, triangles: &str) -> (std::path::PathBuf, std::path::PathBuf) {
     let (glb, path, gwk) = (dir.join("p.glb"), dir.join("p.path"), dir.join("p.gwk"));
     gigawalk_ok(&[
         "generate",
         "plant",
         "--triangles",
-        "8k",
+        triangles,
         "--seed",
         "2",
         "-o",

@@ -2,7 +2,8 @@
 # Preprocess speed, back to back: this checkout's build against another
 # revision's, interleaved (base, new, new, base, ...) on the same generated
 # plants, so both see the same box; the scenes are compared with cmp
-# (a pure speed change leaves them byte-identical).
+# (a pure speed change leaves them byte-identical; where they differ,
+# benches/scene-diff.py says in which sections).
 #
 #   BASE=<rev> SIZES="10M 20M" ROUNDS=2 benches/preprocess-speed.sh [OUT]
 #
@@ -70,7 +71,9 @@ for size in $SIZES; do
       if cmp -s "$OUT/$size-base-$round.gwk" "$OUT/$size-new-$round.gwk"; then
         echo "$size round $round: scenes byte-identical"
       else
-        echo "$size round $round: scenes differ"
+        echo "$size round $round: scenes differ:"
+        python3 benches/scene-diff.py "$OUT/$size-base-$round.gwk" "$OUT/$size-new-$round.gwk" \
+          | sed 's/^/  /' || true
       fi
     fi
     rm -f "$OUT"/"$size"-*-"$round".gwk

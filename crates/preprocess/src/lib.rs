@@ -212,6 +212,11 @@ pub fn preprocess(
 
 /// Step 6 for `role` (every node, or a merge's) into a scene file at
 /// `output`, with its provenance and occluders.
+/// Most threads the object table is compressed on: each holds about 90
+/// MiB of zstd's level-19 tables, so more would take the memory the
+/// levels have just given back, and more.
+const IDENTITY_WORKERS: usize = 4;
+
 pub(crate) fn write_scene(
     model: &dyn Source,
     params: &Params,
@@ -275,8 +280,17 @@ pub(crate) fn write_scene(
     };
     built.stats.occluders = occluders.len();
     built.stats.occluder_cells = cells.leaves();
-    let objects = built.objects.encode();
+    // Compressed on as many threads as the levels were made on, up to
+    // IDENTITY_WORKERS; its CPU seconds and jobs say what more cores would
+    // make of it.
+    let cpu = stats::process_cpu_seconds();
+    let workers = rayon::current_num_threads().min(IDENTITY_WORKERS);
+    let (objects, jobs) = built.objects.encode_on(workers);
     built.stats.identity_bytes = objects.len() as u64;
+    if let (Some(before), Some(after)) = (cpu, stats::process_cpu_seconds()) {
+        built.stats.identity_compression =
+            stats::Pieces::even(jobs, after - before, IDENTITY_WORKERS);
+    }
     writer.add_optional_section(gigawalk_scene::objects::TAG_OBJECTS, objects);
     writer.add_optional_section(
         gigawalk_scene::occluders::TAG_OCCLUDERS,

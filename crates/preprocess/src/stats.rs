@@ -55,6 +55,9 @@ pub struct Stats {
     /// Bytes of the object table and the leaves' runs (OBJT section).
     #[serde(default)]
     pub identity_bytes: u64,
+    /// Compressing the OBJT section's frames (in the write phase).
+    #[serde(default)]
+    pub identity_compression: Pieces,
     /// `output_bytes / raw_input_bytes`.
     pub output_ratio: f64,
     /// `output_bytes / triangles`.
@@ -130,10 +133,49 @@ pub struct Schedule {
     /// work and the critical path allow the phase, by N.
     pub speedup: Vec<(usize, f64)>,
     /// The same for the whole run, the other phases taken as serial at
-    /// the CPU seconds they used (their seconds x cores busy): (W + R) /
-    /// (max(W / N, S) + R). Filled when the run is done.
+    /// the CPU seconds they used (their seconds x cores busy), less the
+    /// pieces of them that ran in parallel (P seconds, longest piece L, on
+    /// at most T threads): (W + P + R) / (max(W / N, S) + max(P / min(N,
+    /// T), L) + R). Filled when the run is done.
     #[serde(default)]
     pub run_speedup: Vec<(usize, f64)>,
+}
+
+/// Work outside the HLOD phase done in pieces on several threads: the
+/// object table's compression jobs (equal in size, so each is taken to
+/// cost the mean), on at most `most_threads`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Pieces {
+    pub pieces: usize,
+    /// CPU seconds of every piece.
+    pub seconds: f64,
+    /// The longest piece's seconds.
+    pub longest_seconds: f64,
+    /// Most threads the pieces run on, whatever the cores.
+    pub most_threads: usize,
+}
+
+impl Pieces {
+    /// `pieces` of equal size that took `seconds` of CPU time in all, run
+    /// on at most `most_threads`.
+    pub fn even(pieces: usize, seconds: f64, most_threads: usize) -> Self {
+        let seconds = seconds.max(0.0);
+        Pieces {
+            pieces,
+            seconds,
+            longest_seconds: if pieces > 0 {
+                seconds / pieces as f64
+            } else {
+                seconds
+            },
+            most_threads: most_threads.max(1),
+        }
+    }
+
+    /// Their seconds on `n` cores.
+    fn on(&self, n: usize) -> f64 {
+        (self.seconds / n.min(self.most_threads).max(1) as f64).max(self.longest_seconds)
+    }
 }
 
 impl Schedule {
@@ -235,12 +277,17 @@ impl Stats {
                 secs * cores.map_or(1.0, |c| c.1.max(1.0))
             })
             .sum();
+        let pieces = &self.identity_compression;
+        let rest = (rest - pieces.seconds).max(0.0);
         if let Some(w) = &mut self.schedule {
             let (work, span) = (w.work_seconds, w.span_seconds);
             w.run_speedup = w
                 .speedup
                 .iter()
-                .map(|&(n, _)| (n, (work + rest) / ((work / n as f64).max(span) + rest)))
+                .map(|&(n, _)| {
+                    let on_n = (work / n as f64).max(span) + pieces.on(n) + rest;
+                    (n, (work + pieces.seconds + rest) / on_n)
+                })
                 .collect();
         }
     }
@@ -280,10 +327,12 @@ impl Stats {
         );
         let _ = writeln!(
             s,
-            "objects           {} named, {:.1} KiB of identity (OBJT), {:.2}% of the scene",
+            "objects           {} named, {:.1} KiB of identity (OBJT), {:.2}% of the scene, compressed in {} jobs, {:.1} s CPU",
             self.objects,
             self.identity_bytes as f64 / 1024.0,
-            100.0 * self.identity_bytes as f64 / self.output_bytes.max(1) as f64
+            100.0 * self.identity_bytes as f64 / self.output_bytes.max(1) as f64,
+            self.identity_compression.pieces,
+            self.identity_compression.seconds
         );
         let _ = writeln!(
             s,
@@ -356,6 +405,50 @@ impl Stats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The run's speed-up: the levels' work over N cores or their span,
+    /// the object table's jobs over N or the longest, the rest serial at
+    /// its CPU seconds.
+    #[test]
+    fn the_run_speed_up_counts_the_compression_jobs_as_parallel() {
+        let mut st = Stats {
+            phase_seconds: vec![
+                ("import".into(), 4.0),
+                ("hlod".into(), 50.0),
+                ("write".into(), 6.0),
+            ],
+            phase_cores: vec![
+                ("import".into(), 1.0),
+                ("hlod".into(), 2.0),
+                ("write".into(), 2.0),
+            ],
+            // The write phase's 12 s of CPU: 10 s of them in 5 jobs, on
+            // at most 4 threads.
+            identity_compression: Pieces::even(5, 10.0, 4),
+            schedule: Some(Schedule {
+                work_seconds: 100.0,
+                span_seconds: 2.0,
+                speedup: vec![(2, 2.0), (16, 16.0), (100, 50.0)],
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        st.finish();
+        let run = &st.schedule.as_ref().unwrap().run_speedup;
+        // Rest: import 4 s + write 12 s - the jobs' 10 s = 6 s serial.
+        let want = |n: f64| {
+            (100.0 + 10.0 + 6.0) / ((100.0 / n).max(2.0) + (10.0 / n.min(4.0)).max(2.0) + 6.0)
+        };
+        for &(n, x) in run {
+            assert!(
+                (x - want(n as f64)).abs() < 1e-9,
+                "{n}: {x} against {}",
+                want(n as f64)
+            );
+        }
+        assert!(Pieces::even(0, 3.0, 4).longest_seconds == 3.0);
+        assert!(Pieces::even(4, -1.0, 4).seconds == 0.0);
+    }
 
     #[cfg(target_os = "linux")]
     #[test]

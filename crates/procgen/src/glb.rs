@@ -199,6 +199,70 @@ impl GlbBuilder {
         self.instance(group, name, id, c.as_dvec3(), None, None);
     }
 
+    /// Splits the instances into `parts` runs of consecutive instances
+    /// (the generators place them region by region, so each run is a
+    /// compact piece of the scene) with about equal triangles each; every
+    /// run is non-empty, so there are at most as many as instances.
+    pub fn split(&self, parts: usize) -> Vec<std::ops::Range<usize>> {
+        let parts = parts.clamp(1, self.nodes.len().max(1));
+        let mut runs = Vec::with_capacity(parts);
+        let (mut start, mut so_far) = (0, 0u64);
+        for (i, n) in self.nodes.iter().enumerate() {
+            so_far += (self.meshes[n.mesh.0].indices / 3) as u64;
+            let left = self.nodes.len() - i - 1;
+            let runs_left = parts - runs.len() - 1;
+            // Close this run once it holds its share of the triangles, or
+            // when every later run needs one of the remaining instances.
+            let share = self.triangles * (runs.len() as u64 + 1) / parts as u64;
+            if runs_left > 0 && (so_far >= share || left == runs_left) {
+                runs.push(start..i + 1);
+                start = i + 1;
+            }
+        }
+        runs.push(start..self.nodes.len());
+        runs
+    }
+
+    /// The instances `nodes` (a run from [`GlbBuilder::split`]) with the
+    /// meshes they use, as a scene of their own: the same materials and
+    /// group names, each mesh stored once however often the run uses it.
+    pub fn part(&self, nodes: std::ops::Range<usize>) -> GlbBuilder {
+        let mut out = GlbBuilder::new(self.generator.clone(), &self.materials);
+        let mut group_of = vec![0; self.nodes.len()];
+        for (g, (_, children)) in self.groups.iter().enumerate() {
+            for &c in children {
+                group_of[c] = g;
+            }
+        }
+        let mut mesh_in_part: Vec<Option<MeshId>> = vec![None; self.meshes.len()];
+        for i in nodes {
+            let n = &self.nodes[i];
+            let id = *mesh_in_part[n.mesh.0].get_or_insert_with(|| {
+                let m = &self.meshes[n.mesh.0];
+                let vtx = &self.vtx[m.vtx_offset..m.vtx_offset + 24 * m.vertices];
+                let idx = &self.idx[m.idx_offset..m.idx_offset + 4 * m.indices];
+                out.meshes.push(MeshRec {
+                    name: m.name.clone(),
+                    vtx_offset: out.vtx.len(),
+                    idx_offset: out.idx.len(),
+                    ..*m
+                });
+                out.vtx.extend_from_slice(vtx);
+                out.idx.extend_from_slice(idx);
+                MeshId(out.meshes.len() - 1)
+            });
+            out.instance(
+                self.groups[group_of[i]].0,
+                &n.name,
+                id,
+                n.translation,
+                n.rotation,
+                n.scale,
+            );
+        }
+        out
+    }
+
     fn json(&self) -> String {
         let mut j = String::with_capacity(256 + self.nodes.len() * 80 + self.meshes.len() * 400);
         let n_inst = self.nodes.len();
@@ -301,13 +365,14 @@ impl GlbBuilder {
         j
     }
 
-    fn bin_len(&self) -> usize {
+    /// Bytes of vertex and index data (the bulk of a written file).
+    pub fn bin_len(&self) -> usize {
         self.vtx.len() + self.idx.len()
     }
 
     /// Writes the .glb: 12-byte header, JSON chunk (space-padded), BIN
     /// chunk (glTF 2.0 spec, section 4.4).
-    pub fn write_glb<W: Write>(&self, w: &mut W) -> std::io::Result<u64> {
+    pub fn write_glb<W: Write + ?Sized>(&self, w: &mut W) -> std::io::Result<u64> {
         let mut json = self.json().into_bytes();
         while !json.len().is_multiple_of(4) {
             json.push(b' ');
@@ -315,7 +380,12 @@ impl GlbBuilder {
         let bin_len = self.bin_len();
         let bin_padded = bin_len.div_ceil(4) * 4;
         let total = 12 + 8 + json.len() + 8 + bin_padded;
-        let too_big = || std::io::Error::other("scene exceeds the 4 GiB limit of a .glb file");
+        let too_big = || {
+            std::io::Error::new(
+                std::io::ErrorKind::FileTooLarge,
+                "scene exceeds the 4 GiB limit of a .glb file",
+            )
+        };
         let total32 = u32::try_from(total).map_err(|_| too_big())?;
         w.write_all(b"glTF")?;
         w.write_all(&2u32.to_le_bytes())?;

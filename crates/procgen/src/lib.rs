@@ -90,8 +90,43 @@ pub struct Generated {
 
 impl Generated {
     /// Writes the .glb; returns the bytes written.
-    pub fn write_glb<W: Write>(&self, w: &mut W) -> std::io::Result<u64> {
+    pub fn write_glb<W: Write + ?Sized>(&self, w: &mut W) -> std::io::Result<u64> {
         self.builder.write_glb(w)
+    }
+
+    /// Bytes of vertex and index data, about the size of the written file.
+    pub fn data_bytes(&self) -> u64 {
+        self.builder.bin_len() as u64
+    }
+
+    /// Splits the scene into `parts` pieces of about equal triangles, each
+    /// a run of neighbouring objects, for scenes too big for one .glb file
+    /// (glTF binaries are limited to 4 GiB). Fewer pieces when the scene
+    /// has fewer objects than `parts`. Write each with
+    /// [`Generated::write_glb_part`]; importing all of them gives the
+    /// objects, triangles and bounds of the [`Report`].
+    pub fn split(&self, parts: usize) -> Vec<Part> {
+        self.builder
+            .split(parts)
+            .into_iter()
+            .map(|nodes| Part { nodes })
+            .collect()
+    }
+
+    /// Writes one piece from [`Generated::split`] as a .glb of its own;
+    /// returns the bytes written and the piece's report.
+    pub fn write_glb_part<W: Write + ?Sized>(
+        &self,
+        part: &Part,
+        w: &mut W,
+    ) -> std::io::Result<(u64, Report)> {
+        let b = self.builder.part(part.nodes.clone());
+        let report = Report {
+            triangles: b.triangles(),
+            objects: b.objects(),
+            bounds: b.bounds(),
+        };
+        Ok((b.write_glb(w)?, report))
     }
 
     /// The .glb in memory (for tests and small scenes).
@@ -101,6 +136,12 @@ impl Generated {
             .expect("writing to a Vec cannot fail");
         v
     }
+}
+
+/// One piece of a [`Generated`] scene: a run of its objects.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Part {
+    nodes: std::ops::Range<usize>,
 }
 
 /// Default number of camera poses: a one-minute walk at 10 poses a second.

@@ -136,3 +136,57 @@ fn path_walks_at_eye_height_inside_the_scene() {
         assert_eq!(back.poses.len(), 300);
     }
 }
+
+/// A scene written in pieces imports as the whole: every object once, the
+/// reported triangles and bounds, and pieces of about equal triangles.
+#[test]
+fn pieces_import_as_the_whole_scene() {
+    for (kind, parts) in [(Kind::Plant, 3), (Kind::Machine, 4), (Kind::City, 1)] {
+        let g = generate(kind, 80_000, 5, 50);
+        let whole = import_glb_bytes(&g.glb_bytes(), "whole").unwrap();
+        let pieces = g.split(parts);
+        assert_eq!(pieces.len(), parts, "{kind:?}");
+        let mut objects = Vec::new();
+        let mut bounds = Aabb::EMPTY;
+        for (k, piece) in pieces.iter().enumerate() {
+            let mut bytes = Vec::new();
+            let (n, report) = g.write_glb_part(piece, &mut bytes).unwrap();
+            assert_eq!(n as usize, bytes.len());
+            let model = import_glb_bytes(&bytes, &format!("piece {k}")).unwrap();
+            assert_eq!(
+                model.stats.triangles, report.triangles,
+                "{kind:?} piece {k}"
+            );
+            assert_eq!(model.objects.len(), report.objects, "{kind:?} piece {k}");
+            let share = g.report.triangles as f64 / parts as f64;
+            assert!(
+                (report.triangles as f64 - share).abs() < 0.5 * share,
+                "{kind:?} piece {k}: {} triangles of {}",
+                report.triangles,
+                g.report.triangles
+            );
+            bounds = bounds.union(&report.bounds);
+            objects.extend(model.objects);
+        }
+        // The same objects, in whatever order the pieces list them (and
+        // numbered in each file's own node and mesh lists).
+        let key = |o: &gigawalk_import::Object| {
+            let p = o.positions[0];
+            (
+                o.identity.name.clone(),
+                o.indices.len(),
+                [p.x, p.y, p.z].map(f64::to_bits),
+            )
+        };
+        let mut got: Vec<_> = objects.iter().map(key).collect();
+        let mut want: Vec<_> = whole.objects.iter().map(key).collect();
+        got.sort();
+        want.sort();
+        assert_eq!(got, want, "{kind:?}");
+        assert_eq!(bounds, g.report.bounds, "{kind:?}");
+    }
+    // More pieces than objects: one object each, none empty.
+    let g = generate(Kind::Plant, 2_000, 1, 10);
+    let pieces = g.split(g.report.objects + 5);
+    assert_eq!(pieces.len(), g.report.objects);
+}

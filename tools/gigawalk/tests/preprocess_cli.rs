@@ -129,6 +129,66 @@ fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itse
     );
 }
 
+/// A scene generated in pieces (for models past a .glb file's 4 GiB):
+/// numbered files that sort in order, each named with its share, which
+/// preprocess as the same model as the scene in one file.
+#[test]
+fn a_scene_generated_in_pieces_preprocesses_as_the_whole() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let whole = d.join("whole.glb");
+    let (ok, _, err) = gigawalk(&["generate", "plant", "--triangles", "30k", "-o", s(&whole)]);
+    assert!(ok, "{err}");
+    let pieces = d.join("pieces");
+    std::fs::create_dir(&pieces).unwrap();
+    let (ok, out, err) = gigawalk(&[
+        "generate",
+        "plant",
+        "--triangles",
+        "30k",
+        "--parts",
+        "12",
+        "-o",
+        s(&pieces.join("p.glb")),
+    ]);
+    assert!(ok, "{err}");
+    let mut names: Vec<String> = std::fs::read_dir(&pieces)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let want: Vec<String> = (1..=12).map(|k| format!("p-{k:02}.glb")).collect();
+    assert_eq!(names, want);
+    assert!(
+        out.contains("p-07.glb: ") && out.contains("12 files: plant"),
+        "{out}"
+    );
+
+    let mut triangles = Vec::new();
+    for input in [&whole, &pieces] {
+        let st = d.join("stats.json");
+        let (ok, _, err) = gigawalk(&[
+            "preprocess",
+            s(input),
+            "-o",
+            s(&d.join("out.gwk")),
+            "--stats",
+            s(&st),
+        ]);
+        assert!(ok, "{err}");
+        triangles.push(input_triangles(&st));
+    }
+    assert_eq!(triangles[0], triangles[1]);
+
+    // Not a count of pieces.
+    for bad in ["0", "-2", "many"] {
+        let parts = format!("--parts={bad}");
+        let (ok, _, err) = gigawalk(&["generate", "plant", &parts, "-o", s(&d.join("bad.glb"))]);
+        assert!(!ok && err.contains("--parts"), "{bad}: {err}");
+    }
+    assert!(!d.join("bad.glb").exists());
+}
+
 /// A generated plant of `triangles` in `d`, and the bytes of its plain
 /// one-process build (the reference every split build must equal).
 fn plant_and_reference(d: &Path, triangles: &str) -> (std::path::PathBuf, Vec<u8>) {

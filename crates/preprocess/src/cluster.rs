@@ -68,6 +68,9 @@ pub fn cluster(boxes: &[Aabb], p: &ClusterParams) -> (Vec<Vec<u32>>, usize) {
     (merge(boxes, &edges, p), edges.len())
 }
 
+/// Objects whose neighbours one task finds.
+const EDGE_CHUNK: usize = 4096;
+
 /// Every pair whose box gap is below its D, sorted by (weight, a, b).
 fn neighbour_edges(boxes: &[Aabb], d: f64) -> Vec<Edge> {
     if boxes.len() < 2 {
@@ -92,30 +95,41 @@ fn neighbour_edges(boxes: &[Aabb], d: f64) -> Vec<Edge> {
         BvhBuildParams::fast_build(),
         &mut Default::default(),
     );
-    let mut edges: Vec<Edge> = (0..boxes.len())
+    // Found in chunks of objects, each chunk's list cut to its length, then
+    // joined into one list of exactly their total: growing lists hold up
+    // to twice what they keep, and the edges are this step's memory.
+    let n = boxes.len();
+    let chunks: Vec<Vec<Edge>> = (0..n.div_ceil(EDGE_CHUNK))
         .into_par_iter()
-        .flat_map_iter(|i| {
-            // Each pair is found by the query of its larger member (ties by
-            // index), whose reach is the pair's D.
-            let di = d * side[i];
+        .map(|c| {
             let mut found = Vec::new();
-            bvh.aabb_traverse(to_bvh(&boxes[i], di + slack), |bvh, node| {
-                let n = &bvh.nodes[node as usize];
-                for k in n.first_index..n.first_index + n.prim_count {
-                    let j = bvh.primitive_indices[k as usize] as usize;
-                    if j != i && (side[j], j) < (side[i], i) {
-                        let w = boxes[i].gap(&boxes[j]);
-                        if w < di {
-                            let (a, b) = (i.min(j) as u32, i.max(j) as u32);
-                            found.push(Edge { w, a, b });
+            for i in c * EDGE_CHUNK..(n.min((c + 1) * EDGE_CHUNK)) {
+                // Each pair is found by the query of its larger member
+                // (ties by index), whose reach is the pair's D.
+                let di = d * side[i];
+                bvh.aabb_traverse(to_bvh(&boxes[i], di + slack), |bvh, node| {
+                    let n = &bvh.nodes[node as usize];
+                    for k in n.first_index..n.first_index + n.prim_count {
+                        let j = bvh.primitive_indices[k as usize] as usize;
+                        if j != i && (side[j], j) < (side[i], i) {
+                            let w = boxes[i].gap(&boxes[j]);
+                            if w < di {
+                                let (a, b) = (i.min(j) as u32, i.max(j) as u32);
+                                found.push(Edge { w, a, b });
+                            }
                         }
                     }
-                }
-                true
-            });
+                    true
+                });
+            }
+            found.shrink_to_fit();
             found
         })
         .collect();
+    let mut edges = Vec::with_capacity(chunks.iter().map(Vec::len).sum());
+    for chunk in chunks {
+        edges.extend_from_slice(&chunk);
+    }
     edges.par_sort_unstable_by(|x, y| x.w.total_cmp(&y.w).then((x.a, x.b).cmp(&(y.a, y.b))));
     edges
 }

@@ -210,13 +210,13 @@ pub fn preprocess(
     write_scene(model, params, layout, output, source, progress, Role::All)
 }
 
-/// Step 6 for `role` (every node, or a merge's) into a scene file at
-/// `output`, with its provenance and occluders.
 /// Most threads the object table is compressed on: each holds about 90
 /// MiB of zstd's level-19 tables, so more would take the memory the
 /// levels have just given back, and more.
 const IDENTITY_WORKERS: usize = 4;
 
+/// Step 6 for `role` (every node, or a merge's) into a scene file at
+/// `output`, with its provenance and occluders.
 pub(crate) fn write_scene(
     model: &dyn Source,
     params: &Params,

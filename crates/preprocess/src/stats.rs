@@ -55,7 +55,7 @@ pub struct Stats {
     /// Bytes of the object table and the leaves' runs (OBJT section).
     #[serde(default)]
     pub identity_bytes: u64,
-    /// Compressing the OBJT section's frames (in the write phase).
+    /// Compressing the OBJT section's body, in jobs (in the write phase).
     #[serde(default)]
     pub identity_compression: Pieces,
     /// `output_bytes / raw_input_bytes`.

@@ -41,6 +41,8 @@ struct MeshRec {
 struct NodeRec {
     name: String,
     mesh: MeshId,
+    /// Its group node: an index into `groups`.
+    group: usize,
     translation: DVec3,
     rotation: Option<DQuat>,
     scale: Option<DVec3>,
@@ -54,7 +56,8 @@ pub struct GlbBuilder {
     idx: Vec<u8>,
     meshes: Vec<MeshRec>,
     nodes: Vec<NodeRec>,
-    groups: Vec<(&'static str, Vec<usize>)>,
+    /// Group node names, in order of first use.
+    groups: Vec<&'static str>,
     materials: Vec<Material>,
     triangles: u64,
     bounds: Aabb,
@@ -164,18 +167,21 @@ impl GlbBuilder {
                     .grow(m.transform_point3(DVec3::new(c(0), c(1), c(2))));
             }
         }
-        let node = self.nodes.len();
+        let group = match self.groups.iter().position(|&g| g == group) {
+            Some(g) => g,
+            None => {
+                self.groups.push(group);
+                self.groups.len() - 1
+            }
+        };
         self.nodes.push(NodeRec {
             name: name.to_owned(),
             mesh,
+            group,
             translation,
             rotation,
             scale,
         });
-        match self.groups.iter_mut().find(|g| g.0 == group) {
-            Some(g) => g.1.push(node),
-            None => self.groups.push((group, vec![node])),
-        }
     }
 
     /// Stores a one-off mesh built in world coordinates: re-centred on its
@@ -228,12 +234,6 @@ impl GlbBuilder {
     /// group names, each mesh stored once however often the run uses it.
     pub fn part(&self, nodes: std::ops::Range<usize>) -> GlbBuilder {
         let mut out = GlbBuilder::new(self.generator.clone(), &self.materials);
-        let mut group_of = vec![0; self.nodes.len()];
-        for (g, (_, children)) in self.groups.iter().enumerate() {
-            for &c in children {
-                group_of[c] = g;
-            }
-        }
         let mut mesh_in_part: Vec<Option<MeshId>> = vec![None; self.meshes.len()];
         for i in nodes {
             let n = &self.nodes[i];
@@ -252,7 +252,7 @@ impl GlbBuilder {
                 MeshId(out.meshes.len() - 1)
             });
             out.instance(
-                self.groups[group_of[i]].0,
+                self.groups[n.group],
                 &n.name,
                 id,
                 n.translation,
@@ -294,7 +294,11 @@ impl GlbBuilder {
             }
             j.push('}');
         }
-        for (name, children) in &self.groups {
+        let mut children = vec![Vec::new(); self.groups.len()];
+        for (i, n) in self.nodes.iter().enumerate() {
+            children[n.group].push(i);
+        }
+        for (name, children) in self.groups.iter().zip(&children) {
             j.push(',');
             let _ = write!(j, "{{\"name\":\"{name}\",\"children\":[");
             for (k, c) in children.iter().enumerate() {

@@ -136,8 +136,8 @@ fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itse
 }
 
 /// A scene generated in pieces (for models past a .glb file's 4 GiB):
-/// numbered files that sort in order, each named with its share, which
-/// preprocess as the same model as the scene in one file.
+/// numbered files that sort in order, each listed with its triangles,
+/// which preprocess as the same model as the scene in one file.
 #[test]
 fn a_scene_generated_in_pieces_preprocesses_as_the_whole() {
     let t = tempfile::tempdir().unwrap();

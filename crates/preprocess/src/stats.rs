@@ -101,6 +101,11 @@ pub struct Certification {
     pub rivals_won: u64,
     /// Rivals whose measurement stopped as soon as they had lost.
     pub rivals_stopped: u64,
+    /// Edge-collapsed levels measured far off their limit for which a
+    /// gentler collapse was measured too.
+    pub gentler: u64,
+    /// Gentler collapses kept instead (they measured nearer).
+    pub gentler_won: u64,
 }
 
 /// The HLOD phase as a graph of tasks: every node's levels are one task,

@@ -26,15 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let reader = SceneReader::open(std::path::Path::new(scene))?;
     let sk = reader.skeleton();
-    let p = Params::default();
-    let chain = ChainParams {
-        ratio: p.lod_ratio,
-        floor: p.lod_floor as usize,
-        collapse_levels: p.collapse_levels as usize,
-        node_budget: p.node_budget as usize,
-        bound_spacing: p.bound_spacing as f32,
-        bound_floor: p.bound_floor,
-    };
+    let chain = ChainParams::of(&Params::default());
     let show = |l: &mut dyn Iterator<Item = (usize, f32)>| {
         l.map(|(t, e)| format!("{t}@{e:.4}"))
             .collect::<Vec<_>>()

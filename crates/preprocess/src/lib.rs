@@ -483,14 +483,7 @@ pub(crate) fn build_role<S: LodSink>(
         _ => false,
     };
     clock.start(Phase::Hlod, tree.len() as u64);
-    let chain = ChainParams {
-        ratio: params.lod_ratio,
-        floor: params.lod_floor as usize,
-        collapse_levels: params.collapse_levels as usize,
-        node_budget: params.node_budget as usize,
-        bound_spacing: params.bound_spacing as f32,
-        bound_floor: params.bound_floor,
-    };
+    let chain = ChainParams::of(params);
     let keep = chain.merge_budget();
     let tally = hlod::Tally::default();
     let mut lod_ranges = vec![(0u32, 0u32); tree.len()];

@@ -114,6 +114,18 @@ pub struct ChainParams {
 }
 
 impl ChainParams {
+    /// The chain settings of a run's parameters.
+    pub fn of(params: &crate::Params) -> Self {
+        ChainParams {
+            ratio: params.lod_ratio,
+            floor: params.lod_floor as usize,
+            collapse_levels: params.collapse_levels as usize,
+            node_budget: params.node_budget as usize,
+            bound_spacing: params.bound_spacing as f32,
+            bound_floor: params.bound_floor,
+        }
+    }
+
     fn sampling(&self, diagonal: f64) -> Sampling {
         Sampling {
             spacing: self.bound_spacing,

@@ -404,6 +404,12 @@ mod tests {
         assert!(lods.last().unwrap().mesh.triangles() < lods[0].mesh.triangles() / 2);
     }
 
+    /// A leaf's mesh from the one object of an OBJ file.
+    fn obj_leaf(text: &str) -> WorkMesh {
+        let model = gigawalk_import::import_obj_str(text, "leaf.obj").unwrap();
+        mesh_of(model.objects.into_iter().next().unwrap())
+    }
+
     #[test]
     fn a_level_that_shortens_thin_tubes_gives_way_to_clustering() {
         // Edge collapse's quadric error barely sees a thin tube's end
@@ -411,12 +417,7 @@ mod tests {
         // the first level that kept at most 65% of the triangles (at an
         // error limit of 0.27) had halved both rails, measured 8.95 units
         // off in a 17-unit leaf. Clustering at the same limits keeps them.
-        let model = gigawalk_import::import_obj_str(
-            include_str!("../../testdata/ladder_leaf.obj"),
-            "ladder_leaf.obj",
-        )
-        .unwrap();
-        let mesh = mesh_of(model.objects.into_iter().next().unwrap());
+        let mesh = obj_leaf(include_str!("../../testdata/ladder_leaf.obj"));
         assert_eq!(mesh.triangles(), 888);
         // The leaf's box (0.5 x 17 x 0.5).
         let diagonal = 17.02;
@@ -437,12 +438,8 @@ mod tests {
         // A leaf of the generated demo plant whose first halving measured
         // 0.74 units off (and every level after it as far): edge collapse
         // to 65% of the triangles measures 0.03, and is kept.
-        let model = gigawalk_import::import_obj_str(
-            include_str!("../../testdata/gentler_leaf.obj"),
-            "gentler_leaf.obj",
-        )
-        .unwrap();
-        let mesh = mesh_of(model.objects.into_iter().next().unwrap());
+        let mesh = obj_leaf(include_str!("../../testdata/gentler_leaf.obj"));
+        assert_eq!(mesh.triangles(), 608);
         // The leaf's box (a 608-triangle leaf of the 4M plant, seed 1).
         let diagonal = 29.71;
         let tally = Tally::default();

@@ -15,8 +15,13 @@
 //! not be drawn yet), and why (the parent has no levels, or the parent's
 //! finest is too coarse).
 //!
+//! `--worst N` also lists the N leaves that draw the most triangles from
+//! the 16-unit band on: the level drawn, the allowed error, and the
+//! leaf's and its parent's levels (triangles@error), which shows whether
+//! a far leaf is held by its own chain or waits for its parent.
+//!
 //! cargo run --release -p gigawalk-replay --example far_field -- \
-//!     SCENE.gwk PATH [--every K] [--width W] [--height H] [--pixel-error P] [--unit U] [--json OUT]
+//!     SCENE.gwk PATH [--every K] [--width W] [--height H] [--pixel-error P] [--unit U] [--worst N] [--json OUT]
 //!
 //! Run it on two scenes walked by the same path (a floor and the same
 //! floor with rows added behind it) to see where the extra triangles
@@ -130,6 +135,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     );
     let tolerance = num("--pixel-error", 1.0)?;
     let json_out = flag("--json").map(|v| v.cloned().ok_or("--json needs a file"));
+    let worst_n = match flag("--worst") {
+        None => 0,
+        Some(v) => v
+            .and_then(|v| v.parse::<usize>().ok())
+            .ok_or("--worst needs a count")?,
+    };
+    // Per far leaf: triangles summed over poses, and the last level drawn
+    // with the error it was allowed.
+    let mut far: BTreeMap<u32, (u64, u32, f64)> = BTreeMap::new();
     let reader = SceneReader::open(&PathBuf::from(scene))?;
     let skeleton = reader.skeleton();
     let path = CameraPath::read(&PathBuf::from(path))?;
@@ -181,6 +195,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             if allowed > 0.0 {
                 cell.density
                     .push(level.triangles as f64 / (diagonal / allowed).powi(2));
+            }
+            if n.is_leaf() && band >= 5 {
+                let e = far.entry(i.node).or_default();
+                *e = (e.0 + level.triangles as u64, i.lod, allowed);
             }
             if kind == Kind::LeafFull && band >= 3 {
                 full.triangles += level.triangles as u64;
@@ -291,6 +309,28 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         next_share[1],
         full.single as f64 / poses_f
     );
+    let mut worst: Vec<(&u32, &(u64, u32, f64))> = far.iter().collect();
+    worst.sort_by_key(|(node, (t, _, _))| (std::cmp::Reverse(*t), **node));
+    let levels = |lods: &[gigawalk_scene::LodInfo]| {
+        lods.iter()
+            .map(|l| format!("{}@{:.4}", l.triangles, l.error))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    for (node, (t, lod, allowed)) in worst.into_iter().take(worst_n) {
+        let n = skeleton.node(*node);
+        let parent = if n.parent != NO_NODE {
+            levels(skeleton.node_lods(n.parent))
+        } else {
+            "none".into()
+        };
+        println!(
+            "far leaf {node}: {:.0} triangles a pose, level {lod} at allowed {allowed:.4}; \
+             levels {}; parent {parent}",
+            *t as f64 / poses_f,
+            levels(skeleton.node_lods(*node))
+        );
+    }
     if let Some(out) = json_out {
         let doc = serde_json::json!({
             "scene": scene, "poses": poses, "width": width, "height": height,

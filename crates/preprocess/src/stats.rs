@@ -101,8 +101,8 @@ pub struct Certification {
     pub rivals_won: u64,
     /// Rivals whose measurement stopped as soon as they had lost.
     pub rivals_stopped: u64,
-    /// Edge-collapsed levels measured far off their limit for which a
-    /// gentler collapse was measured too.
+    /// Levels (collapsed or clustered) measured far off their limit for
+    /// which a gentler edge collapse was measured too.
     pub gentler: u64,
     /// Gentler collapses kept instead (they measured nearer).
     pub gentler_won: u64,

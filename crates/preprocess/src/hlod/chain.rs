@@ -178,9 +178,9 @@ pub(super) fn extend_chain(
         // first that shrinks is measured and kept when it is nearer (that
         // chain then fell to 713 triangles at 0.10). NaN-safe: a NaN
         // measurement is retried, and kept only against a finite one.
-        let gentle = (MIN_SHRINK * n as f64) as usize;
         let near_enough = measured <= SUSPECT_OVER_LIMIT * e.max(r.sampling.enough);
         if !near_enough {
+            let gentle = (MIN_SHRINK * n as f64) as usize;
             let mut limit = limit_error;
             while limit <= cap {
                 if let Some(m) = s.step(gentle, limit, false).filter(shrunk) {

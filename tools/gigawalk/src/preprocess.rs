@@ -515,21 +515,50 @@ impl<'a> ShardProgress<'a> {
     }
 }
 
-/// Runs shards `todo` in this process, one after another.
+/// Runs shards `todo` in this process, [`SHARDS_IN_FLIGHT`] at a time on
+/// the one thread pool: a shard's top nodes and its file's write run
+/// with few tasks ready, and the next shard's leaves fill the cores
+/// meanwhile. Stops at the first shard that fails (those in flight
+/// finish); the shards done are kept, so a rerun resumes.
 fn run_shards_here(
     planned: &shards::Planned,
     todo: &[usize],
     progress: &Display,
 ) -> anyhow::Result<()> {
-    let mut line = ShardProgress::new(planned.plan(), todo);
-    for &k in todo {
-        planned
-            .run_shard(k, progress)
-            .with_context(|| format!("shard {k}"))?;
-        progress.line(&line.done(k, None));
-    }
-    Ok(())
+    let line = std::sync::Mutex::new(ShardProgress::new(planned.plan(), todo));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let failed = std::sync::atomic::AtomicBool::new(false);
+    let worker = || -> anyhow::Result<()> {
+        use std::sync::atomic::Ordering;
+        while !failed.load(Ordering::Relaxed) {
+            let Some(&k) = todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
+                break;
+            };
+            if let Err(e) = planned.run_shard(k, progress) {
+                failed.store(true, Ordering::Relaxed);
+                return Err(anyhow::Error::new(e).context(format!("shard {k}")));
+            }
+            let done = line.lock().unwrap_or_else(|e| e.into_inner()).done(k, None);
+            progress.line(&done);
+        }
+        Ok(())
+    };
+    let results: Vec<anyhow::Result<()>> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..SHARDS_IN_FLIGHT.min(todo.len()))
+            .map(|_| s.spawn(worker))
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect()
+    });
+    results.into_iter().collect()
 }
+
+/// Shards a process runs at once ([`run_shards_here`]): two keep the
+/// cores busy through one shard's serial end; each holds its unit window
+/// (a few MiB a thread) beside the other's.
+const SHARDS_IN_FLIGHT: usize = 2;
 
 /// What a run needs whatever its budget (code, threads' working sets,
 /// one unit of levels): 60-110 MiB measured on the plants, 2 cores.

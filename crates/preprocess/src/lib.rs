@@ -79,7 +79,7 @@ use std::time::Instant;
 use gigawalk_scene::{Aabb, LodMesh, Node, Provenance, SceneWriter, WriteError};
 use rayon::prelude::*;
 
-pub use params::{ParamError, Params, PositionBits, Resolved};
+pub use params::{LeafChains, ParamError, Params, PositionBits, Resolved};
 pub use parts::InputError;
 pub use source::{Source, Spill, SpillError, SpillWriter};
 pub use stats::Stats;

@@ -106,6 +106,9 @@ pub struct Certification {
     pub gentler: u64,
     /// Gentler collapses kept instead (they measured nearer).
     pub gentler_won: u64,
+    /// Leaves whose chain covers vanished pieces (as an inner node's
+    /// does) rather than keeping a triangle of each: it draws less.
+    pub leaf_cover_chosen: u64,
 }
 
 /// The HLOD phase as a graph of tasks: every node's levels are one task,

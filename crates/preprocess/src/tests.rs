@@ -212,6 +212,11 @@ fn bad_input_leaves_no_file() {
 /// Builds `objects` and checks every node's every stored error against
 /// brute-force samples; returns the check's figures.
 fn bounds_hold(objects: Vec<Object>, params: &Params) -> crate::verify::BoundCheck {
+    bounds_hold_built(objects, params).0
+}
+
+/// [`bounds_hold`], and what was built.
+fn bounds_hold_built(objects: Vec<Object>, params: &Params) -> (crate::verify::BoundCheck, Built) {
     let model = Model {
         objects,
         ..Default::default()
@@ -228,7 +233,7 @@ fn bounds_hold(objects: Vec<Object>, params: &Params) -> crate::verify::BoundChe
     )
     .unwrap();
     assert!(check.lods > 1, "{check:?}");
-    check
+    (check, built)
 }
 
 #[test]
@@ -298,6 +303,26 @@ fn small_plant_errors_are_bounds() {
     let check = bounds_hold(model.objects, &small_params());
     // How tight: some sample comes close to its bound.
     assert!(check.worst_ratio > 0.3, "{check:?}");
+}
+
+#[test]
+fn small_plant_errors_are_bounds_with_the_better_of_two_leaf_chains() {
+    let model = small_plant();
+    let params = Params {
+        leaf_chains: crate::LeafChains::Best,
+        ..small_params()
+    };
+    let (check, built) = bounds_hold_built(model.objects, &params);
+    assert!(check.worst_ratio <= 1.0, "{check:?}");
+    let chosen = built.stats.certification.leaf_cover_chosen;
+    assert!(
+        chosen > 0 && (chosen as usize) < built.stats.leaves,
+        "{chosen} of {} leaves",
+        built.stats.leaves
+    );
+    // The kept-pieces chains alone choose nothing.
+    let (_, kept) = bounds_hold_built(small_plant().objects, &small_params());
+    assert_eq!(kept.stats.certification.leaf_cover_chosen, 0);
 }
 
 /// Triangles the subtree of `node` draws at `error`: each node its

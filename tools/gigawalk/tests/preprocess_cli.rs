@@ -300,6 +300,57 @@ fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
     );
 }
 
+#[test]
+fn the_better_of_two_leaf_chains_reaches_split_builds_and_a_bad_choice_is_named() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let (glb, kept) = plant_and_reference(d, "20k");
+    let best = d.join("best.gwk");
+    let stats = d.join("best.json");
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        s(&glb),
+        "-o",
+        s(&best),
+        "--leaf-chains",
+        "best",
+        "--stats",
+        s(&stats),
+    ]);
+    assert!(ok, "{err}");
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let chosen = j["certification"]["leaf_cover_chosen"].as_u64().unwrap();
+    assert!(chosen > 0, "{j}");
+    let best = std::fs::read(&best).unwrap();
+    assert!(best != kept, "--leaf-chains best changed nothing");
+    // Shards made by workers read the choice from the plan.
+    let jobs = d.join("jobs.gwk");
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        s(&glb),
+        "-o",
+        s(&jobs),
+        "--leaf-chains",
+        "best",
+        "--jobs",
+        "2",
+        "--shard-triangles",
+        "4k",
+    ]);
+    assert!(ok, "{err}");
+    assert!(std::fs::read(&jobs).unwrap() == best, "split bytes differ");
+    let (ok, _, err) = gigawalk(&[
+        "preprocess",
+        s(&glb),
+        "-o",
+        s(&jobs),
+        "--leaf-chains",
+        "all",
+    ]);
+    assert!(!ok && err.contains("--leaf-chains"), "{err}");
+}
+
 /// Files in `dir` whose names start with `prefix`.
 fn named(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
     std::fs::read_dir(dir)

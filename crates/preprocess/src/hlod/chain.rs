@@ -23,9 +23,14 @@ pub(super) struct Reference<'a> {
     pub(super) diagonal: f32,
     /// Most triangles of the first level made (an inner node's budget).
     pub(super) first_budget: usize,
-    /// Whether every piece keeps a triangle (a leaf's few pieces), rather
-    /// than vanished pieces being covered where nothing is left near them.
+    /// Whether every piece keeps a triangle (a leaf's kept-pieces chain),
+    /// rather than vanished pieces being covered where nothing is left
+    /// near them.
     pub(super) keep_pieces: bool,
+    /// Whether collapsed levels meet clustering only when suspect, by
+    /// error alone (a leaf's rule), rather than at every level by error
+    /// x sqrt(triangles) (an inner node's).
+    pub(super) leaf_rivals: bool,
 }
 
 impl Reference<'_> {
@@ -224,7 +229,7 @@ pub(super) fn extend_chain(
         // A level below `lower` (collapse pruned nearly everything) gives
         // way to one within it.
         let undershoots = |m: &WorkMesh| m.triangles() < lower;
-        if was_collapse && (!plausible || !r.keep_pieces || undershoots(&mesh)) {
+        if was_collapse && (!plausible || !r.leaf_rivals || undershoots(&mesh)) {
             if let Some((alt, e_alt)) = find(true) {
                 Tally::add(&tally.rivals, 1);
                 if let Some(alt_measured) =
@@ -262,7 +267,7 @@ fn rival(
     tally: &Tally,
 ) -> Option<f32> {
     let (u_main, u_alt) = (main.triangles() < lower, alt.triangles() < lower);
-    let keep_pieces = r.keep_pieces;
+    let keep_pieces = r.leaf_rivals;
     let per_triangle = |e: f32, m: &WorkMesh| {
         if keep_pieces {
             e as f64
@@ -320,11 +325,17 @@ pub struct Tally {
     pub gentler: std::sync::atomic::AtomicU64,
     /// Gentler collapses that measured nearer and were kept.
     pub gentler_won: std::sync::atomic::AtomicU64,
+    /// Leaves whose covering chain was kept (it draws less).
+    pub cover_chosen: std::sync::atomic::AtomicU64,
 }
 
 impl Tally {
     fn add(counter: &std::sync::atomic::AtomicU64, n: u64) {
         counter.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    pub(super) fn add_cover_chosen(&self) {
+        Self::add(&self.cover_chosen, 1);
     }
 
     /// The counts as plain numbers.
@@ -337,6 +348,7 @@ impl Tally {
             rivals_stopped: get(&self.rivals_stopped),
             gentler: get(&self.gentler),
             gentler_won: get(&self.gentler_won),
+            leaf_cover_chosen: get(&self.cover_chosen),
         }
     }
 }
@@ -359,9 +371,9 @@ fn shrinks(m: &WorkMesh, n: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hlod::leaf_lods;
     use crate::hlod::simplify::tests::pieces;
     use crate::hlod::tests::{mesh_of, P};
+    use crate::hlod::{draw_cost, leaf_chain, leaf_lods, LeafChain};
     use crate::test_models::{box_object, grid_object, pipe_object};
     use glam::DVec3;
 
@@ -479,7 +491,15 @@ mod tests {
         let mesh = mesh_of(all);
         let n = pieces(&mesh);
         assert_eq!(n, 41);
-        let lods = leaf_lods(mesh, 21.0, &P, &Tally::default());
+        let mut queries = Nearest::new(mesh.surface());
+        let lods = leaf_chain(
+            &mesh,
+            &mut queries,
+            21.0,
+            LeafChain::KeepPieces,
+            &P,
+            &Tally::default(),
+        );
         assert!(lods.len() >= 3, "{} levels", lods.len());
         for l in &lods {
             assert_eq!(pieces(&l.mesh), n, "a level lost a piece");
@@ -487,6 +507,99 @@ mod tests {
         // The first level only smooths the plate's bumps, far below the
         // gaps between boxes and rows (0.4 and 1 unit).
         assert!(lods[1].error < 0.3, "level 1 error {}", lods[1].error);
+    }
+
+    /// Both kinds of a leaf's chain, and what `leaf_lods` kept.
+    fn both_chains(mesh: WorkMesh, diagonal: f64) -> [Vec<Lod>; 3] {
+        let mut queries = Nearest::new(mesh.surface());
+        let tally = Tally::default();
+        let best = ChainParams {
+            leaf_best: true,
+            ..P
+        };
+        let mut chain = |kind| leaf_chain(&mesh, &mut queries, diagonal, kind, &best, &tally);
+        let (kept, covered) = (chain(LeafChain::KeepPieces), chain(LeafChain::Cover));
+        let chosen = leaf_lods(mesh.clone(), diagonal, &best, &tally);
+        // Without `leaf_best`, the kept-pieces chain alone.
+        assert_eq!(leaf_lods(mesh, diagonal, &P, &tally), kept);
+        [kept, covered, chosen]
+    }
+
+    #[test]
+    fn a_leaf_of_many_small_pieces_keeps_the_chain_that_covers_them() {
+        // 400 bolt heads on a plate: a kept triangle each holds every
+        // level of the kept-pieces chain at 400 triangles or more; covered
+        // where the plate is near, they cost the coarse levels nothing.
+        let mut all = grid_object(DVec3::ZERO, 10.0, 20, 0.0);
+        for i in 0..400 {
+            let lo = DVec3::new(
+                0.25 + 0.5 * (i % 20) as f64,
+                0.0,
+                0.25 + 0.5 * (i / 20) as f64,
+            );
+            let b = box_object(lo, lo + DVec3::splat(0.08));
+            let base = all.positions.len() as u32;
+            all.positions.extend(b.positions);
+            all.normals.extend(b.normals);
+            all.indices.extend(b.indices.iter().map(|i| i + base));
+        }
+        let diagonal = 14.2;
+        let [kept, covered, chosen] = both_chains(mesh_of(all), diagonal);
+        let cost = |c: &[Lod]| draw_cost(c, diagonal);
+        assert!(
+            kept.last().unwrap().mesh.triangles() >= 400,
+            "{} triangles",
+            kept.last().unwrap().mesh.triangles()
+        );
+        assert!(
+            cost(&covered) < cost(&kept),
+            "{} {}",
+            cost(&covered),
+            cost(&kept)
+        );
+        assert_eq!(chosen, covered);
+        for w in chosen.windows(2) {
+            assert!(w[1].error >= w[0].error);
+        }
+    }
+
+    #[test]
+    fn a_leaf_keeps_the_chain_that_draws_less_and_the_kept_pieces_on_a_tie() {
+        for (mesh, diagonal) in [
+            (mesh_of(grid_object(DVec3::ZERO, 10.0, 32, 0.3)), 15.0),
+            (
+                obj_leaf(include_str!("../../testdata/gentler_leaf.obj")),
+                29.71,
+            ),
+            (
+                obj_leaf(include_str!("../../testdata/ladder_leaf.obj")),
+                17.02,
+            ),
+        ] {
+            let [kept, covered, chosen] = both_chains(mesh, diagonal);
+            let cost = |c: &[Lod]| draw_cost(c, diagonal);
+            let best = if cost(&covered) < cost(&kept) {
+                covered
+            } else {
+                kept
+            };
+            assert_eq!(chosen, best);
+        }
+    }
+
+    #[test]
+    fn draw_cost_counts_the_coarsest_level_within_each_halving_tolerance() {
+        let level = |n: u32, error: f32| Lod {
+            mesh: mesh_of(grid_object(DVec3::ZERO, 1.0, n, 0.0)),
+            error,
+        };
+        // Grids of n x n cells: 32, 8 and 2 triangles.
+        let chain = [level(4, 0.0), level(2, 0.3), level(1, 3.0)];
+        // Tolerances 8, 4, 2, 1, 0.5, 0.25, ...: the coarsest level at
+        // 8 and 4 (2 triangles), level 1 at 2 down to 0.5 (8), full
+        // detail below 0.3 (32) for the 11 tolerances left.
+        assert_eq!(draw_cost(&chain, 8.0), 2 * 2 + 3 * 8 + 11 * 32);
+        assert_eq!(draw_cost(&[], 8.0), 0);
     }
 
     #[test]

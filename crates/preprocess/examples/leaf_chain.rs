@@ -2,13 +2,15 @@
 //! study how a chain steps: for each node given, the stored chain and the
 //! chain `leaf_lods` makes now (triangles@error per level, and seconds).
 //!
-//! `cargo run --release -p gigawalk-preprocess --example leaf_chain -- SCENE NODE... [--obj DIR]`
+//! `cargo run --release -p gigawalk-preprocess --example leaf_chain -- SCENE NODE... [--obj DIR] [--best]`
 //!
+//! `--best` makes the chains as `--leaf-chains best` does (both kinds,
+//! the one that draws less kept); without it, the default's.
 //! `--obj DIR` also writes each node's full detail to `DIR/leaf-NODE.obj`
 //! (positions in the scene's model units), for a test or another tool.
 
 use gigawalk_preprocess::hlod::{leaf_lods, ChainParams, Tally, WorkMesh};
-use gigawalk_preprocess::Params;
+use gigawalk_preprocess::{LeafChains, Params};
 use gigawalk_scene::{Colours, SceneReader};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -21,12 +23,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         None => None,
     };
+    let best = match args.iter().position(|a| a == "--best") {
+        Some(i) => {
+            args.remove(i);
+            true
+        }
+        None => false,
+    };
     let [scene, nodes @ ..] = args.as_slice() else {
-        return Err("usage: leaf_chain SCENE NODE... [--obj DIR]".into());
+        return Err("usage: leaf_chain SCENE NODE... [--obj DIR] [--best]".into());
     };
     let reader = SceneReader::open(std::path::Path::new(scene))?;
     let sk = reader.skeleton();
-    let chain = ChainParams::of(&Params::default());
+    let chain = ChainParams::of(&Params {
+        leaf_chains: if best {
+            LeafChains::Best
+        } else {
+            LeafChains::Kept
+        },
+        ..Params::default()
+    });
     let show = |l: &mut dyn Iterator<Item = (usize, f32)>| {
         l.map(|(t, e)| format!("{t}@{e:.4}"))
             .collect::<Vec<_>>()
@@ -72,8 +88,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let c = tally.snapshot();
         println!(
             "node {ni} diag {diagonal:.3}\n  stored {stored}\n  now    {now}  ({secs:.2} s; \
-             rivals {}/{} won, gentler {}/{} kept)",
-            c.rivals_won, c.rivals, c.gentler_won, c.gentler
+             rivals {}/{} won, gentler {}/{} kept{})",
+            c.rivals_won,
+            c.rivals,
+            c.gentler_won,
+            c.gentler,
+            match (best, c.leaf_cover_chosen) {
+                (false, _) => "",
+                (true, 0) => "; the kept-pieces chain",
+                (true, _) => "; the covering chain",
+            }
         );
     }
     Ok(())

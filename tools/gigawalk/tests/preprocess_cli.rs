@@ -300,24 +300,25 @@ fn a_split_build_in_steps_or_with_workers_writes_the_single_process_bytes() {
     );
 }
 
+/// `gigawalk preprocess GLB -o OUT EXTRA...`, which must succeed.
+fn preprocess_to(glb: &Path, out: &Path, extra: &[&str]) {
+    let mut args = vec!["preprocess", s(glb), "-o", s(out)];
+    args.extend_from_slice(extra);
+    let (ok, _, err) = gigawalk(&args);
+    assert!(ok, "{err}");
+}
+
 #[test]
 fn the_better_of_two_leaf_chains_reaches_split_builds_and_a_bad_choice_is_named() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
     let (glb, kept) = plant_and_reference(d, "20k");
-    let best = d.join("best.gwk");
-    let stats = d.join("best.json");
-    let (ok, _, err) = gigawalk(&[
-        "preprocess",
-        s(&glb),
-        "-o",
-        s(&best),
-        "--leaf-chains",
-        "best",
-        "--stats",
-        s(&stats),
-    ]);
-    assert!(ok, "{err}");
+    let (best, stats) = (d.join("best.gwk"), d.join("best.json"));
+    preprocess_to(
+        &glb,
+        &best,
+        &["--leaf-chains", "best", "--stats", s(&stats)],
+    );
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     let chosen = j["certification"]["leaf_cover_chosen"].as_u64().unwrap();
@@ -326,19 +327,15 @@ fn the_better_of_two_leaf_chains_reaches_split_builds_and_a_bad_choice_is_named(
     assert!(best != kept, "--leaf-chains best changed nothing");
     // Shards made by workers read the choice from the plan.
     let jobs = d.join("jobs.gwk");
-    let (ok, _, err) = gigawalk(&[
-        "preprocess",
-        s(&glb),
-        "-o",
-        s(&jobs),
+    let split = [
         "--leaf-chains",
         "best",
         "--jobs",
         "2",
         "--shard-triangles",
         "4k",
-    ]);
-    assert!(ok, "{err}");
+    ];
+    preprocess_to(&glb, &jobs, &split);
     assert!(std::fs::read(&jobs).unwrap() == best, "split bytes differ");
     let (ok, _, err) = gigawalk(&[
         "preprocess",

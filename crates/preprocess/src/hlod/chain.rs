@@ -23,14 +23,13 @@ pub(super) struct Reference<'a> {
     pub(super) diagonal: f32,
     /// Most triangles of the first level made (an inner node's budget).
     pub(super) first_budget: usize,
-    /// Whether every piece keeps a triangle (a leaf's kept-pieces chain),
-    /// rather than vanished pieces being covered where nothing is left
-    /// near them.
+    /// Whether every piece keeps a triangle and collapsed levels meet
+    /// clustering only when suspect, by error alone (a leaf's kept-pieces
+    /// chain), rather than vanished pieces being covered where nothing is
+    /// left near them and every collapsed level compared with clustering
+    /// by error x sqrt(triangles) (an inner node's chain, and a leaf's
+    /// covering one).
     pub(super) keep_pieces: bool,
-    /// Whether collapsed levels meet clustering only when suspect, by
-    /// error alone (a leaf's rule), rather than at every level by error
-    /// x sqrt(triangles) (an inner node's).
-    pub(super) leaf_rivals: bool,
 }
 
 impl Reference<'_> {
@@ -229,7 +228,7 @@ pub(super) fn extend_chain(
         // A level below `lower` (collapse pruned nearly everything) gives
         // way to one within it.
         let undershoots = |m: &WorkMesh| m.triangles() < lower;
-        if was_collapse && (!plausible || !r.leaf_rivals || undershoots(&mesh)) {
+        if was_collapse && (!plausible || !r.keep_pieces || undershoots(&mesh)) {
             if let Some((alt, e_alt)) = find(true) {
                 Tally::add(&tally.rivals, 1);
                 if let Some(alt_measured) =
@@ -267,7 +266,7 @@ fn rival(
     tally: &Tally,
 ) -> Option<f32> {
     let (u_main, u_alt) = (main.triangles() < lower, alt.triangles() < lower);
-    let keep_pieces = r.leaf_rivals;
+    let keep_pieces = r.keep_pieces;
     let per_triangle = |e: f32, m: &WorkMesh| {
         if keep_pieces {
             e as f64

@@ -246,7 +246,6 @@ pub fn leaf_chain(
         mesh: mesh.clone(),
         error: 0.0,
     }];
-    let keep = kind == LeafChain::KeepPieces;
     let reference = Reference {
         mesh,
         queries,
@@ -254,8 +253,7 @@ pub fn leaf_chain(
         sampling: p.sampling(diagonal),
         diagonal: diagonal as f32,
         first_budget: usize::MAX,
-        keep_pieces: keep,
-        leaf_rivals: keep,
+        keep_pieces: kind == LeafChain::KeepPieces,
     };
     extend_chain(&mut lods, reference, p, tally);
     lods
@@ -342,7 +340,6 @@ pub fn inner_lods(
         diagonal: diagonal as f32,
         first_budget: p.node_budget,
         keep_pieces: false,
-        leaf_rivals: false,
     };
     extend_chain(&mut lods, reference, p, tally);
     if lods.len() > 1 && lods[0].mesh.triangles() > p.node_budget {

@@ -28,11 +28,11 @@ pub fn shard_path(dir: &Path, plan: &Plan, index: usize) -> PathBuf {
 /// - header: [`SHARD_MAGIC`], the plan id, the shard index (u32), the
 ///   node count (u32);
 /// - per node, in the order they were made: its LOD count (u32), then
-///   per LOD its stored length (u32), the length of its error (f32) and
-///   mesh (u32) and those bytes, zstd-compressed (level
-///   [`SHARD_ZSTD_LEVEL`]) on the thread that made the LOD: about a
-///   quarter of the raw bytes, which at 500M triangles were 44 GB of
-///   shards;
+///   per LOD the length of its compressed bytes (u32), the length they
+///   decompress to (u32), and those bytes: its error (f32) and mesh,
+///   zstd-compressed (level [`SHARD_ZSTD_LEVEL`]) on the thread that
+///   made the LOD, about a third of the raw bytes (which at 500M
+///   triangles were 44 GB of shards);
 /// - the trailer: the node count again, per node its index (u32) and
 ///   the byte range of its LODs (two u64); the root count, per root its
 ///   index, its levels (count, then error and mesh each) and its full

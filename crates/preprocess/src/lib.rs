@@ -354,15 +354,18 @@ pub(crate) enum Role<'a> {
     /// root's [`Done`]) are taken from `given`, in the order a
     /// single-process build makes them, so the sink sees the same LODs in
     /// the same order.
-    Merge { given: &'a mut Given },
+    Merge { given: &'a Given },
 }
 
 /// Levels made by shards, for the merge: where each node's LODs are in
-/// the (checked) shard files, read when the node's turn in the sequence
-/// comes so only one node's are in memory; and the shard roots' [`Done`].
+/// the (checked) shard files, read as a task of the node's own on the
+/// thread pool once its children are done, so the nodes in flight are
+/// bounded as a build's are; and the shard roots' [`Done`]. The files are
+/// named, not held open: a merge of thousands of shards stays within the
+/// limit on open files.
 #[derive(Default)]
 pub(crate) struct Given {
-    pub(crate) files: Vec<std::fs::File>,
+    pub(crate) files: Vec<std::path::PathBuf>,
     pub(crate) lods: std::collections::HashMap<u32, (usize, std::ops::Range<usize>)>,
     pub(crate) done: std::collections::HashMap<u32, Done>,
 }
@@ -463,7 +466,7 @@ pub(crate) fn build_role<S: LodSink>(
     layout: &Layout,
     sink: &mut S,
     progress: &dyn Progress,
-    mut role: Role,
+    role: Role,
 ) -> Result<(Built, Vec<(u32, Done)>), PreprocessError> {
     let Layout {
         parts,
@@ -478,9 +481,9 @@ pub(crate) fn build_role<S: LodSink>(
         Role::Shard { mine, .. } => mine[ni],
         _ => true,
     };
-    let given = |ni: usize, role: &Role| match role {
-        Role::Merge { given } => given.lods.contains_key(&(ni as u32)),
-        _ => false,
+    let given = match &role {
+        Role::Merge { given } => Some(&**given),
+        _ => None,
     };
     clock.start(Phase::Hlod, tree.len() as u64);
     let chain = ChainParams::of(params);
@@ -526,7 +529,6 @@ pub(crate) fn build_role<S: LodSink>(
         .flatten()
         .filter(|&i| mine(i, &role))
         .collect();
-    let made: Vec<bool> = (0..tree.len()).map(|i| !given(i, &role)).collect();
     let window = (rayon::current_num_threads() as u64 + 1) * UNIT_TRIANGLES;
     let cost = |ni: usize| match tree[ni].object {
         Some(_) => below[ni],
@@ -553,6 +555,10 @@ pub(crate) fn build_role<S: LodSink>(
     let make = |ni: usize,
                 children: Vec<ForParent>|
      -> Result<(ForParent, Vec<Prepared<S::Prepared>>), PreprocessError> {
+        if let Some((lods, d)) = take(given, ni)? {
+            let lowest = lowest_of(&tree[ni], &lods, &children);
+            return Ok(((d, lowest), ready(ni, lods)));
+        }
         let (lods, d) = match tree[ni].object {
             Some(object) => make_leaf(
                 model,
@@ -571,32 +577,27 @@ pub(crate) fn build_role<S: LodSink>(
     };
     let mut hand_on = |ni: usize,
                        lods: Option<Vec<Prepared<S::Prepared>>>,
-                       children: Vec<ForParent>|
+                       _: Vec<ForParent>|
      -> Result<Option<ForParent>, PreprocessError> {
-        let (lods, own) = match lods {
-            Some(lods) => (lods, None),
-            None => {
-                let (lods, d) = take(&mut role, ni)?.ok_or_else(|| PreprocessError::Shard {
-                    node: ni as u32,
-                    reason: "neither made here nor given by a shard".into(),
-                })?;
-                let lowest = lowest_of(&tree[ni], &lods, &children);
-                (ready(ni, lods), Some((d, lowest)))
-            }
-        };
+        // Every node of the sequence is made (or read from its shard) by
+        // `make`; none is left for this thread.
+        let lods = lods.ok_or(PreprocessError::Shard {
+            node: ni as u32,
+            reason: "neither made here nor given by a shard".into(),
+        })?;
         match tree[ni].object {
             Some(_) => emit(ni, lods, &mut stats.leaf_lod_triangles)?,
             None => emit(ni, lods, &mut stats.inner_lod_triangles)?,
         }
         progress.advance(1);
-        Ok(own)
+        Ok(None)
     };
     let (mut left, work) = schedule::run(
         tree,
         &sequence,
         window,
         &cost,
-        &|ni| made[ni],
+        &|_| true,
         &make,
         &mut hand_on,
     )?;
@@ -785,20 +786,21 @@ pub(crate) fn subtree_triangles(tree: &[hierarchy::HNode], parts: &[Part]) -> Ve
 /// A merge's node made by a shard: its levels, and what it leaves for its
 /// parent (a shard root's [`Done`]; nothing for a node inside a shard,
 /// whose parent was made there too).
-fn take(role: &mut Role, ni: usize) -> Result<Option<Finished>, PreprocessError> {
-    let Role::Merge { given } = role else {
+fn take(given: Option<&Given>, ni: usize) -> Result<Option<Finished>, PreprocessError> {
+    let Some(given) = given else {
         return Ok(None);
     };
-    let Some((file, range)) = given.lods.remove(&(ni as u32)) else {
+    let Some((file, range)) = given.lods.get(&(ni as u32)) else {
         return Ok(None);
     };
-    let lods = shards::read_node_lods(&mut given.files[file], range).map_err(|reason| {
-        PreprocessError::Shard {
-            node: ni as u32,
-            reason,
-        }
+    let lods = spent::timed(spent::Kind::Read, || {
+        shards::read_node_lods(&given.files[*file], range.clone())
+    })
+    .map_err(|reason| PreprocessError::Shard {
+        node: ni as u32,
+        reason,
     })?;
-    let done = given.done.remove(&(ni as u32)).unwrap_or(Done {
+    let done = given.done.get(&(ni as u32)).cloned().unwrap_or(Done {
         levels: Vec::new(),
         full: None,
     });

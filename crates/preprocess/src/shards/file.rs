@@ -430,16 +430,17 @@ pub(super) fn read_shard(
 }
 
 /// One node's LODs from a shard file checked by [`read_shard`], at the
-/// range its index gave.
+/// range its index gave. The file is opened for the read (any number of
+/// threads read at once, and no handle is held between nodes).
 pub(crate) fn read_node_lods(
-    file: &mut std::fs::File,
+    path: &Path,
     range: std::ops::Range<usize>,
 ) -> Result<Vec<(LodMesh, f32)>, String> {
-    use std::io::{Read as _, Seek as _};
+    use std::os::unix::fs::FileExt as _;
     let mut bytes = vec![0u8; range.len()];
-    file.seek(std::io::SeekFrom::Start(range.start as u64))
-        .and_then(|_| file.read_exact(&mut bytes))
-        .map_err(|e| format!("cannot read a shard file again: {e}"))?;
+    std::fs::File::open(path)
+        .and_then(|f| f.read_exact_at(&mut bytes, range.start as u64))
+        .map_err(|e| format!("cannot read {} again: {e}", path.display()))?;
     let mut g = Get { b: &bytes };
     let lods = g.node_lods()?;
     if !g.b.is_empty() {
@@ -585,10 +586,13 @@ mod tests {
         }
         w.finish(&done).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        let (mut file, (l, d)) = read_shard(&path, &plan, 0).unwrap();
-        assert_eq!(read_node_lods(&mut file, l[&1].clone()).unwrap(), lods[0].1);
-        assert!(read_node_lods(&mut file, l[&2].clone()).unwrap().is_empty());
-        assert!(read_node_lods(&mut file, l[&1].start..l[&1].end - 1).is_err());
+        let (_, (l, d)) = read_shard(&path, &plan, 0).unwrap();
+        assert_eq!(read_node_lods(&path, l[&1].clone()).unwrap(), lods[0].1);
+        assert!(read_node_lods(&path, l[&2].clone()).unwrap().is_empty());
+        assert!(read_node_lods(&path, l[&1].start..l[&1].end - 1).is_err());
+        let gone = dir.path().join("gone.bin");
+        let e = read_node_lods(&gone, l[&1].clone()).unwrap_err();
+        assert!(e.contains("gone.bin"), "{e}");
         assert_eq!(d[&1], done[0].1);
         let check = |b: &[u8], plan: &Plan, index: usize| {
             std::fs::write(dir.path().join("t.bin"), b).unwrap();

@@ -115,11 +115,19 @@ impl Planned {
         progress: &dyn Progress,
         redo: &mut dyn FnMut(usize, &ShardError),
     ) -> Result<Stats, ShardError> {
+        use rayon::prelude::*;
         let (dir, plan) = (&self.dir, &self.plan);
         let mut given = Given::default();
-        for spec in &plan.shards {
+        // Every shard file is read whole to check it: on all cores, each
+        // keeping only its index; the ones to make again are made in order.
+        let checked: Vec<_> = plan
+            .shards
+            .par_iter()
+            .map(|spec| read_shard(&shard_path(dir, plan, spec.index), plan, spec.index))
+            .collect();
+        for (spec, checked) in plan.shards.iter().zip(checked) {
             let path = shard_path(dir, plan, spec.index);
-            let shard = match read_shard(&path, plan, spec.index) {
+            let (_, (lods, done)) = match checked {
                 Ok(s) => s,
                 Err(e) => {
                     redo(spec.index, &e);
@@ -127,9 +135,8 @@ impl Planned {
                     read_shard(&path, plan, spec.index)?
                 }
             };
-            let (file, (lods, done)) = shard;
             let f = given.files.len();
-            given.files.push(file);
+            given.files.push(path);
             given
                 .lods
                 .extend(lods.into_iter().map(|(ni, r)| (ni, (f, r))));
@@ -160,7 +167,7 @@ impl Planned {
             output,
             &plan.source,
             progress,
-            Role::Merge { given: &mut given },
+            Role::Merge { given: &given },
         )?;
         stats.spilled_bytes = self.model.spilled_bytes();
         Ok(stats)

@@ -575,32 +575,16 @@ pub(crate) fn build_role<S: LodSink>(
         let lowest = lowest_of(&tree[ni], &lods, &children);
         Ok(((d, lowest), ready(ni, lods)))
     };
-    let mut hand_on = |ni: usize,
-                       lods: Option<Vec<Prepared<S::Prepared>>>,
-                       _: Vec<ForParent>|
-     -> Result<Option<ForParent>, PreprocessError> {
-        // Every node of the sequence is made (or read from its shard) by
-        // `make`; none is left for this thread.
-        let lods = lods.ok_or(PreprocessError::Shard {
-            node: ni as u32,
-            reason: "neither made here nor given by a shard".into(),
-        })?;
-        match tree[ni].object {
-            Some(_) => emit(ni, lods, &mut stats.leaf_lod_triangles)?,
-            None => emit(ni, lods, &mut stats.inner_lod_triangles)?,
-        }
-        progress.advance(1);
-        Ok(None)
-    };
-    let (mut left, work) = schedule::run(
-        tree,
-        &sequence,
-        window,
-        &cost,
-        &|_| true,
-        &make,
-        &mut hand_on,
-    )?;
+    let mut hand_on =
+        |ni: usize, lods: Vec<Prepared<S::Prepared>>| -> Result<(), PreprocessError> {
+            match tree[ni].object {
+                Some(_) => emit(ni, lods, &mut stats.leaf_lod_triangles)?,
+                None => emit(ni, lods, &mut stats.inner_lod_triangles)?,
+            }
+            progress.advance(1);
+            Ok(())
+        };
+    let (mut left, work) = schedule::run(tree, &sequence, window, &cost, &make, &mut hand_on)?;
     stats.schedule = Some(stats::Schedule::of(&work, tree));
     stats.lods = lod_ranges.iter().map(|r| r.1 as usize).sum();
     lod_runs.sort_unstable_by_key(|(lod, _)| *lod);

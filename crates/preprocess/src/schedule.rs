@@ -38,7 +38,6 @@ enum Message<L, E> {
 struct Shared<'a, P, L, E> {
     tree: &'a [HNode],
     in_sequence: &'a [bool],
-    made_here: &'a (dyn Fn(usize) -> bool + Sync),
     make: &'a (dyn Fn(usize, Vec<P>) -> Result<(P, L), E> + Sync),
     pending: Pending,
     /// What each done node leaves for its parent, until the parent takes it.
@@ -68,13 +67,12 @@ impl<'a, P: Send, L: Send, E: Send> Shared<'a, P, L, E> {
         let _ = self.tx.lock().unwrap_or_else(|e| e.into_inner()).send(m);
     }
 
-    /// One of `ni`'s counts is met; starts it when that was the last and
-    /// it is made here.
+    /// One of `ni`'s counts is met; starts it when that was the last.
     fn release<'s>(&'s self, scope: &rayon::Scope<'s>, ni: usize)
     where
         'a: 's,
     {
-        if self.pending.0[ni].fetch_sub(1, Ordering::AcqRel) == 1 && (self.made_here)(ni) {
+        if self.pending.0[ni].fetch_sub(1, Ordering::AcqRel) == 1 {
             self.queued.fetch_add(1, Ordering::Relaxed);
             scope.spawn(move |s| {
                 self.run(s, ni);
@@ -146,7 +144,7 @@ impl<'a, P: Send, L: Send, E: Send> Shared<'a, P, L, E> {
 /// What a run's nodes cost, for [`Work::speedup`].
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
-    /// Seconds each node's `make` ran (0 for nodes not made here).
+    /// Seconds each node's `make` ran (0 for nodes outside the sequence).
     pub(crate) node_seconds: Vec<f64>,
     /// Seconds the calling thread spent in `emit`: serial, in sequence.
     pub(crate) emit_seconds: f64,
@@ -193,26 +191,23 @@ impl Work {
     }
 }
 
-/// Makes the nodes of `sequence` (children before parents) that are
-/// `made_here` with `make` (given the parts their children in the sequence
-/// left, in child order) on rayon's pool, and hands every node of the
-/// sequence to `emit` in order on this thread: a made node with its
-/// result, any other with `None` and its children's parts, for which
-/// `emit` returns the node's own part. `cost`: a node's input triangles
+/// Makes the nodes of `sequence` (children before parents) with `make`
+/// (given the parts their children in the sequence left, in child order)
+/// on rayon's pool, and hands every node's result to `emit` in sequence
+/// order on this thread. `cost`: a node's input triangles
 /// held in flight ([`window`](self)). Returns the parts no parent in the
 /// sequence took (the sequence's roots'), and the [`Work`].
 ///
 /// The first error (from `make` or `emit`) is returned once the nodes
 /// already started have ended; a panic in `make` is resumed here.
-#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+#[allow(clippy::type_complexity)]
 pub(crate) fn run<P: Send, L: Send, E: Send>(
     tree: &[HNode],
     sequence: &[usize],
     window: u64,
     cost: &dyn Fn(usize) -> u64,
-    made_here: &(dyn Fn(usize) -> bool + Sync),
     make: &(dyn Fn(usize, Vec<P>) -> Result<(P, L), E> + Sync),
-    emit: &mut dyn FnMut(usize, Option<L>, Vec<P>) -> Result<Option<P>, E>,
+    emit: &mut dyn FnMut(usize, L) -> Result<(), E>,
 ) -> Result<(Vec<Option<P>>, Work), E> {
     let mut in_sequence = vec![false; tree.len()];
     for &ni in sequence {
@@ -222,7 +217,6 @@ pub(crate) fn run<P: Send, L: Send, E: Send>(
     let mut shared = Shared {
         tree,
         in_sequence: &in_sequence,
-        made_here,
         make,
         pending: Pending(Vec::new()),
         slots: (0..tree.len()).map(|_| Mutex::new(None)).collect(),
@@ -260,42 +254,31 @@ pub(crate) fn run<P: Send, L: Send, E: Send>(
                 shared.release(scope, a);
                 admitted += 1;
             }
-            let result = if made_here(ni) {
-                let full = admitted < sequence.len();
-                let mut since = Instant::now();
-                while !waiting.contains_key(&ni) {
-                    let starved = full && shared.queued.load(Ordering::Relaxed) < threads;
-                    let message = receive(&rx);
-                    if starved {
-                        window_starved_seconds += since.elapsed().as_secs_f64();
-                    }
-                    since = Instant::now();
-                    match message {
-                        Message::Made(m, l) => {
-                            waiting.insert(m, l);
-                        }
-                        Message::Failed(e) => return Err(e),
-                        Message::Panicked(p) => std::panic::resume_unwind(p),
-                    }
+            let full = admitted < sequence.len();
+            let mut since = Instant::now();
+            let result = loop {
+                if let Some(l) = waiting.remove(&ni) {
+                    break l;
                 }
-                waiting.remove(&ni)
-            } else {
-                None
-            };
-            let children = if result.is_none() {
-                shared.take_children(ni)
-            } else {
-                Vec::new()
+                let starved = full && shared.queued.load(Ordering::Relaxed) < threads;
+                let message = receive(&rx);
+                if starved {
+                    window_starved_seconds += since.elapsed().as_secs_f64();
+                }
+                since = Instant::now();
+                match message {
+                    Message::Made(m, l) => {
+                        waiting.insert(m, l);
+                    }
+                    Message::Failed(e) => return Err(e),
+                    Message::Panicked(p) => std::panic::resume_unwind(p),
+                }
             };
             let (started, before) = (Instant::now(), spent::totals());
-            let own = emit(ni, result, children);
+            let emitted = emit(ni, result);
             emit_seconds += started.elapsed().as_secs_f64();
             shared.charge(before);
-            match own {
-                Ok(Some(p)) => shared.done(scope, ni, p),
-                Ok(None) => {}
-                Err(e) => return Err(e),
-            }
+            emitted?;
             in_flight -= cost(ni);
         }
         std::mem::forget(cancel);
@@ -379,14 +362,14 @@ mod tests {
 
     const SEQUENCE: [usize; 8] = [3, 4, 5, 6, 7, 1, 2, 0];
 
-    /// [`run`] over [`SEQUENCE`], every node made here, the window open.
+    /// [`run`] over [`SEQUENCE`], the window open.
     #[allow(clippy::type_complexity)]
     fn run_all(
         tree: &[HNode],
         make: &(dyn Fn(usize, Vec<u32>) -> Result<(u32, String), String> + Sync),
-        emit: &mut dyn FnMut(usize, Option<String>, Vec<u32>) -> Result<Option<u32>, String>,
+        emit: &mut dyn FnMut(usize, String) -> Result<(), String>,
     ) -> Result<(Vec<Option<u32>>, Work), String> {
-        run(tree, &SEQUENCE, u64::MAX, &|_| 1, &|_| true, make, emit)
+        run(tree, &SEQUENCE, u64::MAX, &|_| 1, make, emit)
     }
 
     /// Each node's part is the number of leaves below it; its result
@@ -416,12 +399,10 @@ mod tests {
                 &SEQUENCE,
                 window,
                 &|ni| u64::from(tree[ni].child_count == 0),
-                &|_| true,
                 &count(&tree),
-                &mut |ni, made: Option<String>, children: Vec<u32>| {
-                    assert!(children.is_empty());
-                    seen.push((ni, made.expect("made here")));
-                    Ok(None)
+                &mut |ni, made: String| {
+                    seen.push((ni, made));
+                    Ok(())
                 },
             )
             .unwrap();
@@ -439,52 +420,6 @@ mod tests {
     }
 
     #[test]
-    fn a_node_not_made_here_is_handed_on_with_its_childrens_parts() {
-        let tree = tree();
-        // Node 2's subtree comes from elsewhere (as a merge's shards do).
-        let given = |ni: usize| [2, 5, 6, 7].contains(&ni);
-        let mut seen = Vec::new();
-        let (left, _) = run(
-            &tree,
-            &SEQUENCE,
-            u64::MAX,
-            &|_| 0,
-            &|ni| !given(ni),
-            &count(&tree),
-            &mut |ni, made: Option<String>, children: Vec<u32>| match made {
-                Some(m) => {
-                    seen.push(m);
-                    Ok(None)
-                }
-                None => {
-                    let part = if ni == 2 {
-                        children.iter().sum::<u32>() * 10
-                    } else {
-                        1
-                    };
-                    seen.push(format!("given {ni}:{part}"));
-                    Ok(Some(part))
-                }
-            },
-        )
-        .unwrap();
-        assert_eq!(
-            seen,
-            [
-                "3:1",
-                "4:1",
-                "given 5:1",
-                "given 6:1",
-                "given 7:1",
-                "1:2",
-                "given 2:30",
-                "0:32"
-            ]
-        );
-        assert_eq!(left[0], Some(32));
-    }
-
-    #[test]
     fn a_shards_sequence_leaves_its_roots_parts() {
         let tree = tree();
         // Node 1's subtree alone: its parent is not in the sequence.
@@ -493,9 +428,8 @@ mod tests {
             &[3, 4, 1],
             u64::MAX,
             &|_| 0,
-            &|_| true,
             &count(&tree),
-            &mut |_, _: Option<String>, _: Vec<u32>| Ok(None),
+            &mut |_, _: String| Ok(()),
         )
         .unwrap();
         assert_eq!(left[1], Some(2));
@@ -514,9 +448,9 @@ mod tests {
             count(&tree)(ni, children)
         };
         let mut handed = Vec::new();
-        let err = run_all(&tree, &make, &mut |ni, _, _| {
+        let err = run_all(&tree, &make, &mut |ni, _| {
             handed.push(ni);
-            Ok(None)
+            Ok(())
         })
         .unwrap_err();
         assert_eq!(err, "node 6 is broken");
@@ -529,11 +463,11 @@ mod tests {
     #[test]
     fn an_error_from_the_sink_stops_the_run() {
         let tree = tree();
-        let err = run_all(&tree, &count(&tree), &mut |ni, _, _| {
+        let err = run_all(&tree, &count(&tree), &mut |ni, _| {
             if ni == 5 {
                 Err("disk full".to_string())
             } else {
-                Ok(None)
+                Ok(())
             }
         })
         .unwrap_err();
@@ -548,7 +482,7 @@ mod tests {
                 assert_ne!(ni, 1, "node 1 cannot be made");
                 count(&tree)(ni, children)
             };
-            run_all(&tree, &make, &mut |_, _, _| Ok(None))
+            run_all(&tree, &make, &mut |_, _| Ok(()))
         }));
         let panic = r.unwrap_err();
         let message = panic.downcast_ref::<String>().cloned().unwrap_or_default();

@@ -137,6 +137,14 @@ pub struct Params {
     /// ([`crate::hlod::leaf_lods`]).
     #[serde(default, skip_serializing_if = "LeafChains::is_default")]
     pub leaf_chains: LeafChains,
+    /// Whether merged proxies (watertight shells at the scale of an
+    /// error, [`crate::hlod`]) are made and measured beside every chain's
+    /// levels, and kept where they draw fewer triangles at a lower error.
+    /// Off by default: on floors of real CAD 0.97x and 0.94x the
+    /// triangles drawn (frustum and HLODs, 1 px) for 1.6x and 4.5x the
+    /// preprocess time.
+    #[serde(default)]
+    pub proxies: bool,
 }
 
 /// Which LOD chains a leaf gets.
@@ -239,6 +247,7 @@ impl Default for Params {
             normal_bits: 8,
             compress: true,
             leaf_chains: LeafChains::Kept,
+            proxies: false,
         }
     }
 }
@@ -444,6 +453,9 @@ impl Params {
                 }
                 if !self.leaf_chains.is_default() {
                     m.insert("leaf_chains".into(), json!(self.leaf_chains.to_string()));
+                }
+                if self.proxies {
+                    m.insert("proxies".into(), json!(true));
                 }
                 m
             }

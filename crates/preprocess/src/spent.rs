@@ -24,10 +24,12 @@ pub(crate) enum Kind {
     Read,
     /// Quantizing, encoding and compressing levels for the sink.
     Prepare,
+    /// Merged proxies' distance fields and surfaces ([`crate::hlod`]).
+    Proxy,
 }
 
 /// How many kinds there are, and their names in `--stats`.
-pub(crate) const KINDS: [(Kind, &str); 7] = [
+pub(crate) const KINDS: [(Kind, &str); 8] = [
     (Kind::Simplify, "simplify"),
     (Kind::Backward, "certify level->reference"),
     (Kind::Forward, "certify reference->level"),
@@ -35,6 +37,7 @@ pub(crate) const KINDS: [(Kind, &str); 7] = [
     (Kind::Planar, "flat regions"),
     (Kind::Read, "read objects"),
     (Kind::Prepare, "encode and compress"),
+    (Kind::Proxy, "merged proxies"),
 ];
 
 fn index(kind: Kind) -> usize {

@@ -109,6 +109,10 @@ pub struct Certification {
     /// Leaves whose chain covers vanished pieces (as an inner node's
     /// does) rather than keeping a triangle of each: it draws less.
     pub leaf_cover_chosen: u64,
+    /// Merged proxies made and measured beside the chains' levels.
+    pub proxies: u64,
+    /// Proxies kept: each beat every level of at most its triangles.
+    pub proxies_kept: u64,
 }
 
 /// The HLOD phase as a graph of tasks: every node's levels are one task,

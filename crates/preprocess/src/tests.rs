@@ -325,6 +325,44 @@ fn small_plant_errors_are_bounds_with_the_better_of_two_leaf_chains() {
     assert_eq!(kept.stats.certification.leaf_cover_chosen, 0);
 }
 
+#[test]
+fn merged_proxies_are_bounds_on_thin_open_shells_and_small_parts() {
+    // Single-sided sheets (no volume at all) a little apart, thin pipes
+    // and rows of small boxes: the parts proxies merge. Every stored
+    // error, proxies' included, must bound brute-force samples, and the
+    // shells must not vanish (a sample on a sheet far from its level is
+    // what the check would find).
+    let mut objects = vec![
+        grid_object(DVec3::ZERO, 10.0, 40, 0.0),
+        grid_object(DVec3::new(0.0, 0.05, 0.0), 10.0, 40, 0.0),
+        grid_object(DVec3::new(0.0, 1.0, 0.0), 10.0, 24, 0.1),
+    ];
+    for i in 0..6 {
+        objects.push(pipe_object(
+            DVec3::new(0.0, 2.0, 1.5 * i as f64),
+            10.0,
+            0.02,
+            40,
+            6,
+        ));
+    }
+    for i in 0..300 {
+        let min = DVec3::new(0.3 * (i % 30) as f64, 3.0, 0.3 * (i / 30) as f64);
+        objects.push(box_object(min, min + DVec3::splat(0.2)));
+    }
+    let on = Params {
+        proxies: true,
+        ..small_params()
+    };
+    let (check, built) = bounds_hold_built(objects.clone(), &on);
+    assert!(check.worst_ratio <= 1.0, "{check:?}");
+    let c = built.stats.certification;
+    assert!(c.proxies_kept > 0 && c.proxies >= c.proxies_kept, "{c:?}");
+    // Off (the default), none is made.
+    let (_, without) = bounds_hold_built(objects, &small_params());
+    assert_eq!(without.stats.certification.proxies, 0);
+}
+
 /// Triangles the subtree of `node` draws at `error`: each node its
 /// coarsest level within it, else its children's; a leaf with none its
 /// finest (as traversal and `gigawalk info` count it).
@@ -366,7 +404,23 @@ fn disjoint_parts_aggregate(name: &str, objects: Vec<Object>, max_error: f64) {
         objects,
         ..Default::default()
     };
-    let (built, sink) = build_in_memory(&model, &Params::default());
+    // With the chains alone, and with merged proxies beside them.
+    for proxies in [false, true] {
+        let params = Params {
+            proxies,
+            ..Params::default()
+        };
+        parts_aggregate_with(
+            &format!("{name}, proxies {proxies}"),
+            &model,
+            &params,
+            max_error,
+        );
+    }
+}
+
+fn parts_aggregate_with(name: &str, model: &Model, params: &Params, max_error: f64) {
+    let (built, sink) = build_in_memory(model, params);
     let full = built.stats.triangles;
     let diagonal = built.nodes[0].bounds.diagonal();
     let drawn = drawn_at(&built, &sink, 0, (max_error * diagonal) as f32);
@@ -464,10 +518,10 @@ fn a_hose_of_300_rings_aggregates() {
 }
 
 /// The switch factors of a generated scene of about `triangles`.
-fn generated_switches(kind: gigawalk_procgen::Kind, triangles: u64) -> Vec<f64> {
+fn generated_switches(kind: gigawalk_procgen::Kind, triangles: u64, params: &Params) -> Vec<f64> {
     let g = gigawalk_procgen::generate(kind, triangles, 3, 2);
     let model = gigawalk_import::import_glb_bytes(&g.glb_bytes(), kind.name()).unwrap();
-    let (built, sink) = build_in_memory(&model, &Params::default());
+    let (built, sink) = build_in_memory(&model, params);
     let mut f: Vec<f64> = switch_factors(&built, &sink).iter().map(|s| s.1).collect();
     f.sort_by(f64::total_cmp);
     f
@@ -476,8 +530,20 @@ fn generated_switches(kind: gigawalk_procgen::Kind, triangles: u64) -> Vec<f64> 
 #[test]
 fn switch_factors_are_bounded_on_generated_scenes() {
     use gigawalk_procgen::Kind;
-    for kind in [Kind::Plant, Kind::City, Kind::Forest, Kind::Machine] {
-        let f = generated_switches(kind, 80_000);
+    // With merged proxies too: an inner node keeps one only where its
+    // children draw at most 8 times its triangles.
+    let proxies = Params {
+        proxies: true,
+        ..Params::default()
+    };
+    for (kind, params) in [
+        (Kind::Plant, Params::default()),
+        (Kind::City, Params::default()),
+        (Kind::Forest, Params::default()),
+        (Kind::Machine, Params::default()),
+        (Kind::Machine, proxies),
+    ] {
+        let f = generated_switches(kind, 80_000, &params);
         let median = f[f.len() / 2];
         let max = f.last().copied().unwrap_or(0.0);
         eprintln!(

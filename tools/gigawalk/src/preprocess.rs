@@ -90,6 +90,9 @@ pub struct Args {
     /// LODs (4.3): kept: a leaf's chain keeps a triangle of every piece a level makes vanish. best: a second chain covers vanished pieces per error-sized cell as an inner node's does, and the one that draws fewer triangles over the distances the leaf may be seen from is kept (real-CAD floor: 0.90x the triangles drawn at 1 px for 1.55x the preprocess time; generated plant: 0.97x for 1.27x)
     #[arg(long, value_enum, default_value_t = LeafChainsArg::Kept)]
     leaf_chains: LeafChainsArg,
+    /// LODs and HLODs (4.3): on: beside every chain, merged proxies (watertight shells of the geometry's distance field at an offset of a cell, on cells of 1/8 to 1/128 of the node, simplified) are measured as every level is, and kept where they draw fewer triangles at a lower error; they merge the small, thin, disjoint parts that edge collapse cannot (docs/preprocess.md, "Merged proxies"; on two floors of real CAD 0.97x and 0.94x the triangles drawn at 1 px for 1.6x and 4.5x the preprocess time, so not the default). off: the chains alone
+    #[arg(long, value_enum, default_value_t = OnOff::Off)]
+    proxies: OnOff,
     /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it (with one collapse level, 512 drew 8% and 10% fewer triangles than 1024 at 1 px on the 4M and 20M plants, in a 1.2x smaller scene)
     #[arg(long, default_value_t = Params::default().node_budget)]
     node_budget: u32,
@@ -124,6 +127,13 @@ pub struct Args {
 enum LeafChainsArg {
     Kept,
     Best,
+}
+
+/// `--proxies`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum OnOff {
+    On,
+    Off,
 }
 
 /// `--compress`.
@@ -161,6 +171,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             LeafChainsArg::Kept => LeafChains::Kept,
             LeafChainsArg::Best => LeafChains::Best,
         },
+        proxies: args.proxies == OnOff::On,
     };
     // Bad flags fail before the (possibly long) import.
     params.validate().context("bad parameter")?;

@@ -348,6 +348,34 @@ fn the_better_of_two_leaf_chains_reaches_split_builds_and_a_bad_choice_is_named(
     assert!(!ok && err.contains("--leaf-chains"), "{err}");
 }
 
+#[test]
+fn merged_proxies_are_made_on_request_and_a_bad_choice_is_named() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let (glb, off) = plant_and_reference(d, "20k");
+    let count = |stats: &Path, key: &str| -> u64 {
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
+        j["certification"][key].as_u64().unwrap()
+    };
+    let (default, stats) = (d.join("default.gwk"), d.join("default.json"));
+    preprocess_to(&glb, &default, &["--stats", s(&stats)]);
+    assert_eq!(count(&stats, "proxies"), 0);
+    let (on, on_stats) = (d.join("on.gwk"), d.join("on.json"));
+    preprocess_to(&glb, &on, &["--proxies", "on", "--stats", s(&on_stats)]);
+    let (made, kept) = (
+        count(&on_stats, "proxies"),
+        count(&on_stats, "proxies_kept"),
+    );
+    assert!(made >= kept && kept > 0, "{made} made, {kept} kept");
+    assert!(
+        std::fs::read(&on).unwrap() != off,
+        "--proxies on changed nothing"
+    );
+    let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&on), "--proxies", "yes"]);
+    assert!(!ok && err.contains("--proxies"), "{err}");
+}
+
 /// Files in `dir` whose names start with `prefix`.
 fn named(dir: &Path, prefix: &str) -> Vec<std::path::PathBuf> {
     std::fs::read_dir(dir)

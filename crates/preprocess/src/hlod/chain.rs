@@ -326,6 +326,10 @@ pub struct Tally {
     pub gentler_won: std::sync::atomic::AtomicU64,
     /// Leaves whose covering chain was kept (it draws less).
     pub cover_chosen: std::sync::atomic::AtomicU64,
+    /// Merged proxies made and measured.
+    pub proxies: std::sync::atomic::AtomicU64,
+    /// Proxies that beat every level of at most their triangles.
+    pub proxies_kept: std::sync::atomic::AtomicU64,
 }
 
 impl Tally {
@@ -335,6 +339,14 @@ impl Tally {
 
     pub(super) fn add_cover_chosen(&self) {
         Self::add(&self.cover_chosen, 1);
+    }
+
+    pub(super) fn add_proxy(&self) {
+        Self::add(&self.proxies, 1);
+    }
+
+    pub(super) fn add_proxy_kept(&self) {
+        Self::add(&self.proxies_kept, 1);
     }
 
     /// The counts as plain numbers.
@@ -348,6 +360,8 @@ impl Tally {
             gentler: get(&self.gentler),
             gentler_won: get(&self.gentler_won),
             leaf_cover_chosen: get(&self.cover_chosen),
+            proxies: get(&self.proxies),
+            proxies_kept: get(&self.proxies_kept),
         }
     }
 }

@@ -42,6 +42,7 @@ use crate::parts::Part;
 use crate::source::{Source, SpillError};
 
 mod chain;
+mod proxy;
 mod simplify;
 
 pub use chain::Tally;
@@ -106,6 +107,9 @@ pub struct ChainParams {
     /// Whether a leaf's covering chain is made beside its kept-pieces
     /// chain, and the one that draws less kept ([`leaf_lods`]).
     pub leaf_best: bool,
+    /// Whether merged proxies are made and measured beside the chain's
+    /// levels, and kept where they draw less ([`with_proxies`]).
+    pub proxies: bool,
     /// Levels 1..=collapse_levels of a leaf use edge collapse, the rest sloppy.
     pub collapse_levels: usize,
     /// Triangles of an inner node's finest HLOD (at most).
@@ -125,6 +129,7 @@ impl ChainParams {
             ratio: params.lod_ratio,
             floor: params.lod_floor as usize,
             leaf_best: params.leaf_chains == crate::LeafChains::Best,
+            proxies: params.proxies,
             collapse_levels: params.collapse_levels as usize,
             node_budget: params.node_budget as usize,
             bound_spacing: params.bound_spacing as f32,
@@ -204,17 +209,171 @@ pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams, tally: &Tally) 
         p,
         tally,
     );
-    if !p.leaf_best {
-        return kept;
-    }
-    let covered = leaf_chain(&mesh, &mut queries, diagonal, LeafChain::Cover, p, tally);
-    if draw_cost(&covered, diagonal) < draw_cost(&kept, diagonal) {
-        tally.add_cover_chosen();
-        covered
-    } else {
+    let chain = if !p.leaf_best {
         kept
+    } else {
+        let covered = leaf_chain(&mesh, &mut queries, diagonal, LeafChain::Cover, p, tally);
+        if draw_cost(&covered, diagonal) < draw_cost(&kept, diagonal) {
+            tally.add_cover_chosen();
+            covered
+        } else {
+            kept
+        }
+    };
+    if !p.proxies {
+        return chain;
     }
+    let reference = ProxyReference {
+        mesh: &mesh,
+        queries: &mut queries,
+        base: 0.0,
+        sampling: p.sampling(diagonal),
+        children: &[],
+    };
+    with_proxies(chain, reference, tally)
 }
+
+/// What proxies are made of and measured against: a leaf's full detail,
+/// or an inner node's reference (its full detail, or the union of its
+/// children's levels, whose own error is `base`).
+struct ProxyReference<'a> {
+    mesh: &'a WorkMesh,
+    queries: &'a mut Nearest,
+    base: f32,
+    sampling: Sampling,
+    /// An inner node's children's chains: a proxy of the node is kept
+    /// only where switching to them multiplies what is drawn by at most
+    /// [`MAX_SWITCH`] (a plate's 200 rivets would otherwise go from a
+    /// 2-triangle slab to 450 triangles at a hair's less error).
+    children: &'a [&'a [Lod]],
+}
+
+/// The chain `lods` (finest first, errors non-decreasing) with merged
+/// proxies ([`proxy`]) of the reference put in where they draw less: each
+/// proxy, on cells of [`PROXY_RESOLUTIONS`] fractions of the reference's
+/// longest side, is measured (two-sided, as every level) only as far as
+/// it takes to know whether it beats every level of at most its
+/// triangles, and the chain is then the lower envelope of the levels and
+/// the winning proxies (in order of error, each with fewer triangles
+/// than the one before): at every tolerance it draws the fewest
+/// triangles of any of them within it, never more than the chain alone. Level 0 (a leaf's full detail, an inner node's union) stays
+/// first; no proxy's error is below it. References of fewer than
+/// [`PROXY_MIN_TRIANGLES`] are left as they are.
+fn with_proxies(lods: Vec<Lod>, r: ProxyReference<'_>, tally: &Tally) -> Vec<Lod> {
+    use crate::hausdorff::{symmetric_within, Within};
+    let Some(first) = lods.first() else {
+        return lods;
+    };
+    if r.mesh.triangles() < PROXY_MIN_TRIANGLES {
+        return lods;
+    }
+    let floor_error = first.error;
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in &r.mesh.positions {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let longest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+    if !(longest.is_finite() && longest > 0.0) {
+        return lods;
+    }
+    let mut proxies: Vec<Lod> = Vec::new();
+    for cells in PROXY_RESOLUTIONS {
+        let Some(mesh) = proxy::proxy(r.mesh, longest / cells) else {
+            // Past the grid's cap: finer cells are too.
+            break;
+        };
+        tally.add_proxy();
+        // It wins only below the error of every level (or proxy kept) of
+        // at most its triangles; one ulp above that, so a bound past it
+        // loses for certain.
+        let t = mesh.triangles();
+        let beat = lods
+            .iter()
+            .chain(&proxies)
+            .filter(|l| l.mesh.triangles() <= t)
+            .map(|l| l.error)
+            .fold(f32::INFINITY, f32::min);
+        let limit = if beat.is_finite() {
+            (beat - r.base).max(0.0).next_up()
+        } else {
+            f32::INFINITY
+        };
+        let w = symmetric_within(
+            r.mesh.surface(),
+            r.queries,
+            mesh.surface(),
+            None,
+            &r.sampling,
+            limit,
+        );
+        // At least the error this proxy has (or the one it lost to).
+        let mut at_least = beat;
+        if let Within::Yes(e) = w {
+            let error = (r.base + e).max(floor_error);
+            at_least = error;
+            let switch_ok =
+                r.children.is_empty() || refined(r.children, error) <= MAX_SWITCH * t.max(1);
+            if error < beat && error.is_finite() && switch_ok {
+                tally.add_proxy_kept();
+                proxies.push(Lod { mesh, error });
+            }
+        }
+        // Halving the cell about doubles a proxy's triangles at least,
+        // and at best halves its error: the next can win only if no level
+        // (or proxy kept) of at most twice these triangles is within
+        // that. Nor is a proxy of a quarter of the reference's triangles
+        // or more a real step.
+        let hope = (at_least * PROXY_HOPE).max(floor_error);
+        let dominated = lods
+            .iter()
+            .chain(&proxies)
+            .any(|l| l.mesh.triangles() <= 2 * t && l.error <= hope);
+        if dominated || 4 * t >= r.mesh.triangles() {
+            break;
+        }
+    }
+    if proxies.is_empty() {
+        return lods;
+    }
+    let mut rest: Vec<Lod> = lods.into_iter().chain(proxies).collect();
+    let first = rest.remove(0);
+    rest.sort_by(|a, b| {
+        a.error
+            .total_cmp(&b.error)
+            .then(a.mesh.triangles().cmp(&b.mesh.triangles()))
+    });
+    let mut chain = vec![first];
+    for l in rest {
+        let last = chain.last().map_or(usize::MAX, |l| l.mesh.triangles());
+        if l.mesh.triangles() < last {
+            chain.push(l);
+        }
+    }
+    chain
+}
+
+/// Proxies are made on cells of these fractions of a reference's longest
+/// side: errors from about a quarter of it down to about a sixtieth (the
+/// offset, the sampling and the simplifier each move the shell by up to
+/// about a cell), where a machine seen from 16-64 m is drawn at 1 px.
+const PROXY_RESOLUTIONS: [f32; 5] = [8.0, 16.0, 32.0, 64.0, 128.0];
+
+/// The most an inner node's proxy may be outnumbered by what its
+/// children draw at its error (the switch factor `gigawalk info` and
+/// `preprocess --stats` report, and the tests bound).
+const MAX_SWITCH: usize = 8;
+
+/// The most a proxy on cells half the size may shrink the error by (a
+/// half, and some hope), to decide whether making it is worth the time.
+const PROXY_HOPE: f32 = 0.375;
+
+/// References of fewer triangles get no proxies: their chains end within
+/// a few hundred triangles anyway.
+const PROXY_MIN_TRIANGLES: usize = 1024;
 
 /// How a leaf's chain treats the pieces a level makes vanish.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -342,6 +501,16 @@ pub fn inner_lods(
         keep_pieces: false,
     };
     extend_chain(&mut lods, reference, p, tally);
+    if p.proxies {
+        let reference = ProxyReference {
+            mesh: reference_mesh,
+            queries: &mut queries,
+            base: reference_base,
+            sampling: p.sampling(diagonal),
+            children,
+        };
+        lods = with_proxies(lods, reference, tally);
+    }
     if lods.len() > 1 && lods[0].mesh.triangles() > p.node_budget {
         lods.remove(0);
     }
@@ -356,20 +525,24 @@ pub fn inner_lods(
 /// make a tolerance draw more triangles than full detail. The levels after
 /// the first worth storing are coarser still and stay.
 pub fn worth_drawing(lods: &[Lod], children: &[&[Lod]]) -> std::ops::Range<usize> {
-    let refine = |e: f32| -> usize {
-        children
-            .iter()
-            .map(|c| {
-                let k = c.iter().rposition(|l| l.error <= e).unwrap_or(0);
-                c.get(k).map_or(0, |l| l.mesh.triangles())
-            })
-            .sum()
-    };
+    let refine = |e: f32| refined(children, e);
     let first = lods
         .iter()
         .position(|l| l.mesh.triangles() < refine(l.error))
         .unwrap_or(lods.len());
     first..lods.len()
+}
+
+/// Triangles `children` draw at `error`: each its coarsest level within
+/// it, or its finest.
+fn refined(children: &[&[Lod]], error: f32) -> usize {
+    children
+        .iter()
+        .map(|c| {
+            let k = c.iter().rposition(|l| l.error <= error).unwrap_or(0);
+            c.get(k).map_or(0, |l| l.mesh.triangles())
+        })
+        .sum()
 }
 
 /// For each child chain, the index of the level to merge: the coarsest
@@ -453,6 +626,7 @@ mod tests {
         floor: 64,
         collapse_levels: 1,
         leaf_best: false,
+        proxies: false,
         node_budget: 256,
         bound_spacing: 0.25,
         bound_floor: 1e-3,
@@ -500,6 +674,68 @@ mod tests {
         for w in lods.windows(2) {
             assert!(w[1].error >= w[0].error);
         }
+    }
+
+    /// 400 cubes of 0.4 a gap of 0.1 apart on a 10-unit square: 4,800
+    /// triangles of disjoint parts, which edge collapse cannot join.
+    pub(super) fn cubes() -> WorkMesh {
+        let mut all = crate::test_models::box_object(DVec3::ZERO, DVec3::splat(0.4));
+        for i in 1..400 {
+            let lo = DVec3::new(0.5 * (i % 20) as f64, 0.0, 0.5 * (i / 20) as f64);
+            let b = crate::test_models::box_object(lo, lo + DVec3::splat(0.4));
+            let base = all.positions.len() as u32;
+            all.positions.extend(b.positions);
+            all.normals.extend(b.normals);
+            all.indices.extend(b.indices.iter().map(|i| i + base));
+        }
+        mesh_of(all)
+    }
+
+    /// Triangles of the coarsest level within `tolerance` (the finest when
+    /// none is), as traversal draws a leaf.
+    fn drawn(lods: &[Lod], tolerance: f64) -> usize {
+        let k = lods
+            .iter()
+            .rposition(|l| l.error as f64 <= tolerance)
+            .unwrap_or(0);
+        lods[k].mesh.triangles()
+    }
+
+    #[test]
+    fn proxies_join_a_chain_only_where_it_then_draws_less() {
+        let mesh = cubes();
+        let diagonal = 14.2;
+        let chain = leaf_lods(mesh.clone(), diagonal, &P, &Tally::default());
+        let tally = Tally::default();
+        let with = ChainParams { proxies: true, ..P };
+        let lods = leaf_lods(mesh, diagonal, &with, &tally);
+        let c = tally.snapshot();
+        assert!(c.proxies_kept > 0 && c.proxies >= c.proxies_kept, "{c:?}");
+        assert_eq!(lods[0], chain[0]);
+        for w in lods.windows(2) {
+            assert!(w[1].error >= w[0].error);
+            assert!(w[1].mesh.triangles() < w[0].mesh.triangles());
+        }
+        // Never more at any tolerance, and fewer at some.
+        let mut fewer = 0;
+        for k in 0..24 {
+            let tolerance = diagonal * 0.5f64.powi(k);
+            let (a, b) = (drawn(&lods, tolerance), drawn(&chain, tolerance));
+            assert!(a <= b, "{tolerance}: {a} against {b}");
+            fewer += usize::from(a < b);
+        }
+        assert!(fewer > 0);
+    }
+
+    #[test]
+    fn small_references_get_no_proxies() {
+        let mesh = mesh_of(grid_object(DVec3::ZERO, 1.0, 8, 0.1));
+        assert!(mesh.triangles() < PROXY_MIN_TRIANGLES);
+        let tally = Tally::default();
+        let with = ChainParams { proxies: true, ..P };
+        let lods = leaf_lods(mesh.clone(), 1.5, &with, &tally);
+        assert_eq!(tally.snapshot().proxies, 0);
+        assert_eq!(lods, leaf_lods(mesh, 1.5, &P, &Tally::default()));
     }
 
     #[test]

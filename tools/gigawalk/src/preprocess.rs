@@ -93,6 +93,9 @@ pub struct Args {
     /// LODs and HLODs (4.3): on: beside every chain, merged proxies (watertight shells of the geometry's distance field at an offset of a cell, on cells of 1/8 to 1/128 of the node, simplified) are measured as every level is, and kept where they draw fewer triangles at a lower error; they merge the small, thin, disjoint parts that edge collapse cannot (docs/preprocess.md, "Merged proxies"; on two floors of real CAD 0.97x and 0.94x the triangles drawn at 1 px for 1.6x and 4.5x the preprocess time, so not the default). off: the chains alone
     #[arg(long, value_enum, default_value_t = OnOff::Off)]
     proxies: OnOff,
+    /// LODs and HLODs (4.3), with --proxies on: the finest proxies' cells across a node's longest side; proxies are tried on 8, 16, ... up to this many (8-128). Each halving of the cell costs about 4x the last: on a held-out real-CAD floor 32 drew 0.983x the triangles for 1.70x the preprocess time, 64 0.973x for 2.98x, 128 0.942x for 4.5x (docs/results.md, "The far field on real CAD")
+    #[arg(long, default_value_t = Params::default().proxy_cells)]
+    proxy_cells: u32,
     /// HLODs (4.3): triangles of an inner node's finest HLOD; its children are cut at a matching error and merged to about this / lod-ratio, then simplified to it (with one collapse level, 512 drew 8% and 10% fewer triangles than 1024 at 1 px on the 4M and 20M plants, in a 1.2x smaller scene)
     #[arg(long, default_value_t = Params::default().node_budget)]
     node_budget: u32,
@@ -172,6 +175,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             LeafChainsArg::Best => LeafChains::Best,
         },
         proxies: args.proxies == OnOff::On,
+        proxy_cells: args.proxy_cells,
     };
     // Bad flags fail before the (possibly long) import.
     params.validate().context("bad parameter")?;

@@ -368,12 +368,51 @@ fn merged_proxies_are_made_on_request_and_a_bad_choice_is_named() {
         count(&on_stats, "proxies_kept"),
     );
     assert!(made >= kept && kept > 0, "{made} made, {kept} kept");
+    let on_bytes = std::fs::read(&on).unwrap();
+    assert!(on_bytes != off, "--proxies on changed nothing");
+    // Shards made by workers read the choice from the plan.
+    let jobs = d.join("jobs.gwk");
+    let split = ["--proxies", "on", "--jobs", "2", "--shard-triangles", "4k"];
+    preprocess_to(&glb, &jobs, &split);
     assert!(
-        std::fs::read(&on).unwrap() != off,
-        "--proxies on changed nothing"
+        std::fs::read(&jobs).unwrap() == on_bytes,
+        "split bytes differ"
     );
     let (ok, _, err) = gigawalk(&["preprocess", s(&glb), "-o", s(&on), "--proxies", "yes"]);
     assert!(!ok && err.contains("--proxies"), "{err}");
+    let before = std::fs::read(&on).unwrap();
+    for cells in ["4", "1000", "many"] {
+        let (ok, _, err) = gigawalk(&[
+            "preprocess",
+            s(&glb),
+            "-o",
+            s(&on),
+            "--proxies",
+            "on",
+            "--proxy-cells",
+            cells,
+        ]);
+        assert!(!ok && err.contains("proxy-cells"), "{cells}: {err}");
+        assert!(
+            std::fs::read(&on).unwrap() == before,
+            "{cells}: the scene was touched"
+        );
+    }
+    // Coarser proxies only: fewer tried.
+    let coarse = d.join("coarse.json");
+    preprocess_to(
+        &glb,
+        &jobs,
+        &[
+            "--proxies",
+            "on",
+            "--proxy-cells",
+            "16",
+            "--stats",
+            s(&coarse),
+        ],
+    );
+    assert!(count(&coarse, "proxies") <= made);
 }
 
 /// Files in `dir` whose names start with `prefix`.

@@ -110,6 +110,8 @@ pub struct ChainParams {
     /// Whether merged proxies are made and measured beside the chain's
     /// levels, and kept where they draw less ([`with_proxies`]).
     pub proxies: bool,
+    /// The finest proxies' cells across a reference's longest side.
+    pub proxy_cells: u32,
     /// Levels 1..=collapse_levels of a leaf use edge collapse, the rest sloppy.
     pub collapse_levels: usize,
     /// Triangles of an inner node's finest HLOD (at most).
@@ -130,6 +132,7 @@ impl ChainParams {
             floor: params.lod_floor as usize,
             leaf_best: params.leaf_chains == crate::LeafChains::Best,
             proxies: params.proxies,
+            proxy_cells: params.proxy_cells,
             collapse_levels: params.collapse_levels as usize,
             node_budget: params.node_budget as usize,
             bound_spacing: params.bound_spacing as f32,
@@ -229,6 +232,7 @@ pub fn leaf_lods(mesh: WorkMesh, diagonal: f64, p: &ChainParams, tally: &Tally) 
         base: 0.0,
         sampling: p.sampling(diagonal),
         children: &[],
+        finest: p.proxy_cells,
     };
     with_proxies(chain, reference, tally)
 }
@@ -246,12 +250,14 @@ struct ProxyReference<'a> {
     /// [`MAX_SWITCH`] (a plate's 200 rivets would otherwise go from a
     /// 2-triangle slab to 450 triangles at a hair's less error).
     children: &'a [&'a [Lod]],
+    /// Cells across the longest side of the finest proxy tried.
+    finest: u32,
 }
 
 /// The chain `lods` (finest first, errors non-decreasing) with merged
 /// proxies ([`proxy`]) of the reference put in where they draw less: each
 /// proxy, on cells of [`PROXY_RESOLUTIONS`] fractions of the reference's
-/// longest side, is measured (two-sided, as every level) only as far as
+/// longest side (up to `--proxy-cells`), is measured (two-sided, as every level) only as far as
 /// it takes to know whether it beats every level of at most its
 /// triangles, and the chain is then the lower envelope of the levels and
 /// the winning proxies (in order of error, each with fewer triangles
@@ -281,7 +287,10 @@ fn with_proxies(lods: Vec<Lod>, r: ProxyReference<'_>, tally: &Tally) -> Vec<Lod
         return lods;
     }
     let mut proxies: Vec<Lod> = Vec::new();
-    for cells in PROXY_RESOLUTIONS {
+    for cells in PROXY_RESOLUTIONS
+        .into_iter()
+        .filter(|&c| c <= r.finest as f32)
+    {
         let Some(mesh) = proxy::proxy(r.mesh, longest / cells) else {
             // Past the grid's cap: finer cells are too.
             break;
@@ -508,6 +517,7 @@ pub fn inner_lods(
             base: reference_base,
             sampling: p.sampling(diagonal),
             children,
+            finest: p.proxy_cells,
         };
         lods = with_proxies(lods, reference, tally);
     }
@@ -627,6 +637,7 @@ mod tests {
         collapse_levels: 1,
         leaf_best: false,
         proxies: false,
+        proxy_cells: 128,
         node_budget: 256,
         bound_spacing: 0.25,
         bound_floor: 1e-3,

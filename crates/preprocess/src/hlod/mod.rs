@@ -257,12 +257,13 @@ struct ProxyReference<'a> {
 /// The chain `lods` (finest first, errors non-decreasing) with merged
 /// proxies ([`proxy`]) of the reference put in where they draw less: each
 /// proxy, on cells of [`PROXY_RESOLUTIONS`] fractions of the reference's
-/// longest side (up to `--proxy-cells`), is measured (two-sided, as every level) only as far as
-/// it takes to know whether it beats every level of at most its
-/// triangles, and the chain is then the lower envelope of the levels and
-/// the winning proxies (in order of error, each with fewer triangles
-/// than the one before): at every tolerance it draws the fewest
-/// triangles of any of them within it, never more than the chain alone. Level 0 (a leaf's full detail, an inner node's union) stays
+/// longest side (up to `--proxy-cells`), is measured (two-sided, as every
+/// level) only as far as it takes to know whether it beats every level
+/// of at most its triangles, and the chain is then the lower envelope of
+/// the levels and the winning proxies (in order of error, each with
+/// fewer triangles than the one before): at every tolerance it draws the
+/// fewest triangles of any of them within it, never more than the chain
+/// alone. Level 0 (a leaf's full detail, an inner node's union) stays
 /// first; no proxy's error is below it. References of fewer than
 /// [`PROXY_MIN_TRIANGLES`] are left as they are.
 fn with_proxies(lods: Vec<Lod>, r: ProxyReference<'_>, tally: &Tally) -> Vec<Lod> {
@@ -274,15 +275,10 @@ fn with_proxies(lods: Vec<Lod>, r: ProxyReference<'_>, tally: &Tally) -> Vec<Lod
         return lods;
     }
     let floor_error = first.error;
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in &r.mesh.positions {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    let longest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+    let Some(bounds) = proxy::bounds(r.mesh) else {
+        return lods;
+    };
+    let longest = (bounds.1 - bounds.0).max_element();
     if !(longest.is_finite() && longest > 0.0) {
         return lods;
     }
@@ -291,7 +287,7 @@ fn with_proxies(lods: Vec<Lod>, r: ProxyReference<'_>, tally: &Tally) -> Vec<Lod
         .into_iter()
         .filter(|&c| c <= r.finest as f32)
     {
-        let Some(mesh) = proxy::proxy(r.mesh, longest / cells) else {
+        let Some(mesh) = proxy::proxy(r.mesh, bounds, longest / cells) else {
             // Past the grid's cap: finer cells are too.
             break;
         };

@@ -35,23 +35,14 @@ const OFFSET_CELLS: f32 = 1.0;
 /// sampled distance is within about 0.6 of it of the true one.
 const SAMPLE_CELLS: f32 = 0.5;
 
-/// Most grid vertices a proxy's distance field may have (8 bytes each
-/// for the distance and colour, 4 for the surface's cells): a
-/// 128-cell cube and its pad.
-pub(super) const MAX_GRID_VERTICES: usize = 1 << 22;
+/// Most grid vertices a proxy's grid may have (16 bytes each: the
+/// distance, the colour, the nearest site's slot and the surface's
+/// cell): a 128-cell cube and its pad.
+const MAX_GRID_VERTICES: usize = 1 << 22;
 
-/// A proxy of `mesh` on a grid of `cell`-sized cells, simplified by edge
-/// collapse within about a cell; `None` when the grid would exceed
-/// [`MAX_GRID_VERTICES`], the mesh is empty or not finite, or nothing is
-/// left. Positions are relative to `mesh.origin`, as the mesh's.
-pub(super) fn proxy(mesh: &WorkMesh, cell: f32) -> Option<WorkMesh> {
-    crate::spent::timed(crate::spent::Kind::Proxy, || make(mesh, cell))
-}
-
-fn shell(mesh: &WorkMesh, cell: f32) -> Option<Shell> {
-    if mesh.indices.is_empty() || !(cell.is_finite() && cell > 0.0) {
-        return None;
-    }
+/// The box of the vertices `mesh`'s triangles use (relative to its
+/// origin), `None` when it has none or any is not finite.
+pub(super) fn bounds(mesh: &WorkMesh) -> Option<(Vec3A, Vec3A)> {
     let mut lo = Vec3A::splat(f32::INFINITY);
     let mut hi = Vec3A::splat(f32::NEG_INFINITY);
     for &i in &mesh.indices {
@@ -59,7 +50,20 @@ fn shell(mesh: &WorkMesh, cell: f32) -> Option<Shell> {
         lo = lo.min(p);
         hi = hi.max(p);
     }
-    if !(lo.is_finite() && hi.is_finite()) {
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
+/// A proxy of `mesh`, whose [`bounds`] are `bounds`, on a grid of
+/// `cell`-sized cells, simplified by edge collapse within about a cell;
+/// `None` when the grid would exceed [`MAX_GRID_VERTICES`], the cell is
+/// not a positive finite length, or nothing is left. Positions are
+/// relative to `mesh.origin`, as the mesh's.
+pub(super) fn proxy(mesh: &WorkMesh, bounds: (Vec3A, Vec3A), cell: f32) -> Option<WorkMesh> {
+    crate::spent::timed(crate::spent::Kind::Proxy, || make(mesh, bounds, cell))
+}
+
+fn shell(mesh: &WorkMesh, (lo, hi): (Vec3A, Vec3A), cell: f32) -> Option<Shell> {
+    if mesh.indices.is_empty() || !(cell.is_finite() && cell > 0.0) {
         return None;
     }
     let offset = OFFSET_CELLS * cell;
@@ -78,8 +82,6 @@ fn shell(mesh: &WorkMesh, cell: f32) -> Option<Shell> {
         positions,
         colours,
         indices,
-        lo,
-        hi,
     })
 }
 
@@ -89,19 +91,14 @@ struct Shell {
     positions: Vec<Vec3A>,
     colours: Vec<[u8; 4]>,
     indices: Vec<u32>,
-    /// The geometry's box.
-    lo: Vec3A,
-    hi: Vec3A,
 }
 
-fn make(mesh: &WorkMesh, cell: f32) -> Option<WorkMesh> {
+fn make(mesh: &WorkMesh, (lo, hi): (Vec3A, Vec3A), cell: f32) -> Option<WorkMesh> {
     let Shell {
         positions,
         colours,
         indices,
-        lo,
-        hi,
-    } = shell(mesh, cell)?;
+    } = shell(mesh, (lo, hi), cell)?;
     // Inside the geometry's own box, which the node's box holds: the
     // shell stands out by the offset, a flattened side moves it back by
     // at most that (the measured error includes it), and a side
@@ -531,6 +528,7 @@ mod tests {
     use crate::hlod::tests::mesh_of;
     use crate::test_models::{box_object, grid_object};
     use glam::DVec3;
+    use rustc_hash::FxHashMap;
 
     /// Every directed edge of a closed, consistently wound surface
     /// appears once, and its reverse once.
@@ -545,17 +543,16 @@ mod tests {
         edges.values().all(|&v| v == 0)
     }
 
-    use rustc_hash::FxHashMap;
-
     #[test]
     fn an_empty_mesh_or_a_bad_cell_makes_no_proxy() {
         let m = mesh_of(box_object(DVec3::ZERO, DVec3::ONE));
-        assert!(proxy(&WorkMesh::default(), 0.1).is_none());
+        assert!(bounds(&WorkMesh::default()).is_none());
+        let b = bounds(&m).expect("a box");
         for cell in [0.0, -1.0, f32::NAN, f32::INFINITY] {
-            assert!(proxy(&m, cell).is_none(), "cell {cell}");
+            assert!(proxy(&m, b, cell).is_none(), "cell {cell}");
         }
         // A grid past the cap.
-        assert!(proxy(&m, 1e-4).is_none());
+        assert!(proxy(&m, b, 1e-4).is_none());
     }
 
     #[test]
@@ -564,11 +561,12 @@ mod tests {
         // closed slab about a cell either side of it.
         let sheet = mesh_of(grid_object(DVec3::ZERO, 10.0, 8, 0.0));
         let cell = 0.5;
-        let s = shell(&sheet, cell).expect("a shell");
+        let b = bounds(&sheet).expect("a box");
+        let s = shell(&sheet, b, cell).expect("a shell");
         let closed = compact(sheet.origin, &s.positions, &s.colours, &s.indices);
         assert!(is_closed(&closed), "the slab is not closed");
         // Fitted into the sheet's flat box, its two faces.
-        let p = proxy(&sheet, cell).expect("a proxy");
+        let p = proxy(&sheet, b, cell).expect("a proxy");
         assert!(p.triangles() >= 2, "{} triangles", p.triangles());
         let mut q = Nearest::new(sheet.surface());
         let sampling = Sampling {
@@ -585,14 +583,15 @@ mod tests {
     fn many_small_parts_merge_into_few_triangles() {
         let m = crate::hlod::tests::cubes();
         assert_eq!(m.triangles(), 4800);
-        let s = shell(&m, 0.2).expect("a shell");
+        let b = bounds(&m).expect("a box");
+        let s = shell(&m, b, 0.2).expect("a shell");
         assert!(is_closed(&compact(
             m.origin,
             &s.positions,
             &s.colours,
             &s.indices
         )));
-        let p = proxy(&m, 0.2).expect("a proxy");
+        let p = proxy(&m, b, 0.2).expect("a proxy");
         assert!(p.triangles() < 600, "{} triangles", p.triangles());
     }
 }

@@ -22,6 +22,7 @@
 #![forbid(unsafe_code)]
 
 pub mod cluster;
+mod files;
 pub mod hausdorff;
 pub mod hierarchy;
 pub mod hlod;
@@ -79,6 +80,7 @@ use std::time::Instant;
 use gigawalk_scene::{Aabb, LodMesh, Node, Provenance, SceneWriter, WriteError};
 use rayon::prelude::*;
 
+pub use files::{preprocess_files, FilesError};
 pub use params::{LeafChains, ParamError, Params, PositionBits, Resolved};
 pub use parts::InputError;
 pub use source::{Source, Spill, SpillError, SpillWriter};
@@ -125,6 +127,8 @@ pub trait Progress: Sync {
     fn advance(&self, _n: u64) {}
     /// The current phase ended after `seconds`.
     fn finish(&self, _phase: Phase, _seconds: f64) {}
+    /// A line for the user: what was imported, planned, capped, done.
+    fn line(&self, _text: &str) {}
 }
 
 /// A [`Progress`] that ignores everything.

@@ -6,8 +6,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
+use gigawalk_preprocess::shards::{mib, peak_text, threads_within, FIXED_MEMORY};
+
 use anyhow::Context as _;
-use gigawalk_preprocess::{preprocess, shards, LeafChains, Params, Phase, PositionBits, Progress};
+use gigawalk_preprocess::{
+    preprocess_files, shards, LeafChains, Params, Phase, PositionBits, Progress,
+};
 use gigawalk_scene::{SceneReader, SceneStats};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -191,10 +195,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let done = shards::run_shard(dir, k, budget, &progress)
                 .with_context(|| format!("shard {k} of {}", dir.display()))?;
             progress.line(&match done {
-                shards::ShardRun::Made => format!(
-                    "shard {k} done in {:.1} s, {PEAK}{}",
+                shards::ShardRun::Made => shards::shard_done_line(
+                    k,
                     t.elapsed().as_secs_f64(),
-                    mib(gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0))
+                    gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0),
                 ),
                 shards::ShardRun::AlreadyDone => format!("shard {k} was already done"),
             });
@@ -210,12 +214,43 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .join(" ");
     let split = args.work_dir.is_some() || args.jobs > 1;
     let (mut stats, files) = if split {
-        match split_build(&args, &params, &inputs, &output, budget, &progress)? {
-            Some(built) => built,
-            None => return Ok(()), // --plan-only
+        let exe = std::env::current_exe();
+        let worker = |dir: &Path, k: usize, budget: Option<u64>| {
+            let exe = exe
+                .as_ref()
+                .map_err(|e| std::io::Error::new(e.kind(), e.to_string()))?;
+            let mut c = std::process::Command::new(exe);
+            c.arg("preprocess")
+                .arg("--work-dir")
+                .arg(dir)
+                .arg("--shard")
+                .arg(k.to_string())
+                .arg("--memory-budget")
+                .arg(budget.map_or("all".into(), |b| b.to_string()));
+            Ok(c)
+        };
+        let build = shards::SplitBuild {
+            inputs: &args.input,
+            label: &inputs,
+            params: &params,
+            shard_triangles: args.shard_triangles,
+            work_dir: args.work_dir.as_deref(),
+            output: &output,
+            plan_only: args.plan_only,
+            merge_only: args.merge,
+            jobs: args.jobs,
+            budget,
+            worker: &worker,
+        };
+        match shards::build_split(&build, &progress)? {
+            shards::SplitOutcome::Built { stats, files } => (*stats, files),
+            shards::SplitOutcome::Planned { shards } => {
+                crate::write_stdout(format_args!("{shards}\n"), false)?;
+                return Ok(());
+            }
         }
     } else {
-        single_build(&args.input, &inputs, &params, &output, budget, &progress)?
+        preprocess_files(&args.input, &inputs, &params, &output, budget, &progress)?
     };
     stats.input_file_bytes = files
         .iter()
@@ -297,78 +332,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Import and build in this process (no shards).
-fn single_build(
-    input: &[PathBuf],
-    inputs: &str,
-    params: &Params,
-    output: &Path,
-    budget: Option<u64>,
-    progress: &Display,
-) -> anyhow::Result<(gigawalk_preprocess::Stats, Vec<PathBuf>)> {
-    let t = Instant::now();
-    let files =
-        gigawalk_import::model_files(input).with_context(|| format!("cannot import {inputs}"))?;
-    let model = gigawalk_preprocess::source::import_within(
-        &files,
-        budget,
-        output_dir(output),
-        &mut |i, n, path| {
-            progress.line(&match n {
-                1 => format!("importing {}", path.display()),
-                _ => format!("importing {}/{n}: {}", i + 1, path.display()),
-            })
-        },
-    )
-    .with_context(|| format!("cannot import {inputs}"))?;
-    let import_secs = t.elapsed().as_secs_f64();
-    let import_stats = model.stats().clone();
-    let spilled = model.spilled_bytes();
-    progress.line(&format!(
-        "import: {} objects, {} triangles ({} degenerate dropped) in {import_secs:.2} s, {}",
-        model.source().len(),
-        import_stats.triangles - import_stats.degenerate_triangles_dropped,
-        import_stats.degenerate_triangles_dropped,
-        match spilled {
-            0 => format!("in memory, {PEAK}{}", mib(peak_memory())),
-            b => format!(
-                "spilled to disk ({}: the objects would take over {:.0}% of the memory budget, or the process over {:.0}%), {PEAK}{}",
-                mib(b),
-                100.0 * gigawalk_preprocess::source::MEMORY_SHARE,
-                100.0 * gigawalk_preprocess::source::RESIDENT_SHARE,
-                mib(peak_memory())
-            ),
-        }
-    ));
-    for w in &import_stats.warnings {
-        tracing::warn!("{w}");
-    }
-    let import_dropped = import_stats.degenerate_triangles_dropped;
-    let mut stats = preprocess(model.source(), params, output, inputs, progress)
-        .with_context(|| format!("cannot preprocess {inputs} into {}", output.display()))?;
-    stats.spilled_bytes = spilled;
-    drop(model);
-    stats
-        .phase_seconds
-        .insert(0, ("import".into(), import_secs));
-    // Triangles the importer dropped never reach the preprocessor; count them too.
-    stats.degenerate_dropped += import_dropped;
-    stats.input_triangles += import_dropped;
-    Ok((stats, files))
-}
-
-/// The directory `output` goes in.
-fn output_dir(output: &Path) -> &Path {
-    match output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    }
-}
-
-fn peak_memory() -> u64 {
-    gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0)
-}
-
 /// The memory budget in bytes, `None` for all.
 fn preprocess_budget(b: gigawalk_runtime::MemoryBudget) -> anyhow::Result<Option<u64>> {
     use gigawalk_runtime::MemoryBudget;
@@ -381,336 +344,6 @@ fn preprocess_budget(b: gigawalk_runtime::MemoryBudget) -> anyhow::Result<Option
             )?,
         ),
     })
-}
-
-/// A build split into shards: plan (or find the plan), run the shards not
-/// done (here, or in `--jobs` worker processes), merge. Returns the
-/// merge's statistics and the model files, `None` after `--plan-only`.
-fn split_build(
-    args: &Args,
-    params: &Params,
-    inputs: &str,
-    output: &Path,
-    budget: Option<u64>,
-    progress: &Display,
-) -> anyhow::Result<Option<(gigawalk_preprocess::Stats, Vec<PathBuf>)>> {
-    // Without --work-dir (--jobs above 1): a temporary one beside the
-    // output, removed however the run ends.
-    let temp;
-    let dir: &Path = match &args.work_dir {
-        Some(d) => d,
-        None => {
-            let parent = match output.parent() {
-                Some(p) if !p.as_os_str().is_empty() => p,
-                _ => Path::new("."),
-            };
-            // Named with this process's id: should it be killed, a later
-            // run removes the directory (gigawalk_scene's atomic writes).
-            let prefix = gigawalk_scene::work_dir_prefix();
-            temp = tempfile::Builder::new()
-                .prefix(&prefix)
-                .tempdir_in(parent)
-                .with_context(|| format!("cannot make a work directory in {}", parent.display()))?;
-            temp.path()
-        }
-    };
-    // The model imported and laid out once for the shards run here and
-    // the merge.
-    let open = || {
-        shards::Planned::open(dir, budget, progress)
-            .with_context(|| format!("cannot read the plan and model of {}", dir.display()))
-    };
-    let mut planned = None;
-    if !args.merge {
-        let t = Instant::now();
-        progress.line(&format!("planning {inputs}"));
-        let here = shards::plan(
-            &args.input,
-            inputs,
-            params,
-            args.shard_triangles,
-            dir,
-            budget,
-            progress,
-        )
-        .with_context(|| format!("cannot plan {inputs} in {}", dir.display()))?;
-        let plan = here.plan().clone();
-        let todo = shards::unfinished_shards(dir, &plan);
-        progress.line(&format!(
-            "plan: {} shards of at most {} triangles ({} triangles, {} nodes), {} to do, in {:.1} s: {}",
-            plan.shards.len(),
-            plan.shard_triangles,
-            plan.triangles,
-            plan.nodes,
-            todo.len(),
-            t.elapsed().as_secs_f64(),
-            dir.join(shards::PLAN_FILE).display()
-        ));
-        if args.plan_only {
-            crate::write_stdout(format_args!("{}\n", plan.shards.len()), false)?;
-            return Ok(None);
-        }
-        if args.jobs <= 1 || todo.is_empty() {
-            run_shards_here(&here, &todo, progress)?;
-            planned = Some(here);
-        } else {
-            // The workers share the budget; this process holds nothing
-            // meanwhile and imports the model again for the merge.
-            drop(here);
-            let jobs = workers_within(args.jobs, budget, progress);
-            run_workers(
-                dir,
-                &plan,
-                &todo,
-                jobs,
-                budget.map(|b| b / jobs as u64),
-                progress,
-            )?;
-        }
-    }
-    let planned = match planned {
-        Some(p) => p,
-        None => open()?,
-    };
-    let files = planned
-        .plan()
-        .inputs
-        .iter()
-        .map(|f| f.path.clone())
-        .collect();
-    let t = Instant::now();
-    let stats = planned
-        .merge(output, progress, &mut |k, why| {
-            progress.line(&format!("shard {k} is not done ({why}): making it here"))
-        })
-        .with_context(|| format!("cannot merge {} into {}", dir.display(), output.display()))?;
-    progress.line(&format!("merge done in {:.1} s", t.elapsed().as_secs_f64()));
-    Ok(Some((stats, files)))
-}
-
-/// How a finished shard reports its peak memory on stderr (the parent
-/// reads it back from a worker's output).
-const PEAK: &str = "peak memory ";
-
-fn mib(bytes: u64) -> String {
-    format!("{:.0} MiB", bytes as f64 / (1024.0 * 1024.0))
-}
-
-/// The run's one progress line after each shard: shards and triangles
-/// done, triangles per second, time left at that rate, peak memory.
-struct ShardProgress<'a> {
-    plan: &'a shards::Plan,
-    todo: u64,
-    started: Instant,
-    shards: usize,
-    triangles: u64,
-    worker_peak: u64,
-}
-
-impl ShardProgress<'_> {
-    fn done(&mut self, k: usize, peak: Option<u64>) -> String {
-        self.shards += 1;
-        self.triangles += self.plan.shards[k].triangles;
-        self.worker_peak = self.worker_peak.max(peak.unwrap_or(0));
-        let secs = self.started.elapsed().as_secs_f64().max(1e-3);
-        let rate = self.triangles as f64 / secs;
-        let left = self.todo.saturating_sub(self.triangles) as f64 / rate.max(1.0);
-        let own = gigawalk_preprocess::stats::peak_memory_bytes().unwrap_or(0);
-        format!(
-            "shards {}/{} done ({} of {} triangles), {:.0} triangles/s, {:.0} s, eta {:.0} s, {PEAK}{} (largest worker {})",
-            self.shards,
-            self.plan.shards.len(),
-            self.triangles,
-            self.todo,
-            rate,
-            secs,
-            left,
-            mib(own),
-            mib(self.worker_peak)
-        )
-    }
-}
-
-impl<'a> ShardProgress<'a> {
-    fn new(plan: &'a shards::Plan, todo: &[usize]) -> Self {
-        ShardProgress {
-            plan,
-            todo: todo.iter().map(|&k| plan.shards[k].triangles).sum(),
-            started: Instant::now(),
-            shards: plan.shards.len() - todo.len(),
-            triangles: 0,
-            worker_peak: 0,
-        }
-    }
-}
-
-/// Runs shards `todo` in this process, [`SHARDS_IN_FLIGHT`] at a time on
-/// the one thread pool: a shard's top nodes and its file's write run
-/// with few tasks ready, and the next shard's leaves fill the cores
-/// meanwhile. Stops at the first shard that fails (those in flight
-/// finish); the shards done are kept, so a rerun resumes.
-fn run_shards_here(
-    planned: &shards::Planned,
-    todo: &[usize],
-    progress: &Display,
-) -> anyhow::Result<()> {
-    let line = std::sync::Mutex::new(ShardProgress::new(planned.plan(), todo));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let failed = std::sync::atomic::AtomicBool::new(false);
-    let worker = || -> anyhow::Result<()> {
-        use std::sync::atomic::Ordering;
-        while !failed.load(Ordering::Relaxed) {
-            let Some(&k) = todo.get(next.fetch_add(1, Ordering::Relaxed)) else {
-                break;
-            };
-            if let Err(e) = planned.run_shard(k, progress) {
-                failed.store(true, Ordering::Relaxed);
-                return Err(anyhow::Error::new(e).context(format!("shard {k}")));
-            }
-            let done = line.lock().unwrap_or_else(|e| e.into_inner()).done(k, None);
-            progress.line(&done);
-        }
-        Ok(())
-    };
-    let results: Vec<anyhow::Result<()>> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..SHARDS_IN_FLIGHT.min(todo.len()))
-            .map(|_| s.spawn(worker))
-            .collect();
-        workers
-            .into_iter()
-            .map(|w| w.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
-            .collect()
-    });
-    results.into_iter().collect()
-}
-
-/// Shards a process runs at once ([`run_shards_here`]): two keep the
-/// cores busy through one shard's serial end; each holds its unit window
-/// (a few MiB a thread) beside the other's.
-const SHARDS_IN_FLIGHT: usize = 2;
-
-/// What a run needs whatever its budget (code, threads' working sets,
-/// one unit of levels): 60-110 MiB measured on the plants, 2 cores.
-const FIXED_MEMORY: u64 = 128 << 20;
-
-/// What each thread of a run needs of the budget: a unit's working set
-/// and one node's chain (2 threads held 15 MiB more than one on the 2M
-/// plant; twice that, for larger nodes).
-const THREAD_MEMORY: u64 = 32 << 20;
-
-/// Caps this process's threads so each has [`THREAD_MEMORY`] of `budget`
-/// (unless RAYON_NUM_THREADS says how many), and says so when that is
-/// fewer than the cores.
-fn threads_within(budget: u64, progress: &Display) {
-    if std::env::var_os("RAYON_NUM_THREADS").is_some() {
-        return;
-    }
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let fit = ((budget / THREAD_MEMORY) as usize).clamp(1, cores);
-    if fit < cores
-        && rayon::ThreadPoolBuilder::new()
-            .num_threads(fit)
-            .build_global()
-            .is_ok()
-    {
-        progress.line(&format!(
-            "{fit} threads, not {cores}: the memory budget of {} gives each {}",
-            mib(budget),
-            mib(THREAD_MEMORY)
-        ));
-    }
-}
-
-/// The least memory a worker is given: what one shard of the default size
-/// needs, with the model spilled (about 150 MiB measured on the plants,
-/// docs/results.md "Memory").
-const MIN_WORKER_BUDGET: u64 = 192 << 20;
-
-/// `jobs`, or fewer when the budget cannot give each worker
-/// [`MIN_WORKER_BUDGET`] (said on the progress line).
-fn workers_within(jobs: u32, budget: Option<u64>, progress: &Display) -> u32 {
-    let Some(b) = budget else {
-        return jobs;
-    };
-    let fit = (b / MIN_WORKER_BUDGET).clamp(1, jobs as u64) as u32;
-    if fit < jobs {
-        progress.line(&format!(
-            "{fit} workers, not {jobs}: the memory budget of {} gives each at least {}",
-            mib(b),
-            mib(MIN_WORKER_BUDGET)
-        ));
-    }
-    fit
-}
-
-/// Runs shards `todo` of the plan in `dir` in `jobs` worker processes of
-/// this binary at a time. The first failure stops new shards and is the
-/// error, with the worker's output.
-fn run_workers(
-    dir: &Path,
-    plan: &shards::Plan,
-    todo: &[usize],
-    jobs: u32,
-    budget: Option<u64>,
-    progress: &Display,
-) -> anyhow::Result<()> {
-    let line = Mutex::new(ShardProgress::new(plan, todo));
-    let exe =
-        std::env::current_exe().context("cannot find the gigawalk binary to start workers")?;
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let failed: Mutex<Option<anyhow::Error>> = Mutex::new(None);
-    std::thread::scope(|s| {
-        for _ in 0..jobs.min(todo.len() as u32) {
-            s.spawn(|| loop {
-                if failed.lock().map_or(true, |f| f.is_some()) {
-                    return;
-                }
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                let Some(&k) = todo.get(i) else {
-                    return;
-                };
-                let out = std::process::Command::new(&exe)
-                    .arg("preprocess")
-                    .arg("--work-dir")
-                    .arg(dir)
-                    .arg("--shard")
-                    .arg(k.to_string())
-                    .arg("--memory-budget")
-                    .arg(budget.map_or("all".into(), |b| b.to_string()))
-                    .stdin(std::process::Stdio::null())
-                    .output();
-                let stderr = match out {
-                    Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stderr).into_owned(),
-                    failure => {
-                        let e = match failure {
-                            Ok(o) => anyhow::anyhow!(
-                                "shard {k}'s worker failed ({}):\n{}",
-                                o.status,
-                                String::from_utf8_lossy(&o.stderr).trim_end()
-                            ),
-                            Err(e) => anyhow::anyhow!("cannot start a worker for shard {k}: {e}"),
-                        };
-                        if let Ok(mut f) = failed.lock() {
-                            f.get_or_insert(e);
-                        }
-                        return;
-                    }
-                };
-                // "shard K done in S s, peak memory N MiB"
-                let peak = stderr.rsplit_once(PEAK).and_then(|(_, r)| {
-                    let mib: f64 = r.split_whitespace().next()?.parse().ok()?;
-                    Some((mib * 1024.0 * 1024.0) as u64)
-                });
-                if let Ok(mut l) = line.lock() {
-                    progress.line(&format!("{} [{jobs} workers]", l.done(k, peak)));
-                }
-            });
-        }
-    });
-    match failed.into_inner().ok().flatten() {
-        Some(e) => Err(e),
-        None => Ok(()),
-    }
 }
 
 /// Progress on stderr: an indicatif bar per phase on a terminal, one plain
@@ -727,13 +360,13 @@ impl Display {
             bar: Mutex::new(None),
         }
     }
-
-    fn line(&self, s: &str) {
-        eprintln!("{s}");
-    }
 }
 
 impl Progress for Display {
+    fn line(&self, s: &str) {
+        eprintln!("{s}");
+    }
+
     fn start(&self, phase: Phase, total: u64) {
         if !self.terminal {
             return;
@@ -776,9 +409,9 @@ impl Progress for Display {
         // before the end.
         match gigawalk_preprocess::stats::peak_memory_bytes() {
             Some(peak) => eprintln!(
-                "{:>13} done in {seconds:.2} s, {PEAK}{} so far",
+                "{:>13} done in {seconds:.2} s, {} so far",
                 phase.name(),
-                mib(peak)
+                peak_text(peak)
             ),
             None => eprintln!("{:>13} done in {seconds:.2} s", phase.name()),
         }

@@ -22,16 +22,23 @@
 //!
 //! In parts: `plan` makes the plan and checks later jobs against it,
 //! `file` writes and reads shard files, `run` runs the shards and the
-//! merge.
+//! merge, `drive` runs a whole split build from one command (in this
+//! process or in worker processes) within a memory budget.
 
 use std::path::{Path, PathBuf};
 
 use crate::PreprocessError;
 
+mod drive;
 mod file;
 mod plan;
 mod run;
 
+pub use drive::{
+    build_split, mib, peak_text, shard_done_line, threads_for, threads_within, workers_for,
+    SplitBuild, SplitError, SplitOutcome, WorkerCommand, FIXED_MEMORY, MIN_WORKER_BUDGET,
+    THREAD_MEMORY,
+};
 pub(crate) use file::read_node_lods;
 pub use file::shard_path;
 pub use plan::{make_plan, plan, read_plan, spill_path, InputFile, Plan, ShardSpec};

@@ -43,6 +43,7 @@ mod object_space;
 mod occlusion;
 pub mod pick;
 mod raster;
+pub mod select;
 #[cfg(test)]
 mod test_rng;
 pub mod tiles;

@@ -17,7 +17,6 @@
 mod accuracy;
 pub mod demo;
 pub mod gpu_run;
-pub mod inspect;
 mod mode;
 mod plot;
 mod replay;

@@ -6,10 +6,10 @@
 //! scene), flies the camera and shows the messages these return, so all
 //! of this is unit-tested without a window.
 
-use std::collections::BTreeSet;
 use std::path::Path;
 use std::sync::Arc;
 
+use gigawalk_cull::select::HiddenSet;
 use gigawalk_cull::Visibility;
 use gigawalk_scene::objects::{ObjectTable, Pattern};
 use gigawalk_scene::path::Pose;
@@ -54,12 +54,10 @@ pub struct Objects {
     /// objects while geometry streams), if it is.
     no_hiding: Option<String>,
     selection: Option<Selection>,
-    /// Objects hidden one by one (`H`).
-    hidden: BTreeSet<u32>,
-    /// `I`: every object but these is hidden too.
-    isolated: Option<BTreeSet<u32>>,
+    /// Objects hidden one by one (`H`) and the isolation (`I`).
+    hidden: HiddenSet,
     search: Option<Search>,
-    /// Objects `hidden` and `isolated` hide together.
+    /// Objects `hidden` hides, of the table's.
     hidden_count: usize,
     /// The hidden set or the selection changed since `take_changed`.
     changed: bool,
@@ -74,8 +72,7 @@ impl Objects {
             table,
             no_hiding,
             selection: None,
-            hidden: BTreeSet::new(),
-            isolated: None,
+            hidden: HiddenSet::default(),
             search: None,
             hidden_count: 0,
             changed: false,
@@ -101,8 +98,7 @@ impl Objects {
     }
 
     pub fn is_hidden(&self, object: u32) -> bool {
-        self.hidden.contains(&object)
-            || self.isolated.as_ref().is_some_and(|s| !s.contains(&object))
+        self.hidden.is_hidden(object)
     }
 
     /// Whether the hidden set or the selection changed since the last
@@ -119,9 +115,7 @@ impl Objects {
         if self.hidden_count == 0 && selected.is_none() {
             return None;
         }
-        let v = Visibility::new(skeleton, table, &|o| self.is_hidden(o), &|o| {
-            Some(o) == selected
-        });
+        let v = self.hidden.visibility(skeleton, table, selected);
         (!v.is_all()).then(|| Arc::new(v))
     }
 
@@ -231,7 +225,7 @@ impl Objects {
     pub fn hide(&mut self) -> Result<String, String> {
         let targets = self.targets("H")?;
         let k = targets.len();
-        self.hidden.extend(targets);
+        self.hidden.hide(targets);
         self.search = None;
         self.after_hiding_changed();
         Ok(format!(
@@ -246,10 +240,7 @@ impl Objects {
     pub fn isolate(&mut self) -> Result<String, String> {
         let targets = self.targets("I")?;
         let k = targets.len();
-        for t in &targets {
-            self.hidden.remove(t);
-        }
-        self.isolated = Some(targets.into_iter().collect());
+        self.hidden.isolate(targets);
         self.after_hiding_changed();
         Ok(format!(
             "isolated {}: {}",
@@ -266,22 +257,13 @@ impl Objects {
         }
         let k = self.hidden_count;
         self.hidden.clear();
-        self.isolated = None;
         self.after_hiding_changed();
         Ok(format!("showing all objects again ({k} were hidden)"))
     }
 
     fn after_hiding_changed(&mut self) {
         let n = self.table.as_ref().map_or(0, |t| t.objects().len());
-        self.hidden_count = match &self.isolated {
-            Some(iso) => {
-                n - iso
-                    .iter()
-                    .filter(|o| (**o as usize) < n && !self.hidden.contains(o))
-                    .count()
-            }
-            None => self.hidden.iter().filter(|o| (**o as usize) < n).count(),
-        };
+        self.hidden_count = self.hidden.count(n);
         if self.selection.is_some_and(|s| self.is_hidden(s.object)) {
             self.selection = None;
         }
@@ -301,8 +283,8 @@ impl Objects {
                 ids.filter_map(|i| ObjectRef::of(t, i)).collect()
             };
             v.selected = refs(&mut self.selection.map(|s| s.object).into_iter());
-            v.hidden = refs(&mut self.hidden.iter().copied());
-            v.isolated = self.isolated.as_ref().map(|s| refs(&mut s.iter().copied()));
+            v.hidden = refs(&mut self.hidden.hidden().iter().copied());
+            v.isolated = self.hidden.isolated().map(|s| refs(&mut s.iter().copied()));
         }
         v
     }
@@ -321,21 +303,13 @@ impl Objects {
         };
         let (selected, mut missing) = views::resolve(&view.selected, table);
         let mut note = None;
-        let (hidden, isolated) = if hides && self.no_hiding.is_some() {
+        let mut hidden = HiddenSet::default();
+        if hides && self.no_hiding.is_some() {
             note = self.no_hiding.clone();
-            (Vec::new(), None)
         } else {
-            let (h, m) = views::resolve(&view.hidden, table);
-            missing.extend(m);
-            let iso = view.isolated.as_ref().map(|refs| {
-                let (ids, m) = views::resolve(refs, table);
-                missing.extend(m);
-                ids
-            });
-            (h, iso)
-        };
-        self.hidden = hidden.into_iter().collect();
-        self.isolated = isolated.map(|ids| ids.into_iter().collect());
+            missing.extend(hidden.add_view(view, table));
+        }
+        self.hidden = hidden;
         self.search = None;
         self.selection = selected.first().map(|&object| Selection {
             object,
@@ -386,7 +360,7 @@ impl Objects {
             lines.push(format!(
                 "{}{} (U shows all)",
                 self.hidden_line(),
-                if self.isolated.is_some() {
+                if self.hidden.isolated().is_some() {
                     ", isolated"
                 } else {
                     ""

@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use gigawalk_replay::inspect::{self, PickRequest};
+use gigawalk_cull::select::{self, PickRequest, Picked};
+use gigawalk_scene::objects::ObjectRecord;
 
 #[derive(clap::Args)]
 pub struct PickArgs {
@@ -70,7 +71,7 @@ pub fn pick(a: PickArgs) -> anyhow::Result<()> {
         .skeleton()
         .bounds();
     let section = a.section.section(None, &bounds)?;
-    let picks = inspect::pick(&PickRequest {
+    let picks = select::pick(&PickRequest {
         scene: a.scene.clone(),
         path: a.path.clone(),
         frame: a.frame,
@@ -80,10 +81,10 @@ pub fn pick(a: PickArgs) -> anyhow::Result<()> {
         height: a.height,
         near: a.near,
     })?;
-    let pick_json = |pixel: (u32, u32), p: &inspect::Picked| {
+    let pick_json = |pixel: (u32, u32), p: &Picked| {
         serde_json::json!({
             "pixel": [pixel.0, pixel.1],
-            "object": p.object.as_ref().map(|(id, o)| inspect::object_json(*id, o)),
+            "object": p.object.as_ref().map(|(id, o)| object_json(*id, o)),
             "point": p.point.map(|q| q.to_array()),
             "distance": p.distance,
             "node": p.node,
@@ -140,7 +141,7 @@ pub fn pick(a: PickArgs) -> anyhow::Result<()> {
     print_pick(a.pixel[0], p)
 }
 
-fn print_pick(pixel: (u32, u32), p: &inspect::Picked) -> anyhow::Result<()> {
+fn print_pick(pixel: (u32, u32), p: &Picked) -> anyhow::Result<()> {
     match (&p.object, p.point) {
         (Some((id, o)), Some(q)) => {
             out!("object    {} (#{id})", o.name)?;
@@ -175,12 +176,9 @@ pub struct FindArgs {
 }
 
 pub fn find(a: FindArgs) -> anyhow::Result<()> {
-    let found = inspect::find(&a.scene, &a.pattern)?;
+    let found = select::find(&a.scene, &a.pattern)?;
     if a.json {
-        let v: Vec<serde_json::Value> = found
-            .iter()
-            .map(|(id, o)| inspect::object_json(*id, o))
-            .collect();
+        let v: Vec<serde_json::Value> = found.iter().map(|(id, o)| object_json(*id, o)).collect();
         out!(
             "{}",
             serde_json::to_string_pretty(&v).context("serialising objects")?
@@ -212,4 +210,17 @@ pub fn find(a: FindArgs) -> anyhow::Result<()> {
         eprintln!("{} object(s) match", found.len());
     }
     Ok(())
+}
+
+/// An object as `pick --json` and `find --json` print it.
+fn object_json(id: u32, o: &ObjectRecord) -> serde_json::Value {
+    serde_json::json!({
+        "id": id,
+        "name": o.name,
+        "file": o.file,
+        "path": o.path,
+        "metadata": o.metadata.as_deref().and_then(|m| serde_json::from_str::<serde_json::Value>(m).ok()),
+        "triangles": o.triangles,
+        "bounds": {"min": o.bounds.min.to_array(), "max": o.bounds.max.to_array()},
+    })
 }

@@ -250,10 +250,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let visibility = if args.hide.is_empty() && args.isolate.is_empty() && view.is_none() {
         None
     } else {
-        let h = gigawalk_replay::inspect::hidden(
+        let h = gigawalk_cull::select::hidden(
             &scene,
             &args.scene,
-            &gigawalk_replay::inspect::HideRequest {
+            &gigawalk_cull::select::HideRequest {
                 hide: args.hide.clone(),
                 isolate: args.isolate.clone(),
                 view: view.clone(),

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use gigawalk_cull::{NodeShow, PickHit, Viewport, Visibility};
+use gigawalk_cull::{select, NodeShow, PickHit, Viewport, Visibility};
 use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
 use gigawalk_runtime::{CullMethod, OccluderSelection};
 use gigawalk_scene::path::Pose;
@@ -408,22 +408,17 @@ impl LoopState {
         // `gigawalk pick` does.
         let (x, y) = (at.0.floor() + 0.5, at.1.floor() + 0.5);
         let section = self.sections.current();
-        // What the section cuts away shows nothing to pick.
-        let Some(ray) = camera
-            .pixel_ray(viewport, x, y)
-            .and_then(|r| r.clipped(section.as_deref()))
-        else {
-            return Ok(None);
-        };
         let vis = self.visibility.as_deref();
         let objects = &self.objects;
-        gigawalk_cull::pick(
-            scene.skeleton(),
+        select::pick_pixel(
+            scene,
             objects.table().ok(),
-            &ray,
+            &camera,
+            viewport,
+            (x, y),
             &|node| vis.is_some_and(|v| v.node(node) == NodeShow::Hidden),
             &|o| objects.is_hidden(o),
-            &mut |lod| scene.read_lod(lod),
+            section.as_deref(),
         )
         .map(|(hit, _)| hit)
         .map_err(|e| format!("pick failed: {e}"))

@@ -9,11 +9,15 @@
 //! Optional, each with what happens without it ([`Optional`]): depth
 //! texture copies (without them depth is read back through a small pass
 //! that draws it into a colour target, `DepthCopy` in passes/readback.rs), line
-//! polygon mode (wireframe) and index values beyond 2^24 (larger LODs).
+//! polygon mode (wireframe), index values beyond 2^24 (larger LODs), clip
+//! distances (sections clip in the rasterizer rather than discarding
+//! fragments) and compute shaders (OR's HZB pyramid). [`Capabilities::of`]
+//! decides them all once per adapter; a device is opened with what it
+//! decided, and the passes ask the device's [`Capabilities`], nothing else.
 //! Whether occlusion queries count samples (only `oq`'s adaptive culling
 //! needs it) takes a device to find out: [`crate::query_counts`].
 
-use wgpu::{DownlevelFlags, TextureFormat, TextureUsages};
+use wgpu::{DownlevelFlags, Features, TextureFormat, TextureUsages};
 
 /// Downlevel flags every pass needs, each with why.
 pub const REQUIRED_DOWNLEVEL: [(DownlevelFlags, &str); 2] = [
@@ -59,6 +63,13 @@ pub enum Optional {
     /// at most 2^24 vertices (indices are local to a LOD), checked when a
     /// scene is loaded ([`crate::GpuContext::max_lod_vertices`]).
     IndexRange,
+    /// User clip planes (`CLIP_DISTANCES`; GL and many mobile drivers lack
+    /// it): section planes are applied by discarding fragments instead.
+    ClipDistances,
+    /// Compute passes for OR's HZB pyramid (`COMPUTE_SHADERS` and a backend
+    /// other than GL, whose compute path is not used): the pyramid is built
+    /// with fragment passes into a texture instead.
+    ComputePyramid,
 }
 
 impl Optional {
@@ -72,7 +83,72 @@ impl Optional {
             Optional::IndexRange => {
                 "index values only up to 2^24 - 1: a LOD may have at most 16,777,216 vertices"
             }
+            Optional::ClipDistances => {
+                "no clip distances: section planes discard fragments instead"
+            }
+            Optional::ComputePyramid => {
+                "no compute pyramid: OR's HZB pyramid is built with fragment passes"
+            }
         }
+    }
+}
+
+/// The optional capabilities of an adapter, decided once: the device is
+/// opened with the features they need, and every pass asks this instead
+/// of the adapter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Capabilities {
+    /// Depth textures copy straight to a buffer (else the copy pass).
+    pub depth_copies: bool,
+    /// Line polygon mode, for the viewer's wireframe.
+    pub wireframe: bool,
+    /// Index values may use all 32 bits.
+    pub full_index_range: bool,
+    /// Section planes clip in the rasterizer.
+    pub clip_distances: bool,
+    /// OR's HZB pyramid may be built by compute passes.
+    pub compute_pyramid: bool,
+}
+
+impl Capabilities {
+    pub fn of(adapter: &wgpu::Adapter) -> Capabilities {
+        let flags = adapter.get_downlevel_capabilities().flags;
+        let features = adapter.features();
+        Capabilities {
+            depth_copies: flags.contains(DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES),
+            wireframe: features.contains(Features::POLYGON_MODE_LINE),
+            full_index_range: flags.contains(DownlevelFlags::FULL_DRAW_INDEX_UINT32),
+            clip_distances: features.contains(Features::CLIP_DISTANCES),
+            compute_pyramid: flags.contains(DownlevelFlags::COMPUTE_SHADERS)
+                && adapter.get_info().backend != wgpu::Backend::Gl,
+        }
+    }
+
+    /// The device features these need (requested when it is opened).
+    pub fn features(self) -> Features {
+        let mut f = Features::empty();
+        if self.wireframe {
+            f |= Features::POLYGON_MODE_LINE;
+        }
+        if self.clip_distances {
+            f |= Features::CLIP_DISTANCES;
+        }
+        f
+    }
+
+    /// What is missing, in [`Optional`]'s order.
+    pub fn missing(self) -> Vec<Optional> {
+        [
+            (self.depth_copies, Optional::DepthCopies),
+            (self.wireframe, Optional::Wireframe),
+            (self.full_index_range, Optional::IndexRange),
+            (self.clip_distances, Optional::ClipDistances),
+            (self.compute_pyramid, Optional::ComputePyramid),
+        ]
+        .into_iter()
+        .filter(|(has, _)| !has)
+        .map(|(_, o)| o)
+        .collect()
     }
 }
 
@@ -125,29 +201,10 @@ impl AdapterReport {
                 missing.push(format!("{format:?} as {:?} ({why})", usages - has));
             }
         }
-        let mut optional_missing = Vec::new();
-        if !downlevel
-            .flags
-            .contains(DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES)
-        {
-            optional_missing.push(Optional::DepthCopies);
-        }
-        if !adapter
-            .features()
-            .contains(wgpu::Features::POLYGON_MODE_LINE)
-        {
-            optional_missing.push(Optional::Wireframe);
-        }
-        if !downlevel
-            .flags
-            .contains(DownlevelFlags::FULL_DRAW_INDEX_UINT32)
-        {
-            optional_missing.push(Optional::IndexRange);
-        }
         AdapterReport {
             info,
             missing,
-            optional_missing,
+            optional_missing: Capabilities::of(adapter).missing(),
             query_counts: None,
         }
     }
@@ -202,4 +259,48 @@ pub fn list_adapters() -> Vec<AdapterReport> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_missing_capability_is_named_once_and_features_follow_the_choice() {
+        let all = Capabilities {
+            depth_copies: true,
+            wireframe: true,
+            full_index_range: true,
+            clip_distances: true,
+            compute_pyramid: true,
+        };
+        assert!(all.missing().is_empty());
+        assert_eq!(
+            all.features(),
+            Features::POLYGON_MODE_LINE | Features::CLIP_DISTANCES
+        );
+        let gl_like = Capabilities {
+            depth_copies: false,
+            wireframe: true,
+            full_index_range: false,
+            clip_distances: false,
+            compute_pyramid: false,
+        };
+        assert_eq!(
+            gl_like.missing(),
+            [
+                Optional::DepthCopies,
+                Optional::IndexRange,
+                Optional::ClipDistances,
+                Optional::ComputePyramid
+            ]
+        );
+        assert_eq!(gl_like.features(), Features::POLYGON_MODE_LINE);
+        // Every description is distinct, so a report names each once.
+        let mut texts: Vec<_> = gl_like.missing().iter().map(|o| o.describe()).collect();
+        texts.push(Optional::Wireframe.describe());
+        texts.sort_unstable();
+        texts.dedup();
+        assert_eq!(texts.len(), 5);
+    }
 }

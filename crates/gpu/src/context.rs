@@ -3,6 +3,7 @@
 //! (`capabilities.rs`), and a clear error naming every adapter seen and
 //! what it lacks when none does.
 
+use crate::capabilities::Capabilities;
 use std::sync::{Arc, Mutex};
 
 /// Why the GPU side failed.
@@ -54,12 +55,11 @@ pub struct GpuContext {
     /// errors through a callback; we turn them into [`GpuError::Device`]
     /// instead of the default panic.
     errors: Arc<Mutex<Option<String>>>,
+    /// The optional capabilities it was opened with.
+    pub(crate) caps: Capabilities,
     /// Whether depth textures are read back through a copy pass (the
-    /// adapter cannot copy depth to a buffer, as on GL).
+    /// adapter cannot copy depth to a buffer, as on GL, or a test asks).
     pub(crate) depth_via_pass: bool,
-    /// Whether index values may use all 32 bits.
-    full_index_range: bool,
-    pub(crate) downlevel_flags: wgpu::DownlevelFlags,
     /// Whether OR builds its HZB pyramid with fragment passes even where
     /// compute would do (tests compare the two paths on one adapter).
     pub(crate) force_fragment_pyramid: bool,
@@ -103,19 +103,20 @@ impl GpuContext {
         self.info.device_type == wgpu::DeviceType::Cpu
     }
 
-    /// Whether RVG can draw [`crate::DrawStyle::Wireframe`] here.
     /// Whether the rasterizer clips by user planes (sections clip there
     /// rather than discarding fragments).
     pub fn supports_clip_distances(&self) -> bool {
-        self.device
-            .features()
-            .contains(wgpu::Features::CLIP_DISTANCES)
+        self.caps.clip_distances
     }
 
+    /// Whether RVG can draw [`crate::DrawStyle::Wireframe`] here.
     pub fn supports_wireframe(&self) -> bool {
-        self.device
-            .features()
-            .contains(wgpu::Features::POLYGON_MODE_LINE)
+        self.caps.wireframe
+    }
+
+    /// The optional capabilities this device was opened with.
+    pub fn capabilities(&self) -> Capabilities {
+        self.caps
     }
 
     /// An absolute bound on how far a depth this device stores may lie from
@@ -133,7 +134,7 @@ impl GpuContext {
     /// and must stay within the adapter's index range (2^32, or 2^24 where
     /// the adapter lacks `FULL_DRAW_INDEX_UINT32`, as some GL drivers do).
     pub fn max_lod_vertices(&self) -> u64 {
-        if self.full_index_range {
+        if self.caps.full_index_range {
             1 << 32
         } else {
             1 << 24
@@ -444,6 +445,7 @@ pub(crate) fn second_adapter(
 pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, GpuError> {
     let info = adapter.get_info();
     let label = format!("{name} ({}, {:?})", info.name, info.backend);
+    let caps = Capabilities::of(adapter);
     let limits = wgpu::Limits {
         // Big scenes want big buffers; take what the adapter offers.
         max_buffer_size: adapter.limits().max_buffer_size,
@@ -454,10 +456,9 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some(&label),
-        // Line mode for the viewer's wireframe, where the adapter has it.
-        // Clip distances for sections, where the adapter has them.
-        required_features: adapter.features()
-            & (wgpu::Features::POLYGON_MODE_LINE | wgpu::Features::CLIP_DISTANCES),
+        // Line mode for the viewer's wireframe and clip distances for
+        // sections, where the adapter has them.
+        required_features: caps.features(),
         required_limits: limits,
         ..Default::default()
     }))
@@ -474,18 +475,14 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
             *s = Some(e.to_string());
         }
     }));
-    let flags = adapter.get_downlevel_capabilities().flags;
-    let depth_via_pass = !flags.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
-    let full_index_range = flags.contains(wgpu::DownlevelFlags::FULL_DRAW_INDEX_UINT32);
     Ok(GpuContext {
         device,
         queue,
         info,
         name: label,
         errors,
-        depth_via_pass,
-        full_index_range,
-        downlevel_flags: flags,
+        caps,
+        depth_via_pass: !caps.depth_copies,
         force_fragment_pyramid: false,
     })
 }

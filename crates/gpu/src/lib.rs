@@ -25,7 +25,8 @@ mod residency;
 pub mod shader_types;
 
 pub use capabilities::{
-    list_adapters, AdapterReport, Optional, HOW_TO_GET_ONE, REQUIRED_DOWNLEVEL, REQUIRED_FORMATS,
+    list_adapters, AdapterReport, Capabilities, Optional, HOW_TO_GET_ONE, REQUIRED_DOWNLEVEL,
+    REQUIRED_FORMATS,
 };
 pub use context::{
     chosen_adapter, is_null_adapter, open_devices, open_devices_on, GpuContext, GpuError,

@@ -95,5 +95,7 @@ fn consequence(o: Optional) -> &'static str {
         Optional::DepthCopies => " (same images, one extra pass a read-back)",
         Optional::Wireframe => " (the viewer's --wireframe refuses, T draws shaded)",
         Optional::IndexRange => " (a scene with a larger LOD is refused when loaded)",
+        Optional::ClipDistances => " (same images)",
+        Optional::ComputePyramid => " (same HZB, more passes)",
     }
 }

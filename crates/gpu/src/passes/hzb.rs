@@ -70,15 +70,12 @@ pub(crate) struct Pyramid {
 }
 
 impl Pyramid {
-    /// The path this device takes: compute where it has compute shaders
-    /// and a storage binding as large as the pyramid of a `w x h` image
-    /// needs, except on GL; else fragment passes.
+    /// The path this device takes: compute where its capabilities allow
+    /// ([`crate::Capabilities::compute_pyramid`]) and its storage binding
+    /// is as large as the pyramid of a `w x h` image needs; else fragment
+    /// passes.
     pub(crate) fn path_for(ctx: &GpuContext, w: u32, h: u32) -> PyramidPath {
-        let compute = ctx
-            .downlevel_flags
-            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
-            && ctx.info.backend != wgpu::Backend::Gl
-            && !ctx.force_fragment_pyramid;
+        let compute = ctx.caps.compute_pyramid && !ctx.force_fragment_pyramid;
         // Levels 1 and up hold at most a third of level 0's texels, each
         // texel 4 bytes.
         let bytes = (w as u64 * h as u64).div_ceil(3) * 4 + 64;

@@ -25,6 +25,19 @@ pub struct SectionArgs {
 }
 
 impl SectionArgs {
+    /// The section these flags give on their own, or none when neither
+    /// flag is given. The viewer takes this one, since it weighs a saved
+    /// view's section (and warns about one that keeps nothing) itself.
+    pub fn given(&self) -> anyhow::Result<Option<Section>> {
+        if self.planes.is_empty() && self.section_box.is_none() {
+            return Ok(None);
+        }
+        Ok(Some(Section::parse(
+            &self.planes,
+            self.section_box.as_deref(),
+        )?))
+    }
+
     /// The section these flags give, else the saved view's, else none. A
     /// section that keeps nothing of `bounds` (the scene's) is allowed,
     /// with a warning: every frame is then empty.
@@ -33,8 +46,8 @@ impl SectionArgs {
         view: Option<&SectionSpec>,
         bounds: &Aabb,
     ) -> anyhow::Result<Option<Arc<Section>>> {
-        let section = if !self.planes.is_empty() || self.section_box.is_some() {
-            Section::parse(&self.planes, self.section_box.as_deref())?
+        let section = if let Some(given) = self.given()? {
+            given
         } else if let Some(spec) = view {
             Section::new(spec.clone())
                 .map_err(|e| anyhow::anyhow!("the saved view's section: {e}"))?

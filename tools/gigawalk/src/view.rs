@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Context as _;
-use gigawalk_scene::section::Section;
 use gigawalk_scene::units::Units;
 use gigawalk_viewer::{controls, Settings, ViewArgs};
 
@@ -128,14 +127,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         anyhow::bail!("--width and --height must be at least 1");
     }
     // Checked here, before a window opens; over a --view's own section.
-    let section = if a.section.planes.is_empty() && a.section.section_box.is_none() {
-        None
-    } else {
-        Some(Arc::new(Section::parse(
-            &a.section.planes,
-            a.section.section_box.as_deref(),
-        )?))
-    };
+    let section = a.section.given()?.map(Arc::new);
     if let Some(null) = a
         .adapter
         .as_deref()

@@ -14,8 +14,6 @@ use gigawalk_import::{Identity, Object};
 use gigawalk_scene::objects::{ObjectRecord, ObjectRun, ObjectTable};
 use gigawalk_scene::Aabb;
 
-use crate::parts::Part;
-
 /// What the table needs of one imported object, taken while it is checked.
 #[derive(Clone, Debug)]
 pub(crate) struct Seen {
@@ -95,11 +93,11 @@ impl Identities {
     }
 
     /// A leaf's runs: its pieces' triangles per table entry, in order.
-    pub fn runs(&self, part: &Part) -> Vec<ObjectRun> {
+    /// `pieces` gives each piece's model object and triangle count.
+    pub fn runs(&self, pieces: impl IntoIterator<Item = (u32, u32)>) -> Vec<ObjectRun> {
         let mut runs: Vec<ObjectRun> = Vec::new();
-        for p in &part.pieces {
-            let object = self.entry[p.object as usize];
-            let triangles = p.triangles.len() as u32;
+        for (model_object, triangles) in pieces {
+            let object = self.entry[model_object as usize];
             match runs.last_mut() {
                 Some(r) if r.object == object => r.triangles += triangles,
                 _ => runs.push(ObjectRun { object, triangles }),

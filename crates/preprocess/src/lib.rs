@@ -541,9 +541,10 @@ pub(crate) fn build_role<S: LodSink>(
     // A node's levels made ready for the sink; a leaf's full detail keeps
     // its triangles in runs per object.
     let ready = |ni: usize, lods: Lods| -> Vec<Prepared<S::Prepared>> {
-        let mut runs = tree[ni]
-            .object
-            .map(|part| identities.runs(&parts[part as usize]));
+        let mut runs = tree[ni].object.map(|part| {
+            let pieces = &parts[part as usize].pieces;
+            identities.runs(pieces.iter().map(|p| (p.object, p.triangles.len() as u32)))
+        });
         lods.into_iter()
             .map(|(mesh, error)| {
                 let runs = runs.take();

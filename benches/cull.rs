@@ -184,7 +184,7 @@ fn cull(c: &mut Criterion) {
         (
             "occlusion_full_detail",
             TraversalOptions {
-                pixel_tolerance: 0.0,
+                pixel_error: 0.0,
                 ..Default::default()
             },
         ),
@@ -193,7 +193,7 @@ fn cull(c: &mut Criterion) {
             TraversalOptions {
                 occlusion: false,
                 hlod: false,
-                pixel_tolerance: 0.0,
+                pixel_error: 0.0,
             },
         ),
     ] {

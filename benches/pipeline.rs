@@ -118,7 +118,7 @@ fn main() {
                 traversal: TraversalOptions {
                     occlusion: true,
                     hlod: true,
-                    pixel_tolerance: pixel_error,
+                    pixel_error,
                 },
                 occluder_budget,
                 ..Default::default()

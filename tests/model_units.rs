@@ -84,7 +84,7 @@ fn render(
         traversal: TraversalOptions {
             occlusion: occlusion_and_hlod,
             hlod: occlusion_and_hlod,
-            pixel_tolerance: if occlusion_and_hlod { 1.0 } else { 0.0 },
+            pixel_error: if occlusion_and_hlod { 1.0 } else { 0.0 },
         },
         ..Default::default()
     };

@@ -42,7 +42,7 @@ fn options(schedule: Schedule, occlusion: bool, culler: CullMethod) -> RuntimeOp
         traversal: TraversalOptions {
             occlusion,
             hlod: false,
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
         },
         ..Default::default()
     }

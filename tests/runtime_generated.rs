@@ -55,7 +55,7 @@ fn check(kind: Kind) {
         traversal: TraversalOptions {
             occlusion,
             hlod: false,
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
         },
         ..Default::default()
     };

@@ -36,12 +36,7 @@ fn walk(frames: usize, shift: DVec3, read_back: bool) -> CameraList {
     CameraList { cameras }
 }
 
-fn options(
-    schedule: Schedule,
-    occlusion: bool,
-    hlod: bool,
-    pixel_tolerance: f64,
-) -> RuntimeOptions {
+fn options(schedule: Schedule, occlusion: bool, hlod: bool, pixel_error: f64) -> RuntimeOptions {
     RuntimeOptions {
         schedule,
         width: W,
@@ -49,7 +44,7 @@ fn options(
         traversal: TraversalOptions {
             occlusion,
             hlod,
-            pixel_tolerance,
+            pixel_error,
         },
         ..Default::default()
     }

@@ -42,7 +42,7 @@ fn options(schedule: Schedule, devices: usize, pixel_error: f64) -> RuntimeOptio
         traversal: TraversalOptions {
             occlusion: true,
             hlod: pixel_error > 0.0,
-            pixel_tolerance: pixel_error,
+            pixel_error,
         },
         ..Default::default()
     }

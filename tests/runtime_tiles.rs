@@ -55,7 +55,7 @@ fn options(
         traversal: TraversalOptions {
             occlusion,
             hlod: false,
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
         },
         tiles: tiles.map(|t| t.0),
         tile_culling: tiles.map_or(TileMethod::Adaptive, |t| t.1),

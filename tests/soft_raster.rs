@@ -47,7 +47,7 @@ fn software_depth_is_never_nearer_than_the_gpus_and_matches_it_closely() {
             traversal: TraversalOptions {
                 occlusion: false,
                 hlod: false,
-                pixel_tolerance: 0.0,
+                pixel_error: 0.0,
             },
             ..Default::default()
         };

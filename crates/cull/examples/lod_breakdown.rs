@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let options = TraversalOptions {
         occlusion: false,
         hlod: true,
-        pixel_tolerance: tolerance,
+        pixel_error: tolerance,
     };
     let mut traverser = Traverser::new();
     let (mut frames, mut leaf_nodes, mut inner_nodes) = (0u64, 0u64, 0u64);

@@ -80,7 +80,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let options = TraversalOptions {
         occlusion: false,
         hlod: tolerance > 0.0,
-        pixel_tolerance: tolerance,
+        pixel_error: tolerance,
     };
     let grids = [(1, 1), (2, 2), (3, 2), (4, 4), (8, 8), (16, 16)];
     let mut traverser = Traverser::new();

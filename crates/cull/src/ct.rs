@@ -462,7 +462,7 @@ mod tests {
         let opts = TraversalOptions {
             occlusion: true,
             hlod: false,
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
         };
         let mut culled_somewhere = 0;
         let mut cache = PlaneCache::new(1 << 16);
@@ -545,7 +545,7 @@ mod tests {
         let opts = TraversalOptions {
             occlusion: true,
             hlod: false,
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
         };
         let mut cache = PlaneCache::new(1 << 16);
         let mut ct = CtCuller::new(sk, occ, areas, cells, 32, &mut cache);

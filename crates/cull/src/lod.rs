@@ -25,13 +25,13 @@ pub fn pixel_error(error: f32, distance: f64, pixels_per_radian: f64) -> f64 {
 }
 
 /// The coarsest of `lods` (finest first) whose pixel error at `distance` is
-/// at most `tolerance` pixels; `None` when none is, or when the eye touches
+/// at most `pixel_error` pixels; `None` when none is, or when the eye touches
 /// the box (distance 0: always refine), or when `lods` is empty.
 pub fn select_lod(
     lods: &[LodInfo],
     distance: f64,
     pixels_per_radian: f64,
-    tolerance: f64,
+    pixel_error: f64,
 ) -> Option<usize> {
     if distance.is_nan() || distance <= 0.0 {
         return None;
@@ -39,7 +39,7 @@ pub fn select_lod(
     // error x ppr <= tolerance x distance, written without a division so an
     // infinite distance (or error) cannot make NaN.
     lods.iter()
-        .rposition(|l| l.error as f64 * pixels_per_radian <= tolerance * distance)
+        .rposition(|l| l.error as f64 * pixels_per_radian <= pixel_error * distance)
 }
 
 #[cfg(test)]

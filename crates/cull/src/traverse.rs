@@ -25,7 +25,7 @@ pub struct TraversalOptions {
     pub hlod: bool,
     /// Largest acceptable screen-space error in pixels. 0 = full detail:
     /// always refine to the leaves and draw their finest LOD.
-    pub pixel_tolerance: f64,
+    pub pixel_error: f64,
 }
 
 impl Default for TraversalOptions {
@@ -33,7 +33,7 @@ impl Default for TraversalOptions {
         TraversalOptions {
             occlusion: true,
             hlod: true,
-            pixel_tolerance: 1.0,
+            pixel_error: 1.0,
         }
     }
 }
@@ -147,18 +147,18 @@ fn choose(
     }
     // In the table, and at least one for a leaf: the skeleton is valid.
     let lods = &skeleton.lods()[n.lods()];
-    let full_detail = o.pixel_tolerance.is_nan() || o.pixel_tolerance <= 0.0;
+    let full_detail = o.pixel_error.is_nan() || o.pixel_error <= 0.0;
     let distance = || view.lod_distance(min, max);
     if n.is_leaf() {
         if full_detail {
             return Choice::Draw(0);
         }
-        let l = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_tolerance);
+        let l = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_error);
         // Too coarse even at its finest: draw the finest, there is no finer.
         return Choice::Draw(l.unwrap_or(0) as u32);
     }
     if o.hlod && !full_detail {
-        if let Some(l) = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_tolerance) {
+        if let Some(l) = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_error) {
             return Choice::Draw(l as u32);
         }
     }
@@ -584,7 +584,7 @@ mod tests {
         // Keeping x <= 0 removes the right leaf (x 0.5..2) whole; the root
         // is cut, so refined; the left leaf is drawn.
         let full = TraversalOptions {
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
             ..Default::default()
         };
         let (items, stats) = run(&s, &cut(&["-1 0 0 0"]), full);
@@ -638,7 +638,7 @@ mod tests {
     fn unacceptable_hlod_refines_to_leaves() {
         // Tolerance 0.5: root (0.625 pixels at best) refines; leaves' level 1 is 0.3125.
         let o = TraversalOptions {
-            pixel_tolerance: 0.5,
+            pixel_error: 0.5,
             ..Default::default()
         };
         let (items, stats) = run(&two_leaves(), &view_from([0.0; 3]), o);
@@ -662,7 +662,7 @@ mod tests {
     #[test]
     fn zero_tolerance_draws_finest_leaves() {
         let o = TraversalOptions {
-            pixel_tolerance: 0.0,
+            pixel_error: 0.0,
             ..Default::default()
         };
         let (items, stats) = run(&two_leaves(), &view_from([0.0, 0.0, 1e6]), o);

@@ -154,7 +154,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let opts = TraversalOptions {
         occlusion: false,
         hlod: true,
-        pixel_tolerance: tolerance,
+        pixel_error: tolerance,
     };
     let mut cells: BTreeMap<(Kind, usize), Cell> = BTreeMap::new();
     let mut floor = FloorGap::default();

@@ -74,13 +74,13 @@ pub struct Accuracy {
 
 impl Accuracy {
     /// Compares `result`, rendered at pixel-error tolerance
-    /// `pixel_tolerance` (0 for full detail) by a camera with
+    /// `pixel_error` (0 for full detail) by a camera with
     /// `pixels_per_radian`, with `reference`; `None` when their sizes
     /// differ.
     pub fn compare(
         reference: &FrameImage,
         result: &FrameImage,
-        pixel_tolerance: f64,
+        pixel_error: f64,
         pixels_per_radian: f64,
     ) -> Option<Accuracy> {
         let (r, x) = (&reference.depth, &result.depth);
@@ -117,11 +117,11 @@ impl Accuracy {
             .zip(&x.depth)
             .filter(|(r, x)| **r > **x * (1.0 + WRONGLY_CULLED_RELATIVE_DEPTH))
             .count() as u64;
-        acc.bound_violating_pixels = bound_violations(r, x, pixel_tolerance)?;
+        acc.bound_violating_pixels = bound_violations(r, x, pixel_error)?;
         acc.bound_exceeding_pixels = if acc.bound_violating_pixels == 0 {
             0
         } else {
-            bound_exceedances(r, x, pixel_tolerance, pixels_per_radian)?
+            bound_exceedances(r, x, pixel_error, pixels_per_radian)?
         };
         Some(acc)
     }

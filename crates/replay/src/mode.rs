@@ -46,7 +46,7 @@ impl Mode {
         TraversalOptions {
             occlusion: matches!(self, Mode::Occ | Mode::Och),
             hlod: self.uses_pixel_error(),
-            pixel_tolerance: tol,
+            pixel_error: tol,
         }
     }
 }
@@ -179,11 +179,11 @@ mod tests {
     #[test]
     fn mode_traversals() {
         let v = Mode::Vfc.traversal(2.0);
-        assert!(!v.occlusion && !v.hlod && v.pixel_tolerance == 0.0);
+        assert!(!v.occlusion && !v.hlod && v.pixel_error == 0.0);
         let o = Mode::Occ.traversal(2.0);
-        assert!(o.occlusion && !o.hlod && o.pixel_tolerance == 0.0);
+        assert!(o.occlusion && !o.hlod && o.pixel_error == 0.0);
         let h = Mode::Och.traversal(2.0);
-        assert!(h.occlusion && h.hlod && h.pixel_tolerance == 2.0);
+        assert!(h.occlusion && h.hlod && h.pixel_error == 2.0);
         assert_eq!("och".parse::<Mode>(), Ok(Mode::Och));
         assert!("fast".parse::<Mode>().is_err());
     }

@@ -762,7 +762,7 @@ impl CameraSource for Controlled {
         let pixel_error = self
             .ctrl
             .as_ref()
-            .and_then(|c| c.lock().ok().map(|c| c.tolerance()));
+            .and_then(|c| c.lock().ok().map(|c| c.pixel_error()));
         Ok(self.cameras.get(frame as usize).map(|c| CameraRequest {
             pixel_error,
             ..c.clone()

@@ -213,7 +213,7 @@ fn no_drawn_lod_stands_for_a_hidden_object_at_any_tolerance() {
         let opts = TraversalOptions {
             occlusion: false,
             hlod: true,
-            pixel_tolerance: tolerance,
+            pixel_error: tolerance,
         };
         for pose in b.generated.path.poses.iter().step_by(4) {
             let camera = Camera::of_pose(pose, vp, near);

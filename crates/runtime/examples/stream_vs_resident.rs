@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         traversal: TraversalOptions {
             occlusion: true,
             hlod: true,
-            pixel_tolerance: 1.0,
+            pixel_error: 1.0,
         },
         ..Default::default()
     };

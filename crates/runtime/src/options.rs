@@ -483,8 +483,8 @@ impl RuntimeOptions {
         if !(1..=2).contains(&self.devices) {
             return Err(OptionsError::Devices(self.devices));
         }
-        if !(self.traversal.pixel_tolerance >= 0.0 && self.traversal.pixel_tolerance.is_finite()) {
-            return Err(OptionsError::PixelError(self.traversal.pixel_tolerance));
+        if !(self.traversal.pixel_error >= 0.0 && self.traversal.pixel_error.is_finite()) {
+            return Err(OptionsError::PixelError(self.traversal.pixel_error));
         }
         if let Reduction::NthFarthest(n) = self.hzb_reduction {
             if !(1..=4).contains(&n) {

@@ -28,14 +28,14 @@ pub const DEAD_BAND: f64 = 0.06;
 pub const MAX_STEP: f64 = 1.25;
 /// The tolerance never goes below this (pixels): at 0 the power law has
 /// no meaning, and full detail is what `--pixel-error 0` is for.
-pub const MIN_TOLERANCE: f64 = 0.125;
+pub const MIN_PIXEL_ERROR: f64 = 0.125;
 
 /// Chooses each frame's pixel-error tolerance to hold a frame time.
 #[derive(Clone, Debug)]
 pub struct FrameRateController {
     target_ms: f64,
     max: f64,
-    tolerance: f64,
+    pixel_error: f64,
     alpha: f64,
     smoothed_ms: Option<f64>,
     /// The last frame fed: its tolerance and triangles.
@@ -45,11 +45,11 @@ pub struct FrameRateController {
 impl FrameRateController {
     /// `start` is the first frames' tolerance; `max` the most it may reach.
     pub fn new(target_ms: f64, start: f64, max: f64) -> Self {
-        let max = max.max(MIN_TOLERANCE);
+        let max = max.max(MIN_PIXEL_ERROR);
         FrameRateController {
             target_ms,
             max,
-            tolerance: start.clamp(MIN_TOLERANCE, max),
+            pixel_error: start.clamp(MIN_PIXEL_ERROR, max),
             alpha: 1.0,
             smoothed_ms: None,
             last: None,
@@ -57,20 +57,20 @@ impl FrameRateController {
     }
 
     /// The tolerance for the next frame.
-    pub fn tolerance(&self) -> f64 {
-        self.tolerance
+    pub fn pixel_error(&self) -> f64 {
+        self.pixel_error
     }
 
     /// Feeds a finished frame: its time, the triangles it drew and the
     /// tolerance it was drawn with. Returns the next frame's tolerance.
-    pub fn update(&mut self, frame_ms: f64, triangles: u64, tolerance: f64) -> f64 {
-        if !(frame_ms.is_finite() && frame_ms > 0.0 && tolerance > 0.0) {
-            return self.tolerance;
+    pub fn update(&mut self, frame_ms: f64, triangles: u64, pixel_error: f64) -> f64 {
+        if !(frame_ms.is_finite() && frame_ms > 0.0 && pixel_error > 0.0) {
+            return self.pixel_error;
         }
         let t = triangles.max(1) as f64;
         // The triangles' response to the tolerance, from the last frame.
         if let Some((p0, t0)) = self.last {
-            let dp = (tolerance / p0).ln();
+            let dp = (pixel_error / p0).ln();
             if dp.abs() > 0.05 {
                 let a = -(t / t0).ln() / dp;
                 if a.is_finite() {
@@ -78,7 +78,7 @@ impl FrameRateController {
                 }
             }
         }
-        self.last = Some((tolerance, t));
+        self.last = Some((pixel_error, t));
         let ms = match self.smoothed_ms {
             Some(s) => s + SMOOTHING * (frame_ms - s),
             None => frame_ms,
@@ -86,14 +86,14 @@ impl FrameRateController {
         self.smoothed_ms = Some(ms);
         let off = ms / self.target_ms;
         if (off - 1.0).abs() <= DEAD_BAND {
-            return self.tolerance;
+            return self.pixel_error;
         }
-        let wanted = tolerance * off.powf(1.0 / self.alpha);
+        let wanted = pixel_error * off.powf(1.0 / self.alpha);
         // Move from the tolerance in use now, at most MAX_STEP a frame.
         let next = wanted
-            .clamp(self.tolerance / MAX_STEP, self.tolerance * MAX_STEP)
-            .clamp(MIN_TOLERANCE, self.max);
-        self.tolerance = next;
+            .clamp(self.pixel_error / MAX_STEP, self.pixel_error * MAX_STEP)
+            .clamp(MIN_PIXEL_ERROR, self.max);
+        self.pixel_error = next;
         next
     }
 }
@@ -135,7 +135,7 @@ mod tests {
                 Some((at, s)) if f >= at => s,
                 _ => 1.0,
             };
-            let p = c.tolerance();
+            let p = c.pixel_error();
             let tris = m.base * scale * p.powf(-m.alpha);
             let ms = (m.fixed_ms + tris * m.ns * 1e-6) * (1.0 + m.noise * jitter());
             pending.push_back((ms, tris as u64, p));
@@ -213,20 +213,20 @@ mod tests {
         let mut c = FrameRateController::new(10.0, 1.0, 4.0);
         // An impossible target: the tolerance rises to the maximum, no more.
         for _ in 0..100 {
-            let p = c.tolerance();
+            let p = c.pixel_error();
             c.update(100.0, 1_000_000, p);
         }
-        assert_eq!(c.tolerance(), 4.0);
+        assert_eq!(c.pixel_error(), 4.0);
         // A trivially met target: down to the minimum, no less.
         for _ in 0..200 {
-            let p = c.tolerance();
+            let p = c.pixel_error();
             c.update(0.01, 10, p);
         }
-        assert_eq!(c.tolerance(), MIN_TOLERANCE);
-        let before = c.tolerance();
+        assert_eq!(c.pixel_error(), MIN_PIXEL_ERROR);
+        let before = c.pixel_error();
         c.update(f64::NAN, 5, 1.0);
         c.update(-3.0, 5, 1.0);
         c.update(5.0, 5, 0.0);
-        assert_eq!(c.tolerance(), before);
+        assert_eq!(c.pixel_error(), before);
     }
 }

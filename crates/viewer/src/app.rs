@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 use gigawalk_cull::Camera;
 use gigawalk_cull::Section;
 use gigawalk_gpu::{open_devices_for_window, GpuContext, WindowError};
-use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
+use gigawalk_runtime::target::{FrameRateController, MIN_PIXEL_ERROR};
 use gigawalk_runtime::{CullMethod, OccluderBudget, Runtime, RuntimeError, RuntimeOptions};
 use gigawalk_scene::path::{CameraPath, PathReadError, PathWriteError, Pose};
 use gigawalk_scene::units::Units;
@@ -318,7 +318,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         quit: false,
         message: None,
         error: None,
-        target_tolerance: None,
+        target_pixel_error: None,
         visibility: None,
         section: None,
     }));
@@ -336,7 +336,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         script: scripted.clone(),
         clock: FrameClock::default(),
     };
-    let (settings_target, target_fps, start_tolerance) =
+    let (settings_target, target_fps, start_pixel_error) =
         (settings.target, settings.target_fps, settings.pixel_error);
     let mut state = LoopState {
         controller,
@@ -353,7 +353,11 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         near,
         rendered: 0,
         target: settings_target.then(|| {
-            FrameRateController::new(1e3 / target_fps, start_tolerance.max(MIN_TOLERANCE), 16.0)
+            FrameRateController::new(
+                1e3 / target_fps,
+                start_pixel_error.max(MIN_PIXEL_ERROR),
+                16.0,
+            )
         }),
         last_finish: None,
         objects: Objects::new(table, no_hiding),
@@ -517,7 +521,7 @@ struct Shared {
     /// A failure on the RVG thread that is not the runtime's (screenshot).
     error: Option<ViewError>,
     /// The next frame's pixel error while a target frame rate is held.
-    target_tolerance: Option<f64>,
+    target_pixel_error: Option<f64>,
     /// Hidden and highlighted objects (`None`: all show, none tinted).
     visibility: Option<Arc<gigawalk_cull::Visibility>>,
     /// What the section keeps (`None`: everything).

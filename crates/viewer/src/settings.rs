@@ -38,7 +38,7 @@ impl Default for Settings {
             occlusion: t.occlusion,
             culler: CullMethod::default(),
             hlod: t.hlod,
-            pixel_error: t.pixel_tolerance,
+            pixel_error: t.pixel_error,
             async_rvg: false,
             wireframe: false,
             boxes: false,
@@ -56,7 +56,7 @@ impl Settings {
         TraversalOptions {
             occlusion: self.occlusion,
             hlod: self.hlod,
-            pixel_tolerance: self.pixel_error,
+            pixel_error: self.pixel_error,
         }
     }
 

@@ -140,7 +140,7 @@ fn async_or_thread(
         let o = or.run(
             sample.frame,
             &sample.view,
-            sample.tolerance,
+            sample.pixel_error,
             occluders.for_frame(sample.frame),
         )?;
         let msg = OrToStc {
@@ -165,7 +165,7 @@ fn async_stc_thread(
         let s = stc.run(
             m.sample.frame,
             &m.sample.view,
-            m.sample.tolerance,
+            m.sample.pixel_error,
             m.depth.as_ref(),
             &mut |_| {},
         )?;

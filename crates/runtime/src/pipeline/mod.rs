@@ -50,7 +50,7 @@ pub(super) struct Sample {
     pub(super) style: DrawStyle,
     pub(super) sampled_at: Instant,
     /// The request's pixel error for this frame (`None`: the options').
-    pub(super) tolerance: Option<f64>,
+    pub(super) pixel_error: Option<f64>,
 }
 
 /// OR -> STC: one frame's camera and occluder depth.
@@ -161,7 +161,7 @@ pub(super) fn next_sample(
         hold: req.hold_culling,
         style: req.style,
         sampled_at: Instant::now(),
-        tolerance: req.pixel_error,
+        pixel_error: req.pixel_error,
     }))
 }
 
@@ -190,7 +190,7 @@ pub(super) fn report(
         rvg_pass: Default::default(),
         culler_work: end.stc.culler_work,
         tiles: end.stc.tiles.clone(),
-        pixel_error: end.stc.tolerance,
+        pixel_error: end.stc.pixel_error,
         speculative: false,
         rvg_wait_ms: 0.0,
         stc_ms: end.stc.ms,

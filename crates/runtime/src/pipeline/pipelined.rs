@@ -104,7 +104,7 @@ fn or_thread(
             let o = or.run(
                 frame,
                 &sample.view,
-                sample.tolerance,
+                sample.pixel_error,
                 occluders.for_frame(frame),
             )?;
             OrToStc {
@@ -166,7 +166,7 @@ fn stc_thread(
                 (s, true)
             }
             None if opts.tiles.is_some() => {
-                let (view, tol) = (&m.sample.view, m.sample.tolerance);
+                let (view, tol) = (&m.sample.view, m.sample.pixel_error);
                 let s = stc.run(frame, view, tol, m.depth.as_ref(), &mut |_| {})?;
                 if send_set(&s, None).is_err() {
                     return Ok(());
@@ -176,7 +176,7 @@ fn stc_thread(
             None => {
                 let mut chunk = Vec::with_capacity(opts.chunk);
                 let mut closed = false;
-                let (view, tol) = (&m.sample.view, m.sample.tolerance);
+                let (view, tol) = (&m.sample.view, m.sample.pixel_error);
                 let s = stc.run(frame, view, tol, m.depth.as_ref(), &mut |item| {
                     chunk.push(t.skeleton.nodes()[item.node as usize].first_lod + item.lod);
                     if chunk.len() == opts.chunk && !closed {
@@ -275,7 +275,7 @@ fn rvg_thread(
                             hold: false,
                             style: *style,
                             sampled_at: Instant::now(),
-                            tolerance: Some(set.tolerance),
+                            pixel_error: Some(set.pixel_error),
                         },
                         or: OrFigures::default(),
                         stc: StcOutput {

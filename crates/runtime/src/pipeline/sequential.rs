@@ -70,7 +70,7 @@ fn sequential_frames<'a>(
         let (stc_out, o, reused) = match frozen.held(sample.hold) {
             Some(s) => (s, None, true),
             None => {
-                let tol = sample.tolerance;
+                let tol = sample.pixel_error;
                 let o = or.run(frame, &view, tol, occluders.for_frame(frame))?;
                 let s = stc.run(frame, &view, tol, o.depth.as_ref(), &mut |_| {})?;
                 (s, Some(o), false)

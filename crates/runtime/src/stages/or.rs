@@ -98,12 +98,12 @@ pub(crate) struct OrFigures {
 
 impl<'a> OrStage<'a> {
     /// `occluders` is `None` during the startup bypass or with occlusion off.
-    /// `tolerance` overrides the options' pixel error for this frame.
+    /// `pixel_error` overrides the options' pixel error for this frame.
     pub fn run(
         &mut self,
         frame: u64,
         view: &CullView,
-        tolerance: Option<f64>,
+        pixel_error: Option<f64>,
         occluders: Option<&[DrawItem]>,
     ) -> Result<OrOutput, RuntimeError> {
         let _span = tracing::info_span!("OR", frame).entered();
@@ -122,7 +122,7 @@ impl<'a> OrStage<'a> {
         // The same LOD choice STC makes for this camera (conservative mode).
         let mut items = Vec::with_capacity(occluders.len());
         let traversal = TraversalOptions {
-            pixel_tolerance: tolerance.unwrap_or(self.opts.traversal.pixel_tolerance),
+            pixel_error: pixel_error.unwrap_or(self.opts.traversal.pixel_error),
             ..self.opts.traversal
         };
         reselect_lods(self.skeleton, view, &traversal, occluders, &mut |i| {

@@ -47,7 +47,7 @@ pub(crate) struct StcOutput {
     /// The tiles' draw lists (a tiled display only).
     pub tiles: Option<Arc<TileFrame>>,
     /// The pixel-error tolerance traversal used.
-    pub tolerance: f64,
+    pub pixel_error: f64,
     pub ms: f64,
 }
 
@@ -67,13 +67,13 @@ impl<'a> StcStage<'a> {
         }
     }
 
-    /// Traverses, handing every item to `emit` as it is found; `tolerance`
+    /// Traverses, handing every item to `emit` as it is found; `pixel_error`
     /// overrides the options' pixel error for this frame.
     pub fn run(
         &mut self,
         frame: u64,
         view: &CullView,
-        tolerance: Option<f64>,
+        pixel_error: Option<f64>,
         depth: Option<&DepthLevel>,
         emit: &mut dyn FnMut(DrawItem),
     ) -> Result<StcOutput, RuntimeError> {
@@ -93,21 +93,21 @@ impl<'a> StcStage<'a> {
         };
         let options = TraversalOptions {
             occlusion,
-            pixel_tolerance: tolerance.unwrap_or(self.opts.traversal.pixel_tolerance),
+            pixel_error: pixel_error.unwrap_or(self.opts.traversal.pixel_error),
             ..self.opts.traversal
         };
         let mut visible = Vec::new();
-        let tolerance = options.pixel_tolerance;
+        let pixel_error = options.pixel_error;
         let band = self
             .prefetch
             .as_ref()
-            .filter(|_| self.opts.prefetch.band() && options.hlod && tolerance > 0.0);
+            .filter(|_| self.opts.prefetch.band() && options.hlod && pixel_error > 0.0);
         let skeleton = self.skeleton;
         let mut sink = |item: DrawItem| {
             visible.push(item);
             emit(item);
             if let Some(p) = band {
-                p.item(skeleton, view, tolerance, frame, item);
+                p.item(skeleton, view, pixel_error, frame, item);
             }
         };
         let mut culled = Vec::new();
@@ -148,7 +148,7 @@ impl<'a> StcStage<'a> {
         });
         Ok(StcOutput {
             tiles,
-            tolerance: options.pixel_tolerance,
+            pixel_error: options.pixel_error,
             stats,
             culled: culled.into(),
             visible: visible.into(),

@@ -28,7 +28,7 @@ impl Prefetch<'_> {
         &self,
         skeleton: &Skeleton,
         view: &CullView,
-        tolerance: f64,
+        pixel_error: f64,
         frame: u64,
         item: DrawItem,
     ) {
@@ -42,7 +42,7 @@ impl Prefetch<'_> {
             view.lod_distance(min, max),
             view.pixels_per_radian,
         );
-        if pe <= PREFETCH_BAND * tolerance {
+        if pe <= PREFETCH_BAND * pixel_error {
             return;
         }
         if item.lod > 0 {

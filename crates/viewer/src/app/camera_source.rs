@@ -40,7 +40,7 @@ impl CameraSource for LiveSource {
                 },
                 s.quit,
                 s.window_size.0 == 0 || s.window_size.1 == 0,
-                s.target_tolerance.filter(|_| s.settings.target),
+                s.target_pixel_error.filter(|_| s.settings.target),
                 s.visibility.clone(),
                 s.section.clone(),
             )

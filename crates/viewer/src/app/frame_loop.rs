@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gigawalk_cull::{select, NodeShow, PickHit, Viewport, Visibility};
-use gigawalk_runtime::target::{FrameRateController, MIN_TOLERANCE};
+use gigawalk_runtime::target::{FrameRateController, MIN_PIXEL_ERROR};
 use gigawalk_runtime::{CullMethod, OccluderSelection};
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::units::Units;
@@ -115,15 +115,15 @@ impl LoopState {
             .last_finish
             .map(|t| (report.finished_at - t).as_secs_f64() * 1e3);
         self.last_finish = Some(report.finished_at);
-        let tolerance = match (&mut self.target, ms) {
+        let pixel_error = match (&mut self.target, ms) {
             (Some(c), Some(ms)) if !report.speculative => {
                 Some(c.update(ms, report.stats.drawn_triangles, report.pixel_error))
             }
-            (Some(c), _) => Some(c.tolerance()),
+            (Some(c), _) => Some(c.pixel_error()),
             (None, _) => None,
         };
         if let Ok(mut s) = shared.lock() {
-            s.target_tolerance = tolerance;
+            s.target_pixel_error = pixel_error;
         }
     }
 
@@ -193,7 +193,7 @@ impl LoopState {
                     self.target = self.settings.target.then(|| {
                         FrameRateController::new(
                             1e3 / self.settings.target_fps,
-                            self.settings.pixel_error.max(MIN_TOLERANCE),
+                            self.settings.pixel_error.max(MIN_PIXEL_ERROR),
                             16.0,
                         )
                     });

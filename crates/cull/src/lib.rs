@@ -39,6 +39,7 @@ mod frustum;
 mod grid;
 mod hzb;
 pub mod lod;
+mod nearest;
 mod object_space;
 mod occlusion;
 pub mod pick;

@@ -6,13 +6,13 @@
 //! only when its box could hold a nearer hit than the best so far, so a
 //! pick reads the few leaves along the ray in front of the hit.
 
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use gigawalk_scene::objects::ObjectTable;
 use gigawalk_scene::{LodMesh, Skeleton};
 use glam::DVec3;
 
+use crate::nearest::Nearest;
 use crate::{Camera, Section, Viewport};
 
 /// A ray in world coordinates: points `origin + t dir` for `t_min <= t
@@ -92,28 +92,7 @@ pub struct PickStats {
     pub triangles_tested: u64,
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Entry {
-    t: f64,
-    node: u32,
-}
-impl PartialEq for Entry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Entry {
-    /// Reversed: the max-heap pops the nearest entry; ties by node.
-    fn cmp(&self, o: &Self) -> Ordering {
-        o.t.total_cmp(&self.t).then(o.node.cmp(&self.node))
-    }
-}
+type Entry = Nearest<()>;
 
 /// The nearest hit of `ray` on the full detail of the leaves of
 /// `skeleton`, skipping nodes `skip_node` says hold nothing to hit and
@@ -144,9 +123,16 @@ pub fn pick<E>(
         (near <= far).then_some(near)
     };
     if let Some(t) = enter(0) {
-        heap.push(Entry { t, node: 0 });
+        heap.push(Entry {
+            distance: t,
+            node: 0,
+            item: (),
+        });
     }
-    while let Some(Entry { t, node }) = heap.pop() {
+    while let Some(Entry {
+        distance: t, node, ..
+    }) = heap.pop()
+    {
         if best.is_some_and(|b| b.distance < t) {
             break;
         }
@@ -157,7 +143,11 @@ pub fn pick<E>(
         if !n.is_leaf() {
             for c in n.children() {
                 if let Some(t) = enter(c) {
-                    heap.push(Entry { t, node: c });
+                    heap.push(Entry {
+                        distance: t,
+                        node: c,
+                        item: (),
+                    });
                 }
             }
             continue;

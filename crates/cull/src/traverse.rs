@@ -1,13 +1,13 @@
 //! Scene traversal with culling and LOD selection (GigaWalk Algorithm 5.2),
 //! and the LOD re-selection the occluder pass runs on an older frame's list.
 
-use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use gigawalk_scene::Skeleton;
 use glam::DVec3;
 
 use crate::lod::{distance_to_rel_box, select_lod};
+use crate::nearest::Nearest;
 use crate::BoxSide;
 use crate::{
     BoxTest, Containment, CullView, Culler, NodeShow, OcclusionTest, PlaneMask, Verdict, ALL_PLANES,
@@ -82,11 +82,9 @@ pub struct TraversalStats {
     pub section_culled: u64,
 }
 
-/// A queued node, ordered nearest first.
+/// What traversal keeps beside a queued node.
 #[derive(Clone, Copy, Debug)]
-struct Entry {
-    distance: f64,
-    node: u32,
+struct Queued {
     mask: PlaneMask,
     /// False below a node the culler called [`Verdict::VisibleBelow`].
     test: bool,
@@ -94,26 +92,8 @@ struct Entry {
     ctx: u32,
 }
 
-impl PartialEq for Entry {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Entry {
-    /// Reversed, so `BinaryHeap` (a max-heap) pops the nearest; ties go to
-    /// the lower node index, so the order is deterministic.
-    fn cmp(&self, o: &Self) -> Ordering {
-        o.distance
-            .total_cmp(&self.distance)
-            .then(o.node.cmp(&self.node))
-    }
-}
+/// A queued node, nearest first.
+type Entry = Nearest<Queued>;
 
 /// What to do with a node that survived culling.
 enum Choice {
@@ -267,17 +247,13 @@ impl Traverser {
             heap.push(Entry {
                 distance: distance_to_rel_box(min, max),
                 node,
-                mask,
-                test,
-                ctx,
+                item: Queued { mask, test, ctx },
             });
         };
         queue(&mut self.heap, culler, &contexts, 0, ALL_PLANES, true, 0);
         while let Some(Entry {
             node,
-            mask,
-            test,
-            ctx,
+            item: Queued { mask, test, ctx },
             ..
         }) = self.heap.pop()
         {

@@ -84,37 +84,18 @@ pub(crate) fn run_async(
     // Owned by RVG's body, so the slot closes when RVG ends for any reason,
     // or when its body is dropped without running.
     let close = CloseOnDrop(latest);
-    let StreamLinks {
-        loader,
-        or: or_link,
-        rvg: rvg_link,
-        stc: prefetch,
-    } = stream_links(t, opts, 0, b);
     std::thread::scope(|s| {
-        let stages: Vec<(Stage, StageBody)> = vec![
-            (
-                Stage::Or,
-                Box::new(move || {
-                    let or = t.or_stage(opts, or_link);
-                    async_or_thread(or, opts, latest, or_tx, feedback_rx)
-                }),
-            ),
-            (
-                Stage::Stc,
-                Box::new(move || {
-                    let stc = t.stc_stage(opts, b, prefetch)?;
-                    async_stc_thread(stc, or_rx, sets_tx, feedback_tx)
-                }),
-            ),
-            (
-                Stage::Rvg,
-                Box::new(move || {
-                    let _close = close;
-                    let rvg = t.rvg_stage(opts, b, rvg_link);
-                    async_rvg_thread(rvg, t, opts, source, latest, sets_rx, report_tx, presenter)
-                }),
-            ),
-        ];
+        let (stages, loader) = stage_bodies(
+            t,
+            opts,
+            b,
+            move |or| async_or_thread(or, opts, latest, or_tx, feedback_rx),
+            move |stc| async_stc_thread(stc, or_rx, sets_tx, feedback_tx),
+            move |rvg| {
+                let _close = close;
+                async_rvg_thread(rvg, t, opts, source, latest, sets_rx, report_tx, presenter)
+            },
+        );
         run_threads(s, stages, loader, report_rx, on_frame)
     })
 }

@@ -19,7 +19,7 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::{DepthLevel, DrawStyle};
 
-use crate::stages::{lod_ids, OrFigures, RvgStage, StcOutput, Target};
+use crate::stages::{lod_ids, OrFigures, OrStage, RvgStage, StcOutput, StcStage, Target};
 use crate::streaming::Prefetch;
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
@@ -318,6 +318,34 @@ pub(super) fn panic_message(p: Box<dyn std::any::Any + Send>) -> String {
         .map(|s| s.to_string())
         .or_else(|| p.downcast_ref::<String>().cloned())
         .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// The stage bodies of a threaded schedule: OR on device 0, STC and RVG
+/// for device `b`, each building its stage (with its streaming link) on
+/// its own thread and handing it to `or`, `stc` and `rvg`; with the
+/// loader's queues when the scene streams. For [`run_threads`].
+pub(super) fn stage_bodies<'s>(
+    t: Target<'s>,
+    opts: &'s ResolvedOptions,
+    b: usize,
+    or: impl FnOnce(OrStage<'s>) -> Result<(), RuntimeError> + Send + 's,
+    stc: impl FnOnce(StcStage<'s>) -> Result<(), RuntimeError> + Send + 's,
+    rvg: impl FnOnce(RvgStage<'s>) -> Result<(), RuntimeError> + Send + 's,
+) -> (Vec<(Stage, StageBody<'s>)>, Option<LoaderQueues<'s>>) {
+    let links = stream_links(t, opts, 0, b);
+    let (or_link, rvg_link, prefetch) = (links.or, links.rvg, links.stc);
+    let stages: Vec<(Stage, StageBody<'s>)> = vec![
+        (Stage::Or, Box::new(move || or(t.or_stage(opts, or_link)))),
+        (
+            Stage::Stc,
+            Box::new(move || stc(t.stc_stage(opts, b, prefetch)?)),
+        ),
+        (
+            Stage::Rvg,
+            Box::new(move || rvg(t.rvg_stage(opts, b, rvg_link))),
+        ),
+    ];
+    (stages, links.loader)
 }
 
 /// One stage's thread body.

@@ -29,40 +29,21 @@ pub(crate) fn run_pipelined(
         token_tx.send(()).expect("room for every token");
     }
     let b = t.rvg_device(opts);
-    let StreamLinks {
-        loader,
-        or: or_link,
-        rvg: rvg_link,
-        stc: prefetch,
-    } = stream_links(t, opts, 0, b);
     std::thread::scope(|s| {
-        let stages: Vec<(Stage, StageBody)> = vec![
-            (
-                Stage::Or,
-                Box::new(move || {
-                    let or = t.or_stage(opts, or_link);
-                    or_thread(or, opts, source, or_tx, feedback_rx, token_rx)
-                }),
-            ),
-            (
-                Stage::Stc,
-                Box::new(move || {
-                    let stc = t.stc_stage(opts, b, prefetch)?;
-                    stc_thread(stc, t, opts, or_rx, rvg_tx, feedback_tx)
-                }),
-            ),
-            (
-                Stage::Rvg,
-                Box::new(move || {
-                    let rvg = t.rvg_stage(opts, b, rvg_link);
-                    let spec = opts.speculative_rvg.then_some(Speculative {
-                        skeleton: t.skeleton,
-                        opts,
-                    });
-                    rvg_thread(rvg, rvg_rx, report_tx, token_tx, presenter, spec)
-                }),
-            ),
-        ];
+        let (stages, loader) = stage_bodies(
+            t,
+            opts,
+            b,
+            move |or| or_thread(or, opts, source, or_tx, feedback_rx, token_rx),
+            move |stc| stc_thread(stc, t, opts, or_rx, rvg_tx, feedback_tx),
+            move |rvg| {
+                let spec = opts.speculative_rvg.then_some(Speculative {
+                    skeleton: t.skeleton,
+                    opts,
+                });
+                rvg_thread(rvg, rvg_rx, report_tx, token_tx, presenter, spec)
+            },
+        );
         run_threads(s, stages, loader, report_rx, on_frame)
     })
 }

@@ -1,19 +1,28 @@
-//! The crate dependency arrows are the ones ARCHITECTURE.md draws: each
-//! workspace crate's gigawalk dependencies (normal, not dev) as
-//! `cargo metadata` reports them, against the `deps` block there.
+//! The rules of ARCHITECTURE.md that a machine can check:
+//! - the crate dependency arrows are the ones it draws: each workspace
+//!   crate's gigawalk dependencies (normal, not dev) as `cargo metadata`
+//!   reports them, against the `deps` block there;
+//! - the threads block names every source file that starts a thread of
+//!   its own (`std::thread` spawns, scopes and builders; rayon's pool
+//!   running data-parallel loops is not one), outside test modules;
+//! - only gigawalk-gpu depends on wgpu, and no source file outside it,
+//!   tests and benches included, names it.
 
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 type Arrows = BTreeMap<String, Vec<String>>;
 
-/// The `deps` block of ARCHITECTURE.md: `crate: dependency ...` per line.
-fn drawn(doc: &str) -> Arrows {
+/// A block of ARCHITECTURE.md fenced as `tag`: `crate: item ...` per
+/// line, items sorted.
+fn block(doc: &str, tag: &str) -> Arrows {
+    let fence = format!("```{tag}");
     let start = doc
-        .find("```deps")
-        .expect("ARCHITECTURE.md has a ```deps block");
-    let body = &doc[start + "```deps".len()..];
-    let end = body.find("```").expect("the deps block ends");
+        .find(&fence)
+        .unwrap_or_else(|| panic!("ARCHITECTURE.md has a {fence} block"));
+    let body = &doc[start + fence.len()..];
+    let end = body.find("```").expect("the block ends");
     body[..end]
         .lines()
         .map(str::trim)
@@ -27,8 +36,18 @@ fn drawn(doc: &str) -> Arrows {
         .collect()
 }
 
-/// What `cargo metadata` says the workspace's crates depend on.
-fn actual() -> Arrows {
+/// The `deps` block of ARCHITECTURE.md: `crate: dependency ...` per line.
+fn drawn(doc: &str) -> Arrows {
+    block(doc, "deps")
+}
+
+fn architecture_md() -> String {
+    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/ARCHITECTURE.md"))
+        .expect("ARCHITECTURE.md")
+}
+
+/// `cargo metadata` of the workspace's own packages.
+fn metadata() -> Vec<serde_json::Value> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .args([
@@ -47,9 +66,12 @@ fn actual() -> Arrows {
         String::from_utf8_lossy(&out.stderr)
     );
     let meta: serde_json::Value = serde_json::from_slice(&out.stdout).expect("metadata is JSON");
-    meta["packages"]
-        .as_array()
-        .expect("packages")
+    meta["packages"].as_array().expect("packages").clone()
+}
+
+/// Each package's normal (not dev) dependencies whose names `keep` keeps.
+fn dependencies(keep: impl Fn(&str) -> bool) -> Arrows {
+    metadata()
         .iter()
         .map(|p| {
             let mut deps: Vec<String> = p["dependencies"]
@@ -58,7 +80,7 @@ fn actual() -> Arrows {
                 .iter()
                 .filter(|d| d["kind"].is_null())
                 .filter_map(|d| d["name"].as_str())
-                .filter(|n| n.starts_with("gigawalk"))
+                .filter(|n| keep(n))
                 .map(String::from)
                 .collect();
             deps.sort();
@@ -67,10 +89,87 @@ fn actual() -> Arrows {
         .collect()
 }
 
+/// What `cargo metadata` says the workspace's crates depend on.
+fn actual() -> Arrows {
+    dependencies(|n| n.starts_with("gigawalk"))
+}
+
+/// Every package's name and directory, deepest first, so a file belongs
+/// to the first whose directory holds it (the root package holds the
+/// others' directories).
+fn packages() -> Vec<(String, PathBuf)> {
+    let mut out: Vec<(String, PathBuf)> = metadata()
+        .iter()
+        .map(|p| {
+            let manifest = PathBuf::from(p["manifest_path"].as_str().expect("manifest_path"));
+            let dir = manifest
+                .parent()
+                .expect("a manifest's folder")
+                .to_path_buf();
+            (p["name"].as_str().expect("name").to_string(), dir)
+        })
+        .collect();
+    out.sort_by_key(|(_, d)| std::cmp::Reverse(d.components().count()));
+    out
+}
+
+/// The `.rs` files below `dir`, skipping build output, hidden folders and
+/// the fuzz targets (outside the workspace).
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let path = e.path();
+        let name = e.file_name().to_string_lossy().to_string();
+        if path.is_dir() {
+            if !(name.starts_with('.') || name == "target" || name == "fuzz") {
+                rust_files(&path, out);
+            }
+        } else if name.ends_with(".rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// Every workspace `.rs` file with its package's name and its path
+/// within that package.
+fn sources() -> Vec<(String, String, String)> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(root, &mut files);
+    let packages = packages();
+    files
+        .into_iter()
+        .filter_map(|f| {
+            let (name, dir) = packages.iter().find(|(_, d)| f.starts_with(d))?;
+            let rel = f
+                .strip_prefix(dir)
+                .ok()?
+                .to_string_lossy()
+                .replace('\\', "/");
+            let text = std::fs::read_to_string(&f).ok()?;
+            Some((name.clone(), rel, text))
+        })
+        .collect()
+}
+
+/// Whether library or binary code (not a test module) starts a thread.
+fn starts_threads(text: &str) -> bool {
+    let code = text.split("#[cfg(test)]\nmod tests {").next().unwrap_or("");
+    [
+        "thread::spawn",
+        "thread::scope",
+        "thread::Builder",
+        "spawn_scoped",
+    ]
+    .iter()
+    .any(|p| code.contains(p))
+}
+
 #[test]
 fn crate_dependencies_are_the_ones_architecture_md_draws() {
-    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/ARCHITECTURE.md"))
-        .expect("ARCHITECTURE.md");
+    let doc = architecture_md();
     assert_eq!(
         actual(),
         drawn(&doc),
@@ -83,4 +182,68 @@ fn the_deps_block_parses() {
     let d = drawn("x\n```deps\na:\nb: c a\n```\n");
     assert_eq!(d["a"], Vec::<String>::new());
     assert_eq!(d["b"], vec!["a".to_string(), "c".to_string()]);
+}
+
+#[test]
+fn only_the_files_architecture_md_names_start_threads() {
+    let mut found = Arrows::new();
+    for (package, file, text) in sources() {
+        let in_src = file.starts_with("src/");
+        if in_src && starts_threads(&text) {
+            found.entry(package).or_default().push(file);
+        }
+    }
+    for files in found.values_mut() {
+        files.sort();
+    }
+    let drawn: Arrows = block(&architecture_md(), "threads")
+        .into_iter()
+        .filter(|(_, files)| !files.is_empty())
+        .collect();
+    assert_eq!(
+        found, drawn,
+        "a thread started where ARCHITECTURE.md's threads block does not say (or no longer started where it does)"
+    );
+}
+
+#[test]
+fn only_the_gpu_crate_names_wgpu() {
+    let with_wgpu: Vec<String> = dependencies(|n| n == "wgpu")
+        .into_iter()
+        .filter(|(_, deps)| !deps.is_empty())
+        .map(|(name, _)| name)
+        .collect();
+    assert_eq!(with_wgpu, ["gigawalk-gpu"], "crates that depend on wgpu");
+    let naming: Vec<String> = sources()
+        .into_iter()
+        // This file names wgpu only in the patterns it looks for.
+        .filter(|(package, file, text)| {
+            package != "gigawalk-gpu"
+                && file != file!()
+                && (text.contains("wgpu::") || text.contains("use wgpu"))
+        })
+        .map(|(package, file, _)| format!("{package}: {file}"))
+        .collect();
+    assert!(
+        naming.is_empty(),
+        "wgpu named outside gigawalk-gpu: {naming:?}"
+    );
+}
+
+#[test]
+fn starts_threads_sees_spawns_and_scopes_but_not_test_modules() {
+    assert!(starts_threads("fn f() { std::thread::scope(|s| {}); }"));
+    assert!(starts_threads(
+        "use std::thread;\nfn f() { thread::spawn(|| {}); }"
+    ));
+    assert!(!starts_threads(
+        "fn f() {}\n#[cfg(test)]\nmod tests {\n    fn g() { std::thread::spawn(|| {}); }\n}"
+    ));
+    // A test module in a file of its own hides nothing after it.
+    assert!(starts_threads(
+        "#[cfg(test)]\nmod tests;\nfn f() { std::thread::scope(|s| {}); }"
+    ));
+    assert!(!starts_threads(
+        "let n = std::thread::available_parallelism();"
+    ));
 }

@@ -11,7 +11,8 @@
 //! that draws it into a colour target, `DepthCopy` in passes/readback.rs), line
 //! polygon mode (wireframe), index values beyond 2^24 (larger LODs), clip
 //! distances (sections clip in the rasterizer rather than discarding
-//! fragments) and compute shaders (OR's HZB pyramid). [`Capabilities::of`]
+//! fragments), compute shaders (OR's HZB pyramid) and indirect draws with
+//! a first instance (a run of draws recorded as one multi-draw). [`Capabilities::of`]
 //! decides them all once per adapter; a device is opened with what it
 //! decided, and the passes ask the device's [`Capabilities`], nothing else.
 //! Whether occlusion queries count samples (only `oq`'s adaptive culling
@@ -70,6 +71,11 @@ pub enum Optional {
     /// other than GL, whose compute path is not used): the pyramid is built
     /// with fragment passes into a texture instead.
     ComputePyramid,
+    /// Indirect draws with a first instance (`INDIRECT_EXECUTION` and
+    /// `INDIRECT_FIRST_INSTANCE`; GL lacks the second): each draw is
+    /// recorded as a call of its own instead of runs of draws as one
+    /// multi-draw. The image is the same.
+    MultiDraw,
 }
 
 impl Optional {
@@ -88,6 +94,9 @@ impl Optional {
             }
             Optional::ComputePyramid => {
                 "no compute pyramid: OR's HZB pyramid is built with fragment passes"
+            }
+            Optional::MultiDraw => {
+                "no indirect first instance: each LOD is a draw call of its own, not one multi-draw a run"
             }
         }
     }
@@ -108,6 +117,9 @@ pub struct Capabilities {
     pub clip_distances: bool,
     /// OR's HZB pyramid may be built by compute passes.
     pub compute_pyramid: bool,
+    /// Runs of draws go as one `multi_draw_indexed_indirect`, each draw's
+    /// instance data found by its first instance.
+    pub multi_draw: bool,
 }
 
 impl Capabilities {
@@ -121,6 +133,8 @@ impl Capabilities {
             clip_distances: features.contains(Features::CLIP_DISTANCES),
             compute_pyramid: flags.contains(DownlevelFlags::COMPUTE_SHADERS)
                 && adapter.get_info().backend != wgpu::Backend::Gl,
+            multi_draw: flags.contains(DownlevelFlags::INDIRECT_EXECUTION)
+                && features.contains(Features::INDIRECT_FIRST_INSTANCE),
         }
     }
 
@@ -133,6 +147,9 @@ impl Capabilities {
         if self.clip_distances {
             f |= Features::CLIP_DISTANCES;
         }
+        if self.multi_draw {
+            f |= Features::INDIRECT_FIRST_INSTANCE;
+        }
         f
     }
 
@@ -144,6 +161,7 @@ impl Capabilities {
             (self.full_index_range, Optional::IndexRange),
             (self.clip_distances, Optional::ClipDistances),
             (self.compute_pyramid, Optional::ComputePyramid),
+            (self.multi_draw, Optional::MultiDraw),
         ]
         .into_iter()
         .filter(|(has, _)| !has)
@@ -273,11 +291,14 @@ mod tests {
             full_index_range: true,
             clip_distances: true,
             compute_pyramid: true,
+            multi_draw: true,
         };
         assert!(all.missing().is_empty());
         assert_eq!(
             all.features(),
-            Features::POLYGON_MODE_LINE | Features::CLIP_DISTANCES
+            Features::POLYGON_MODE_LINE
+                | Features::CLIP_DISTANCES
+                | Features::INDIRECT_FIRST_INSTANCE
         );
         let gl_like = Capabilities {
             depth_copies: false,
@@ -285,6 +306,7 @@ mod tests {
             full_index_range: false,
             clip_distances: false,
             compute_pyramid: false,
+            multi_draw: false,
         };
         assert_eq!(
             gl_like.missing(),
@@ -292,7 +314,8 @@ mod tests {
                 Optional::DepthCopies,
                 Optional::IndexRange,
                 Optional::ClipDistances,
-                Optional::ComputePyramid
+                Optional::ComputePyramid,
+                Optional::MultiDraw
             ]
         );
         assert_eq!(gl_like.features(), Features::POLYGON_MODE_LINE);
@@ -301,6 +324,6 @@ mod tests {
         texts.push(Optional::Wireframe.describe());
         texts.sort_unstable();
         texts.dedup();
-        assert_eq!(texts.len(), 5);
+        assert_eq!(texts.len(), 6);
     }
 }

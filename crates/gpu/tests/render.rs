@@ -183,6 +183,46 @@ fn render_both_depth_paths() -> Option<[Rendered; 2]> {
     out.try_into().ok()
 }
 
+/// Runs of draws recorded as one multi-draw (where the adapter has
+/// indirect draws with a first instance) draw what one call a draw does,
+/// bit for bit: OR's depth, RVG's colour and depth, in either draw order
+/// and with a LOD drawn twice.
+#[test]
+fn multi_draws_draw_what_one_call_a_draw_does() {
+    let Some(mut ctx) = devices_or_skip(1, "multi-draw").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    let multi = ctx.capabilities().multi_draw;
+    let shift = DVec3::new(-3e5, 7e4, 1e6);
+    let (w, h) = (80, 50);
+    let v = view(shift + DVec3::new(0.0, -1.5, 0.0), w, h);
+    let mut out = Vec::new();
+    for forced in [false, true] {
+        if forced {
+            ctx.force_draw_calls();
+        }
+        assert_eq!(ctx.capabilities().multi_draw, multi && !forced);
+        for layout in [VertexLayout::Wide, VertexLayout::Compact] {
+            let geometry = upload_scene(&ctx, shift, layout);
+            for lods in [&[0u32, 1][..], &[1, 0], &[0, 1, 0]] {
+                let depth = DepthPass::new(&ctx, w, h)
+                    .render(&ctx, &geometry, &v, lods)
+                    .unwrap();
+                let mut rvg = VisiblePass::new(&ctx, w, h);
+                rvg.begin(&ctx, &v, DrawStyle::Shaded);
+                rvg.draw(&ctx, &geometry, lods);
+                let frame = rvg.finish(&ctx, true).unwrap().unwrap();
+                let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                out.push((bits(&depth.depth), frame.colour, bits(&frame.depth.depth)));
+            }
+        }
+    }
+    let (multi_draws, calls) = out.split_at(out.len() / 2);
+    assert_eq!(multi_draws, calls);
+    // Something was drawn.
+    assert!(calls.iter().all(|(d, _, _)| d.iter().any(|&b| b != 0)));
+}
+
 /// Adapters without depth-texture copies (GL) read depth through a pass
 /// that draws it into an R32Uint target; the HZB and the accuracy
 /// reference compare depths exactly, so it must read the same bits, the

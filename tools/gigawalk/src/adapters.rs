@@ -97,5 +97,6 @@ fn consequence(o: Optional) -> &'static str {
         Optional::IndexRange => " (a scene with a larger LOD is refused when loaded)",
         Optional::ClipDistances => " (same images)",
         Optional::ComputePyramid => " (same HZB, more passes)",
+        Optional::MultiDraw => " (same images, more CPU a draw)",
     }
 }

@@ -1,7 +1,13 @@
 //! The draw loop both passes (and the query pass's depth prepass) share:
 //! a uniform buffer with the frame's view, a per-draw instance buffer with
-//! each LOD's origin relative to the eye, and the recording of one indexed
-//! draw per LOD, rebinding geometry buffers only when they change.
+//! each LOD's origin relative to the eye, and the recording of the draws,
+//! rebinding geometry buffers only when they change. Where the device has
+//! indirect draws with a first instance (`Capabilities::multi_draw`), each
+//! run of draws that share a pipeline and buffers is one
+//! `multi_draw_indexed_indirect` over records written beside the instance
+//! data (a draw's first instance is its instance slot); elsewhere each
+//! draw is a `draw_indexed` of its own. Both draw the same triangles in
+//! the same order.
 
 use std::sync::Arc;
 
@@ -19,6 +25,9 @@ pub(crate) struct Drawer {
     pub(crate) bind_group: wgpu::BindGroup,
     pub(crate) layout: wgpu::PipelineLayout,
     instances: wgpu::Buffer,
+    /// A `DrawIndexedIndirectArgs` per instance slot, when the device
+    /// records runs of draws as multi-draws.
+    indirect: Option<wgpu::Buffer>,
     /// Instances already used this frame (chunks append).
     used: u64,
     /// Written to `FrameUniforms::params.z` (what shaders that read it
@@ -73,6 +82,7 @@ impl Drawer {
             bind_group,
             layout,
             instances: instance_buffer(ctx, 1024),
+            indirect: indirect_buffer(ctx, 1024),
             used: 0,
             depth_bias: 0.0,
             pieces: None,
@@ -147,8 +157,10 @@ impl Drawer {
         let size = std::mem::size_of::<DrawInstance>() as u64;
         let needed = self.used + draws.len() as u64;
         if needed * size > self.instances.size() {
-            // Earlier chunks keep the old buffer alive until they finish.
-            self.instances = instance_buffer(ctx, needed.next_power_of_two().max(1024));
+            // Earlier chunks keep the old buffers alive until they finish.
+            let slots = needed.next_power_of_two().max(1024);
+            self.instances = instance_buffer(ctx, slots);
+            self.indirect = indirect_buffer(ctx, slots);
             self.used = 0;
         }
         let data: Vec<DrawInstance> = draws
@@ -168,6 +180,27 @@ impl Drawer {
             bytemuck::cast_slice(&data),
         );
         let first = self.used as u32;
+        if let Some(indirect) = &self.indirect {
+            let args: Vec<u32> = draws
+                .iter()
+                .enumerate()
+                // DrawIndexedIndirectArgs, field by field.
+                .flat_map(|(i, (r, _))| {
+                    [
+                        r.index_count,
+                        1,
+                        r.first_index,
+                        r.base_vertex as u32,
+                        first + i as u32,
+                    ]
+                })
+                .collect();
+            ctx.queue.write_buffer(
+                indirect,
+                self.used * INDIRECT_BYTES,
+                bytemuck::cast_slice(&args),
+            );
+        }
         self.used += draws.len() as u64;
         draws
             .into_iter()
@@ -188,14 +221,23 @@ impl Drawer {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(1, self.instances.slice(..));
         let (mut layout, mut vertices, mut indices) = (None, None, None);
+        // The indirect run not yet recorded: its first slot and length.
+        let mut run: Option<(u32, u32)> = None;
+        let flush = |pass: &mut wgpu::RenderPass, run: &mut Option<(u32, u32)>| {
+            if let (Some((first, count)), Some(indirect)) = (run.take(), &self.indirect) {
+                pass.multi_draw_indexed_indirect(indirect, first as u64 * INDIRECT_BYTES, count);
+            }
+        };
         for (r, instance) in draws {
             if layout != Some(r.layout) {
+                flush(pass, &mut run);
                 pass.set_pipeline(
                     pipelines.get(r.layout, pipelines.clipping(self.clip_planes, self.caps)),
                 );
                 layout = Some(r.layout);
             }
             if vertices != Some(r.buffer) || indices != Some((r.buffer, r.index_format)) {
+                flush(pass, &mut run);
                 let (v, i) = residency.buffers(r.buffer);
                 if vertices != Some(r.buffer) {
                     pass.set_vertex_buffer(0, v.slice(..));
@@ -204,13 +246,40 @@ impl Drawer {
                 pass.set_index_buffer(i.slice(..), r.index_format);
                 indices = Some((r.buffer, r.index_format));
             }
-            pass.draw_indexed(
-                r.first_index..r.first_index + r.index_count,
-                r.base_vertex,
-                *instance..*instance + 1,
-            );
+            if self.indirect.is_none() {
+                pass.draw_indexed(
+                    r.first_index..r.first_index + r.index_count,
+                    r.base_vertex,
+                    *instance..*instance + 1,
+                );
+                continue;
+            }
+            // Slots are consecutive within a chunk; a gap starts a new run.
+            match &mut run {
+                Some((first, count)) if *first + *count == *instance => *count += 1,
+                _ => {
+                    flush(pass, &mut run);
+                    run = Some((*instance, 1));
+                }
+            }
         }
+        flush(pass, &mut run);
     }
+}
+
+/// Bytes of one `DrawIndexedIndirectArgs`.
+const INDIRECT_BYTES: u64 = std::mem::size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
+
+/// The indirect records of `count` draws, where the device takes them.
+fn indirect_buffer(ctx: &GpuContext, count: u64) -> Option<wgpu::Buffer> {
+    ctx.capabilities().multi_draw.then(|| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("draw records"),
+            size: count * INDIRECT_BYTES,
+            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    })
 }
 
 fn instance_buffer(ctx: &GpuContext, count: u64) -> wgpu::Buffer {

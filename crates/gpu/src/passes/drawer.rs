@@ -30,6 +30,8 @@ pub(crate) struct Drawer {
     indirect: Option<wgpu::Buffer>,
     /// Instances already used this frame (chunks append).
     used: u64,
+    /// What `prepare` builds each chunk, kept so a chunk allocates none.
+    scratch: Scratch,
     /// Written to `FrameUniforms::params.z` (what shaders that read it
     /// move toward the eye in depth).
     pub(crate) depth_bias: f32,
@@ -84,6 +86,7 @@ impl Drawer {
             instances: instance_buffer(ctx, 1024),
             indirect: indirect_buffer(ctx, 1024),
             used: 0,
+            scratch: Scratch::default(),
             depth_bias: 0.0,
             pieces: None,
             clip_planes: 0,
@@ -153,7 +156,9 @@ impl Drawer {
         }
         // One pipeline switch at most: draws grouped by layout, in the
         // caller's order within each.
-        draws.sort_by_key(|(r, _)| r.layout as u8);
+        if !draws.is_sorted_by_key(|(r, _)| r.layout as u8) {
+            draws.sort_by_key(|(r, _)| r.layout as u8);
+        }
         let size = std::mem::size_of::<DrawInstance>() as u64;
         let needed = self.used + draws.len() as u64;
         if needed * size > self.instances.size() {
@@ -163,42 +168,42 @@ impl Drawer {
             self.indirect = indirect_buffer(ctx, slots);
             self.used = 0;
         }
-        let data: Vec<DrawInstance> = draws
-            .iter()
-            .map(|(r, highlight)| DrawInstance {
+        let first = self.used as u32;
+        // Each draw's instance data and, for multi-draws, its record
+        // (DrawIndexedIndirectArgs, field by field), in scratch kept
+        // between chunks.
+        self.scratch.instances.clear();
+        self.scratch.records.clear();
+        let records = self.indirect.is_some();
+        for (i, (r, highlight)) in draws.iter().enumerate() {
+            self.scratch.instances.push(DrawInstance {
                 // w: 1 tints the draw (a highlighted object).
                 offset: (r.origin - view.eye)
                     .as_vec3()
                     .extend(if *highlight { 1.0 } else { 0.0 })
                     .to_array(),
                 scale: [r.scale[0], r.scale[1], r.scale[2], 0.0],
-            })
-            .collect();
+            });
+            if records {
+                self.scratch.records.extend_from_slice(&[
+                    r.index_count,
+                    1,
+                    r.first_index,
+                    r.base_vertex as u32,
+                    first + i as u32,
+                ]);
+            }
+        }
         ctx.queue.write_buffer(
             &self.instances,
             self.used * size,
-            bytemuck::cast_slice(&data),
+            bytemuck::cast_slice(&self.scratch.instances),
         );
-        let first = self.used as u32;
         if let Some(indirect) = &self.indirect {
-            let args: Vec<u32> = draws
-                .iter()
-                .enumerate()
-                // DrawIndexedIndirectArgs, field by field.
-                .flat_map(|(i, (r, _))| {
-                    [
-                        r.index_count,
-                        1,
-                        r.first_index,
-                        r.base_vertex as u32,
-                        first + i as u32,
-                    ]
-                })
-                .collect();
             ctx.queue.write_buffer(
                 indirect,
                 self.used * INDIRECT_BYTES,
-                bytemuck::cast_slice(&args),
+                bytemuck::cast_slice(&self.scratch.records),
             );
         }
         self.used += draws.len() as u64;
@@ -265,6 +270,13 @@ impl Drawer {
         }
         flush(pass, &mut run);
     }
+}
+
+/// A chunk's instance data and draw records, before they are written.
+#[derive(Default)]
+struct Scratch {
+    instances: Vec<DrawInstance>,
+    records: Vec<u32>,
 }
 
 /// Bytes of one `DrawIndexedIndirectArgs`.

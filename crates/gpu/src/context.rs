@@ -55,14 +55,9 @@ pub struct GpuContext {
     /// errors through a callback; we turn them into [`GpuError::Device`]
     /// instead of the default panic.
     errors: Arc<Mutex<Option<String>>>,
-    /// The optional capabilities it was opened with.
+    /// The optional capabilities it was opened with, and the passes use
+    /// (a test may turn one off to compare the two paths on one adapter).
     pub(crate) caps: Capabilities,
-    /// Whether depth textures are read back through a copy pass (the
-    /// adapter cannot copy depth to a buffer, as on GL, or a test asks).
-    pub(crate) depth_via_pass: bool,
-    /// Whether OR builds its HZB pyramid with fragment passes even where
-    /// compute would do (tests compare the two paths on one adapter).
-    pub(crate) force_fragment_pyramid: bool,
 }
 
 impl GpuContext {
@@ -114,7 +109,7 @@ impl GpuContext {
         self.caps.wireframe
     }
 
-    /// The optional capabilities this device was opened with.
+    /// The optional capabilities this device's passes use.
     pub fn capabilities(&self) -> Capabilities {
         self.caps
     }
@@ -145,7 +140,7 @@ impl GpuContext {
     /// work, so tests compare the two paths on one adapter.
     #[cfg(feature = "testing")]
     pub fn force_depth_copy_pass(&mut self) {
-        self.depth_via_pass = true;
+        self.caps.depth_copies = false;
     }
 
     /// Records every draw as a call of its own even where runs of draws
@@ -160,7 +155,7 @@ impl GpuContext {
     /// passes would be used, so tests compare the two paths on one adapter.
     #[cfg(feature = "testing")]
     pub fn force_fragment_pyramid(&mut self) {
-        self.force_fragment_pyramid = true;
+        self.caps.compute_pyramid = false;
     }
 
     /// Returns the first GPU error seen since the device was opened.
@@ -498,8 +493,6 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
         name: label,
         errors,
         caps,
-        depth_via_pass: !caps.depth_copies,
-        force_fragment_pyramid: false,
     })
 }
 

@@ -75,7 +75,7 @@ impl Pyramid {
     /// is as large as the pyramid of a `w x h` image needs; else fragment
     /// passes.
     pub(crate) fn path_for(ctx: &GpuContext, w: u32, h: u32) -> PyramidPath {
-        let compute = ctx.caps.compute_pyramid && !ctx.force_fragment_pyramid;
+        let compute = ctx.caps.compute_pyramid;
         // Levels 1 and up hold at most a third of level 0's texels, each
         // texel 4 bytes.
         let bytes = (w as u64 * h as u64).div_ceil(3) * 4 + 64;

@@ -170,7 +170,7 @@ impl ReadBack {
         w: u32,
         h: u32,
     ) -> Rows {
-        if ctx.depth_via_pass {
+        if !ctx.caps.depth_copies {
             let copy = self.depth_copy.get_or_insert_with(|| DepthCopy::new(ctx));
             let target = copy.draw(ctx, enc, tex, w, h);
             self.record_texture(ctx, enc, &target, w, h, 4, wgpu::TextureAspect::All)

@@ -19,16 +19,10 @@ use gigawalk_cull::{
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 
-const LEVELS: usize = 8;
+mod common;
+use common::arg;
 
-fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> Result<T, String> {
-    match args.get(i) {
-        None => Ok(default),
-        Some(s) => s
-            .parse()
-            .map_err(|_| format!("argument {i}: cannot parse {s:?}")),
-    }
-}
+const LEVELS: usize = 8;
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().collect();

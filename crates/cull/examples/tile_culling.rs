@@ -23,19 +23,8 @@ use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 use glam::DVec3;
 
-fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> Result<T, String> {
-    match args.get(i) {
-        None => Ok(default),
-        Some(s) => s
-            .parse()
-            .map_err(|_| format!("argument {i}: cannot parse {s:?}")),
-    }
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+mod common;
+use common::{arg, median};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().collect();

@@ -21,14 +21,8 @@ use gigawalk_cull::{
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::SceneReader;
 
-fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> Result<T, String> {
-    match args.get(i) {
-        None => Ok(default),
-        Some(s) => s
-            .parse()
-            .map_err(|_| format!("argument {i}: cannot parse {s:?}")),
-    }
-}
+mod common;
+use common::{arg, median};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -79,10 +73,6 @@ fn main() -> Result<(), Box<dyn Error>> {
         per_item.push(ns / d.max(1) as f64);
         (visited, drawn, hash) = (v, d, h);
     }
-    let median = |x: &mut Vec<f64>| {
-        x.sort_by(f64::total_cmp);
-        x[x.len() / 2]
-    };
     let poses = views.len().max(1) as f64;
     println!(
         "{}: {} poses, {w}x{h}, {pixel_error} px, {rounds} rounds: {:.0} nodes visited and {:.0} drawn a pose; {:.1} ns a visited node, {:.1} ns a drawn item (medians); items hash {hash:016x}",
@@ -90,8 +80,8 @@ fn main() -> Result<(), Box<dyn Error>> {
         views.len(),
         visited as f64 / poses,
         drawn as f64 / poses,
-        median(&mut per_node),
-        median(&mut per_item),
+        median(per_node),
+        median(per_item),
     );
     Ok(())
 }

@@ -11,6 +11,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::OnceLock;
 
 type Arrows = BTreeMap<String, Vec<String>>;
 
@@ -46,8 +47,14 @@ fn architecture_md() -> String {
         .expect("ARCHITECTURE.md")
 }
 
-/// `cargo metadata` of the workspace's own packages.
-fn metadata() -> Vec<serde_json::Value> {
+/// `cargo metadata` of the workspace's own packages, run once for every
+/// test of this file.
+fn metadata() -> &'static [serde_json::Value] {
+    static PACKAGES: OnceLock<Vec<serde_json::Value>> = OnceLock::new();
+    PACKAGES.get_or_init(run_metadata)
+}
+
+fn run_metadata() -> Vec<serde_json::Value> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .args([

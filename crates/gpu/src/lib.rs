@@ -38,8 +38,9 @@ pub use overlay::{
     OverlayBox, OverlayFrame, OverlayLine, OverlayText, OverlayUniforms, OVERLAY_WGSL,
 };
 pub use passes::{
-    ClipPlanes, DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, PassFigures, PyramidPath,
-    View, VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL,
+    Antialias, ClipPlanes, DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, Look,
+    LookChoice, PassFigures, PyramidPath, View, VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL,
+    DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL, LOOK_WGSL,
 };
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};

@@ -129,7 +129,7 @@ impl WindowSurface {
         window_size: (u32, u32),
         capture: bool,
     ) -> Result<Presented, GpuError> {
-        self.present_texture(ctx, pass.colour_texture(), overlay, window_size, capture)
+        self.present_texture(ctx, pass.shown_texture(), overlay, window_size, capture)
     }
 
     /// [`WindowSurface::present`] for any `COLOUR_FORMAT` texture with

@@ -106,7 +106,7 @@ impl QueryPass {
                 shader_types::OCCLUDER_DEPTH_WGSL,
                 shader_types::OCCLUDER_DEPTH_CLIP_WGSL,
             ),
-            None,
+            &[],
             wgpu::PolygonMode::Fill,
         );
         let module = ctx

@@ -183,6 +183,7 @@ fn every_shader_in_the_tree_parses_and_validates() {
         ("query_box.wgsl", gigawalk_gpu::QUERY_BOX_WGSL, true),
         ("depth_copy.wgsl", gigawalk_gpu::DEPTH_COPY_WGSL, false),
         ("blit.wgsl", gigawalk_gpu::BLIT_WGSL, false),
+        ("look.wgsl", gigawalk_gpu::LOOK_WGSL, false),
         ("overlay.wgsl", gigawalk_gpu::OVERLAY_WGSL, false),
         (
             "hzb_downsample.wgsl",

@@ -5,7 +5,7 @@
 use gigawalk_cull::{Camera, Hzb, Reduction};
 use gigawalk_gpu::{
     devices_or_skip, ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext,
-    HostGeometry, PyramidPath, ResidentGeometry, VertexLayout, View, VisiblePass,
+    HostGeometry, Look, PyramidPath, ResidentGeometry, VertexLayout, View, VisiblePass,
 };
 use gigawalk_scene::{Aabb, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
 use gigawalk_testkit::box_mesh;
@@ -116,7 +116,7 @@ fn render_styled(
     let depth = or.render(&ctx, &geometry, &v, &[0, 1]).unwrap();
     assert_eq!((depth.width, depth.height), (w, h));
     let mut rvg = VisiblePass::new(&ctx, w, h);
-    rvg.begin(&ctx, &v, style);
+    rvg.begin(&ctx, &v, style, Look::PLAIN);
     rvg.draw(&ctx, &geometry, &[1]); // far box first, in its own chunk
     rvg.draw(&ctx, &geometry, &[0]);
     let frame = rvg.finish(&ctx, true).unwrap().unwrap();
@@ -175,7 +175,7 @@ fn render_both_depth_paths() -> Option<[Rendered; 2]> {
             .render(&ctx, &geometry, &v, &[0, 1])
             .unwrap();
         let mut rvg = VisiblePass::new(&ctx, w, h);
-        rvg.begin(&ctx, &v, DrawStyle::Shaded);
+        rvg.begin(&ctx, &v, DrawStyle::Shaded, Look::PLAIN);
         rvg.draw(&ctx, &geometry, &[0, 1]);
         let frame = rvg.finish(&ctx, true).unwrap().unwrap();
         out.push((depth.depth, frame.colour, frame.depth.depth));
@@ -209,7 +209,7 @@ fn multi_draws_draw_what_one_call_a_draw_does() {
                     .render(&ctx, &geometry, &v, lods)
                     .unwrap();
                 let mut rvg = VisiblePass::new(&ctx, w, h);
-                rvg.begin(&ctx, &v, DrawStyle::Shaded);
+                rvg.begin(&ctx, &v, DrawStyle::Shaded, Look::PLAIN);
                 rvg.draw(&ctx, &geometry, lods);
                 let frame = rvg.finish(&ctx, true).unwrap().unwrap();
                 let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -324,7 +324,7 @@ fn draw_both(
     v: &View,
 ) -> (Vec<u8>, Vec<f32>, Vec<f32>) {
     let mut rvg = VisiblePass::new(ctx, 64, 48);
-    rvg.begin(ctx, v, DrawStyle::Shaded);
+    rvg.begin(ctx, v, DrawStyle::Shaded, Look::PLAIN);
     rvg.draw(ctx, geometry, &[0, 1]);
     let frame = rvg.finish(ctx, true).unwrap().unwrap();
     let depth = DepthPass::new(ctx, 64, 48)

@@ -193,5 +193,6 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
         adapter: None,
         visibility: None,
         section: None,
+        look: Default::default(),
     }
 }

@@ -66,6 +66,10 @@ pub struct ReplayOptions {
     /// the same for the reference and every run: accuracy is measured
     /// against the full detail of what the section keeps.
     pub section: Option<Arc<gigawalk_cull::Section>>,
+    /// What every run's shown image adds (edges, ambient occlusion, FXAA,
+    /// the sky): its passes run each frame and cost what the frame times
+    /// show; accuracy reads the frame as drawn, before them.
+    pub look: gigawalk_runtime::Look,
 }
 
 /// `--target-fps` / `--target-ms`.
@@ -93,6 +97,7 @@ impl Default for ReplayOptions {
             adapter: None,
             visibility: None,
             section: None,
+            look: gigawalk_runtime::Look::PLAIN,
         }
     }
 }
@@ -481,6 +486,7 @@ pub fn replay_on(
             CameraRequest {
                 visibility: opts.visibility.clone(),
                 section: opts.section.clone(),
+                look: opts.look,
                 ..CameraRequest::new(camera, compared_or_next(i, k))
             }
         })

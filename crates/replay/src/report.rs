@@ -228,6 +228,12 @@ pub fn markdown(s: &Summary) -> String {
             "**Section: {section}. The reference and every run draw only what it keeps; nodes wholly on its removed side are dropped (`mean_section_culled`).**\n"
         );
     }
+    if let Some(look) = &s.look {
+        let _ = writeln!(
+            m,
+            "**Look: {look}. Every run's frames also ran these passes, so their cost is in the frame times; accuracy reads each frame as drawn, before them.**\n"
+        );
+    }
     if s.hidden_objects > 0 {
         let _ = writeln!(
             m,

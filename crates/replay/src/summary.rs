@@ -38,6 +38,10 @@ pub struct Summary {
     /// (`--section`, `--section-box`); null: nothing cut.
     #[serde(default)]
     pub section: Option<String>,
+    /// What each run's shown image added, run every frame (`--aa`,
+    /// `--edges`, `--ao`, `--sky`); null: nothing.
+    #[serde(default)]
+    pub look: Option<String>,
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
@@ -566,6 +570,7 @@ impl Replay {
             null_adapter: self.null_adapter,
             hidden_objects: self.options.visibility.as_ref().map_or(0, |v| v.counts().0),
             section: self.options.section.as_ref().map(|s| s.describe()),
+            look: (!self.options.look.is_plain()).then(|| self.options.look.describe()),
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,

@@ -70,6 +70,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
         adapter: None,
         visibility: None,
         section: None,
+        look: Default::default(),
     }
 }
 

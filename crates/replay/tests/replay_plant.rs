@@ -86,6 +86,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
         adapter: None,
         visibility: None,
         section: None,
+        look: Default::default(),
     }
 }
 
@@ -407,6 +408,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 adapter: None,
                 visibility: None,
                 section: None,
+                look: Default::default(),
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             // Frames 0, 4, 8 and the frame after each.

@@ -35,8 +35,8 @@ pub use gigawalk_cull::{
     Viewport,
 };
 pub use gigawalk_gpu::{
-    chosen_adapter, list_adapters, AdapterReport, DrawStyle, FrameImage, GpuContext, GpuError,
-    Optional, QueryCounts, VisiblePass,
+    chosen_adapter, list_adapters, AdapterReport, Antialias, DrawStyle, FrameImage, GpuContext,
+    GpuError, Look, LookChoice, Optional, QueryCounts, VisiblePass,
 };
 pub(crate) use options::ResolvedOptions;
 pub use options::{
@@ -167,6 +167,10 @@ pub struct CameraRequest {
     /// How RVG draws this frame (the viewer's wireframe toggle). Culling
     /// does not depend on it.
     pub style: DrawStyle,
+    /// What the shown image adds to the frame (edges, ambient occlusion,
+    /// anti-aliasing, the sky): the window and screenshots show it, while
+    /// the colour and depth read back stay the geometry as drawn.
+    pub look: Look,
     /// This frame's pixel-error tolerance, overriding
     /// `RuntimeOptions::traversal` (a target-frame-rate controller sets it
     /// per frame); `None`: the options'. Must be finite and >= 0.
@@ -189,6 +193,7 @@ impl CameraRequest {
             read_back,
             hold_culling: false,
             style: DrawStyle::Shaded,
+            look: Look::PLAIN,
             pixel_error: None,
             visibility: None,
             section: None,

@@ -93,6 +93,9 @@ pub struct ViewArgs {
     pub view: Option<String>,
     /// Start with this section (over the saved view's).
     pub section: Option<Arc<Section>>,
+    /// The look asked for; what it leaves open is `Look::auto` for the
+    /// devices opened.
+    pub look: gigawalk_gpu::LookChoice,
 }
 
 /// Why the viewer stopped with an error.
@@ -256,6 +259,9 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
     let wireframe_supported = devices.iter().all(GpuContext::supports_wireframe);
     let mut start_message = None;
     let mut settings = args.settings.clone();
+    settings.look = args.look.over(gigawalk_gpu::Look::auto(
+        devices.iter().any(GpuContext::is_cpu),
+    ));
     if settings.wireframe && !wireframe_supported {
         // Asked for on the command line: refuse rather than draw something
         // else (T in the window only shows that it draws shaded).

@@ -175,6 +175,18 @@ pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> V
     if s.wireframe {
         flags.push("wireframe");
     }
+    if s.look.edges {
+        flags.push("edges");
+    }
+    if s.look.ao {
+        flags.push("AO");
+    }
+    if s.look.aa != gigawalk_gpu::Antialias::Off {
+        flags.push("FXAA");
+    }
+    if s.xray {
+        flags.push("x-ray");
+    }
     lines.push(format!(
         "{} {:.3} u/s{}{}",
         if v.walking { "walk" } else { "fly" },

@@ -1,8 +1,9 @@
 //! The viewer's toggles (occlusion, HLOD, pixel error, async rendering,
-//! wireframe, boxes, freeze, HUD, help), and which of them need the
+//! wireframe, the look, x-ray, boxes, freeze, HUD, help), and which of them need the
 //! pipeline restarted: the runtime fixes its options per run.
 
 use gigawalk_cull::TraversalOptions;
+use gigawalk_gpu::{Antialias, Look};
 use gigawalk_runtime::CullMethod;
 
 /// Pixel-error steps for +/-: 0 is full detail; then doubling from half a
@@ -20,6 +21,12 @@ pub struct Settings {
     /// (the runtime's `async_rvg`).
     pub async_rvg: bool,
     pub wireframe: bool,
+    /// What the shown image adds: edges (E), ambient occlusion (F2),
+    /// anti-aliasing (F3), the sky.
+    pub look: Look,
+    /// Hidden objects, and those an isolation leaves out, drawn as faint
+    /// ghosts for context (F4).
+    pub xray: bool,
     pub boxes: bool,
     /// Freeze culling: RVG keeps drawing the frozen view's visible set.
     pub frozen: bool,
@@ -41,6 +48,8 @@ impl Default for Settings {
             pixel_error: t.pixel_error,
             async_rvg: false,
             wireframe: false,
+            look: Look::PLAIN,
+            xray: false,
             boxes: false,
             frozen: false,
             hud: true,
@@ -76,6 +85,14 @@ impl Settings {
                 .copied()
                 .find(|&s| s < cur)
                 .unwrap_or(cur)
+        };
+    }
+
+    /// Anti-aliasing on (FXAA) or off.
+    pub fn toggle_aa(&mut self) {
+        self.look.aa = match self.look.aa {
+            Antialias::Off => Antialias::Fxaa,
+            Antialias::Fxaa => Antialias::Off,
         };
     }
 

@@ -19,6 +19,7 @@ mod demo;
 mod generate;
 mod gpu_run;
 mod info;
+mod look;
 mod objects;
 mod preprocess;
 mod replay;

@@ -38,6 +38,8 @@ pub struct Args {
     view: Option<String>,
     #[command(flatten)]
     section: crate::section::SectionArgs,
+    #[command(flatten)]
+    look: crate::look::LookArgs,
     /// Report directory: summary.md, summary.json, frames.csv, fps.png, tradeoff.png
     #[arg(long, default_value = "report")]
     out: PathBuf,
@@ -290,6 +292,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             view.as_ref().and_then(|v| v.section.as_ref()),
             &scene.skeleton().bounds(),
         )?,
+        look: args.look.choice(1.0)?.over(gigawalk_runtime::Look::PLAIN),
     };
     let replay = run_replay(
         &scene,

@@ -79,6 +79,11 @@ pub struct Args {
     /// Start in wireframe (triangle edges in each object's colour)
     #[arg(long)]
     wireframe: bool,
+    /// Start in x-ray (F4): hidden objects, and those an isolation leaves out, drawn as faint ghosts
+    #[arg(long)]
+    xray: bool,
+    #[command(flatten)]
+    look: crate::look::LookArgs,
     /// Start with node bounding boxes shown
     #[arg(long)]
     boxes: bool,
@@ -128,6 +133,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     // Checked here, before a window opens; over a --view's own section.
     let section = a.section.given()?.map(Arc::new);
+    let look = a.look.choice(a.units.metres)?;
     if let Some(null) = a
         .adapter
         .as_deref()
@@ -158,6 +164,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             pixel_error: a.pixel_error,
             async_rvg: a.async_rvg,
             wireframe: a.wireframe,
+            xray: a.xray,
             boxes: a.boxes,
             hud: !a.no_hud,
             target: a.target_fps.is_some(),
@@ -169,6 +176,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         tile_culling: a.tile_culling,
         view: a.view,
         section,
+        look,
     })
     .with_context(|| format!("viewing {}", scene.display()))
 }

@@ -53,7 +53,7 @@ impl DepthPass {
                 shader_types::OCCLUDER_DEPTH_WGSL,
                 shader_types::OCCLUDER_DEPTH_CLIP_WGSL,
             ),
-            None,
+            &[],
             wgpu::PolygonMode::Fill,
         );
         DepthPass {

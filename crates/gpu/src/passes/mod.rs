@@ -11,6 +11,7 @@
 mod depth;
 mod drawer;
 mod hzb;
+mod look;
 mod pipelines;
 mod readback;
 mod visible;
@@ -23,6 +24,7 @@ use crate::GpuContext;
 pub use depth::{DepthLevel, DepthPass};
 pub(crate) use drawer::Drawer;
 pub use hzb::{PyramidPath, HZB_DOWNSAMPLE_WGSL};
+pub use look::{Antialias, Look, LookChoice, LOOK_WGSL};
 pub(crate) use pipelines::{
     draw_fullscreen, fullscreen_pipeline, fullscreen_pipeline_entry, pipeline, ScenePipelines,
 };

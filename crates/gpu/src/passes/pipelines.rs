@@ -69,7 +69,7 @@ pub(crate) fn pipeline(
     drawer: &Drawer,
     label: &str,
     (wgsl, clip_wgsl): (&str, &str),
-    colour: Option<wgpu::TextureFormat>,
+    colour: &[Option<wgpu::TextureFormat>],
     polygon_mode: wgpu::PolygonMode,
 ) -> ScenePipelines {
     let module = ctx
@@ -87,17 +87,21 @@ pub(crate) fn pipeline(
                 ),
             })
     });
+    // `colour`: the pass's colour targets by location (none: depth only;
+    // a `None` slot drops what the shader writes there).
     let targets: Vec<_> = colour
-        .map(|format| wgpu::ColorTargetState {
-            format,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
+        .iter()
+        .map(|f| {
+            f.map(|format| wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
         })
-        .into_iter()
-        .map(Some)
         .collect();
+    let has_colour = !colour.is_empty();
     // Without a section a depth-only pass has no fragment stage.
-    let plain = colour.map(|_| "fs_main");
+    let plain = has_colour.then_some("fs_main");
     // `suffix`: "" for the plain entry points, "_clip" for those writing
     // clip distances.
     let build = |module: &wgpu::ShaderModule,
@@ -147,7 +151,7 @@ pub(crate) fn pipeline(
         plain: VertexLayout::ALL.map(|l| build(&module, l, "", plain)),
         discard: VertexLayout::ALL.map(|l| build(&module, l, "", Some("fs_section"))),
         hardware: clip_module.map(|m| {
-            [plain, colour.map(|_| "fs_cap")]
+            [plain, has_colour.then_some("fs_cap")]
                 .map(|fragment| VertexLayout::ALL.map(|l| build(&m, l, "_clip", fragment)))
         }),
     }

@@ -3,8 +3,9 @@
 
 use std::time::Instant;
 
+use crate::passes::look::{LookPass, NORMAL_FORMAT};
 use crate::passes::{
-    depth_attachment, ms_since, pipeline, target, DrawStyle, Drawer, FrameImage, PassFigures,
+    depth_attachment, ms_since, pipeline, target, DrawStyle, Drawer, FrameImage, Look, PassFigures,
     ReadBack, ScenePipelines, View, COLOUR_FORMAT, DEPTH_FORMAT,
 };
 use crate::residency::{LodRange, Residency};
@@ -15,13 +16,21 @@ use crate::{GpuContext, GpuError};
 /// colour target (or a caller-provided view, e.g. a window's surface).
 pub struct VisiblePass {
     drawer: Drawer,
-    pipelines: ScenePipelines,
-    /// The line-mode pipelines, where the device supports them.
-    wire_pipelines: Option<ScenePipelines>,
+    /// Pipelines writing colour alone.
+    colour_only: Pipelines,
+    /// Pipelines writing colour and the normal target, made when a look
+    /// first needs normals.
+    with_normals: Option<Pipelines>,
     style: DrawStyle,
     warned_no_wireframe: bool,
     colour: wgpu::Texture,
     depth: wgpu::Texture,
+    /// The eye-facing normals (`look.wgsl`), made with the look's passes.
+    normal: Option<wgpu::Texture>,
+    /// What the shown image adds this frame, and its passes once a frame
+    /// has asked for one.
+    look: Look,
+    look_pass: Option<LookPass>,
     colour_readback: ReadBack,
     depth_readback: ReadBack,
     width: u32,
@@ -47,26 +56,48 @@ const BACKGROUND: wgpu::Color = wgpu::Color {
     a: 1.0,
 };
 
+/// RVG's scene pipelines for one set of colour targets: filled, and in
+/// line mode where the device supports it.
+struct Pipelines {
+    fill: ScenePipelines,
+    wire: Option<ScenePipelines>,
+}
+
+impl Pipelines {
+    fn new(
+        ctx: &GpuContext,
+        drawer: &Drawer,
+        targets: &[Option<wgpu::TextureFormat>],
+    ) -> Pipelines {
+        let visible = |label, mode| {
+            pipeline(
+                ctx,
+                drawer,
+                label,
+                (shader_types::VISIBLE_WGSL, shader_types::VISIBLE_CLIP_WGSL),
+                targets,
+                mode,
+            )
+        };
+        Pipelines {
+            fill: visible("visible", wgpu::PolygonMode::Fill),
+            wire: ctx
+                .supports_wireframe()
+                .then(|| visible("visible wireframe", wgpu::PolygonMode::Line)),
+        }
+    }
+}
+
 impl VisiblePass {
     pub fn new(ctx: &GpuContext, width: u32, height: u32) -> VisiblePass {
         let (width, height) = (width.max(1), height.max(1));
         let drawer = Drawer::new(ctx, "visible");
-        let visible = |label, mode| {
-            pipeline(
-                ctx,
-                &drawer,
-                label,
-                (shader_types::VISIBLE_WGSL, shader_types::VISIBLE_CLIP_WGSL),
-                Some(COLOUR_FORMAT),
-                mode,
-            )
-        };
-        let pipelines = visible("visible", wgpu::PolygonMode::Fill);
-        let wire_pipelines = ctx
-            .supports_wireframe()
-            .then(|| visible("visible wireframe", wgpu::PolygonMode::Line));
         VisiblePass {
-            wire_pipelines,
+            colour_only: Pipelines::new(ctx, &drawer, &[Some(COLOUR_FORMAT)]),
+            with_normals: None,
+            normal: None,
+            look: Look::PLAIN,
+            look_pass: None,
             style: DrawStyle::Shaded,
             warned_no_wireframe: false,
             colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
@@ -74,7 +105,6 @@ impl VisiblePass {
             colour_readback: ReadBack::default(),
             depth_readback: ReadBack::default(),
             drawer,
-            pipelines,
             width,
             height,
             cleared: false,
@@ -101,6 +131,21 @@ impl VisiblePass {
         &self.colour
     }
 
+    /// The image to show of the last finished frame: the look's, or
+    /// where the look is plain the colour target itself
+    /// (`COLOUR_FORMAT`, with `COPY_SRC`).
+    pub fn shown_texture(&self) -> &wgpu::Texture {
+        match &self.look_pass {
+            Some(l) if !self.look.is_plain() => l.shown(&self.look),
+            _ => &self.colour,
+        }
+    }
+
+    /// The look frames are shown with.
+    pub fn look(&self) -> Look {
+        self.look
+    }
+
     /// The depth target (`DEPTH_FORMAT`, reversed-Z), for overlays that
     /// depth-test against the frame.
     pub fn depth_texture(&self) -> &wgpu::Texture {
@@ -119,9 +164,12 @@ impl VisiblePass {
     }
 
     /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
-    pub fn begin(&mut self, ctx: &GpuContext, view: &View, style: DrawStyle) {
+    /// `look`: what the shown image adds once the frame ends (its passes
+    /// and the normal target are made the first time a frame asks).
+    pub fn begin(&mut self, ctx: &GpuContext, view: &View, style: DrawStyle, look: Look) {
+        self.set_look(ctx, look);
         self.style = match style {
-            DrawStyle::Wireframe if self.wire_pipelines.is_none() => {
+            DrawStyle::Wireframe if self.colour_only.wire.is_none() => {
                 if !self.warned_no_wireframe {
                     tracing::warn!(
                         "{}: no POLYGON_MODE_LINE, drawing shaded instead of wireframe",
@@ -138,6 +186,31 @@ impl VisiblePass {
         self.cleared = false;
         self.view = Some(*view);
         self.scissor = None;
+    }
+
+    fn set_look(&mut self, ctx: &GpuContext, look: Look) {
+        self.look = look;
+        if look.is_plain() {
+            return;
+        }
+        if look.needs_normals() && self.with_normals.is_none() {
+            self.with_normals = Some(Pipelines::new(
+                ctx,
+                &self.drawer,
+                &[Some(COLOUR_FORMAT), Some(NORMAL_FORMAT)],
+            ));
+        }
+        if self.look_pass.is_none() {
+            let normal = target(
+                ctx,
+                "visible normals",
+                self.width,
+                self.height,
+                NORMAL_FORMAT,
+            );
+            self.look_pass = Some(LookPass::new(ctx, &self.colour, &self.depth, &normal));
+            self.normal = Some(normal);
+        }
     }
 
     /// Later draws of this frame write only pixels in `[x, y, w, h]` (a
@@ -157,27 +230,44 @@ impl VisiblePass {
         {
             let cv = self.colour.create_view(&Default::default());
             let dv = self.depth.create_view(&Default::default());
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("visible"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &cv,
+            let normals = self.look.needs_normals();
+            let nv = self
+                .normal
+                .as_ref()
+                .filter(|_| normals)
+                .map(|n| n.create_view(&Default::default()));
+            let attachment = |view, clear| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
                         load: if self.cleared {
                             wgpu::LoadOp::Load
                         } else {
-                            wgpu::LoadOp::Clear(BACKGROUND)
+                            wgpu::LoadOp::Clear(clear)
                         },
                         store: wgpu::StoreOp::Store,
                     },
-                })],
+                })
+            };
+            let mut colour = vec![attachment(&cv, BACKGROUND)];
+            if let Some(nv) = &nv {
+                colour.push(attachment(nv, wgpu::Color::TRANSPARENT));
+            }
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("visible"),
+                color_attachments: &colour,
                 depth_stencil_attachment: Some(depth_attachment(&dv, !self.cleared)),
                 ..Default::default()
             });
-            let pipelines = match (self.style, &self.wire_pipelines) {
+            let set = match (&self.with_normals, nv.is_some()) {
+                (Some(with_normals), true) => with_normals,
+                _ => &self.colour_only,
+            };
+            let pipelines = match (self.style, &set.wire) {
                 (DrawStyle::Wireframe, Some(wire)) => wire,
-                _ => &self.pipelines,
+                _ => &set.fill,
             };
             if let Some([x, y, w, h]) = self.scissor {
                 let (tw, th) = (self.width, self.height);
@@ -215,12 +305,45 @@ impl VisiblePass {
             // An empty frame still clears its targets.
             self.draw(ctx, &NoGeometry, &[]);
         }
+        if let (Some(look_pass), Some(view)) = (&self.look_pass, &self.view) {
+            if !self.look.is_plain() {
+                let t = Instant::now();
+                let mut enc = ctx.device.create_command_encoder(&Default::default());
+                let shaded = self.style == DrawStyle::Shaded;
+                look_pass.record(ctx, &mut enc, view, &self.look, shaded);
+                self.figures.encode_ms += ms_since(t);
+                self.submitted = Some(self.figures.submit(ctx, enc));
+            }
+        }
         self.view = None;
         let this_frame = self.submitted.take();
         if let Some(index) = std::mem::replace(&mut self.previous_frame, this_frame) {
             self.figures.wait(ctx, index)?;
         }
         ctx.check()
+    }
+
+    /// Reads back the last finished frame's shown image
+    /// ([`VisiblePass::shown_texture`]: sRGB RGBA8, row 0 at the top),
+    /// what the window and screenshots show.
+    pub fn read_shown(&mut self, ctx: &GpuContext) -> Result<Vec<u8>, GpuError> {
+        let (w, h) = (self.width, self.height);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let shown = match &self.look_pass {
+            Some(l) if !self.look.is_plain() => l.shown(&self.look),
+            _ => &self.colour,
+        };
+        let rows = self.colour_readback.record_texture(
+            ctx,
+            &mut enc,
+            shown,
+            w,
+            h,
+            4,
+            wgpu::TextureAspect::All,
+        );
+        self.colour_readback
+            .submit_and_read(ctx, enc, rows, &mut self.figures)
     }
 
     /// Reads back the last finished frame's colour and depth.

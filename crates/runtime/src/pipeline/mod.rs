@@ -17,7 +17,9 @@ use std::time::Instant;
 
 use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
-use gigawalk_gpu::{DepthLevel, DrawStyle};
+use gigawalk_gpu::DepthLevel;
+
+use crate::stages::FrameStyle;
 
 use crate::stages::{lod_ids, OrFigures, OrStage, RvgStage, StcOutput, StcStage, Target};
 use crate::streaming::Prefetch;
@@ -47,7 +49,7 @@ pub(super) struct Sample {
     pub(super) view: CullView,
     pub(super) read_back: bool,
     pub(super) hold: bool,
-    pub(super) style: DrawStyle,
+    pub(super) style: FrameStyle,
     pub(super) sampled_at: Instant,
     /// The request's pixel error for this frame (`None`: the options').
     pub(super) pixel_error: Option<f64>,
@@ -64,7 +66,7 @@ pub(super) struct OrToStc {
 /// the last `Scissor`: a tile, or none), then the sentinel `End` carrying
 /// the frame number, camera and statistics.
 pub(super) enum StcToRvg {
-    Begin(u64, Box<CullView>, DrawStyle),
+    Begin(u64, Box<CullView>, FrameStyle),
     Scissor(Option<[u32; 4]>),
     Items(Vec<u32>),
     End(Box<FrameEnd>),
@@ -159,7 +161,10 @@ pub(super) fn next_sample(
             .with_section(req.section),
         read_back: req.read_back,
         hold: req.hold_culling,
-        style: req.style,
+        style: FrameStyle {
+            draw: req.style,
+            look: req.look,
+        },
         sampled_at: Instant::now(),
         pixel_error: req.pixel_error,
     }))

@@ -208,7 +208,7 @@ fn rvg_thread(
 ) -> Result<(), RuntimeError> {
     let mut span = None;
     // The frame announced by `Begin` and not begun yet.
-    let mut pending: Option<(u64, Box<CullView>, DrawStyle)> = None;
+    let mut pending: Option<(u64, Box<CullView>, FrameStyle)> = None;
     // When RVG last finished drawing, and how long it waited for STC.
     let mut idle_since = Instant::now();
     let mut wait_ms = 0.0;

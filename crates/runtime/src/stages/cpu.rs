@@ -2,7 +2,7 @@
 //! into a conservative software depth image, no colour, no streaming.
 
 use gigawalk_cull::{CullView, Hzb, Reduction, SoftDepth, TriangleSource};
-use gigawalk_gpu::{DepthImage, DepthLevel, DrawStyle, FrameImage};
+use gigawalk_gpu::{DepthImage, DepthLevel, FrameImage};
 
 use super::or::OccluderTarget;
 use super::rvg::VisibleTarget;
@@ -99,7 +99,7 @@ impl OccluderTarget for CpuRaster<'_> {
 }
 
 impl VisibleTarget for CpuRaster<'_> {
-    fn begin(&mut self, view: &CullView, _: DrawStyle) {
+    fn begin(&mut self, view: &CullView, _: super::rvg::FrameStyle) {
         self.start(view);
     }
 

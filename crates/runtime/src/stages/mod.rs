@@ -10,7 +10,7 @@ mod tile_frame;
 
 use or::{GpuOccluders, OccluderTarget};
 pub(crate) use or::{OrFigures, OrStage};
-pub(crate) use rvg::RvgStage;
+pub(crate) use rvg::{FrameStyle, RvgStage};
 use rvg::{GpuVisible, VisibleTarget};
 pub(crate) use stc::{StcOutput, StcStage};
 pub use tile_frame::TileFrame;

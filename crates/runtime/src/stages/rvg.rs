@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use gigawalk_cull::CullView;
-use gigawalk_gpu::{DrawStyle, FrameImage, PassFigures, VisiblePass};
+use gigawalk_gpu::{DrawStyle, FrameImage, Look, PassFigures, VisiblePass};
 
 use super::*;
 use crate::streaming::{StreamStats, Use};
@@ -13,7 +13,7 @@ use crate::{gpu_view, ms_since, Presenter, RuntimeError, Stage};
 /// What RVG draws the visible set on: a visible pass on a device
 /// ([`GpuVisible`]), or in tests the CPU's software depth (no colour).
 pub(super) trait VisibleTarget {
-    fn begin(&mut self, view: &CullView, style: DrawStyle);
+    fn begin(&mut self, view: &CullView, style: FrameStyle);
     /// The rectangle `[x, y, w, h]` later chunks draw into (a tile), or
     /// the whole viewport.
     fn scissor(&mut self, rect: Option<[u32; 4]>);
@@ -49,10 +49,11 @@ pub(super) struct GpuVisible<'a> {
 }
 
 impl VisibleTarget for GpuVisible<'_> {
-    fn begin(&mut self, view: &CullView, style: DrawStyle) {
+    fn begin(&mut self, view: &CullView, style: FrameStyle) {
         self.pass
             .set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
-        self.pass.begin(self.device.ctx, &gpu_view(view), style);
+        self.pass
+            .begin(self.device.ctx, &gpu_view(view), style.draw, style.look);
     }
 
     fn scissor(&mut self, rect: Option<[u32; 4]>) {
@@ -103,6 +104,14 @@ pub(crate) struct RvgStage<'a> {
     pub(super) frame: u64,
 }
 
+/// How RVG draws a frame and what the shown image adds to it; culling
+/// depends on neither.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStyle {
+    pub draw: DrawStyle,
+    pub look: Look,
+}
+
 fn rvg_error(source: gigawalk_gpu::GpuError) -> RuntimeError {
     RuntimeError::Gpu {
         stage: Stage::Rvg,
@@ -115,7 +124,7 @@ impl<'a> RvgStage<'a> {
         &mut self,
         frame: u64,
         view: &CullView,
-        style: DrawStyle,
+        style: FrameStyle,
     ) -> Result<(), RuntimeError> {
         self.opts.inject_failure.check(Stage::Rvg, frame)?;
         self.started = Some(Instant::now());

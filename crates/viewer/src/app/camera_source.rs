@@ -25,7 +25,7 @@ pub(super) struct LiveSource {
 
 impl CameraSource for LiveSource {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        let (camera, frozen, style, quit, minimised, pixel_error, visibility, section) = {
+        let (camera, frozen, style, look, quit, minimised, pixel_error, visibility, section) = {
             let s = self.shared.lock().map_err(|_| CameraError::Source {
                 frame,
                 source: "the window's state is poisoned: its thread panicked".into(),
@@ -38,6 +38,7 @@ impl CameraSource for LiveSource {
                 } else {
                     DrawStyle::Shaded
                 },
+                s.settings.look,
                 s.quit,
                 s.window_size.0 == 0 || s.window_size.1 == 0,
                 s.target_pixel_error.filter(|_| s.settings.target),
@@ -69,6 +70,7 @@ impl CameraSource for LiveSource {
                 read_back: false,
                 hold_culling: false,
                 style,
+                look,
                 pixel_error,
                 visibility,
                 section,
@@ -82,6 +84,7 @@ impl CameraSource for LiveSource {
             read_back: false,
             hold_culling: frozen,
             style,
+            look,
             pixel_error,
             visibility,
             section,

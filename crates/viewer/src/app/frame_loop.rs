@@ -202,6 +202,10 @@ impl LoopState {
                     self.settings.wireframe ^= true
                 }
                 Action::ToggleWireframe => self.message = Some((WIREFRAME_UNSUPPORTED.into(), now)),
+                Action::ToggleEdges => self.settings.look.edges ^= true,
+                Action::ToggleAmbientOcclusion => self.settings.look.ao ^= true,
+                Action::ToggleAntialiasing => self.settings.toggle_aa(),
+                Action::ToggleXray => self.settings.xray ^= true,
                 Action::ToggleBoxes => self.settings.boxes ^= true,
                 Action::ToggleFreeze => self.settings.frozen ^= true,
                 Action::ToggleHud => self.settings.hud ^= true,

@@ -1,0 +1,381 @@
+//! The look: what the shown image adds to RVG's frame (`shaders/look.wgsl`):
+//! a sky and ground behind the model, screen-space ambient occlusion,
+//! edges (creases from the normal target, silhouettes from depth) and
+//! FXAA. It reads RVG's colour, depth and normal targets and writes an
+//! image of its own, so what accuracy reads back stays the geometry as
+//! drawn; only the window, screenshots and what they show take the look.
+
+use glam::Mat4;
+
+use crate::passes::{fullscreen_pipeline_entry, target, View, COLOUR_FORMAT};
+use crate::GpuContext;
+
+pub const LOOK_WGSL: &str = include_str!("../../../../shaders/look.wgsl");
+
+/// How the shown image is anti-aliased.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Antialias {
+    /// As drawn: one sample a pixel.
+    #[default]
+    Off,
+    /// FXAA over the composed image: edges blended along their direction.
+    Fxaa,
+}
+
+/// What the shown image adds to the geometry RVG draws. The default is
+/// [`Look::PLAIN`]: the frame as drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Look {
+    pub aa: Antialias,
+    /// Crease edges (normals parting by more than `crease_degrees`) and
+    /// silhouettes, drawn dark over the surface.
+    pub edges: bool,
+    pub crease_degrees: f32,
+    /// Screen-space ambient occlusion reaching `ao_radius` model units.
+    pub ao: bool,
+    pub ao_radius: f32,
+    /// A sky and ground gradient behind the model, instead of the flat
+    /// background.
+    pub sky: bool,
+}
+
+impl Default for Look {
+    fn default() -> Look {
+        Look::PLAIN
+    }
+}
+
+impl Look {
+    /// Nothing added: what is shown is what RVG drew.
+    pub const PLAIN: Look = Look {
+        aa: Antialias::Off,
+        edges: false,
+        crease_degrees: 30.0,
+        ao: false,
+        ao_radius: 0.5,
+        sky: false,
+    };
+
+    /// The defaults for a device: everything on a GPU; on a CPU
+    /// rasterizer (lavapipe, llvmpipe) the sky, edges and FXAA, which
+    /// cost little there, and not ambient occlusion, which samples a
+    /// dozen depths a pixel (docs/results.md, "The look").
+    pub fn auto(cpu_rasterizer: bool) -> Look {
+        Look {
+            aa: Antialias::Fxaa,
+            edges: true,
+            ao: !cpu_rasterizer,
+            sky: true,
+            ..Look::PLAIN
+        }
+    }
+
+    /// Whether nothing is added (no look pass runs).
+    pub fn is_plain(&self) -> bool {
+        self.aa == Antialias::Off && !self.edges && !self.ao && !self.sky
+    }
+
+    /// What it adds, in words ("plain" for nothing).
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if self.sky {
+            parts.push("sky".to_string());
+        }
+        if self.edges {
+            parts.push(format!("edges over {} degrees", self.crease_degrees));
+        }
+        if self.ao {
+            parts.push(format!("ambient occlusion within {} units", self.ao_radius));
+        }
+        if self.aa == Antialias::Fxaa {
+            parts.push("FXAA".to_string());
+        }
+        if parts.is_empty() {
+            "plain".to_string()
+        } else {
+            parts.join(", ")
+        }
+    }
+
+    /// Whether RVG must write its normal target.
+    pub fn needs_normals(&self) -> bool {
+        self.edges || self.ao
+    }
+}
+
+/// A look as asked for: each feature on, off, or left to a default look
+/// ([`LookChoice::over`]); the viewer's default is [`Look::auto`] for its
+/// device, replay's [`Look::PLAIN`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LookChoice {
+    pub aa: Option<Antialias>,
+    pub edges: Option<bool>,
+    pub ao: Option<bool>,
+    pub sky: Option<bool>,
+    pub crease_degrees: Option<f32>,
+    /// Ambient occlusion's reach in model units.
+    pub ao_radius: Option<f32>,
+}
+
+impl LookChoice {
+    /// `default` with what was asked for in place of its features.
+    pub fn over(&self, default: Look) -> Look {
+        Look {
+            aa: self.aa.unwrap_or(default.aa),
+            edges: self.edges.unwrap_or(default.edges),
+            crease_degrees: self.crease_degrees.unwrap_or(default.crease_degrees),
+            ao: self.ao.unwrap_or(default.ao),
+            ao_radius: self.ao_radius.unwrap_or(default.ao_radius),
+            sky: self.sky.unwrap_or(default.sky),
+        }
+    }
+}
+
+/// `shaders/look.wgsl`'s `LookUniforms`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct LookUniforms {
+    inv_view_proj: [[f32; 4]; 4],
+    size: [f32; 4],
+    flags: [f32; 4],
+}
+
+/// The normal target's format: 8 bits a component hold a direction to
+/// well under a degree, far finer than any crease angle.
+pub(crate) const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+const AO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+/// The look's passes and targets for one size of RVG's targets.
+pub(crate) struct LookPass {
+    uniforms: wgpu::Buffer,
+    ao_pipeline: wgpu::RenderPipeline,
+    compose_pipeline: wgpu::RenderPipeline,
+    fxaa_pipeline: wgpu::RenderPipeline,
+    ao_group: wgpu::BindGroup,
+    compose_group: wgpu::BindGroup,
+    fxaa_group: wgpu::BindGroup,
+    ao: wgpu::Texture,
+    composed: wgpu::Texture,
+    shown: wgpu::Texture,
+    size: (u32, u32),
+}
+
+/// One binding of the look's layouts.
+#[derive(Clone, Copy)]
+enum Slot {
+    Uniforms,
+    /// A texture read with `textureLoad` only (depth as unfilterable float).
+    Unfiltered,
+    Filtered,
+    Sampler,
+}
+
+fn layout(ctx: &GpuContext, label: &str, slots: &[(u32, Slot)]) -> wgpu::BindGroupLayout {
+    let entries: Vec<_> = slots
+        .iter()
+        .map(|&(binding, slot)| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: match slot {
+                Slot::Uniforms => wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                Slot::Unfiltered | Slot::Filtered => wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float {
+                        filterable: matches!(slot, Slot::Filtered),
+                    },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                Slot::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            },
+            count: None,
+        })
+        .collect();
+    ctx.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &entries,
+        })
+}
+
+impl LookPass {
+    /// The look over RVG's `colour`, `depth` and `normal` targets.
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        colour: &wgpu::Texture,
+        depth: &wgpu::Texture,
+        normal: &wgpu::Texture,
+    ) -> LookPass {
+        let d = &ctx.device;
+        let (w, h) = (colour.width(), colour.height());
+        let uniforms = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("look"),
+            size: std::mem::size_of::<LookUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let ao = target(ctx, "look occlusion", w, h, AO_FORMAT);
+        let composed = target(ctx, "look composed", w, h, COLOUR_FORMAT);
+        let shown = target(ctx, "look shown", w, h, COLOUR_FORMAT);
+        let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("look"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        use Slot::*;
+        let ao_layout = layout(
+            ctx,
+            "look occlusion",
+            &[(0, Uniforms), (1, Unfiltered), (2, Filtered)],
+        );
+        let compose_layout = layout(
+            ctx,
+            "look compose",
+            &[
+                (0, Uniforms),
+                (1, Unfiltered),
+                (2, Filtered),
+                (3, Filtered),
+                (4, Filtered),
+            ],
+        );
+        let fxaa_layout = layout(
+            ctx,
+            "look fxaa",
+            &[(0, Uniforms), (3, Filtered), (5, Sampler)],
+        );
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let group = |label, layout: &wgpu::BindGroupLayout, textures: &[(u32, &wgpu::Texture)]| {
+            let views: Vec<_> = textures.iter().map(|(b, t)| (*b, view(t))).collect();
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            }];
+            entries.extend(views.iter().map(|(b, v)| wgpu::BindGroupEntry {
+                binding: *b,
+                resource: wgpu::BindingResource::TextureView(v),
+            }));
+            if textures.len() == 1 {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                });
+            }
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries: &entries,
+            })
+        };
+        let ao_group = group("look occlusion", &ao_layout, &[(1, depth), (2, normal)]);
+        let compose_group = group(
+            "look compose",
+            &compose_layout,
+            &[(1, depth), (2, normal), (3, colour), (4, &ao)],
+        );
+        let fxaa_group = group("look fxaa", &fxaa_layout, &[(3, &composed)]);
+        let pipeline = |label, layout, format, entry| {
+            fullscreen_pipeline_entry(ctx, label, LOOK_WGSL, layout, format, entry)
+        };
+        LookPass {
+            ao_pipeline: pipeline("look occlusion", &ao_layout, AO_FORMAT, "fs_ao"),
+            compose_pipeline: pipeline(
+                "look compose",
+                &compose_layout,
+                COLOUR_FORMAT,
+                "fs_compose",
+            ),
+            fxaa_pipeline: pipeline("look fxaa", &fxaa_layout, COLOUR_FORMAT, "fs_fxaa"),
+            uniforms,
+            ao_group,
+            compose_group,
+            fxaa_group,
+            ao,
+            composed,
+            shown,
+            size: (w, h),
+        }
+    }
+
+    /// The image the last [`LookPass::record`] made with `look`.
+    pub(crate) fn shown(&self, look: &Look) -> &wgpu::Texture {
+        match look.aa {
+            Antialias::Fxaa => &self.shown,
+            Antialias::Off => &self.composed,
+        }
+    }
+
+    /// Records the look's passes for a frame drawn with `view`; `shaded`:
+    /// false for a wireframe frame, which takes no occlusion or edges.
+    pub(crate) fn record(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        view: &View,
+        look: &Look,
+        shaded: bool,
+    ) {
+        let (w, h) = self.size;
+        // Rows of (projection x rotation): the rotation keeps each row's
+        // length, so the second row's is the projection's y scale.
+        let m = view.view_proj;
+        let y_scale = glam::Vec3::new(m.x_axis.y, m.y_axis.y, m.z_axis.y).length();
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        let (edges, ao) = (shaded && look.edges, shaded && look.ao);
+        let u = LookUniforms {
+            inv_view_proj: inverse(m).to_cols_array_2d(),
+            size: [w as f32, h as f32, look.ao_radius, 0.5 * h as f32 * y_scale],
+            flags: [
+                flag(edges),
+                flag(ao),
+                look.crease_degrees.to_radians().cos(),
+                flag(look.sky),
+            ],
+        };
+        ctx.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        let run = |enc: &mut wgpu::CommandEncoder, label, out: &wgpu::Texture, pipeline, group| {
+            crate::passes::draw_fullscreen(enc, label, out, pipeline, group);
+        };
+        if ao {
+            run(
+                enc,
+                "look occlusion",
+                &self.ao,
+                &self.ao_pipeline,
+                &self.ao_group,
+            );
+        }
+        run(
+            enc,
+            "look compose",
+            &self.composed,
+            &self.compose_pipeline,
+            &self.compose_group,
+        );
+        if look.aa == Antialias::Fxaa {
+            run(
+                enc,
+                "look fxaa",
+                &self.shown,
+                &self.fxaa_pipeline,
+                &self.fxaa_group,
+            );
+        }
+    }
+}
+
+/// The inverse of a frame's projection x rotation; a singular one (a
+/// degenerate camera) gives the identity, which only misplaces the sky.
+fn inverse(m: Mat4) -> Mat4 {
+    let inv = m.inverse();
+    if inv.is_finite() {
+        inv
+    } else {
+        Mat4::IDENTITY
+    }
+}

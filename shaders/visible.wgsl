@@ -88,6 +88,19 @@ fn shaded(colour: vec4<f32>, face: vec3<f32>) -> FsOut {
     return FsOut(colour, vec4<f32>(face * 0.5 + 0.5, 1.0));
 }
 
+// X-ray's ghosts (pipelines that draw them set this): a pale, see-through
+// tint of the object, blended over the frame and writing neither depth
+// nor the normal target, so ghosts hide nothing and draw no edges.
+override GHOST: bool = false;
+const GHOST_ALPHA: f32 = 0.22;
+const GHOST_TINT: vec3<f32> = vec3<f32>(0.62, 0.72, 0.88);
+
+fn ghost(in: VsOut) -> FsOut {
+    let lambert = abs(dot(normalize(in.normal), frame.light_dir.xyz));
+    let c = mix(in.colour.rgb, GHOST_TINT, 0.6) * (0.55 + 0.45 * lambert);
+    return FsOut(vec4<f32>(c, GHOST_ALPHA), vec4<f32>(0.0));
+}
+
 // The head light (two-sided: imported models' winding and normals are not
 // trusted) over a hemisphere term: a face turned to the sky (world +Y)
 // takes more of the ambient light than one turned to the ground, so no
@@ -107,6 +120,9 @@ const HEMI_SKY: f32 = 1.6;
 @fragment
 fn fs_main(in: VsOut) -> FsOut {
     let face = face_normal(in.rel);
+    if (GHOST) {
+        return ghost(in);
+    }
     // Wireframe: the object's colour, unlit, so edges read on any side.
     if (frame.params.y > 0.5) {
         return shaded(vec4<f32>(in.colour.rgb, 1.0), face);
@@ -135,6 +151,9 @@ fn fs_cap(in: VsOut, @builtin(front_facing) front: bool) -> FsOut {
 }
 
 fn cut_surface(in: VsOut, front: bool, face: vec3<f32>) -> FsOut {
+    if (GHOST) {
+        return ghost(in);
+    }
     if (frame.params.y > 0.5) {
         return shaded(vec4<f32>(in.colour.rgb, 1.0), face);
     }

@@ -326,6 +326,14 @@ impl HiddenSet {
     }
 }
 
+impl HiddenSet {
+    /// X-ray's ghosts: the hidden objects of `table` as a visibility of
+    /// their own (`None`: nothing hidden).
+    pub fn ghosts(&self, skeleton: &Skeleton, table: &ObjectTable) -> Option<Visibility> {
+        Visibility::ghosts(skeleton, table, &|o| self.is_hidden(o))
+    }
+}
+
 /// What `--hide`, `--isolate` and `--view` ask to hide.
 #[derive(Clone, Debug, Default)]
 pub struct HideRequest {

@@ -33,6 +33,9 @@ pub struct CullView {
     w_row_abs: Vec4,
     /// Hidden and highlighted objects (`None`: every object shows whole).
     visibility: Option<std::sync::Arc<crate::Visibility>>,
+    /// X-ray: the hidden objects as a visibility of their own
+    /// ([`crate::Visibility::ghosts`]), drawn as faint ghosts.
+    ghosts: Option<std::sync::Arc<crate::Visibility>>,
     /// Section planes and box (`None`: nothing is cut), and their
     /// half-spaces relative to the eye in f64.
     section: Option<std::sync::Arc<Section>>,
@@ -60,6 +63,7 @@ impl CullView {
             near: camera.near as f32,
             w_row_abs: view_proj.row(3).abs(),
             visibility: None,
+            ghosts: None,
             section: None,
             section_rel: Vec::new(),
             section_offset: 0.0,
@@ -114,6 +118,27 @@ impl CullView {
     /// The view's hidden and highlighted objects, when any.
     pub fn visibility(&self) -> Option<&std::sync::Arc<crate::Visibility>> {
         self.visibility.as_ref()
+    }
+
+    /// This view with x-ray's ghosts: `g` shows what the view's own
+    /// visibility hides ([`crate::Visibility::ghosts`]); `None`: no ghosts.
+    pub fn with_ghosts(mut self, g: Option<std::sync::Arc<crate::Visibility>>) -> Self {
+        self.ghosts = g;
+        self
+    }
+
+    /// X-ray's ghosts, when any.
+    pub fn ghosts(&self) -> Option<&std::sync::Arc<crate::Visibility>> {
+        self.ghosts.as_ref()
+    }
+
+    /// The view that draws the ghosts: their visibility in place of the
+    /// view's own, the same camera and section.
+    pub fn ghost_view(&self) -> Option<CullView> {
+        let g = self.ghosts.clone()?;
+        let mut v = self.clone();
+        v.ghosts = None;
+        Some(v.with_visibility(Some(g)))
     }
 
     /// What of `node`'s subtree shows.

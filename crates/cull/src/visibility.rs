@@ -126,6 +126,26 @@ impl Visibility {
         }
     }
 
+    /// X-ray's ghosts for the objects `hidden` leaves out: a visibility that
+    /// shows exactly those (none highlighted) and hides every other, so a
+    /// traversal with it draws what the frame's own leaves out, by the
+    /// same rules (a node whose objects are all ghosts draws its LODs, a
+    /// leaf with some draws its ghosts' pieces at full detail). `None`
+    /// when nothing is hidden.
+    pub fn ghosts(
+        skeleton: &Skeleton,
+        table: &ObjectTable,
+        hidden: &dyn Fn(u32) -> bool,
+    ) -> Option<Visibility> {
+        let objects = table.objects().len() as u32;
+        if !(0..objects).any(hidden) {
+            return None;
+        }
+        Some(Visibility::new(skeleton, table, &|o| !hidden(o), &|_| {
+            false
+        }))
+    }
+
     /// Whether everything shows whole (no hidden or highlighted object).
     pub fn is_all(&self) -> bool {
         self.show.is_empty()

@@ -59,6 +59,11 @@ fn scene(ctx: &GpuContext, floor: bool) -> ResidentGeometry {
             [200, 190, 170, 255],
         ));
     }
+    scene_of(ctx, &boxes)
+}
+
+/// One leaf, and LOD, a box.
+fn scene_of(ctx: &GpuContext, boxes: &[(Aabb, [u8; 4])]) -> ResidentGeometry {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
     let mut w = SceneWriter::create(&path).unwrap();
@@ -408,4 +413,83 @@ fn the_frame_read_back_for_accuracy_is_the_same_with_any_look() {
         with_look.1.iter().map(|d| d.to_bits()).collect::<Vec<_>>()
     );
     assert_ne!(shown, plain.0);
+}
+
+fn linear(c: u8) -> f64 {
+    let c = c as f64 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[test]
+fn a_ghost_is_see_through_and_hides_nothing() {
+    let Some(ctx) = devices_or_skip(1, "ghosts").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    // A red wall to the right, far; the ghost, a box in the middle, near,
+    // half over the wall and half over the background.
+    let geometry = scene_of(
+        &ctx,
+        &[
+            (
+                Aabb::new(DVec3::new(0.0, -3.0, -11.0), DVec3::new(5.0, 3.0, -10.0)),
+                [230, 30, 30, 255],
+            ),
+            (
+                Aabb::new(DVec3::new(-2.0, -1.0, -6.0), DVec3::new(2.0, 1.0, -5.0)),
+                [120, 160, 120, 255],
+            ),
+        ],
+    );
+    let cam = Camera::look_at(
+        DVec3::ZERO,
+        DVec3::NEG_Z,
+        60f64.to_radians(),
+        W as f64 / H as f64,
+        0.1,
+    );
+    let v = view(&cam);
+    let draw = |ghost: bool| {
+        let mut rvg = VisiblePass::new(&ctx, W, H);
+        rvg.begin(&ctx, &v, DrawStyle::Shaded, Look::PLAIN);
+        rvg.draw(&ctx, &geometry, &[0]);
+        if ghost {
+            rvg.draw_ghosts(&ctx, &geometry, &[1]);
+        }
+        rvg.finish(&ctx, true).unwrap().unwrap()
+    };
+    let (plain, ghosted) = (draw(false), draw(true));
+    // Ghosts write no depth.
+    assert_eq!(plain.depth, ghosted.depth);
+    let m = cam.view_projection_rel();
+    let pixel = |p: DVec3| {
+        let c = m * Vec4::from(((p - cam.position).as_vec3(), 1.0));
+        let x = ((c.x / c.w + 1.0) * 0.5 * W as f32) as usize;
+        let y = ((1.0 - c.y / c.w) * 0.5 * H as f32) as usize;
+        y * W as usize + x
+    };
+    let (over_wall, over_sky) = (
+        pixel(DVec3::new(1.0, 0.0, -5.0)),
+        pixel(DVec3::new(-1.0, 0.0, -5.0)),
+    );
+    let red = |img: &[u8], i: usize| linear(img[4 * i]);
+    // Without ghosts: the wall, and the background.
+    let (u1, u2) = (red(&plain.colour, over_wall), red(&plain.colour, over_sky));
+    assert!(u1 - u2 > 0.3, "{u1} {u2}");
+    // The ghost lets through part of what is behind it: the difference
+    // behind shows, scaled by what the ghost's layers (its front and
+    // back faces, each at alpha 0.22) transmit.
+    let (g1, g2) = (
+        red(&ghosted.colour, over_wall),
+        red(&ghosted.colour, over_sky),
+    );
+    let transmitted = (g1 - g2) / (u1 - u2);
+    assert!(
+        (0.35..0.9).contains(&transmitted),
+        "the ghost transmits {transmitted:.2} of what is behind it"
+    );
+    assert!(g2 > u2, "the ghost shows over the background");
 }

@@ -3,7 +3,8 @@
 //! objects Partition-I split and objects clustering merged included; no
 //! drawn LOD stands for a hidden object at any tolerance; a hidden object
 //! leaves exactly its own pixels and occlusion culling stays conservative
-//! (lavapipe or any adapter); find matches glTF node names and OBJ groups
+//! (lavapipe or any adapter); in x-ray a hidden object shows faint where
+//! it showed, hiding nothing; find matches glTF node names and OBJ groups
 //! of several files made one model.
 
 mod common;
@@ -417,6 +418,103 @@ fn a_hidden_object_leaves_exactly_its_pixels_and_culling_stays_conservative() {
             }
         }
     }
+}
+
+#[test]
+fn in_x_ray_a_hidden_object_shows_faint_where_it_showed_and_hides_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = build(dir.path(), Kind::Plant, 30_000, 5, Default::default());
+    let Some(d) = devices_or_skip(2, "x-ray on a generated plant") else {
+        return;
+    };
+    let skeleton = b.reader.skeleton();
+    let near = default_near(&skeleton.bounds());
+    let vp = Viewport::new(W, H);
+    let poses: Vec<_> = b.generated.path.poses.iter().skip(4).take(6).collect();
+    // The object nearest in the most pixels of the first pose.
+    let first = Camera::of_pose(poses[0], vp, near);
+    let mut seen: HashMap<u32, u32> = HashMap::new();
+    for py in (0..H).step_by(6) {
+        for px in (0..W).step_by(6) {
+            let ray = first
+                .pixel_ray(vp, px as f64 + 0.5, py as f64 + 0.5)
+                .unwrap();
+            if let Some(o) = pick_in(&b, &ray, &|_| false).and_then(|h| h.object) {
+                *seen.entry(o).or_default() += 1;
+            }
+        }
+    }
+    let (&x, _) = seen
+        .iter()
+        .max_by_key(|(o, n)| (**n, std::cmp::Reverse(**o)))
+        .expect("the pose sees something");
+    let hidden = |o: u32| o == x;
+    let vis = Arc::new(Visibility::new(skeleton, &b.table, &hidden, &|_| false));
+    let ghosts = Visibility::ghosts(skeleton, &b.table, &hidden).map(Arc::new);
+    assert!(ghosts.is_some());
+    assert!(Visibility::ghosts(skeleton, &b.table, &|_| false).is_none());
+    let rt = Runtime::with_devices(&b.reader, d).unwrap();
+    let opts = RuntimeOptions {
+        width: W,
+        height: H,
+        traversal: Mode::Och.traversal(1.0),
+        ..Default::default()
+    };
+    let frames = |v: Option<Arc<Visibility>>, g: Option<Arc<Visibility>>| {
+        let cameras = poses
+            .iter()
+            .map(|p| CameraRequest {
+                visibility: v.clone(),
+                ghosts: g.clone(),
+                ..CameraRequest::new(Camera::of_pose(p, vp, near), true)
+            })
+            .collect();
+        render(&rt, &opts, cameras)
+    };
+    let shown = frames(None, None);
+    let without = frames(Some(vis.clone()), None);
+    let xray = frames(Some(vis), ghosts);
+    let (mut on_x, mut ghost, mut elsewhere, mut moved) = (0, 0, 0, 0);
+    for f in 0..shown.len() {
+        // Ghosts write no depth: the depth is the frame's without them.
+        assert_eq!(xray[f].0, without[f].0, "frame {f}: a ghost hid something");
+        let px = |img: &[u8], i: usize| [img[4 * i], img[4 * i + 1], img[4 * i + 2]];
+        for i in 0..(W * H) as usize {
+            let (s, w, g) = (px(&shown[f].1, i), px(&without[f].1, i), px(&xray[f].1, i));
+            if shown[f].0[i] != without[f].0[i] {
+                // Where the object showed: its ghost, over what is
+                // behind it, not the object drawn solid.
+                on_x += 1;
+                if g != w && g != s {
+                    ghost += 1;
+                }
+            } else {
+                elsewhere += 1;
+                if g != w {
+                    moved += 1;
+                }
+            }
+        }
+    }
+    assert!(on_x > 50, "the object showed in {on_x} pixels");
+    assert!(
+        ghost * 10 >= on_x * 9,
+        "{ghost} of {on_x} pixels show the ghost"
+    );
+    // Elsewhere the ghost lies behind what is drawn (depth ties aside).
+    assert!(
+        moved * 200 <= elsewhere,
+        "{moved} of {elsewhere} other pixels changed"
+    );
+    // With x-ray off the hidden object is simply absent.
+    assert_eq!(
+        frames(Some(vis_again(skeleton, &b.table, x)), None),
+        without
+    );
+}
+
+fn vis_again(skeleton: &gigawalk_scene::Skeleton, table: &ObjectTable, x: u32) -> Arc<Visibility> {
+    Arc::new(Visibility::new(skeleton, table, &|o| o == x, &|_| false))
 }
 
 #[test]

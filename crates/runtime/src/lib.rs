@@ -179,6 +179,11 @@ pub struct CameraRequest {
     /// shows whole): OR, STC and RVG all see the same set for a frame, so
     /// no drawn LOD and no occluder holds a hidden object.
     pub visibility: Option<std::sync::Arc<gigawalk_cull::Visibility>>,
+    /// X-ray: the objects `visibility` hides, as a visibility of their own
+    /// (`Visibility::ghosts`), drawn by RVG as faint ghosts after the
+    /// frame, tested against its depth; they hide nothing and no culler
+    /// sees them. `None`: hidden objects are simply not drawn.
+    pub ghosts: Option<std::sync::Arc<gigawalk_cull::Visibility>>,
     /// Section planes and box this frame (`None`: nothing cut): traversal
     /// drops what lies wholly on the removed side, and OR, RVG and the
     /// query pass clip every fragment by it, so nothing removed is drawn
@@ -196,6 +201,7 @@ impl CameraRequest {
             look: Look::PLAIN,
             pixel_error: None,
             visibility: None,
+            ghosts: None,
             section: None,
         }
     }

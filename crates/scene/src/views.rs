@@ -53,6 +53,9 @@ pub struct SavedView {
     /// Section planes and box in effect ([`crate::section`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub section: Option<crate::section::SectionSpec>,
+    /// X-ray: the hidden objects drawn as faint ghosts.
+    #[serde(default)]
+    pub xray: bool,
 }
 
 impl SavedView {
@@ -93,6 +96,7 @@ impl SavedView {
             hidden: Vec::new(),
             isolated: None,
             section: None,
+            xray: false,
         }
     }
 }
@@ -295,6 +299,7 @@ mod tests {
         };
         let mut view = SavedView::new(&v.next_name(), &pose);
         view.hidden = vec![ObjectRef::of(&table(), 1).unwrap()];
+        view.xray = true;
         v.put(view.clone());
         assert_eq!(v.next_name(), "view 2");
         v.write(&file).unwrap();
@@ -310,6 +315,7 @@ mod tests {
             "{\"version\": 2, \"views\": []}",
             "{\"version\": 1, \"views\": [{\"name\": \"x\", \"position\": [0,0,0], \"orientation\": [0,0,0,0], \"fovy_deg\": 60}]}",
             "{\"version\": 1, \"views\": [{\"name\": \"x\", \"position\": [0,0,0], \"orientation\": [0,0,0,1], \"fovy_deg\": 0}]}",
+            "{\"version\": 1, \"views\": [{\"name\": \"x\", \"position\": [0,0,0], \"orientation\": [0,0,0,1], \"fovy_deg\": 60, \"xray\": \"yes\"}]}",
         ] {
             std::fs::write(&file, bad).unwrap();
             let e = Views::read(&file).unwrap_err().to_string();

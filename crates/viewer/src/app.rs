@@ -326,6 +326,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         error: None,
         target_pixel_error: None,
         visibility: None,
+        ghosts: None,
         section: None,
     }));
     let mut source = LiveSource {
@@ -368,6 +369,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         last_finish: None,
         objects: Objects::new(table, no_hiding),
         visibility: None,
+        ghosts: None,
         flight: None,
         views_file,
         view_names: view_list,
@@ -381,9 +383,11 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
         // The controller starts at the view's camera already, unless a
         // path gave it its first pose.
         state.apply_view(view, false, Instant::now());
-        state.visibility = state.objects.visibility(skeleton);
+        state.refresh_visibility(skeleton);
         state.objects.take_changed();
-        shared.lock().expect("viewer state").visibility = state.visibility.clone();
+        let mut s = shared.lock().expect("viewer state");
+        s.visibility = state.visibility.clone();
+        s.ghosts = state.ghosts.clone();
     }
     if let Some(section) = &args.section {
         // The command line's section over the saved view's.
@@ -530,6 +534,8 @@ struct Shared {
     target_pixel_error: Option<f64>,
     /// Hidden and highlighted objects (`None`: all show, none tinted).
     visibility: Option<Arc<gigawalk_cull::Visibility>>,
+    /// X-ray's ghosts of the hidden objects (`None`: none drawn).
+    ghosts: Option<Arc<gigawalk_cull::Visibility>>,
     /// What the section keeps (`None`: everything).
     section: Option<Arc<Section>>,
 }

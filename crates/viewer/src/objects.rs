@@ -119,6 +119,22 @@ impl Objects {
         (!v.is_all()).then(|| Arc::new(v))
     }
 
+    /// X-ray's ghosts: the hidden objects, to be drawn faint (`None`:
+    /// nothing hidden, or no object table).
+    pub fn ghosts(&self, skeleton: &Skeleton) -> Option<Arc<Visibility>> {
+        let table = self.table.as_ref().ok()?;
+        if self.hidden_count == 0 {
+            return None;
+        }
+        self.hidden.ghosts(skeleton, table).map(Arc::new)
+    }
+
+    /// Makes the next [`Objects::take_changed`] say so (what the passes
+    /// need changed for another reason: x-ray turned on or off).
+    pub fn mark_changed(&mut self) {
+        self.changed = true;
+    }
+
     /// A click: `hit` is the object under the cursor and where (`None`:
     /// nothing there, which clears the selection). Ends the current search.
     pub fn click(&mut self, hit: Option<(u32, DVec3)>) {

@@ -118,6 +118,11 @@ impl Drawer {
         self.used = 0;
     }
 
+    /// The pieces later draws take, leaving none.
+    pub(crate) fn take_pieces(&mut self) -> Option<Arc<LodPieces>> {
+        self.pieces.take()
+    }
+
     /// Which LODs later draws take in pieces: only each piece's
     /// triangles, a highlighted piece tinted (`None`: every LOD whole).
     pub(crate) fn set_pieces(&mut self, pieces: Option<Arc<LodPieces>>) {

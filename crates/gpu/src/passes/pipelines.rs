@@ -64,6 +64,16 @@ impl ScenePipelines {
     }
 }
 
+/// What a scene pipeline writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Surface {
+    /// Every target and depth, as drawn.
+    Opaque,
+    /// X-ray's ghosts (the shader's `GHOST` override): blended over the
+    /// first target, nothing else written, depth tested but not written.
+    Ghost,
+}
+
 pub(crate) fn pipeline(
     ctx: &GpuContext,
     drawer: &Drawer,
@@ -72,6 +82,27 @@ pub(crate) fn pipeline(
     colour: &[Option<wgpu::TextureFormat>],
     polygon_mode: wgpu::PolygonMode,
 ) -> ScenePipelines {
+    scene_pipelines(
+        ctx,
+        drawer,
+        label,
+        (wgsl, clip_wgsl),
+        colour,
+        polygon_mode,
+        Surface::Opaque,
+    )
+}
+
+pub(crate) fn scene_pipelines(
+    ctx: &GpuContext,
+    drawer: &Drawer,
+    label: &str,
+    (wgsl, clip_wgsl): (&str, &str),
+    colour: &[Option<wgpu::TextureFormat>],
+    polygon_mode: wgpu::PolygonMode,
+    surface: Surface,
+) -> ScenePipelines {
+    let ghost = surface == Surface::Ghost;
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -91,14 +122,20 @@ pub(crate) fn pipeline(
     // a `None` slot drops what the shader writes there).
     let targets: Vec<_> = colour
         .iter()
-        .map(|f| {
+        .enumerate()
+        .map(|(i, f)| {
             f.map(|format| wgpu::ColorTargetState {
                 format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
+                blend: (ghost && i == 0).then_some(wgpu::BlendState::ALPHA_BLENDING),
+                write_mask: if ghost && i > 0 {
+                    wgpu::ColorWrites::empty()
+                } else {
+                    wgpu::ColorWrites::ALL
+                },
             })
         })
         .collect();
+    let constants: &[(&str, f64)] = if ghost { &[("GHOST", 1.0)] } else { &[] };
     let has_colour = !colour.is_empty();
     // Without a section a depth-only pass has no fragment stage.
     let plain = has_colour.then_some("fs_main");
@@ -131,7 +168,7 @@ pub(crate) fn pipeline(
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
+                    depth_write_enabled: Some(!ghost),
                     depth_compare: Some(DEPTH_COMPARE),
                     stencil: Default::default(),
                     bias: Default::default(),
@@ -140,7 +177,10 @@ pub(crate) fn pipeline(
                 fragment: fragment.map(|entry| wgpu::FragmentState {
                     module,
                     entry_point: Some(entry),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
                     targets: &targets,
                 }),
                 multiview_mask: None,

@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use crate::passes::look::{LookPass, NORMAL_FORMAT};
 use crate::passes::{
-    depth_attachment, ms_since, pipeline, target, DrawStyle, Drawer, FrameImage, Look, PassFigures,
-    ReadBack, ScenePipelines, View, COLOUR_FORMAT, DEPTH_FORMAT,
+    depth_attachment, ms_since, pipeline, scene_pipelines, target, DrawStyle, Drawer, FrameImage,
+    Look, PassFigures, ReadBack, ScenePipelines, Surface, View, COLOUR_FORMAT, DEPTH_FORMAT,
 };
 use crate::residency::{LodRange, Residency};
 use crate::shader_types;
@@ -31,6 +31,10 @@ pub struct VisiblePass {
     /// has asked for one.
     look: Look,
     look_pass: Option<LookPass>,
+    /// X-ray's ghost pipelines (colour alone, and with the normal target),
+    /// made when ghosts are first drawn, and the pieces ghost draws take.
+    ghost_pipelines: [Option<ScenePipelines>; 2],
+    ghost_pieces: Option<std::sync::Arc<gigawalk_scene::objects::LodPieces>>,
     colour_readback: ReadBack,
     depth_readback: ReadBack,
     width: u32,
@@ -98,6 +102,8 @@ impl VisiblePass {
             normal: None,
             look: Look::PLAIN,
             look_pass: None,
+            ghost_pipelines: [None, None],
+            ghost_pieces: None,
             style: DrawStyle::Shaded,
             warned_no_wireframe: false,
             colour: target(ctx, "visible colour", width, height, COLOUR_FORMAT),
@@ -163,6 +169,49 @@ impl VisiblePass {
         self.drawer.set_pieces(pieces);
     }
 
+    /// Which LODs x-ray's ghost draws take in pieces (the hidden objects'
+    /// runs of a leaf some of whose objects show), until set again.
+    pub fn set_ghost_pieces(
+        &mut self,
+        pieces: Option<std::sync::Arc<gigawalk_scene::objects::LodPieces>>,
+    ) {
+        self.ghost_pieces = pieces;
+    }
+
+    /// Draws x-ray's ghosts over the frame drawn so far, faint and
+    /// see-through, depth-tested against it and hiding nothing: after
+    /// every chunk of the visible set, over the whole image.
+    pub fn draw_ghosts(&mut self, ctx: &GpuContext, residency: &dyn Residency, lods: &[u32]) {
+        if lods.is_empty() {
+            return;
+        }
+        if !self.cleared {
+            self.draw(ctx, &NoGeometry, &[]);
+        }
+        let normals = self.look.needs_normals() && self.normal.is_some();
+        if self.ghost_pipelines[normals as usize].is_none() {
+            let mut targets = vec![Some(COLOUR_FORMAT)];
+            if normals {
+                targets.push(Some(NORMAL_FORMAT));
+            }
+            self.ghost_pipelines[normals as usize] = Some(scene_pipelines(
+                ctx,
+                &self.drawer,
+                "visible ghosts",
+                (shader_types::VISIBLE_WGSL, shader_types::VISIBLE_CLIP_WGSL),
+                &targets,
+                wgpu::PolygonMode::Fill,
+                Surface::Ghost,
+            ));
+        }
+        let pieces = self.drawer.take_pieces();
+        self.drawer.set_pieces(self.ghost_pieces.clone());
+        let scissor = self.scissor.take();
+        self.record_draws(ctx, residency, lods, true);
+        self.scissor = scissor;
+        self.drawer.set_pieces(pieces);
+    }
+
     /// Starts a frame: the next [`VisiblePass::draw`] clears the targets.
     /// `look`: what the shown image adds once the frame ends (its passes
     /// and the normal target are made the first time a frame asks).
@@ -223,6 +272,18 @@ impl VisiblePass {
     /// Draws one chunk of the frame's visible LODs and submits it, so the
     /// GPU works while the rest of the list is still being culled.
     pub fn draw(&mut self, ctx: &GpuContext, residency: &dyn Residency, lods: &[u32]) {
+        self.record_draws(ctx, residency, lods, false);
+    }
+
+    /// Records and submits one chunk: the visible set's, or with `ghosts`
+    /// x-ray's ghosts.
+    fn record_draws(
+        &mut self,
+        ctx: &GpuContext,
+        residency: &dyn Residency,
+        lods: &[u32],
+        ghosts: bool,
+    ) {
         let view = self.view.expect("VisiblePass::begin before draw");
         let t = Instant::now();
         let draws = self.drawer.prepare(ctx, &view, residency, lods);
@@ -266,6 +327,9 @@ impl VisiblePass {
                 _ => &self.colour_only,
             };
             let pipelines = match (self.style, &set.wire) {
+                _ if ghosts => self.ghost_pipelines[nv.is_some() as usize]
+                    .as_ref()
+                    .expect("made by draw_ghosts"),
                 (DrawStyle::Wireframe, Some(wire)) => wire,
                 _ => &set.fill,
             };

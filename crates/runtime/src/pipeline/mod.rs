@@ -158,6 +158,7 @@ pub(super) fn next_sample(
         frame,
         view: CullView::new(camera, viewport)
             .with_visibility(req.visibility)
+            .with_ghosts(req.ghosts)
             .with_section(req.section),
         read_back: req.read_back,
         hold: req.hold_culling,
@@ -216,6 +217,7 @@ pub(super) fn finish_frame(
     end: FrameEnd,
 ) -> Result<FrameReport, RuntimeError> {
     let read_back = end.sample.read_back;
+    rvg.ghosts(&end.stc.ghosts)?;
     let rvg_ms = rvg.finish()?;
     let mut r = report(end, None, rvg_ms, rvg.stream_stats());
     rvg.present(presenter, &r)?;

@@ -19,6 +19,11 @@ pub(super) trait VisibleTarget {
     fn scissor(&mut self, rect: Option<[u32; 4]>);
     /// Draws a chunk of frame `frame`'s LODs.
     fn draw(&mut self, frame: u64, lods: &[u32]) -> Result<(), RuntimeError>;
+    /// Draws x-ray's ghosts over the frame, after its last chunk (nothing
+    /// where there is no colour).
+    fn ghosts(&mut self, _frame: u64, _lods: &[u32]) -> Result<(), RuntimeError> {
+        Ok(())
+    }
     /// The frame's streaming figures (zeros when nothing streams).
     fn stream_stats(&self) -> StreamStats {
         StreamStats::default()
@@ -53,6 +58,8 @@ impl VisibleTarget for GpuVisible<'_> {
         self.pass
             .set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
         self.pass
+            .set_ghost_pieces(view.ghosts().and_then(|g| g.lod_pieces()));
+        self.pass
             .begin(self.device.ctx, &gpu_view(view), style.draw, style.look);
     }
 
@@ -66,6 +73,14 @@ impl VisibleTarget for GpuVisible<'_> {
         self.device
             .with(frame, lods, Use::Visible, |residency, lods| {
                 pass.draw(ctx, residency, lods)
+            })
+    }
+
+    fn ghosts(&mut self, frame: u64, lods: &[u32]) -> Result<(), RuntimeError> {
+        let (ctx, pass) = (self.device.ctx, &mut self.pass);
+        self.device
+            .with(frame, lods, Use::Visible, |residency, lods| {
+                pass.draw_ghosts(ctx, residency, lods)
             })
     }
 
@@ -144,6 +159,15 @@ impl<'a> RvgStage<'a> {
     pub fn draw(&mut self, lods: &[u32]) -> Result<(), RuntimeError> {
         let _span = tracing::info_span!("RVG chunk", items = lods.len()).entered();
         self.render.draw(self.frame, lods)
+    }
+
+    /// Draws x-ray's ghosts over the frame, after its last chunk.
+    pub fn ghosts(&mut self, lods: &[u32]) -> Result<(), RuntimeError> {
+        if lods.is_empty() {
+            return Ok(());
+        }
+        let _span = tracing::info_span!("RVG ghosts", items = lods.len()).entered();
+        self.render.ghosts(self.frame, lods)
     }
 
     /// The frame's streaming figures (call once, as the frame ends).

@@ -35,6 +35,10 @@ pub(crate) struct StcStage<'a> {
 pub(crate) struct StcOutput {
     pub stats: TraversalStats,
     pub visible: Arc<[DrawItem]>,
+    /// X-ray's ghosts (the view's hidden objects) as LOD indices,
+    /// frustum-culled only: RVG draws them faint after the visible set,
+    /// tested against its depth; never occluders.
+    pub ghosts: Arc<[u32]>,
     pub culled: Arc<[(u32, CullReason)]>,
     pub occlusion_used: bool,
     pub hzb_ms: f64,
@@ -136,6 +140,23 @@ impl<'a> StcStage<'a> {
         if let Some(p) = self.prefetch.as_ref().filter(|_| self.opts.prefetch.ring()) {
             p.margin(&mut self.traverser, skeleton, view, &options, frame);
         }
+        // Ghosts: what the view hides, by frustum and LOD alone (RVG's
+        // depth test against the visible set hides what lies behind it).
+        let mut ghosts = Vec::new();
+        if let Some(ghost_view) = view.ghost_view() {
+            let _s = tracing::info_span!("ghosts", frame).entered();
+            let ghost_options = TraversalOptions {
+                occlusion: false,
+                ..options
+            };
+            self.traverser.traverse(
+                skeleton,
+                &ghost_view,
+                &NoOcclusion,
+                &ghost_options,
+                &mut |item: DrawItem| ghosts.push(skeleton.node(item.node).first_lod + item.lod),
+            );
+        }
         let tiles = self.opts.tiles.map(|grid| {
             let _s = tracing::info_span!("tiles", frame).entered();
             Arc::new(TileFrame::new(
@@ -152,6 +173,7 @@ impl<'a> StcStage<'a> {
             stats,
             culled: culled.into(),
             visible: visible.into(),
+            ghosts: ghosts.into(),
             occlusion_used: occlusion,
             hzb_ms,
             traversal_ms,

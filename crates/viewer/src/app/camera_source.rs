@@ -25,7 +25,18 @@ pub(super) struct LiveSource {
 
 impl CameraSource for LiveSource {
     fn next_camera(&mut self, frame: u64) -> Result<Option<CameraRequest>, CameraError> {
-        let (camera, frozen, style, look, quit, minimised, pixel_error, visibility, section) = {
+        let (
+            camera,
+            frozen,
+            style,
+            look,
+            quit,
+            minimised,
+            pixel_error,
+            visibility,
+            ghosts,
+            section,
+        ) = {
             let s = self.shared.lock().map_err(|_| CameraError::Source {
                 frame,
                 source: "the window's state is poisoned: its thread panicked".into(),
@@ -43,6 +54,7 @@ impl CameraSource for LiveSource {
                 s.window_size.0 == 0 || s.window_size.1 == 0,
                 s.target_pixel_error.filter(|_| s.settings.target),
                 s.visibility.clone(),
+                s.ghosts.clone(),
                 s.section.clone(),
             )
         };
@@ -73,6 +85,7 @@ impl CameraSource for LiveSource {
                 look,
                 pixel_error,
                 visibility,
+                ghosts,
                 section,
             }));
         }
@@ -87,6 +100,7 @@ impl CameraSource for LiveSource {
             look,
             pixel_error,
             visibility,
+            ghosts,
             section,
         }))
     }

@@ -87,6 +87,9 @@ pub(super) struct LoopState {
     pub(super) objects: Objects,
     /// What the passes draw of the objects (`None`: all, none tinted).
     pub(super) visibility: Option<Arc<Visibility>>,
+    /// X-ray's ghosts of the hidden objects (`None`: x-ray off, or
+    /// nothing hidden).
+    pub(super) ghosts: Option<Arc<Visibility>>,
     pub(super) flight: Option<Flight>,
     /// `SCENE.views.json`, and the names of its views (help lists them).
     pub(super) views_file: PathBuf,
@@ -205,7 +208,13 @@ impl LoopState {
                 Action::ToggleEdges => self.settings.look.edges ^= true,
                 Action::ToggleAmbientOcclusion => self.settings.look.ao ^= true,
                 Action::ToggleAntialiasing => self.settings.toggle_aa(),
-                Action::ToggleXray => self.settings.xray ^= true,
+                Action::ToggleXray => {
+                    self.settings.xray ^= true;
+                    self.objects.mark_changed();
+                    if self.settings.xray && self.objects.hidden_count().0 == 0 {
+                        self.say("x-ray on: hidden objects will show as ghosts".into(), now);
+                    }
+                }
                 Action::ToggleBoxes => self.settings.boxes ^= true,
                 Action::ToggleFreeze => self.settings.frozen ^= true,
                 Action::ToggleHud => self.settings.hud ^= true,
@@ -262,7 +271,7 @@ impl LoopState {
             }
         }
         if self.objects.take_changed() {
-            self.visibility = self.objects.visibility(scene.skeleton());
+            self.refresh_visibility(scene.skeleton());
         }
         if !scripted {
             let (dx, dy) = std::mem::take(&mut app.look);
@@ -317,6 +326,7 @@ impl LoopState {
             measure_label: self.measure.label(&self.units),
         };
         s.visibility = self.visibility.clone();
+        s.ghosts = self.ghosts.clone();
         s.section = self.sections.current();
         s.camera = camera;
         s.frozen = self.settings.frozen;
@@ -393,6 +403,17 @@ impl LoopState {
     /// What the full-detail image shows at window pixel `at`: the nearest
     /// surface the section keeps, hidden objects skipped. `Ok(None)`:
     /// nothing there (or outside the image).
+    /// What the passes draw of the objects, after the hidden set, the
+    /// selection or x-ray changed.
+    pub(super) fn refresh_visibility(&mut self, skeleton: &gigawalk_scene::Skeleton) {
+        self.visibility = self.objects.visibility(skeleton);
+        self.ghosts = if self.settings.xray {
+            self.objects.ghosts(skeleton)
+        } else {
+            None
+        };
+    }
+
     fn pick_at(
         &mut self,
         scene: &SceneReader,
@@ -402,7 +423,7 @@ impl LoopState {
     ) -> Result<Option<PickHit>, String> {
         if self.objects.take_changed() {
             // Input earlier in this batch changed what is hidden.
-            self.visibility = self.objects.visibility(scene.skeleton());
+            self.refresh_visibility(scene.skeleton());
         }
         // The window shows the render target scaled to fit, so the click's
         // place in the window is its place in the image.
@@ -559,9 +580,11 @@ impl LoopState {
             fovy: c.fovy,
         };
         let (objects, section) = (&self.objects, self.sections.saved());
+        let xray = self.settings.xray;
         let make = |name: &str| {
             let mut v = objects.saved_view(name, &pose);
             v.section = section;
+            v.xray = xray;
             v
         };
         match save_view(&self.views_file, make) {
@@ -634,6 +657,10 @@ impl LoopState {
         }
         let mut text = self.objects.restore(view);
         text.push_str(&self.sections.restore(view.section.as_ref()));
+        if self.settings.xray != view.xray {
+            self.settings.xray = view.xray;
+            self.objects.mark_changed();
+        }
         self.announce(text, now);
     }
 

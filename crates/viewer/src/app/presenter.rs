@@ -19,9 +19,18 @@ use crate::image::write_png;
 use crate::measure::screen_segment;
 use crate::objects::hud_text;
 
-/// HUD text is drawn 2x on windows at least this tall (8-pixel glyphs are
-/// hard to read on large screens), else 1x.
-const HUD_2X_MIN_HEIGHT: u32 = 600;
+/// How many times its 8-pixel glyphs the HUD text is drawn on a window
+/// `height` pixels tall: 1x below 600, 2x to 1440 (1080p: 16-pixel
+/// text), 3x to 2000 and 4x from there (4K: 32-pixel text), so it reads
+/// at about the same size on any screen.
+fn hud_scale(height: u32) -> u32 {
+    match height {
+        0..600 => 1,
+        600..1440 => 2,
+        1440..2000 => 3,
+        _ => 4,
+    }
+}
 
 /// Shows frames in the window (RVG thread).
 pub(super) struct ViewerPresenter<'s> {
@@ -94,7 +103,7 @@ impl Presenter for ViewerPresenter<'_> {
             overlay.boxes = overlay_boxes(self.skeleton, &self.culled_sets, report.camera.position);
         }
         let (w, h) = pass.size();
-        let scale = if h >= HUD_2X_MIN_HEIGHT { 2 } else { 1 };
+        let scale = hud_scale(h);
         let glyph = (8 * scale) as f32;
         measure_overlay(&mut overlay, report, &viewer, (w, h), scale);
         if settings.hud && !hud.is_empty() {
@@ -127,12 +136,12 @@ impl Presenter for ViewerPresenter<'_> {
                 .chain(std::iter::once(String::new()))
                 .chain(saved_view_lines(&viewer.views))
                 .collect();
-            // The help is long: 2x only where it fits the window's height.
-            let scale = if (lines.len() as u32 + 2) * 8 * scale <= h {
-                scale
-            } else {
-                1
-            };
+            // The help is long: the largest scale up to the HUD's at
+            // which it fits the window's height.
+            let scale = (1..=scale)
+                .rev()
+                .find(|s| (lines.len() as u32 + 2) * 8 * s <= h)
+                .unwrap_or(1);
             let glyph = (8 * scale) as f32;
             let cols = lines.iter().map(|l| l.len()).max().unwrap_or(0) as f32;
             overlay.text.push(OverlayText {
@@ -253,4 +262,19 @@ fn cull_sets(report: &FrameReport) -> CullSets {
         }
     }
     sets
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hud_scale;
+
+    #[test]
+    fn hud_text_grows_with_the_window() {
+        assert_eq!(hud_scale(360), 1);
+        assert_eq!(hud_scale(720), 2);
+        assert_eq!(hud_scale(1080), 2);
+        assert_eq!(hud_scale(1440), 3);
+        assert_eq!(hud_scale(2160), 4);
+        assert_eq!(hud_scale(u32::MAX), 4);
+    }
 }

@@ -68,6 +68,7 @@ const AO_TURNS: f32 = 7.0;
 // surfaces must not darken them).
 const AO_BIAS: f32 = 0.15;
 const AO_STRENGTH: f32 = 2.5;
+const AO_DISTANCE_SHARE: f32 = 0.1;
 
 @fragment
 fn fs_ao(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
@@ -80,9 +81,11 @@ fn fs_ao(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
     let at = position_at(p, d);
     let n = normalize(n4.xyz);
     let dist = length(at);
-    // The reach on screen, at most a tenth of the image's height (a near
-    // surface would otherwise sample far across it).
-    let reach_px = min(look.size.z * look.size.w / max(dist, 1e-6), 0.1 * look.size.y);
+    // The reach: the given one, but at most a tenth of the distance (a
+    // close-up of a small part darkens at its own scale), and on screen
+    // at most a tenth of the image's height.
+    let reach_world = min(look.size.z, AO_DISTANCE_SHARE * dist);
+    let reach_px = min(reach_world * look.size.w / max(dist, 1e-6), 0.1 * look.size.y);
     if (reach_px < 1.5) {
         return vec4<f32>(1.0);
     }

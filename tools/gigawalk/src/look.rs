@@ -43,7 +43,7 @@ pub struct LookArgs {
     /// Edges: the angle between two surfaces, in degrees, above which their meeting is drawn as a crease
     #[arg(long, value_name = "DEGREES", default_value_t = 30.0)]
     edge_angle: f64,
-    /// Ambient occlusion: how far a surface darkens its neighbours, in metres (view: by --units; replay takes the model to be in metres)
+    /// Ambient occlusion: how far a surface darkens its neighbours, in metres, and at most a tenth of the viewing distance (view: by --units; replay takes the model to be in metres)
     #[arg(long, value_name = "METRES", default_value_t = 0.5)]
     ao_radius: f64,
 }

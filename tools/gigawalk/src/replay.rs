@@ -223,6 +223,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.pixel_error_max
         );
     }
+    let look = args.look.choice(1.0)?.over(gigawalk_runtime::Look::PLAIN);
     // The path first: a bad one is named before the scene is read.
     let given_path = match &args.path {
         Some(p) => Some(CameraPath::read(p).context("cannot read the camera path")?),
@@ -292,7 +293,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             view.as_ref().and_then(|v| v.section.as_ref()),
             &scene.skeleton().bounds(),
         )?,
-        look: args.look.choice(1.0)?.over(gigawalk_runtime::Look::PLAIN),
+        look,
     };
     let replay = run_replay(
         &scene,

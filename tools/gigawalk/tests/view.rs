@@ -212,6 +212,31 @@ fn bad_target_fps_and_tiles_are_clear_errors() {
 }
 
 #[test]
+fn bad_look_flags_are_clear_errors() {
+    for (flag, value, says) in [
+        ("--aa", "msaa", "msaa"),
+        ("--edges", "yes", "yes"),
+        ("--ao", "2", "'2'"),
+        ("--sky", "blue", "blue"),
+        ("--edge-angle", "0", "--edge-angle 0"),
+        ("--edge-angle", "200", "--edge-angle 200"),
+        ("--ao-radius", "0", "--ao-radius 0"),
+        ("--ao-radius", "nan", "--ao-radius NaN"),
+    ] {
+        let arg = format!("{flag}={value}");
+        for command in ["view", "replay"] {
+            let (ok, _, err) = gigawalk(
+                &[command, "x.gwk", "--path", "x.path", "--frames", "1", &arg],
+                None,
+            );
+            assert!(!ok, "{command} {arg}");
+            assert!(err.contains(says), "{command} {arg}: {err}");
+            assert!(!err.contains("panicked"), "{err}");
+        }
+    }
+}
+
+#[test]
 fn missing_scene_is_a_clear_error() {
     let (ok, _, err) = gigawalk(&["view", "/nonexistent/scene.gwk", "--frames", "1"], None);
     assert!(!ok);
@@ -276,6 +301,11 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
             "--no-hud",
         ];
         args.extend_from_slice(extra);
+        // Without the sky and FXAA, unless asked: wireframe is then
+        // lines over one background colour.
+        if !extra.contains(&"--sky") {
+            args.extend(["--sky", "off", "--aa", "off"]);
+        }
         let (ok, _, err) = gigawalk(&args, Some(&x.display));
         assert!(ok, "gigawalk view {extra:?} failed:\n{err}");
         let (w, h, rgba) = gigawalk_viewer::read_png(png).unwrap();
@@ -326,6 +356,27 @@ fn scripted_view_of_a_small_plant_shows_the_scene() {
             "{extra:?}: {differing} pixels differ from the single view"
         );
     }
+
+    // The full look (the sky, edges, FXAA, ambient occlusion): the same
+    // view with its background and outlines drawn differently.
+    let look = shot(
+        &dir.path().join("look.png"),
+        &["--sky", "on", "--aa", "fxaa", "--edges", "on", "--ao", "on"],
+    );
+    let lstats = gigawalk_viewer::image_stats(&look);
+    assert!(
+        lstats.distinct_colours > stats.distinct_colours,
+        "{lstats:?} vs {stats:?}"
+    );
+    let differing = shaded
+        .chunks(4)
+        .zip(look.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        differing * 20 > shaded.len() / 4,
+        "the look changed only {differing} pixels"
+    );
 
     // Streamed under a budget far below the scene (out of core): six
     // frames at a still start are enough for the view to fill in.
@@ -535,6 +586,7 @@ fn live_keys_and_mouse_drive_the_viewer() {
     let mut viewer = Viewer(
         Command::new(common::BIN)
             .args(["view", s(&gwk), "--path", s(&path), "--no-hud"])
+            .args(["--sky", "off", "--aa", "off"])
             .args(["--width", "480", "--height", "300", "--out-dir", s(&out)])
             .env("DISPLAY", d)
             .env_remove("WAYLAND_DISPLAY")
@@ -703,6 +755,17 @@ fn live_keys_and_mouse_drive_the_viewer() {
         0.0,
         "a still view changed"
     );
+    // E, F2 and F3 (edges, ambient occlusion, FXAA) each change the still
+    // view, and back; the viewer starts with edges on.
+    for k in ["e", "F2", "F3"] {
+        key(k);
+        let (_, _, toggled) = shot(&mut viewer);
+        let d = differing_fraction(&plain, &toggled);
+        assert!(d > 0.002, "{k} changed {d:.4} of the view");
+        key(k);
+        let (_, _, back) = shot(&mut viewer);
+        assert_eq!(differing_fraction(&plain, &back), 0.0, "{k} twice");
+    }
     key("b");
     let (_, _, boxed) = shot(&mut viewer);
     let changed: Vec<&[u8]> = plain
@@ -812,6 +875,10 @@ fn live_keys_and_mouse_drive_the_viewer() {
             "--height",
             "300",
             "--no-hud",
+            "--sky",
+            "off",
+            "--aa",
+            "off",
         ],
         Some(d),
     );
@@ -921,6 +988,7 @@ fn live_sections_and_a_measurement() {
     let mut viewer = Viewer(
         Command::new(common::BIN)
             .args(["view", s(&gwk), "--path", s(&path), "--no-hud"])
+            .args(["--sky", "off", "--aa", "off"])
             .args(["--width", "480", "--height", "300", "--out-dir", s(&out)])
             .args(["--units", "mm"])
             .env("DISPLAY", d)
@@ -1153,6 +1221,10 @@ fn live_sections_and_a_measurement() {
             "--height",
             "300",
             "--no-hud",
+            "--sky",
+            "off",
+            "--aa",
+            "off",
         ];
         args.extend(extra);
         let (ok, _, err) = gigawalk(&args, Some(d));

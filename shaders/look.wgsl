@@ -12,10 +12,16 @@ struct LookUniforms {
     // x, y: target size in pixels; z: ambient occlusion's reach in model
     // units; w: pixels per radian (the projection's scale).
     size: vec4<f32>,
-    // x: 1 to draw edges; y: 1 to darken by ambient occlusion; z: the
-    // cosine of the crease angle; w: 1 to draw the sky behind the model.
-    flags: vec4<f32>,
+    // x: the cosine of the crease angle; y, z, w: unused.
+    params: vec4<f32>,
 };
+
+// Which of the composition's parts run: each pipeline is made for one
+// set, so a part left out costs nothing (CPU rasterizers such as
+// llvmpipe run both sides of a branch).
+override EDGES: bool = false;
+override AO: bool = false;
+override SKY: bool = false;
 
 @group(0) @binding(0) var<uniform> look: LookUniforms;
 // Depth bound as unfilterable float (naga's GLSL output cannot textureLoad
@@ -156,7 +162,7 @@ const EDGE_COLOUR: vec3<f32> = vec3<f32>(0.02, 0.02, 0.025);
 fn crease_edge(p: vec2<i32>, n: vec3<f32>) -> bool {
     let r = normal_at(p + vec2<i32>(1, 0));
     let b = normal_at(p + vec2<i32>(0, 1));
-    let cosine = look.flags.z;
+    let cosine = look.params.x;
     return (r.w > 0.5 && dot(n, r.xyz) < cosine) || (b.w > 0.5 && dot(n, b.xyz) < cosine);
 }
 
@@ -185,15 +191,15 @@ fn fs_compose(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
     let d = depth_at(p);
     var c = textureLoad(colour_tex, p, 0).rgb;
     if (d <= 0.0) {
-        if (look.flags.w > 0.5) {
+        if (SKY) {
             c = sky(p);
         }
         return vec4<f32>(c, 1.0);
     }
-    if (look.flags.y > 0.5) {
+    if (AO) {
         c = c * blurred_ao(p, d);
     }
-    if (look.flags.x > 0.5) {
+    if (EDGES) {
         let n = normal_at(p);
         if (depth_edge(p, d) || (n.w > 0.5 && crease_edge(p, n.xyz))) {
             c = mix(c, EDGE_COLOUR, EDGE_ALPHA);

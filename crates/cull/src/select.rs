@@ -349,6 +349,8 @@ pub struct HideRequest {
 #[derive(Clone, Debug)]
 pub struct Hidden {
     pub visibility: Arc<Visibility>,
+    /// X-ray's ghosts of the hidden objects (`None`: none hidden).
+    pub ghosts: Option<Arc<Visibility>>,
     /// Objects hidden, of how many.
     pub hidden: usize,
     pub objects: usize,
@@ -394,6 +396,7 @@ pub fn hidden(
     let n = table.objects().len();
     Ok(Hidden {
         visibility: Arc::new(set.visibility(scene.skeleton(), &table, None)),
+        ghosts: set.ghosts(scene.skeleton(), &table).map(Arc::new),
         hidden: set.count(n),
         objects: n,
         missing,

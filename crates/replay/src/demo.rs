@@ -194,5 +194,6 @@ pub fn replay_options(frames: usize, width: u32, height: u32) -> ReplayOptions {
         visibility: None,
         section: None,
         look: Default::default(),
+        ghosts: None,
     }
 }

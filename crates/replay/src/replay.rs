@@ -70,6 +70,11 @@ pub struct ReplayOptions {
     /// the sky): its passes run each frame and cost what the frame times
     /// show; accuracy reads the frame as drawn, before them.
     pub look: gigawalk_runtime::Look,
+    /// X-ray (`--xray`): the hidden objects drawn as ghosts in the
+    /// reference and every run (they write no depth, so the accuracy
+    /// figures that compare surfaces are unchanged; colour comparisons
+    /// see them); `None`: hidden objects are not drawn.
+    pub ghosts: Option<Arc<gigawalk_cull::Visibility>>,
 }
 
 /// `--target-fps` / `--target-ms`.
@@ -98,6 +103,7 @@ impl Default for ReplayOptions {
             visibility: None,
             section: None,
             look: gigawalk_runtime::Look::PLAIN,
+            ghosts: None,
         }
     }
 }
@@ -487,6 +493,7 @@ pub fn replay_on(
                 visibility: opts.visibility.clone(),
                 section: opts.section.clone(),
                 look: opts.look,
+                ghosts: opts.ghosts.clone(),
                 ..CameraRequest::new(camera, compared_or_next(i, k))
             }
         })

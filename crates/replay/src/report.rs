@@ -234,6 +234,12 @@ pub fn markdown(s: &Summary) -> String {
             "**Look: {look}. Every run's frames also ran these passes, so their cost is in the frame times; accuracy reads each frame as drawn, before them.**\n"
         );
     }
+    if s.xray {
+        let _ = writeln!(
+            m,
+            "**X-ray: the hidden objects were drawn as faint ghosts in the reference and every run, by a second traversal without occlusion culling (its cost is in the frame times); they write no depth.**\n"
+        );
+    }
     if s.hidden_objects > 0 {
         let _ = writeln!(
             m,

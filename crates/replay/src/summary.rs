@@ -42,6 +42,9 @@ pub struct Summary {
     /// `--edges`, `--ao`, `--sky`); null: nothing.
     #[serde(default)]
     pub look: Option<String>,
+    /// The hidden objects were drawn as x-ray ghosts (`--xray`).
+    #[serde(default)]
+    pub xray: bool,
     pub schedule: String,
     pub occluder_lag: u32,
     pub occluder_scale: f64,
@@ -571,6 +574,7 @@ impl Replay {
             hidden_objects: self.options.visibility.as_ref().map_or(0, |v| v.counts().0),
             section: self.options.section.as_ref().map(|s| s.describe()),
             look: (!self.options.look.is_plain()).then(|| self.options.look.describe()),
+            xray: self.options.ghosts.is_some(),
             schedule: format!("{:?}", r.schedule).to_lowercase(),
             occluder_lag: r.occluder_lag,
             occluder_scale: r.occluder_scale,

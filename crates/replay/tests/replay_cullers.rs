@@ -71,6 +71,7 @@ fn options(cullers: &[CullMethod], schedule: Schedule, frames: usize) -> ReplayO
         visibility: None,
         section: None,
         look: Default::default(),
+        ghosts: None,
     }
 }
 

@@ -87,6 +87,7 @@ fn options(pixel_errors: &[f64], frames: usize, every: usize) -> ReplayOptions {
         visibility: None,
         section: None,
         look: Default::default(),
+        ghosts: None,
     }
 }
 
@@ -409,6 +410,7 @@ fn every_runtime_knob_replays_with_accuracy() {
                 visibility: None,
                 section: None,
                 look: Default::default(),
+                ghosts: None,
             };
             let r = replay_plant(rt, path, &opts).unwrap_or_else(|e| panic!("{runtime:?}: {e}"));
             // Frames 0, 4, 8 and the frame after each.

@@ -196,7 +196,7 @@ mod tests {
     }
 
     #[test]
-    fn wasd_moves_z_freezes_f_frames_and_f1_helps() {
+    fn wasd_moves_z_freezes_f_frames_e_draws_edges_and_f1_helps() {
         assert!(matches!(
             lookup(KeyCode::KeyW),
             Some(Does::Move(Movement::Forward))
@@ -225,7 +225,19 @@ mod tests {
             lookup(KeyCode::KeyM),
             Some(Does::Act(Action::Measure))
         ));
-        assert!(lookup(KeyCode::F2).is_none());
+        assert!(matches!(
+            lookup(KeyCode::KeyE),
+            Some(Does::Act(Action::ToggleEdges))
+        ));
+        assert!(matches!(
+            lookup(KeyCode::F4),
+            Some(Does::Act(Action::ToggleXray))
+        ));
+        assert!(matches!(
+            lookup(KeyCode::Space),
+            Some(Does::Move(Movement::Up))
+        ));
+        assert!(lookup(KeyCode::F5).is_none());
     }
 
     #[test]

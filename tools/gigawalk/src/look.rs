@@ -28,7 +28,7 @@ pub enum Aa {
 
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct LookArgs {
-    /// Anti-aliasing of the shown image: fxaa (edges blended along their direction, after the frame is drawn) or off [default: view: fxaa; replay: off]
+    /// Anti-aliasing of the shown image: fxaa (edges blended along their direction, after the frame is drawn) or off [default: view: fxaa on GPUs, off on CPU rasterizers such as lavapipe, where it costs more than it shows; replay: off]
     #[arg(long, value_enum)]
     aa: Option<Aa>,
     /// Edges: creases (surfaces meeting at more than --edge-angle) and silhouettes, drawn dark [default: view: on; replay: off]

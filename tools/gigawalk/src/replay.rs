@@ -38,6 +38,9 @@ pub struct Args {
     view: Option<String>,
     #[command(flatten)]
     section: crate::section::SectionArgs,
+    /// X-ray: draw the hidden objects (--hide, --isolate, --view) as faint ghosts in the reference and every run, to time them (they write no depth: the surface accuracy figures are unchanged)
+    #[arg(long)]
+    xray: bool,
     #[command(flatten)]
     look: crate::look::LookArgs,
     /// Report directory: summary.md, summary.json, frames.csv, fps.png, tradeoff.png
@@ -271,7 +274,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             );
         }
         eprintln!("hiding {} of {} objects", h.hidden, h.objects);
-        Some(h.visibility)
+        Some((h.visibility, h.ghosts))
+    };
+    if args.xray && visibility.is_none() {
+        anyhow::bail!(
+            "--xray draws hidden objects as ghosts: give --hide, --isolate or --view too"
+        );
+    }
+    let (visibility, ghosts) = match visibility {
+        Some((v, g)) => (Some(v), g.filter(|_| args.xray)),
+        None => (None, None),
     };
     let opts = ReplayOptions {
         modes: args.modes,
@@ -294,6 +306,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             &scene.skeleton().bounds(),
         )?,
         look,
+        ghosts,
     };
     let replay = run_replay(
         &scene,

@@ -7,7 +7,7 @@
 
 use glam::Mat4;
 
-use crate::passes::{fullscreen_pipeline_entry, target, View, COLOUR_FORMAT};
+use crate::passes::{fullscreen_pipeline_with, target, View, COLOUR_FORMAT};
 use crate::GpuContext;
 
 pub const LOOK_WGSL: &str = include_str!("../../../../shaders/look.wgsl");
@@ -57,14 +57,15 @@ impl Look {
     };
 
     /// The defaults for a device: everything on a GPU; on a CPU
-    /// rasterizer (lavapipe, llvmpipe) the sky, edges and FXAA, which
-    /// cost little there, and not ambient occlusion, which samples a
-    /// dozen depths a pixel (docs/results.md, "The look").
+    /// rasterizer (lavapipe, llvmpipe) the sky and edges, and not
+    /// ambient occlusion nor FXAA, which cost there a frame's worth of
+    /// time or more for what they show (docs/results.md, "The look").
     pub fn auto(cpu_rasterizer: bool) -> Look {
+        let gpu = !cpu_rasterizer;
         Look {
-            aa: Antialias::Fxaa,
+            aa: if gpu { Antialias::Fxaa } else { Antialias::Off },
             edges: true,
-            ao: !cpu_rasterizer,
+            ao: gpu,
             sky: true,
             ..Look::PLAIN
         }
@@ -137,7 +138,7 @@ impl LookChoice {
 struct LookUniforms {
     inv_view_proj: [[f32; 4]; 4],
     size: [f32; 4],
-    flags: [f32; 4],
+    params: [f32; 4],
 }
 
 /// The normal target's format: 8 bits a component hold a direction to
@@ -149,11 +150,19 @@ const AO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 pub(crate) struct LookPass {
     uniforms: wgpu::Buffer,
     ao_pipeline: wgpu::RenderPipeline,
-    compose_pipeline: wgpu::RenderPipeline,
+    /// The composition for each set of its parts (sky, occlusion,
+    /// edges), made when first used.
+    compose_pipelines: [Option<wgpu::RenderPipeline>; 8],
+    compose_layout: wgpu::BindGroupLayout,
     fxaa_pipeline: wgpu::RenderPipeline,
     ao_group: wgpu::BindGroup,
     compose_group: wgpu::BindGroup,
     fxaa_group: wgpu::BindGroup,
+    /// FXAA straight from RVG's colour, when nothing is composed.
+    fxaa_colour_group: wgpu::BindGroup,
+    /// Which image the last frame's passes ended in (`None`: none ran,
+    /// RVG's colour is shown).
+    last: Option<Shown>,
     ao: wgpu::Texture,
     composed: wgpu::Texture,
     shown: wgpu::Texture,
@@ -278,22 +287,21 @@ impl LookPass {
             &[(1, depth), (2, normal), (3, colour), (4, &ao)],
         );
         let fxaa_group = group("look fxaa", &fxaa_layout, &[(3, &composed)]);
+        let fxaa_colour_group = group("look fxaa", &fxaa_layout, &[(3, colour)]);
         let pipeline = |label, layout, format, entry| {
-            fullscreen_pipeline_entry(ctx, label, LOOK_WGSL, layout, format, entry)
+            fullscreen_pipeline_with(ctx, label, LOOK_WGSL, layout, (format, entry), &[])
         };
         LookPass {
             ao_pipeline: pipeline("look occlusion", &ao_layout, AO_FORMAT, "fs_ao"),
-            compose_pipeline: pipeline(
-                "look compose",
-                &compose_layout,
-                COLOUR_FORMAT,
-                "fs_compose",
-            ),
+            compose_pipelines: Default::default(),
             fxaa_pipeline: pipeline("look fxaa", &fxaa_layout, COLOUR_FORMAT, "fs_fxaa"),
+            compose_layout,
             uniforms,
             ao_group,
             compose_group,
             fxaa_group,
+            fxaa_colour_group,
+            last: None,
             ao,
             composed,
             shown,
@@ -301,18 +309,19 @@ impl LookPass {
         }
     }
 
-    /// The image the last [`LookPass::record`] made with `look`.
-    pub(crate) fn shown(&self, look: &Look) -> &wgpu::Texture {
-        match look.aa {
-            Antialias::Fxaa => &self.shown,
-            Antialias::Off => &self.composed,
+    /// The image the last [`LookPass::record`] ended in (`None`: RVG's
+    /// colour, nothing ran).
+    pub(crate) fn shown(&self) -> Option<&wgpu::Texture> {
+        match self.last? {
+            Shown::Composed => Some(&self.composed),
+            Shown::Fxaa => Some(&self.shown),
         }
     }
 
     /// Records the look's passes for a frame drawn with `view`; `shaded`:
     /// false for a wireframe frame, which takes no occlusion or edges.
     pub(crate) fn record(
-        &self,
+        &mut self,
         ctx: &GpuContext,
         enc: &mut wgpu::CommandEncoder,
         view: &View,
@@ -324,17 +333,11 @@ impl LookPass {
         // length, so the second row's is the projection's y scale.
         let m = view.view_proj;
         let y_scale = glam::Vec3::new(m.x_axis.y, m.y_axis.y, m.z_axis.y).length();
-        let flag = |b: bool| if b { 1.0 } else { 0.0 };
         let (edges, ao) = (shaded && look.edges, shaded && look.ao);
         let u = LookUniforms {
             inv_view_proj: inverse(m).to_cols_array_2d(),
             size: [w as f32, h as f32, look.ao_radius, 0.5 * h as f32 * y_scale],
-            flags: [
-                flag(edges),
-                flag(ao),
-                look.crease_degrees.to_radians().cos(),
-                flag(look.sky),
-            ],
+            params: [look.crease_degrees.to_radians().cos(), 0.0, 0.0, 0.0],
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
@@ -350,23 +353,51 @@ impl LookPass {
                 &self.ao_group,
             );
         }
-        run(
-            enc,
-            "look compose",
-            &self.composed,
-            &self.compose_pipeline,
-            &self.compose_group,
-        );
-        if look.aa == Antialias::Fxaa {
+        let compose = edges || ao || look.sky;
+        if compose {
+            let key = (look.sky as usize) | (ao as usize) << 1 | (edges as usize) << 2;
+            let layout = &self.compose_layout;
+            let pipeline = self.compose_pipelines[key].get_or_insert_with(|| {
+                let flag = |on: bool| if on { 1.0 } else { 0.0 };
+                fullscreen_pipeline_with(
+                    ctx,
+                    "look compose",
+                    LOOK_WGSL,
+                    layout,
+                    (COLOUR_FORMAT, "fs_compose"),
+                    &[
+                        ("SKY", flag(look.sky)),
+                        ("AO", flag(ao)),
+                        ("EDGES", flag(edges)),
+                    ],
+                )
+            });
             run(
                 enc,
-                "look fxaa",
-                &self.shown,
-                &self.fxaa_pipeline,
-                &self.fxaa_group,
+                "look compose",
+                &self.composed,
+                pipeline,
+                &self.compose_group,
             );
         }
+        self.last = compose.then_some(Shown::Composed);
+        if look.aa == Antialias::Fxaa {
+            let group = if compose {
+                &self.fxaa_group
+            } else {
+                &self.fxaa_colour_group
+            };
+            run(enc, "look fxaa", &self.shown, &self.fxaa_pipeline, group);
+            self.last = Some(Shown::Fxaa);
+        }
     }
+}
+
+/// Which of the look's images a frame ended in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Shown {
+    Composed,
+    Fxaa,
 }
 
 /// The inverse of a frame's projection x rotation; a singular one (a

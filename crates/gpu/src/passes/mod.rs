@@ -26,8 +26,8 @@ pub(crate) use drawer::Drawer;
 pub use hzb::{PyramidPath, HZB_DOWNSAMPLE_WGSL};
 pub use look::{Antialias, Look, LookChoice, LOOK_WGSL};
 pub(crate) use pipelines::{
-    draw_fullscreen, fullscreen_pipeline, fullscreen_pipeline_entry, pipeline, scene_pipelines,
-    ScenePipelines, Surface,
+    draw_fullscreen, fullscreen_pipeline, fullscreen_pipeline_entry, fullscreen_pipeline_with,
+    pipeline, scene_pipelines, ScenePipelines, Surface,
 };
 pub use readback::PassFigures;
 pub(crate) use readback::{device_error, map_and_wait, ms_since, ReadBack, Rows};

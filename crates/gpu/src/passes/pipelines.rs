@@ -247,6 +247,19 @@ pub(crate) fn fullscreen_pipeline_entry(
     format: wgpu::TextureFormat,
     fragment: &str,
 ) -> wgpu::RenderPipeline {
+    fullscreen_pipeline_with(ctx, label, wgsl, layout, (format, fragment), &[])
+}
+
+/// [`fullscreen_pipeline_entry`] with the fragment stage's overridable
+/// constants set.
+pub(crate) fn fullscreen_pipeline_with(
+    ctx: &GpuContext,
+    label: &str,
+    wgsl: &str,
+    layout: &wgpu::BindGroupLayout,
+    (format, fragment): (wgpu::TextureFormat, &str),
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
     let d = &ctx.device;
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
@@ -272,7 +285,10 @@ pub(crate) fn fullscreen_pipeline_entry(
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some(fragment),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             targets: &[Some(wgpu::ColorTargetState {
                 format,
                 blend: None,

@@ -142,7 +142,7 @@ impl VisiblePass {
     /// (`COLOUR_FORMAT`, with `COPY_SRC`).
     pub fn shown_texture(&self) -> &wgpu::Texture {
         match &self.look_pass {
-            Some(l) if !self.look.is_plain() => l.shown(&self.look),
+            Some(l) if !self.look.is_plain() => l.shown().unwrap_or(&self.colour),
             _ => &self.colour,
         }
     }
@@ -369,7 +369,7 @@ impl VisiblePass {
             // An empty frame still clears its targets.
             self.draw(ctx, &NoGeometry, &[]);
         }
-        if let (Some(look_pass), Some(view)) = (&self.look_pass, &self.view) {
+        if let (Some(look_pass), Some(view)) = (&mut self.look_pass, &self.view) {
             if !self.look.is_plain() {
                 let t = Instant::now();
                 let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -394,7 +394,7 @@ impl VisiblePass {
         let (w, h) = (self.width, self.height);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         let shown = match &self.look_pass {
-            Some(l) if !self.look.is_plain() => l.shown(&self.look),
+            Some(l) if !self.look.is_plain() => l.shown().unwrap_or(&self.colour),
             _ => &self.colour,
         };
         let rows = self.colour_readback.record_texture(

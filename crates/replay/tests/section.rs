@@ -3,7 +3,7 @@
 //! section bit for bit, with every culler, on generated plants, cities
 //! and forests at an odd viewport; a section that removes the only wall
 //! in front of a hall shows the hall, also when the wall was the last
-//! frames' occluder; cut solids show a cap, not a hole; och keeps its
+//! frames' occluder; cut solids show a hatched cap, not a hole; och keeps its
 //! pixel-error bound; a distance measured between two picks is the
 //! distance between the hit points a brute-force ray cast through the
 //! input model's triangles finds.
@@ -432,6 +432,8 @@ fn a_cut_solid_shows_its_cap_not_a_hole() {
     let whole = render(&rt, &opts, requests(&[camera], &|_| None));
     let vp = Viewport::new(W, H);
     let mut inside = 0;
+    // Each cap's brightest and darkest sample: caps are hatched.
+    let mut shades = [(u32::MAX, 0u32); 2];
     // Points well inside each cut face (z = 0), projected to pixels.
     for (lo, hi) in [((-3.0, -1.0), (-1.0, 1.0)), ((1.0, -1.5), (3.0, 1.5))] {
         for i in 1..8 {
@@ -468,11 +470,18 @@ fn a_cut_solid_shows_its_cap_not_a_hole() {
                     w.iter().zip(c).any(|(w, c)| w > c),
                     "pixel {px},{py}: {w:?} against {c:?}"
                 );
+                let sum = c.iter().map(|&v| v as u32).sum::<u32>();
+                let s = &mut shades[(lo.0 > 0.0) as usize];
+                *s = (s.0.min(sum), s.1.max(sum));
                 inside += 1;
             }
         }
     }
     assert_eq!(inside, 98);
+    // The hatching's lines are under 0.7 of the cap's plain shade.
+    for (dark, light) in shades {
+        assert!(dark * 10 < light * 7, "no hatching: {dark} against {light}");
+    }
 }
 
 /// A linear channel as the sRGB target stores it.

@@ -9,7 +9,8 @@ use gigawalk_gpu::{
     devices_or_skip, Antialias, ClipPlanes, DrawStyle, GpuContext, HostGeometry, Look,
     ResidentGeometry, View, VisiblePass,
 };
-use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
+use gigawalk_scene::{Aabb, Colours, LodMesh, SceneReader};
+use gigawalk_testkit::write_leaf_scene;
 use glam::{DVec3, Vec3, Vec4};
 
 const W: u32 = 160;
@@ -66,28 +67,8 @@ fn scene(ctx: &GpuContext, floor: bool) -> ResidentGeometry {
 fn scene_of(ctx: &GpuContext, boxes: &[(Aabb, [u8; 4])]) -> ResidentGeometry {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.gwk");
-    let mut w = SceneWriter::create(&path).unwrap();
-    let mut nodes = vec![Node {
-        bounds: Aabb::EMPTY,
-        parent: NO_NODE,
-        first_child: 1,
-        child_count: boxes.len() as u32,
-        first_lod: 0,
-        lod_count: 0,
-    }];
-    for (i, (b, c)) in boxes.iter().enumerate() {
-        w.add_lod(&flat_box(b, *c), 0.0).unwrap();
-        nodes[0].bounds = nodes[0].bounds.union(b);
-        nodes.push(Node {
-            bounds: *b,
-            parent: 0,
-            first_child: 0,
-            child_count: 0,
-            first_lod: i as u32,
-            lod_count: 1,
-        });
-    }
-    w.finish(nodes, Provenance::default()).unwrap();
+    let leaves: Vec<_> = boxes.iter().map(|(b, c)| (*b, flat_box(b, *c))).collect();
+    write_leaf_scene(&path, 16, &leaves);
     let scene = SceneReader::open(&path).unwrap();
     HostGeometry::load(&scene, 1 << 20)
         .unwrap()

@@ -7,8 +7,8 @@ use gigawalk_gpu::{
     devices_or_skip, ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext,
     HostGeometry, Look, PyramidPath, ResidentGeometry, VertexLayout, View, VisiblePass,
 };
-use gigawalk_scene::{Aabb, Node, Provenance, SceneReader, SceneWriter, NO_NODE};
-use gigawalk_testkit::box_mesh;
+use gigawalk_scene::{Aabb, SceneReader};
+use gigawalk_testkit::{box_mesh, write_leaf_scene};
 use glam::{DVec3, Vec3};
 
 /// A red 2x2x1 box 5 units ahead on -Z, and a green 6x6x1 box 20 ahead and
@@ -30,30 +30,14 @@ fn write_scene_with(path: &std::path::Path, shift: DVec3, normal_bits: u8) {
             [0, 255, 0, 255],
         ),
     ];
-    let mut w = SceneWriter::create(path).unwrap();
-    w.set_normal_bits(normal_bits).unwrap();
-    let mut nodes = vec![Node {
-        bounds: Aabb::EMPTY,
-        parent: NO_NODE,
-        first_child: 1,
-        child_count: 2,
-        first_lod: 0,
-        lod_count: 0,
-    }];
-    for (i, (b, c)) in boxes.iter().enumerate() {
-        let b = Aabb::new(b.min + shift, b.max + shift);
-        w.add_lod(&box_mesh(&b, *c), 0.0).unwrap();
-        nodes[0].bounds = nodes[0].bounds.union(&b);
-        nodes.push(Node {
-            bounds: b,
-            parent: 0,
-            first_child: 0,
-            child_count: 0,
-            first_lod: i as u32,
-            lod_count: 1,
-        });
-    }
-    w.finish(nodes, Provenance::default()).unwrap();
+    let leaves: Vec<_> = boxes
+        .iter()
+        .map(|(b, c)| {
+            let b = Aabb::new(b.min + shift, b.max + shift);
+            (b, box_mesh(&b, *c))
+        })
+        .collect();
+    write_leaf_scene(path, normal_bits, &leaves);
 }
 
 /// The two boxes of [`write_scene_with`], shifted by `shift`, resident on

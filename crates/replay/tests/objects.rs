@@ -47,16 +47,7 @@ fn build(
 ) -> Built {
     let generated = generate(kind, triangles, seed, 24);
     let model = gigawalk_import::import_glb_bytes(&generated.glb_bytes(), "m.glb").unwrap();
-    let file = dir.join(format!("{kind:?}-{seed}.gwk"));
-    gigawalk_preprocess::preprocess(
-        &model,
-        &params,
-        &file,
-        "test",
-        &gigawalk_preprocess::NoProgress,
-    )
-    .unwrap();
-    let reader = SceneReader::open(&file).unwrap();
+    let reader = common::preprocess(dir, &format!("{kind:?}-{seed}"), &model, params);
     let table = reader.objects().unwrap().expect("a new scene has identity");
     Built {
         reader,
@@ -532,17 +523,7 @@ fn find_matches_gltf_node_names_and_obj_groups_of_several_files() {
     .unwrap();
     let model =
         gigawalk_import::import_all(&[glb.clone(), obj.clone()], &mut |_, _, _| {}).unwrap();
-    let file = dir.path().join("both.gwk");
-    gigawalk_preprocess::preprocess(
-        &model,
-        &Default::default(),
-        &file,
-        "test",
-        &gigawalk_preprocess::NoProgress,
-    )
-    .unwrap();
-    let table = SceneReader::open(&file)
-        .unwrap()
+    let table = common::preprocess(dir.path(), "both", &model, Default::default())
         .objects()
         .unwrap()
         .unwrap();

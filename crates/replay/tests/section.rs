@@ -13,7 +13,7 @@ mod common;
 use std::path::Path;
 use std::sync::Arc;
 
-use common::render;
+use common::{preprocess, render};
 use gigawalk_cull::{default_near, pick, Camera, Ray, Section, Viewport};
 use gigawalk_gpu::devices_or_skip;
 use gigawalk_import::{Model, Object};
@@ -26,24 +26,6 @@ use glam::{DQuat, DVec3};
 /// Odd on purpose: no power of two, no even split of the HZB's levels.
 const W: u32 = 157;
 const H: u32 = 93;
-
-fn preprocess(
-    dir: &Path,
-    name: &str,
-    model: &Model,
-    params: gigawalk_preprocess::Params,
-) -> SceneReader {
-    let file = dir.join(format!("{name}.gwk"));
-    gigawalk_preprocess::preprocess(
-        model,
-        &params,
-        &file,
-        "test",
-        &gigawalk_preprocess::NoProgress,
-    )
-    .unwrap();
-    SceneReader::open(&file).unwrap()
-}
 
 fn generated(dir: &Path, kind: Kind, triangles: u64, seed: u64) -> (SceneReader, Generated, Model) {
     let g = generate(kind, triangles, seed, 24);

@@ -2,9 +2,10 @@
 //! a scene with levels of detail, renders without facets at every level
 //! (leaves' coarser levels and inner nodes' merged ones), drawn alone.
 
+mod common;
+
 use gigawalk_cull::Camera;
 use gigawalk_gpu::{devices_or_skip, ClipPlanes, DrawStyle, HostGeometry, Look, View, VisiblePass};
-use gigawalk_scene::SceneReader;
 use glam::DVec3;
 
 const SIZE: u32 = 160;
@@ -52,16 +53,7 @@ fn vertex(rings: u32, segments: u32, i: u32) -> DVec3 {
 fn shade_steps(ctx: &gigawalk_gpu::GpuContext, obj: &str) -> (Vec<(u32, u32, f32, f64)>, usize) {
     let dir = tempfile::tempdir().unwrap();
     let model = gigawalk_import::import_obj_str(obj, "sphere.obj").unwrap();
-    let file = dir.path().join("sphere.gwk");
-    gigawalk_preprocess::preprocess(
-        &model,
-        &Default::default(),
-        &file,
-        "test",
-        &gigawalk_preprocess::NoProgress,
-    )
-    .unwrap();
-    let scene = SceneReader::open(&file).unwrap();
+    let scene = common::preprocess(dir.path(), "sphere", &model, Default::default());
     let geometry = HostGeometry::load(&scene, 1 << 24)
         .unwrap()
         .upload(ctx)

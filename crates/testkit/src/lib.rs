@@ -14,4 +14,4 @@ pub mod rng;
 pub mod scenes;
 
 pub use rng::{XorShift, XorShift32};
-pub use scenes::box_mesh;
+pub use scenes::{box_mesh, write_leaf_scene};

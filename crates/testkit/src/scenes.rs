@@ -1,7 +1,38 @@
 //! Small scene builders that more than one crate's tests use.
 
-use gigawalk_scene::{Aabb, Colours, LodMesh};
+use std::path::Path;
+
+use gigawalk_scene::{Aabb, Colours, LodMesh, Node, Provenance, SceneWriter, NO_NODE};
 use glam::Vec3;
+
+/// Writes a scene of one root over a leaf per mesh, each with that mesh
+/// as its one LOD (bounds: the mesh's box), normals stored in
+/// `normal_bits` (8: the GPU's compact layout, 16: the wide one).
+pub fn write_leaf_scene(path: &Path, normal_bits: u8, leaves: &[(Aabb, LodMesh)]) {
+    let mut w = SceneWriter::create(path).unwrap();
+    w.set_normal_bits(normal_bits).unwrap();
+    let mut nodes = vec![Node {
+        bounds: Aabb::EMPTY,
+        parent: NO_NODE,
+        first_child: 1,
+        child_count: leaves.len() as u32,
+        first_lod: 0,
+        lod_count: 0,
+    }];
+    for (i, (b, mesh)) in leaves.iter().enumerate() {
+        w.add_lod(mesh, 0.0).unwrap();
+        nodes[0].bounds = nodes[0].bounds.union(b);
+        nodes.push(Node {
+            bounds: *b,
+            parent: 0,
+            first_child: 0,
+            child_count: 0,
+            first_lod: i as u32,
+            lod_count: 1,
+        });
+    }
+    w.finish(nodes, Provenance::default()).unwrap();
+}
 
 /// A closed box mesh spanning `b` (8 vertices, 12 triangles, one colour),
 /// positions relative to `b.min` so far-away boxes keep their precision.

@@ -26,3 +26,22 @@ pub fn render(
     .unwrap();
     out
 }
+
+/// `model` preprocessed with `params` into `dir/NAME.gwk`, opened.
+pub fn preprocess(
+    dir: &std::path::Path,
+    name: &str,
+    model: &gigawalk_import::Model,
+    params: gigawalk_preprocess::Params,
+) -> gigawalk_scene::SceneReader {
+    let file = dir.join(format!("{name}.gwk"));
+    gigawalk_preprocess::preprocess(
+        model,
+        &params,
+        &file,
+        "test",
+        &gigawalk_preprocess::NoProgress,
+    )
+    .unwrap();
+    gigawalk_scene::SceneReader::open(&file).unwrap()
+}

@@ -278,6 +278,27 @@ fn no_drawn_lod_stands_for_a_hidden_object_at_any_tolerance() {
     );
 }
 
+/// The object nearest in the most pixels of a coarse grid of picks from
+/// `camera` (ties: the lowest id).
+fn most_seen(b: &Built, camera: &Camera) -> u32 {
+    let vp = Viewport::new(W, H);
+    let mut seen: HashMap<u32, u32> = HashMap::new();
+    for py in (0..H).step_by(6) {
+        for px in (0..W).step_by(6) {
+            let ray = camera
+                .pixel_ray(vp, px as f64 + 0.5, py as f64 + 0.5)
+                .unwrap();
+            if let Some(o) = pick_in(b, &ray, &|_| false).and_then(|h| h.object) {
+                *seen.entry(o).or_default() += 1;
+            }
+        }
+    }
+    seen.iter()
+        .max_by_key(|(o, n)| (**n, std::cmp::Reverse(**o)))
+        .map(|(o, _)| *o)
+        .expect("the pose sees something")
+}
+
 #[test]
 fn a_hidden_object_leaves_exactly_its_pixels_and_culling_stays_conservative() {
     let dir = tempfile::tempdir().unwrap();
@@ -298,25 +319,8 @@ fn a_hidden_object_leaves_exactly_its_pixels_and_culling_stays_conservative() {
             })
             .collect()
     };
-    // The object seen most in the middle pose (a coarse grid of picks).
-    let middle = Camera::of_pose(poses[6], vp, near);
-    let mut seen: HashMap<u32, u32> = HashMap::new();
-    for py in (0..H).step_by(6) {
-        for px in (0..W).step_by(6) {
-            let ray = middle
-                .pixel_ray(vp, px as f64 + 0.5, py as f64 + 0.5)
-                .unwrap();
-            let hit = pick_in(&b, &ray, &|_| false);
-            if let Some(o) = hit.and_then(|h| h.object) {
-                *seen.entry(o).or_default() += 1;
-            }
-        }
-    }
-    let x = seen
-        .iter()
-        .max_by_key(|(o, n)| (**n, std::cmp::Reverse(**o)))
-        .map(|(o, _)| *o)
-        .expect("the middle pose sees something");
+    // The object seen most in the middle pose.
+    let x = most_seen(&b, &Camera::of_pose(poses[6], vp, near));
     let vis = Arc::new(Visibility::new(skeleton, &b.table, &|o| o == x, &|_| false));
     let rt = Runtime::with_devices(&b.reader, d).unwrap();
     let reference = |v| {
@@ -423,22 +427,7 @@ fn in_x_ray_a_hidden_object_shows_faint_where_it_showed_and_hides_nothing() {
     let vp = Viewport::new(W, H);
     let poses: Vec<_> = b.generated.path.poses.iter().skip(4).take(6).collect();
     // The object nearest in the most pixels of the first pose.
-    let first = Camera::of_pose(poses[0], vp, near);
-    let mut seen: HashMap<u32, u32> = HashMap::new();
-    for py in (0..H).step_by(6) {
-        for px in (0..W).step_by(6) {
-            let ray = first
-                .pixel_ray(vp, px as f64 + 0.5, py as f64 + 0.5)
-                .unwrap();
-            if let Some(o) = pick_in(&b, &ray, &|_| false).and_then(|h| h.object) {
-                *seen.entry(o).or_default() += 1;
-            }
-        }
-    }
-    let (&x, _) = seen
-        .iter()
-        .max_by_key(|(o, n)| (**n, std::cmp::Reverse(**o)))
-        .expect("the pose sees something");
+    let x = most_seen(&b, &Camera::of_pose(poses[0], vp, near));
     let hidden = |o: u32| o == x;
     let vis = Arc::new(Visibility::new(skeleton, &b.table, &hidden, &|_| false));
     let ghosts = Visibility::ghosts(skeleton, &b.table, &hidden).map(Arc::new);

@@ -170,14 +170,16 @@ impl CullView {
     pub fn lod_distance(&self, min: DVec3, max: DVec3) -> f64 {
         let d = crate::lod::distance_to_rel_box(min, max);
         let c = (min + max) * 0.5;
-        let (dc, r) = (c.length(), (max - min).length() * 0.5);
-        let cos = if dc > r {
-            // cos(angle of the centre + half-angle of the sphere).
-            let cos_c = (c.dot(self.forward) / dc).clamp(-1.0, 1.0);
-            let sin_c = (1.0 - cos_c * cos_c).sqrt();
-            let sin_a = r / dc;
-            let cos_a = (1.0 - sin_a * sin_a).sqrt();
-            (cos_c * cos_a - sin_c * sin_a).max(self.cos_corner)
+        let (dc2, r2) = (c.length_squared(), ((max - min) * 0.5).length_squared());
+        let cos = if dc2 > r2 {
+            // cos(angle of the centre + half-angle of the sphere), with
+            // dc the centre's distance, cf its component along the view
+            // and r the sphere's radius: (cf sqrt(dc^2 - r^2) -
+            // sqrt(dc^2 - cf^2) r) / dc^2, a square root fewer than the
+            // angles' sines and cosines.
+            let cf = c.dot(self.forward);
+            let far_side = cf * (dc2 - r2).sqrt() - (dc2 - cf * cf).max(0.0).sqrt() * r2.sqrt();
+            (far_side / dc2).max(self.cos_corner)
         } else {
             self.cos_corner
         };

@@ -219,6 +219,45 @@ fn a_null_adapter_replay_reports_the_cpu_ceiling() {
             "{col} missing: {header}"
         );
     }
+    // The look and x-ray run every frame and the report says so; x-ray
+    // needs something hidden.
+    let looked = dir.path().join("look");
+    let (ok, _, err) = replay(
+        &gwk,
+        &path,
+        &looked,
+        &[
+            "--adapter",
+            "null",
+            "--modes",
+            "och",
+            "--sky",
+            "on",
+            "--edges",
+            "on",
+            "--aa",
+            "fxaa",
+            "--hide",
+            "*pipes*",
+            "--xray",
+        ],
+    );
+    assert!(ok, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(looked.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["look"], "sky, edges over 30 degrees, FXAA");
+    assert_eq!(json["xray"], true);
+    let md = std::fs::read_to_string(looked.join("summary.md")).unwrap();
+    assert!(
+        md.contains("**Look: sky") && md.contains("**X-ray:"),
+        "{md}"
+    );
+    let (ok, _, err) = replay(&gwk, &path, &looked, &["--adapter", "null", "--xray"]);
+    assert!(
+        !ok && err.contains("--xray") && err.contains("--hide"),
+        "{err}"
+    );
     // A window cannot be shown on it.
     let (ok, _, err) = gigawalk(&["view", s(&gwk), "--adapter", "null"]);
     assert!(

@@ -40,18 +40,18 @@ fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     return vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
 }
 
-fn size_i() -> vec2<i32> {
-    return vec2<i32>(look.size.xy);
+// The pixel nearest `p` inside the image (neighbours of an edge pixel
+// read the edge).
+fn inside(p: vec2<i32>) -> vec2<i32> {
+    return clamp(p, vec2<i32>(0), vec2<i32>(look.size.xy) - vec2<i32>(1));
 }
 
 fn depth_at(p: vec2<i32>) -> f32 {
-    let q = clamp(p, vec2<i32>(0), size_i() - vec2<i32>(1));
-    return textureLoad(depth_tex, q, 0).x;
+    return textureLoad(depth_tex, inside(p), 0).x;
 }
 
 fn normal_at(p: vec2<i32>) -> vec4<f32> {
-    let q = clamp(p, vec2<i32>(0), size_i() - vec2<i32>(1));
-    let n = textureLoad(normal_tex, q, 0);
+    let n = textureLoad(normal_tex, inside(p), 0);
     return vec4<f32>(n.xyz * 2.0 - 1.0, n.w);
 }
 
@@ -176,8 +176,7 @@ fn blurred_ao(p: vec2<i32>, d: f32) -> f32 {
             let q = p + vec2<i32>(x, y);
             let dq = depth_at(q);
             if (abs(dq - d) <= 0.05 * d) {
-                let qq = clamp(q, vec2<i32>(0), size_i() - vec2<i32>(1));
-                sum = sum + textureLoad(ao_tex, qq, 0).x;
+                sum = sum + textureLoad(ao_tex, inside(q), 0).x;
                 weight = weight + 1.0;
             }
         }

@@ -324,9 +324,7 @@ impl HiddenSet {
             Some(o) == selected
         })
     }
-}
 
-impl HiddenSet {
     /// X-ray's ghosts: the hidden objects of `table` as a visibility of
     /// their own (`None`: nothing hidden).
     pub fn ghosts(&self, skeleton: &Skeleton, table: &ObjectTable) -> Option<Visibility> {

@@ -110,19 +110,6 @@ fn frame(
     rvg.draw(ctx, geometry, lods);
     let drawn = rvg.finish(ctx, true).unwrap().unwrap();
     let shown = rvg.read_shown(ctx).unwrap();
-    if let Ok(dir) = std::env::var("LOOK_DUMP") {
-        for (name, img) in [("raw", &drawn.colour), ("shown", &shown)] {
-            let mut ppm = format!("P6 {W} {H} 255\n").into_bytes();
-            for px in img.chunks(4) {
-                ppm.extend_from_slice(&px[..3]);
-            }
-            let n = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .unwrap()
-                .as_nanos();
-            std::fs::write(format!("{dir}/{n}-{name}.ppm"), ppm).unwrap();
-        }
-    }
     ((drawn.colour, drawn.depth.depth), shown)
 }
 
@@ -247,12 +234,21 @@ fn edges_lie_on_the_cubes_visible_edges_and_not_on_a_face_diagonal() {
             background += 1;
         }
     }
-    // ... and the sky fills the background, lighter toward the horizon
-    // than at the top of the image (the camera looks down at it).
+    // ... and the sky fills the background: not the flat clear colour,
+    // and shaded from row to row.
     assert!(background > (W * H / 2) as usize);
     let top = luma(&shown, (W / 2) as usize);
     assert!(differs(&raw, &shown, (W / 2) as usize, 8));
     assert!(luma(&shown, 0) > 0.0 && top > 0.0);
+    let mut shades: Vec<i64> = depth
+        .iter()
+        .enumerate()
+        .filter(|(_, &d)| d <= 0.0)
+        .map(|(i, _)| luma(&shown, i).round() as i64)
+        .collect();
+    shades.sort_unstable();
+    shades.dedup();
+    assert!(shades.len() >= 4, "the sky is {} shades", shades.len());
 }
 
 #[test]

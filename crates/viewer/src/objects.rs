@@ -123,9 +123,6 @@ impl Objects {
     /// nothing hidden, or no object table).
     pub fn ghosts(&self, skeleton: &Skeleton) -> Option<Arc<Visibility>> {
         let table = self.table.as_ref().ok()?;
-        if self.hidden_count == 0 {
-            return None;
-        }
         self.hidden.ghosts(skeleton, table).map(Arc::new)
     }
 

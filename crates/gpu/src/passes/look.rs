@@ -7,7 +7,10 @@
 
 use glam::Mat4;
 
-use crate::passes::{fullscreen_pipeline_with, target, View, COLOUR_FORMAT};
+use crate::passes::{
+    draw_fullscreen, fullscreen_pipeline_entry, fullscreen_pipeline_with, target, View,
+    COLOUR_FORMAT,
+};
 use crate::GpuContext;
 
 pub const LOOK_WGSL: &str = include_str!("../../../../shaders/look.wgsl");
@@ -258,7 +261,12 @@ impl LookPass {
             &[(0, Uniforms), (3, Filtered), (5, Sampler)],
         );
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let group = |label, layout: &wgpu::BindGroupLayout, textures: &[(u32, &wgpu::Texture)]| {
+        // A group of the uniforms, `textures` at their bindings and, for
+        // FXAA, the sampler at binding 5.
+        let group = |label,
+                     layout: &wgpu::BindGroupLayout,
+                     textures: &[(u32, &wgpu::Texture)],
+                     sampled: bool| {
             let views: Vec<_> = textures.iter().map(|(b, t)| (*b, view(t))).collect();
             let mut entries = vec![wgpu::BindGroupEntry {
                 binding: 0,
@@ -268,7 +276,7 @@ impl LookPass {
                 binding: *b,
                 resource: wgpu::BindingResource::TextureView(v),
             }));
-            if textures.len() == 1 {
+            if sampled {
                 entries.push(wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::Sampler(&sampler),
@@ -280,16 +288,22 @@ impl LookPass {
                 entries: &entries,
             })
         };
-        let ao_group = group("look occlusion", &ao_layout, &[(1, depth), (2, normal)]);
+        let ao_group = group(
+            "look occlusion",
+            &ao_layout,
+            &[(1, depth), (2, normal)],
+            false,
+        );
         let compose_group = group(
             "look compose",
             &compose_layout,
             &[(1, depth), (2, normal), (3, colour), (4, &ao)],
+            false,
         );
-        let fxaa_group = group("look fxaa", &fxaa_layout, &[(3, &composed)]);
-        let fxaa_colour_group = group("look fxaa", &fxaa_layout, &[(3, colour)]);
+        let fxaa_group = group("look fxaa", &fxaa_layout, &[(3, &composed)], true);
+        let fxaa_colour_group = group("look fxaa", &fxaa_layout, &[(3, colour)], true);
         let pipeline = |label, layout, format, entry| {
-            fullscreen_pipeline_with(ctx, label, LOOK_WGSL, layout, (format, entry), &[])
+            fullscreen_pipeline_entry(ctx, label, LOOK_WGSL, layout, format, entry)
         };
         LookPass {
             ao_pipeline: pipeline("look occlusion", &ao_layout, AO_FORMAT, "fs_ao"),
@@ -318,6 +332,12 @@ impl LookPass {
         }
     }
 
+    /// Nothing ran for the last frame (its look was plain): RVG's colour
+    /// is what it shows.
+    pub(crate) fn skip(&mut self) {
+        self.last = None;
+    }
+
     /// Records the look's passes for a frame drawn with `view`; `shaded`:
     /// false for a wireframe frame, which takes no occlusion or edges.
     pub(crate) fn record(
@@ -341,11 +361,8 @@ impl LookPass {
         };
         ctx.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
-        let run = |enc: &mut wgpu::CommandEncoder, label, out: &wgpu::Texture, pipeline, group| {
-            crate::passes::draw_fullscreen(enc, label, out, pipeline, group);
-        };
         if ao {
-            run(
+            draw_fullscreen(
                 enc,
                 "look occlusion",
                 &self.ao,
@@ -372,7 +389,7 @@ impl LookPass {
                     ],
                 )
             });
-            run(
+            draw_fullscreen(
                 enc,
                 "look compose",
                 &self.composed,
@@ -387,7 +404,7 @@ impl LookPass {
             } else {
                 &self.fxaa_colour_group
             };
-            run(enc, "look fxaa", &self.shown, &self.fxaa_pipeline, group);
+            draw_fullscreen(enc, "look fxaa", &self.shown, &self.fxaa_pipeline, group);
             self.last = Some(Shown::Fxaa);
         }
     }

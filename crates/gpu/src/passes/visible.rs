@@ -141,15 +141,10 @@ impl VisiblePass {
     /// where the look is plain the colour target itself
     /// (`COLOUR_FORMAT`, with `COPY_SRC`).
     pub fn shown_texture(&self) -> &wgpu::Texture {
-        match &self.look_pass {
-            Some(l) if !self.look.is_plain() => l.shown().unwrap_or(&self.colour),
-            _ => &self.colour,
-        }
-    }
-
-    /// The look frames are shown with.
-    pub fn look(&self) -> Look {
-        self.look
+        self.look_pass
+            .as_ref()
+            .and_then(LookPass::shown)
+            .unwrap_or(&self.colour)
     }
 
     /// The depth target (`DEPTH_FORMAT`, reversed-Z), for overlays that
@@ -188,7 +183,7 @@ impl VisiblePass {
         if !self.cleared {
             self.draw(ctx, &NoGeometry, &[]);
         }
-        let normals = self.look.needs_normals() && self.normal.is_some();
+        let normals = self.writes_normals();
         if self.ghost_pipelines[normals as usize].is_none() {
             let mut targets = vec![Some(COLOUR_FORMAT)];
             if normals {
@@ -262,6 +257,12 @@ impl VisiblePass {
         }
     }
 
+    /// Whether this frame's draws write the normal target (its look
+    /// needs normals; `set_look` made the target then).
+    fn writes_normals(&self) -> bool {
+        self.look.needs_normals() && self.normal.is_some()
+    }
+
     /// Later draws of this frame write only pixels in `[x, y, w, h]` (a
     /// tile of a tiled display; clamped to the targets), or anywhere. The
     /// first draw still clears the whole targets.
@@ -291,11 +292,10 @@ impl VisiblePass {
         {
             let cv = self.colour.create_view(&Default::default());
             let dv = self.depth.create_view(&Default::default());
-            let normals = self.look.needs_normals();
             let nv = self
                 .normal
                 .as_ref()
-                .filter(|_| normals)
+                .filter(|_| self.writes_normals())
                 .map(|n| n.create_view(&Default::default()));
             let attachment = |view, clear| {
                 Some(wgpu::RenderPassColorAttachment {
@@ -370,7 +370,9 @@ impl VisiblePass {
             self.draw(ctx, &NoGeometry, &[]);
         }
         if let (Some(look_pass), Some(view)) = (&mut self.look_pass, &self.view) {
-            if !self.look.is_plain() {
+            if self.look.is_plain() {
+                look_pass.skip();
+            } else {
                 let t = Instant::now();
                 let mut enc = ctx.device.create_command_encoder(&Default::default());
                 let shaded = self.style == DrawStyle::Shaded;
@@ -391,18 +393,23 @@ impl VisiblePass {
     /// ([`VisiblePass::shown_texture`]: sRGB RGBA8, row 0 at the top),
     /// what the window and screenshots show.
     pub fn read_shown(&mut self, ctx: &GpuContext) -> Result<Vec<u8>, GpuError> {
-        let (w, h) = (self.width, self.height);
+        let shown = self.shown_texture().clone();
+        self.read_rgba(ctx, &shown)
+    }
+
+    /// Reads back one of the pass's `COLOUR_FORMAT` textures.
+    fn read_rgba(
+        &mut self,
+        ctx: &GpuContext,
+        texture: &wgpu::Texture,
+    ) -> Result<Vec<u8>, GpuError> {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        let shown = match &self.look_pass {
-            Some(l) if !self.look.is_plain() => l.shown().unwrap_or(&self.colour),
-            _ => &self.colour,
-        };
         let rows = self.colour_readback.record_texture(
             ctx,
             &mut enc,
-            shown,
-            w,
-            h,
+            texture,
+            self.width,
+            self.height,
             4,
             wgpu::TextureAspect::All,
         );
@@ -413,19 +420,7 @@ impl VisiblePass {
     /// Reads back the last finished frame's colour and depth.
     pub fn read_back(&mut self, ctx: &GpuContext) -> Result<FrameImage, GpuError> {
         let (w, h) = (self.width, self.height);
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        let rows = self.colour_readback.record_texture(
-            ctx,
-            &mut enc,
-            &self.colour,
-            w,
-            h,
-            4,
-            wgpu::TextureAspect::All,
-        );
-        let colour = self
-            .colour_readback
-            .submit_and_read(ctx, enc, rows, &mut self.figures)?;
+        let colour = self.read_rgba(ctx, &self.colour.clone())?;
         let depth = self
             .depth_readback
             .depth(ctx, &self.depth, w, h, &mut self.figures)?;

@@ -19,9 +19,9 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};
 use gigawalk_gpu::DepthLevel;
 
-use crate::stages::FrameStyle;
-
-use crate::stages::{lod_ids, OrFigures, OrStage, RvgStage, StcOutput, StcStage, Target};
+use crate::stages::{
+    lod_ids, FrameStyle, OrFigures, OrStage, RvgStage, StcOutput, StcStage, Target,
+};
 use crate::streaming::Prefetch;
 use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,

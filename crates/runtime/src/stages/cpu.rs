@@ -99,7 +99,7 @@ impl OccluderTarget for CpuRaster<'_> {
 }
 
 impl VisibleTarget for CpuRaster<'_> {
-    fn begin(&mut self, view: &CullView, _: super::rvg::FrameStyle) {
+    fn begin(&mut self, view: &CullView, _: super::FrameStyle) {
         self.start(view);
     }
 

@@ -154,9 +154,10 @@ impl<'a> StcStage<'a> {
                 &ghost_view,
                 &NoOcclusion,
                 &ghost_options,
-                &mut |item: DrawItem| ghosts.push(skeleton.node(item.node).first_lod + item.lod),
+                &mut |item: DrawItem| ghosts.push(item),
             );
         }
+        let ghosts = super::lod_ids(skeleton, &ghosts);
         let tiles = self.opts.tiles.map(|grid| {
             let _s = tracing::info_span!("tiles", frame).entered();
             Arc::new(TileFrame::new(

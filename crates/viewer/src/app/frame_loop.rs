@@ -400,9 +400,6 @@ impl LoopState {
         }
     }
 
-    /// What the full-detail image shows at window pixel `at`: the nearest
-    /// surface the section keeps, hidden objects skipped. `Ok(None)`:
-    /// nothing there (or outside the image).
     /// What the passes draw of the objects, after the hidden set, the
     /// selection or x-ray changed.
     pub(super) fn refresh_visibility(&mut self, skeleton: &gigawalk_scene::Skeleton) {
@@ -414,6 +411,9 @@ impl LoopState {
         };
     }
 
+    /// What the full-detail image shows at window pixel `at`: the nearest
+    /// surface the section keeps, hidden objects skipped. `Ok(None)`:
+    /// nothing there (or outside the image).
     fn pick_at(
         &mut self,
         scene: &SceneReader,

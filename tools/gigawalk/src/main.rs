@@ -16,6 +16,7 @@ macro_rules! out {
 
 mod adapters;
 mod demo;
+mod export_tiles;
 mod generate;
 mod gpu_run;
 mod info;
@@ -59,6 +60,8 @@ enum Command {
     Pick(objects::PickArgs),
     /// List the objects whose name or path matches a pattern, with their boxes
     Find(objects::FindArgs),
+    /// Write a scene as a 3D Tiles 1.1 tileset (CesiumJS, three.js): HLOD tiles with measured geometric errors, objects as features
+    ExportTiles(export_tiles::Args),
     /// benches/gpu-run.sh's last step: results.json and summary.md from its step records
     #[command(hide = true)]
     GpuRunResults(gpu_run::Args),
@@ -109,6 +112,7 @@ fn main() -> std::process::ExitCode {
         Command::View(a) => view::run(a),
         Command::Pick(a) => objects::pick(a),
         Command::Find(a) => objects::find(a),
+        Command::ExportTiles(a) => export_tiles::run(a),
         Command::GpuRunResults(a) => gpu_run::run(a),
     };
     // Temporaries of killed gigawalk runs found beside this run's outputs.

@@ -1,0 +1,858 @@
+//! One tile's content: one LOD of the scene as a binary glTF 2.0 (.glb)
+//! with one mesh of one primitive under one node.
+//!
+//! The node carries where the LOD lies relative to the tileset's root
+//! (its origin minus the scene origin, in f64), so vertices stay small
+//! numbers near the LOD's own centre and a model far from its origin keeps
+//! precision. With [`Encoding::Meshopt`] or [`Encoding::Quantized`] an
+//! encoded LOD's positions go out exactly as the scene stores them: its
+//! 16-bit grid coordinates (KHR_mesh_quantization), with the grid's origin
+//! and step as the node's translation and scale, so a client draws the
+//! geometry the stored errors were measured on. Object identity goes out
+//! as EXT_mesh_features (a feature ID per vertex) over an
+//! EXT_structural_metadata property table of the content's objects.
+
+use std::collections::HashMap;
+
+use bytemuck::Pod;
+use gigawalk_scene::objects::{ObjectRecord, ObjectRun};
+use gigawalk_scene::{Aabb, Colours, StoredLod};
+use glam::DVec3;
+use serde_json::{json, Map, Value};
+
+/// How a content's vertex and index data are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// Integer positions and normals (KHR_mesh_quantization) in buffer
+    /// views compressed by meshoptimizer's codecs (EXT_meshopt_compression),
+    /// as gltfpack writes them. Both extensions are required.
+    Meshopt,
+    /// Integer positions and normals (KHR_mesh_quantization), uncompressed.
+    Quantized,
+    /// Core glTF only: f32 positions and normals.
+    Plain,
+}
+
+impl Encoding {
+    pub fn name(self) -> &'static str {
+        match self {
+            Encoding::Meshopt => "meshopt",
+            Encoding::Quantized => "quantized",
+            Encoding::Plain => "plain",
+        }
+    }
+}
+
+/// Which objects a content's triangles belong to.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Identity<'a> {
+    /// Not known per triangle (a level that merges several objects).
+    None,
+    /// Every triangle belongs to this object (a node of one object).
+    One(u32),
+    /// A leaf's full detail: consecutive runs of triangles per object.
+    Runs(&'a [ObjectRun]),
+}
+
+/// A written content and what the tileset says of it.
+pub(crate) struct Content {
+    pub bytes: Vec<u8>,
+    /// The box of its vertices, world coordinates.
+    pub bounds: Aabb,
+    pub triangles: u64,
+    /// How many objects its feature IDs tell apart (0: none).
+    pub features: usize,
+}
+
+/// A LOD's positions as the content stores them.
+enum Positions {
+    /// Grid coordinates (the 4th always 0, padding to 8 bytes), to be
+    /// scaled by `scale` and moved by the node's translation.
+    Grid {
+        q: Vec<[u16; 4]>,
+        /// The grid's origin relative to the scene origin.
+        translation: DVec3,
+        scale: [f32; 3],
+    },
+    /// f32 offsets from `translation` (the LOD's origin relative to the
+    /// scene origin).
+    Float {
+        p: Vec<[f32; 3]>,
+        translation: DVec3,
+    },
+}
+
+/// A LOD's streams after the split by object.
+struct Streams {
+    positions: Positions,
+    normals: Vec<[f32; 3]>,
+    colours: Option<Vec<[u8; 4]>>,
+    uniform: [u8; 4],
+    indices: Vec<u32>,
+    /// The stored normals' bits (8 or 16).
+    normal_bits: u8,
+}
+
+/// `lod` as a .glb: `origin` is the scene origin the tileset's root sits
+/// at; `objects` the scene's object table when identity is known.
+pub(crate) fn content(
+    stored: StoredLod,
+    identity: Identity,
+    objects: Option<&[ObjectRecord]>,
+    origin: DVec3,
+    encoding: Encoding,
+) -> Result<Content, String> {
+    let mut s = streams(stored, origin, encoding);
+    let triangles = s.indices.len() as u64 / 3;
+    if triangles == 0 {
+        return Err("the level has no triangles".into());
+    }
+    // Per-triangle object ids, then the content's objects in id order and
+    // each triangle's index among them (its feature ID).
+    let per_triangle: Option<Vec<u32>> = match (identity, objects) {
+        (Identity::None, _) | (_, None) => None,
+        (Identity::One(o), Some(_)) => Some(vec![o; triangles as usize]),
+        (Identity::Runs(runs), Some(_)) => {
+            let mut t = Vec::with_capacity(triangles as usize);
+            for r in runs {
+                t.extend(std::iter::repeat_n(r.object, r.triangles as usize));
+            }
+            (t.len() as u64 == triangles).then_some(t)
+        }
+    };
+    let features = per_triangle.map(|t| {
+        let mut ids = t.clone();
+        ids.sort_unstable();
+        ids.dedup();
+        let local: Vec<u32> = t
+            .iter()
+            .map(|o| ids.binary_search(o).unwrap_or(0) as u32)
+            .collect();
+        (ids, local)
+    });
+    let feature_of_vertex = match &features {
+        Some((_, local)) => Some(split_by_feature(&mut s, local)),
+        None => None,
+    };
+    let bounds = bounds_of(&s.positions, origin);
+    let mut b = Builder::new(encoding == Encoding::Meshopt);
+    let mut attributes = Map::new();
+    let nv = match &s.positions {
+        Positions::Grid { q, .. } => q.len(),
+        Positions::Float { p, .. } => p.len(),
+    };
+
+    // Positions and the node that places them.
+    let mut node = Map::new();
+    node.insert("mesh".into(), json!(0));
+    let scale = match &s.positions {
+        Positions::Grid {
+            q,
+            translation,
+            scale,
+        } => {
+            let (lo, hi) = extent_u16(q);
+            let v = b.vertex_view(q, None)?;
+            attributes.insert(
+                "POSITION".into(),
+                json!(b.accessor(v, U16, false, nv, "VEC3", Some((json!(lo), json!(hi))))),
+            );
+            node.insert("translation".into(), json!(translation.to_array()));
+            node.insert("scale".into(), json!(scale));
+            *scale
+        }
+        Positions::Float { p, translation } => {
+            let (lo, hi) = extent_f32(p);
+            let v = b.vertex_view(p, None)?;
+            attributes.insert(
+                "POSITION".into(),
+                json!(b.accessor(v, F32, false, nv, "VEC3", Some((json!(lo), json!(hi))))),
+            );
+            node.insert("translation".into(), json!(translation.to_array()));
+            [1.0; 3]
+        }
+    };
+
+    // Normals: under a non-uniform node scale a client transforms them by
+    // the inverse transpose, diag(1 / scale), so each is stored multiplied
+    // by the scale and renormalized, which that undoes.
+    let normals: Vec<[f32; 3]> = s
+        .normals
+        .iter()
+        .map(|n| {
+            let v = glam::Vec3::from(*n) * glam::Vec3::from(scale);
+            v.try_normalize().unwrap_or(glam::Vec3::Y).to_array()
+        })
+        .collect();
+    let anisotropy = {
+        let (lo, hi) = scale
+            .iter()
+            .fold((f32::MAX, 0f32), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+        hi / lo.max(f32::MIN_POSITIVE)
+    };
+    // 8 bits where the scene stores 8 and the scale's anisotropy (which
+    // multiplies a stored normal's angular error by at most itself) is
+    // at most 4: within 1.6 degrees, about what the scene's 8 bits give
+    // (0.4); else 16.
+    let wide_normals = s.normal_bits > 8 || anisotropy > 4.0;
+    let normal_accessor = match encoding {
+        Encoding::Plain => {
+            let v = b.vertex_view(&normals, None)?;
+            b.accessor(v, F32, false, nv, "VEC3", None)
+        }
+        Encoding::Quantized => {
+            if wide_normals {
+                let q: Vec<[i16; 4]> = normals.iter().map(|n| snorm16(*n)).collect();
+                let v = b.vertex_view(&q, None)?;
+                b.accessor(v, I16, true, nv, "VEC3", None)
+            } else {
+                let q: Vec<[i8; 4]> = normals.iter().map(|n| snorm8(*n)).collect();
+                let v = b.vertex_view(&q, None)?;
+                b.accessor(v, I8, true, nv, "VEC3", None)
+            }
+        }
+        Encoding::Meshopt => {
+            let n4: Vec<[f32; 4]> = normals.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect();
+            if wide_normals {
+                let q = meshopt::encode_filter_oct::<i16>(&n4, 16);
+                let v = b.vertex_view(&q, Some("OCTAHEDRAL"))?;
+                b.accessor(v, I16, true, nv, "VEC3", None)
+            } else {
+                let q = meshopt::encode_filter_oct::<i8>(&n4, 8);
+                let v = b.vertex_view(&q, Some("OCTAHEDRAL"))?;
+                b.accessor(v, I8, true, nv, "VEC3", None)
+            }
+        }
+    };
+    attributes.insert("NORMAL".into(), json!(normal_accessor));
+
+    // Colours: sRGB bytes in the scene, linear in glTF; 16 bits keep the
+    // dark shades 8 linear bits would band.
+    let mut base = [1.0f32; 4];
+    match &s.colours {
+        Some(c) => {
+            let lin: Vec<[u16; 4]> = c
+                .iter()
+                .map(|c| {
+                    [
+                        linear16(c[0]),
+                        linear16(c[1]),
+                        linear16(c[2]),
+                        u16::MAX, // opaque: the scene draws every level opaque
+                    ]
+                })
+                .collect();
+            let v = b.vertex_view(&lin, None)?;
+            attributes.insert(
+                "COLOR_0".into(),
+                json!(b.accessor(v, U16, true, nv, "VEC4", None)),
+            );
+        }
+        None => {
+            for a in 0..3 {
+                base[a] = srgb_to_linear(s.uniform[a]);
+            }
+        }
+    }
+
+    // Feature IDs (a u16 padded to 4 bytes, as vertex data must be).
+    let mut primitive_ext = Map::new();
+    let mut root_ext = Map::new();
+    let mut feature_count = 0;
+    if let (Some((ids, _)), Some(fv), Some(records)) = (&features, &feature_of_vertex, objects) {
+        feature_count = ids.len();
+        let acc = if ids.len() <= u16::MAX as usize {
+            let d: Vec<[u16; 2]> = fv.iter().map(|&f| [f as u16, 0]).collect();
+            let v = b.vertex_view(&d, None)?;
+            b.accessor(v, U16, false, nv, "SCALAR", None)
+        } else {
+            let d: Vec<f32> = fv.iter().map(|&f| f as f32).collect();
+            let v = b.vertex_view(&d, None)?;
+            b.accessor(v, F32, false, nv, "SCALAR", None)
+        };
+        attributes.insert("_FEATURE_ID_0".into(), json!(acc));
+        primitive_ext.insert(
+            "EXT_mesh_features".into(),
+            json!({"featureIds": [{
+                "featureCount": ids.len(),
+                "attribute": 0,
+                "propertyTable": 0,
+                "label": "object",
+            }]}),
+        );
+        root_ext.insert(
+            "EXT_structural_metadata".into(),
+            property_table(&mut b, ids, records),
+        );
+    }
+
+    // Indices: 16 bits when every vertex fits.
+    let index_accessor = b.index_accessor(&s.indices, nv)?;
+    std::mem::take(&mut s.indices);
+
+    let mut primitive = json!({
+        "attributes": attributes,
+        "indices": index_accessor,
+        "material": 0,
+        "mode": 4,
+    });
+    if !primitive_ext.is_empty() {
+        primitive["extensions"] = Value::Object(primitive_ext);
+    }
+    let mut used = Vec::new();
+    let mut required = Vec::new();
+    if encoding != Encoding::Plain {
+        used.push("KHR_mesh_quantization");
+        required.push("KHR_mesh_quantization");
+    }
+    if encoding == Encoding::Meshopt {
+        used.push("EXT_meshopt_compression");
+        required.push("EXT_meshopt_compression");
+    }
+    if feature_count > 0 {
+        used.push("EXT_mesh_features");
+        used.push("EXT_structural_metadata");
+    }
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("gigawalk export-tiles ", env!("CARGO_PKG_VERSION"))},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [node],
+        "meshes": [{"primitives": [primitive]}],
+        "materials": [{
+            "pbrMetallicRoughness": {"baseColorFactor": base, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            // Models' windings are not consistent enough to cull back faces
+            // (gigawalk draws both sides too).
+            "doubleSided": true,
+        }],
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+    });
+    let mut buffers = vec![json!({"byteLength": b.bin.len()})];
+    if b.fallback > 0 {
+        buffers.push(json!({
+            "byteLength": b.fallback,
+            "extensions": {"EXT_meshopt_compression": {"fallback": true}},
+        }));
+    }
+    doc["buffers"] = Value::Array(buffers);
+    if !used.is_empty() {
+        doc["extensionsUsed"] = json!(used);
+    }
+    if !required.is_empty() {
+        doc["extensionsRequired"] = json!(required);
+    }
+    if !root_ext.is_empty() {
+        doc["extensions"] = Value::Object(root_ext);
+    }
+    let json = serde_json::to_vec(&doc).map_err(|e| format!("cannot write the glTF JSON: {e}"))?;
+    Ok(Content {
+        bytes: glb(json, b.bin),
+        bounds,
+        triangles,
+        features: feature_count,
+    })
+}
+
+/// The LOD's streams in the form `encoding` stores: grid coordinates where
+/// the scene stores at most 16 bits an axis (and the encoding allows
+/// integers), else f32 offsets from the LOD's origin.
+fn streams(stored: StoredLod, origin: DVec3, encoding: Encoding) -> Streams {
+    match stored {
+        StoredLod::Grid(g) => {
+            let n = g.streams.positions.len();
+            let normals: Vec<[f32; 3]> = (0..n).map(|i| g.streams.normal(i)).collect();
+            let uniform = g.uniform_colour.unwrap_or([255; 4]);
+            let normal_bits = g.streams.normal_bits;
+            let grid = match (&g.streams.positions, encoding) {
+                (gigawalk_scene::codec::GridPositions::U16(q), Encoding::Meshopt)
+                | (gigawalk_scene::codec::GridPositions::U16(q), Encoding::Quantized) => {
+                    // A flat axis has step 0: any scale works there when
+                    // every coordinate is 0, and 1 keeps the node's matrix
+                    // invertible (its normals' inverse transpose).
+                    let mut scale = g.streams.step;
+                    let mut ok = true;
+                    for (a, s) in scale.iter_mut().enumerate() {
+                        if *s == 0.0 {
+                            ok &= q.iter().all(|v| v[a] == 0);
+                            *s = 1.0;
+                        }
+                    }
+                    ok.then(|| Positions::Grid {
+                        q: q.clone(),
+                        translation: g.origin + DVec3::from(g.streams.origin.map(f64::from))
+                            - origin,
+                        scale,
+                    })
+                }
+                _ => None,
+            };
+            let positions = grid.unwrap_or_else(|| Positions::Float {
+                p: (0..n).map(|i| g.streams.position(i)).collect(),
+                translation: g.origin - origin,
+            });
+            Streams {
+                positions,
+                normals,
+                colours: g.streams.colours,
+                uniform,
+                indices: g.streams.indices,
+                normal_bits,
+            }
+        }
+        StoredLod::Mesh(m) => {
+            let (colours, uniform) = match m.colours {
+                Colours::Uniform(c) => (None, c),
+                Colours::PerVertex(c) => (Some(c), [255; 4]),
+            };
+            Streams {
+                positions: Positions::Float {
+                    p: m.positions,
+                    translation: m.origin - origin,
+                },
+                normals: m.normals,
+                colours,
+                uniform,
+                indices: m.indices,
+                normal_bits: 16,
+            }
+        }
+    }
+}
+
+/// Gives every vertex one feature: a vertex whose triangles belong to more
+/// than one object is copied, once per further object. Returns each
+/// vertex's feature (an index into the content's objects).
+fn split_by_feature(s: &mut Streams, feature_of_triangle: &[u32]) -> Vec<u32> {
+    let nv = s.normals.len();
+    const NONE: u32 = u32::MAX;
+    let mut feature = vec![NONE; nv];
+    // (old vertex, feature) -> new vertex, for the copies only.
+    let mut copies: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut source: Vec<u32> = (0..nv as u32).collect();
+    for (t, tri) in s.indices.chunks_exact_mut(3).enumerate() {
+        let f = feature_of_triangle[t];
+        for v in tri {
+            let old = *v as usize;
+            if feature[old] == NONE {
+                feature[old] = f;
+            } else if feature[old] != f {
+                let next = source.len() as u32;
+                let new = *copies.entry((old as u32, f)).or_insert_with(|| {
+                    source.push(old as u32);
+                    feature.push(f);
+                    next
+                });
+                *v = new;
+            }
+        }
+    }
+    if source.len() > nv {
+        for &o in &source[nv..] {
+            let o = o as usize;
+            s.normals.push(s.normals[o]);
+            if let Some(c) = &mut s.colours {
+                c.push(c[o]);
+            }
+            match &mut s.positions {
+                Positions::Grid { q, .. } => q.push(q[o]),
+                Positions::Float { p, .. } => p.push(p[o]),
+            }
+        }
+    }
+    // A vertex no triangle uses keeps feature 0 (it is never drawn).
+    feature
+        .into_iter()
+        .map(|f| if f == NONE { 0 } else { f })
+        .collect()
+}
+
+/// The world box of the content's vertices as a client places them.
+fn bounds_of(p: &Positions, origin: DVec3) -> Aabb {
+    match p {
+        Positions::Grid {
+            q,
+            translation,
+            scale,
+        } => {
+            let (lo, hi) = extent_u16(q);
+            let s = DVec3::from(scale.map(f64::from));
+            let at = |c: [u16; 3]| origin + *translation + DVec3::from(c.map(f64::from)) * s;
+            Aabb::from_points([at(lo), at(hi)])
+        }
+        Positions::Float { p, translation } => {
+            let (lo, hi) = extent_f32(p);
+            let at = |c: [f32; 3]| origin + *translation + DVec3::from(c.map(f64::from));
+            Aabb::from_points([at(lo), at(hi)])
+        }
+    }
+}
+
+fn extent_u16(q: &[[u16; 4]]) -> ([u16; 3], [u16; 3]) {
+    let mut lo = [u16::MAX; 3];
+    let mut hi = [0u16; 3];
+    for v in q {
+        for a in 0..3 {
+            lo[a] = lo[a].min(v[a]);
+            hi[a] = hi[a].max(v[a]);
+        }
+    }
+    (lo, hi)
+}
+
+fn extent_f32(p: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::MAX; 3];
+    let mut hi = [f32::MIN; 3];
+    for v in p {
+        for a in 0..3 {
+            lo[a] = lo[a].min(v[a]);
+            hi[a] = hi[a].max(v[a]);
+        }
+    }
+    (lo, hi)
+}
+
+fn snorm16(n: [f32; 3]) -> [i16; 4] {
+    let q = |x: f32| (x.clamp(-1.0, 1.0) * 32767.0).round() as i16;
+    [q(n[0]), q(n[1]), q(n[2]), 0]
+}
+
+fn snorm8(n: [f32; 3]) -> [i8; 4] {
+    let q = |x: f32| (x.clamp(-1.0, 1.0) * 127.0).round() as i8;
+    [q(n[0]), q(n[1]), q(n[2]), 0]
+}
+
+pub(crate) fn srgb_to_linear(c: u8) -> f32 {
+    let c = c as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn linear16(c: u8) -> u16 {
+    (srgb_to_linear(c) * 65535.0).round() as u16
+}
+
+/// The content's objects as an EXT_structural_metadata property table:
+/// row i is feature ID i.
+fn property_table(b: &mut Builder, ids: &[u32], records: &[ObjectRecord]) -> Value {
+    let record = |i: u32| records.get(i as usize);
+    let object_ids: Vec<u32> = ids.to_vec();
+    let mut props = Map::new();
+    let v = b.plain_view(bytemuck::cast_slice(&object_ids));
+    props.insert("objectId".into(), json!({"values": v}));
+    let strings: [(&str, &dyn Fn(&ObjectRecord) -> String); 4] = [
+        ("name", &|r| r.name.clone()),
+        ("path", &|r| r.path.clone()),
+        ("file", &|r| r.file.clone()),
+        ("metadata", &|r| r.metadata.clone().unwrap_or_default()),
+    ];
+    let mut classes = Map::new();
+    classes.insert(
+        "objectId".into(),
+        json!({"type": "SCALAR", "componentType": "UINT32"}),
+    );
+    for (name, get) in strings {
+        let mut bytes = Vec::new();
+        let mut offsets = vec![0u32];
+        for &i in ids {
+            if let Some(r) = record(i) {
+                bytes.extend_from_slice(get(r).as_bytes());
+            }
+            offsets.push(bytes.len() as u32);
+        }
+        // A column empty in every row is left out (no property is
+        // required): most models name no file and carry no extras.
+        if bytes.is_empty() && name != "name" {
+            continue;
+        }
+        let values = b.plain_view(&bytes);
+        let offs = b.plain_view(bytemuck::cast_slice(&offsets));
+        props.insert(
+            name.into(),
+            json!({"values": values, "stringOffsets": offs}),
+        );
+        classes.insert(name.into(), json!({"type": "STRING"}));
+    }
+    // The schema's meaning is in docs/tiles.md; each content carries only
+    // its shape, to keep small contents small.
+    json!({
+        "schema": {"id": "gigawalk", "classes": {"object": {"properties": classes}}},
+        "propertyTables": [{"class": "object", "count": ids.len(), "properties": props}],
+    })
+}
+
+const I8: u32 = 5120;
+const U16: u32 = 5123;
+const I16: u32 = 5122;
+const U32: u32 = 5125;
+const F32: u32 = 5126;
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+/// The binary chunk, buffer views and accessors of one content.
+struct Builder {
+    meshopt: bool,
+    /// Buffer 0: the GLB's binary chunk.
+    bin: Vec<u8>,
+    /// Bytes of buffer 1, the fallback buffer the compressed views
+    /// decode into (no data of its own).
+    fallback: usize,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Builder {
+    fn new(meshopt: bool) -> Self {
+        Builder {
+            meshopt,
+            bin: Vec::new(),
+            fallback: 0,
+            views: Vec::new(),
+            accessors: Vec::new(),
+        }
+    }
+
+    /// Pads the binary chunk to 8 bytes (metadata views must start
+    /// there; vertex data at 4).
+    fn align(&mut self) {
+        while self.bin.len() % 8 != 0 {
+            self.bin.push(0);
+        }
+    }
+
+    /// Uncompressed bytes in buffer 0.
+    fn plain_view(&mut self, bytes: &[u8]) -> usize {
+        self.align();
+        let off = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": off, "byteLength": bytes.len()}));
+        self.views.len() - 1
+    }
+
+    /// A vertex attribute stream, one `T` a vertex (its size the stride).
+    fn vertex_view<T: Pod>(&mut self, data: &[T], filter: Option<&str>) -> Result<usize, String> {
+        let stride = std::mem::size_of::<T>();
+        debug_assert!(stride % 4 == 0);
+        let raw: &[u8] = bytemuck::cast_slice(data);
+        if !self.meshopt {
+            let v = self.plain_view(raw);
+            self.views[v]["byteStride"] = json!(stride);
+            self.views[v]["target"] = json!(ARRAY_BUFFER);
+            return Ok(v);
+        }
+        // Version 0 of the vertex codec: the one EXT_meshopt_compression
+        // specifies.
+        let enc = meshopt::encode_vertex_buffer_level(data, 2, Some(0))
+            .map_err(|e| format!("meshopt cannot encode a vertex stream: {e:?}"))?;
+        Ok(self.compressed_view(
+            &enc,
+            raw.len(),
+            data.len(),
+            stride,
+            "ATTRIBUTES",
+            filter,
+            Some(stride),
+            ARRAY_BUFFER,
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn compressed_view(
+        &mut self,
+        enc: &[u8],
+        len: usize,
+        count: usize,
+        stride: usize,
+        mode: &str,
+        filter: Option<&str>,
+        view_stride: Option<usize>,
+        target: u32,
+    ) -> usize {
+        self.align();
+        let off = self.bin.len();
+        self.bin.extend_from_slice(enc);
+        self.fallback = self.fallback.next_multiple_of(8);
+        let fb = self.fallback;
+        self.fallback += len;
+        let mut ext = json!({
+            "buffer": 0, "byteOffset": off, "byteLength": enc.len(),
+            "byteStride": stride, "count": count, "mode": mode,
+        });
+        if let Some(f) = filter {
+            ext["filter"] = json!(f);
+        }
+        let mut view = json!({
+            "buffer": 1, "byteOffset": fb, "byteLength": len, "target": target,
+            "extensions": {"EXT_meshopt_compression": ext},
+        });
+        if let Some(s) = view_stride {
+            view["byteStride"] = json!(s);
+        }
+        self.views.push(view);
+        self.views.len() - 1
+    }
+
+    /// The triangle list, 16-bit indices when every vertex fits.
+    fn index_accessor(&mut self, indices: &[u32], vertices: usize) -> Result<usize, String> {
+        let narrow = vertices <= u16::MAX as usize + 1;
+        let (size, ty) = if narrow { (2, U16) } else { (4, U32) };
+        let v = if self.meshopt {
+            let enc = meshopt::encode_index_buffer(indices, vertices)
+                .map_err(|e| format!("meshopt cannot encode the indices: {e:?}"))?;
+            self.compressed_view(
+                &enc,
+                size * indices.len(),
+                indices.len(),
+                size,
+                "TRIANGLES",
+                None,
+                None,
+                ELEMENT_ARRAY_BUFFER,
+            )
+        } else {
+            let v = if narrow {
+                let i: Vec<u16> = indices.iter().map(|&i| i as u16).collect();
+                self.plain_view(bytemuck::cast_slice(&i))
+            } else {
+                self.plain_view(bytemuck::cast_slice(indices))
+            };
+            self.views[v]["target"] = json!(ELEMENT_ARRAY_BUFFER);
+            v
+        };
+        Ok(self.accessor(v, ty, false, indices.len(), "SCALAR", None))
+    }
+
+    fn accessor(
+        &mut self,
+        view: usize,
+        component: u32,
+        normalized: bool,
+        count: usize,
+        ty: &str,
+        min_max: Option<(Value, Value)>,
+    ) -> usize {
+        let mut a =
+            json!({"bufferView": view, "componentType": component, "count": count, "type": ty});
+        if normalized {
+            a["normalized"] = json!(true);
+        }
+        if let Some((lo, hi)) = min_max {
+            a["min"] = lo;
+            a["max"] = hi;
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+}
+
+/// The GLB container: header, JSON chunk (padded with spaces), binary
+/// chunk (padded with zeros).
+fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gigawalk_scene::LodMesh;
+
+    fn quad() -> LodMesh {
+        LodMesh {
+            origin: DVec3::new(1000.0, 0.0, 0.0),
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+            normals: vec![[0.0, 0.0, 1.0]; 4],
+            colours: Colours::Uniform([255, 0, 0, 255]),
+            indices: vec![0, 1, 2, 0, 2, 3],
+        }
+    }
+
+    fn records(n: usize) -> Vec<ObjectRecord> {
+        (0..n)
+            .map(|i| ObjectRecord {
+                name: format!("o{i}"),
+                path: format!("root/o{i}"),
+                file: String::new(),
+                metadata: None,
+                bounds: Aabb::EMPTY,
+                triangles: 1,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_shared_vertex_of_two_objects_is_copied() {
+        let runs = [
+            ObjectRun {
+                object: 3,
+                triangles: 1,
+            },
+            ObjectRun {
+                object: 1,
+                triangles: 1,
+            },
+        ];
+        let r = records(4);
+        for enc in [Encoding::Plain, Encoding::Quantized, Encoding::Meshopt] {
+            let c = content(
+                StoredLod::Mesh(quad()),
+                Identity::Runs(&runs),
+                Some(&r),
+                DVec3::ZERO,
+                enc,
+            )
+            .unwrap();
+            assert_eq!(c.triangles, 2);
+            assert_eq!(c.features, 2);
+            assert_eq!(c.bounds.min, DVec3::new(1000.0, 0.0, 0.0));
+            assert_eq!(c.bounds.max, DVec3::new(1001.0, 1.0, 0.0));
+            // Without validation: the gltf crate knows no custom
+            // attribute (_FEATURE_ID_0) unless built with its `extras`.
+            let g = gltf::Gltf::from_slice_without_validation(&c.bytes).unwrap();
+            let p = g.meshes().next().unwrap().primitives().next().unwrap();
+            // Vertices 0 and 2 are shared by both objects: 4 + 2.
+            assert_eq!(p.get(&gltf::Semantic::Positions).unwrap().count(), 6);
+        }
+    }
+
+    #[test]
+    fn no_triangles_is_an_error() {
+        let mut m = quad();
+        m.indices.clear();
+        let e = content(
+            StoredLod::Mesh(m),
+            Identity::None,
+            None,
+            DVec3::ZERO,
+            Encoding::Plain,
+        );
+        assert!(e.is_err());
+    }
+}

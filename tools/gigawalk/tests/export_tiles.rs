@@ -97,7 +97,10 @@ fn tile(
     let bv = &t["boundingVolume"]["box"];
     if let Some(p) = parent {
         let pe = p["geometricError"].as_f64().unwrap();
-        assert!(error <= pe, "error {error} under a parent of {pe} ({file:?})");
+        assert!(
+            error <= pe,
+            "error {error} under a parent of {pe} ({file:?})"
+        );
         assert_inside(bv, &p["boundingVolume"]["box"], "a child's box");
     }
     if let Some(c) = t.get("content") {
@@ -105,7 +108,10 @@ fn tile(
         let path = file.parent().unwrap().join(uri);
         assert!(path.exists(), "{uri} (from {}) resolves", file.display());
         if uri.ends_with(".json") {
-            assert!(t.get("children").is_none(), "an external tileset's tile has no children");
+            assert!(
+                t.get("children").is_none(),
+                "an external tileset's tile has no children"
+            );
             let ext = read_json(&path);
             assert_eq!(ext["asset"]["version"], "1.1");
             let root = &ext["root"];
@@ -148,7 +154,8 @@ fn content(path: &Path, objects: Option<&gigawalk_scene::objects::ObjectTable>) 
     let table = objects.expect("features only where the scene has identity");
     let pt = &meta["propertyTables"][0];
     let count = pt["count"].as_u64().unwrap() as usize;
-    let fid = &raw["meshes"][0]["primitives"][0]["extensions"]["EXT_mesh_features"]["featureIds"][0];
+    let fid =
+        &raw["meshes"][0]["primitives"][0]["extensions"]["EXT_mesh_features"]["featureIds"][0];
     assert_eq!(fid["featureCount"].as_u64().unwrap() as usize, count);
     let blob = g.blob.as_ref().expect("a binary chunk");
     let view = |i: &Value| -> &[u8] {
@@ -203,7 +210,11 @@ fn a_small_plant_exports_a_tileset_whose_structure_holds() {
         ]);
         let summary = json(&o.stdout);
         let w = walk(&out, &gwk);
-        assert_eq!(w.tiles as u64, summary["tiles"].as_u64().unwrap(), "{encoding}");
+        assert_eq!(
+            w.tiles as u64,
+            summary["tiles"].as_u64().unwrap(),
+            "{encoding}"
+        );
         assert_eq!(w.contents as u64, summary["contents"].as_u64().unwrap());
         assert_eq!(w.files as u64, summary["tileset_files"].as_u64().unwrap());
         assert_eq!(w.triangles, summary["triangles"].as_u64().unwrap());
@@ -220,7 +231,11 @@ fn a_small_plant_exports_a_tileset_whose_structure_holds() {
         }
         // The tree reaches every leaf's full detail.
         for n in reader.skeleton().nodes().iter().filter(|n| n.is_leaf()) {
-            let finest = out.join(format!("content/{}/{}.glb", n.first_lod / 1000, n.first_lod));
+            let finest = out.join(format!(
+                "content/{}/{}.glb",
+                n.first_lod / 1000,
+                n.first_lod
+            ));
             let coarser_same = lods[n.lods()]
                 .iter()
                 .skip(1)
@@ -241,7 +256,12 @@ fn bad_input_is_an_error_naming_the_thing() {
     assert!(!ok && err.contains("notes.gwk"), "{err}");
     assert!(!out.exists(), "nothing written for a bad scene");
     // Missing.
-    let (ok, _, err) = gigawalk(&["export-tiles", s(&dir.path().join("none.gwk")), "-o", s(&out)]);
+    let (ok, _, err) = gigawalk(&[
+        "export-tiles",
+        s(&dir.path().join("none.gwk")),
+        "-o",
+        s(&out),
+    ]);
     assert!(!ok && err.contains("none.gwk"), "{err}");
 
     let (_, gwk) = small_plant(dir.path());
@@ -250,7 +270,10 @@ fn bad_input_is_an_error_naming_the_thing() {
     let cut = dir.path().join("cut.gwk");
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     let (ok, _, err) = gigawalk(&["export-tiles", s(&cut), "-o", s(&out)]);
-    assert!(!ok && err.contains("cut.gwk") && err.contains("truncated"), "{err}");
+    assert!(
+        !ok && err.contains("cut.gwk") && err.contains("truncated"),
+        "{err}"
+    );
     assert!(!out.exists());
 
     // Bad georeferencing.
@@ -268,10 +291,21 @@ fn bad_input_is_an_error_naming_the_thing() {
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "mine").unwrap();
     let (ok, _, err) = gigawalk(&["export-tiles", s(&gwk), "-o", s(&out)]);
-    assert!(!ok && err.contains("--force") && err.contains("out"), "{err}");
+    assert!(
+        !ok && err.contains("--force") && err.contains("out"),
+        "{err}"
+    );
     assert!(!out.join("tileset.json").exists());
     // With --force it is written, and what is not the export's stays.
-    gigawalk_ok(&["export-tiles", s(&gwk), "-o", s(&out), "--force", "--origin", "-122.4,37.8,10"]);
+    gigawalk_ok(&[
+        "export-tiles",
+        s(&gwk),
+        "-o",
+        s(&out),
+        "--force",
+        "--origin",
+        "-122.4,37.8,10",
+    ]);
     assert!(out.join("tileset.json").exists() && out.join("keep.txt").exists());
     let doc = read_json(&out.join("tileset.json"));
     // Georeferenced: the root transform puts the model on the ellipsoid.
@@ -310,7 +344,9 @@ fn real_clients_load_the_tileset_and_pick_objects() {
             harness.display()
         ))
     } else if !Path::new(&chromium).exists() {
-        Some(format!("{chromium}: no Chromium (apt-get install chromium)"))
+        Some(format!(
+            "{chromium}: no Chromium (apt-get install chromium)"
+        ))
     } else {
         None
     };
@@ -325,8 +361,22 @@ fn real_clients_load_the_tileset_and_pick_objects() {
     let (path, gwk) = small_plant(dir.path());
     let tiles = dir.path().join("tiles");
     let quantized = dir.path().join("tiles-quantized");
-    gigawalk_ok(&["export-tiles", s(&gwk), "-o", s(&tiles), "--tiles-per-file", "200"]);
-    gigawalk_ok(&["export-tiles", s(&gwk), "-o", s(&quantized), "--encoding", "quantized"]);
+    gigawalk_ok(&[
+        "export-tiles",
+        s(&gwk),
+        "-o",
+        s(&tiles),
+        "--tiles-per-file",
+        "200",
+    ]);
+    gigawalk_ok(&[
+        "export-tiles",
+        s(&gwk),
+        "-o",
+        s(&quantized),
+        "--encoding",
+        "quantized",
+    ]);
     let report = dir.path().join("clients.json");
     let out = std::process::Command::new("node")
         .current_dir(&harness)
@@ -352,7 +402,10 @@ fn real_clients_load_the_tileset_and_pick_objects() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     println!("{stdout}");
-    assert!(out.status.success(), "the clients' harness failed:\n{stdout}\n{stderr}");
+    assert!(
+        out.status.success(),
+        "the clients' harness failed:\n{stdout}\n{stderr}"
+    );
     let r = read_json(&report);
     assert_eq!(r["validator"]["errors"], 0, "{r}");
     for client in ["cesium", "threejs"] {
@@ -364,6 +417,9 @@ fn real_clients_load_the_tileset_and_pick_objects() {
         // The picked name is the object's in the scene.
         let id = pick["objectId"].as_u64().unwrap() as u32;
         let table = SceneReader::open(&gwk).unwrap().objects().unwrap().unwrap();
-        assert_eq!(table.object(id).unwrap().name, pick["name"].as_str().unwrap());
+        assert_eq!(
+            table.object(id).unwrap().name,
+            pick["name"].as_str().unwrap()
+        );
     }
 }

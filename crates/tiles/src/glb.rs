@@ -130,10 +130,9 @@ pub(crate) fn content(
             .collect();
         (ids, local)
     });
-    let feature_of_vertex = match &features {
-        Some((_, local)) => Some(split_by_feature(&mut s, local)),
-        None => None,
-    };
+    let feature_of_vertex = features
+        .as_ref()
+        .map(|(_, local)| split_by_feature(&mut s, local));
     let bounds = bounds_of(&s.positions, origin);
     let mut b = Builder::new(encoding == Encoding::Meshopt);
     let mut attributes = Map::new();
@@ -249,8 +248,8 @@ pub(crate) fn content(
             );
         }
         None => {
-            for a in 0..3 {
-                base[a] = srgb_to_linear(s.uniform[a]);
+            for (b, c) in base.iter_mut().zip(s.uniform).take(3) {
+                *b = srgb_to_linear(c);
             }
         }
     }
@@ -543,7 +542,8 @@ fn property_table(b: &mut Builder, ids: &[u32], records: &[ObjectRecord]) -> Val
     let mut props = Map::new();
     let v = b.plain_view(bytemuck::cast_slice(&object_ids));
     props.insert("objectId".into(), json!({"values": v}));
-    let strings: [(&str, &dyn Fn(&ObjectRecord) -> String); 4] = [
+    type Column<'a> = (&'a str, &'a dyn Fn(&ObjectRecord) -> String);
+    let strings: [Column; 4] = [
         ("name", &|r| r.name.clone()),
         ("path", &|r| r.path.clone()),
         ("file", &|r| r.file.clone()),
@@ -618,7 +618,7 @@ impl Builder {
     /// Pads the binary chunk to 8 bytes (metadata views must start
     /// there; vertex data at 4).
     fn align(&mut self) {
-        while self.bin.len() % 8 != 0 {
+        while !self.bin.len().is_multiple_of(8) {
             self.bin.push(0);
         }
     }
@@ -636,7 +636,7 @@ impl Builder {
     /// A vertex attribute stream, one `T` a vertex (its size the stride).
     fn vertex_view<T: Pod>(&mut self, data: &[T], filter: Option<&str>) -> Result<usize, String> {
         let stride = std::mem::size_of::<T>();
-        debug_assert!(stride % 4 == 0);
+        debug_assert!(stride.is_multiple_of(4));
         let raw: &[u8] = bytemuck::cast_slice(data);
         if !self.meshopt {
             let v = self.plain_view(raw);
@@ -752,10 +752,10 @@ impl Builder {
 /// The GLB container: header, JSON chunk (padded with spaces), binary
 /// chunk (padded with zeros).
 fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };

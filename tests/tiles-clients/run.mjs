@@ -1,12 +1,15 @@
 // Loads an exported tileset in real clients and writes what they did:
 //   node run.mjs --tiles DIR [--validate DIR] --path FILE --pose N --sse S
 //                [--chromium /usr/bin/chromium] [--report out.json]
+//                [--shots DIR] [--near D]
 // 1. the Khronos glTF validator over every content of --validate (and of
 //    --tiles): no errors allowed;
 // 2. CesiumJS (@cesium/engine) and 3d-tiles-renderer (three.js) in
 //    headless Chromium (WebGL2 on SwiftShader), from pose N of a gigawalk
 //    camera path at screen-space error S: the tiles and triangles each
-//    selected and what a pixel picks (feature ID and the object's name).
+//    selected and what each pixel of a 16 x 9 grid picks (feature ID, the
+//    object's index and name), the same pixels in both; with --shots, each
+//    client's image (cesium.png, threejs.png).
 // The tileset is served by a static server this script starts.
 import { createServer } from 'node:http';
 import { readFileSync, writeFileSync, mkdirSync, existsSync, statSync, mkdtempSync, rmSync } from 'node:fs';
@@ -24,8 +27,9 @@ const width = 640, height = 360;
 
 /** Pose N (0-based) of a gigawalk camera path (docs/path-format.md), in the
  *  tileset's frame: scene (y up) to 3D Tiles (z up), x, y, z -> x, -z, y;
- *  the tileset's root transform puts the scene's own coordinates there. */
-function pose(pathFile, n) {
+ *  the tileset's root transform puts the scene's own coordinates there.
+ *  `near`: gigawalk's near plane for the scene (`--near`, model units). */
+function pose(pathFile, n, near) {
   const lines = readFileSync(pathFile, 'utf8').split('\n').map((l) => l.replace(/#.*/, '').trim()).filter(Boolean);
   const v = lines[n].split(/\s+/).map(Number);
   const [x, y, z, qx, qy, qz, qw, fovy] = v.slice(1);
@@ -37,7 +41,7 @@ function pose(pathFile, n) {
   const zUp = ([a, b, c]) => [a, -c, b];
   return {
     position: zUp([x, y, z]), direction: zUp(rotate([0, 0, -1])), up: zUp(rotate([0, 1, 0])),
-    fovy, near: 0.05, far: 1e5,
+    fovy, near, far: 1e5,
   };
 }
 
@@ -60,7 +64,7 @@ function serve(routes) {
   return new Promise((r) => server.listen(0, '127.0.0.1', () => r(server)));
 }
 
-async function client(browser, base, name, params) {
+async function client(browser, base, name, params, shot) {
   const page = await browser.newPage();
   const log = [];
   page.on('console', (m) => log.push(`${m.type()}: ${m.text()}`));
@@ -69,6 +73,7 @@ async function client(browser, base, name, params) {
   await page.goto(`${base}/app/${name}.html#${encodeURIComponent(JSON.stringify(params))}`);
   await page.waitForFunction('window.__result !== undefined', { timeout: 240000, polling: 200 });
   const r = await page.evaluate('window.__result');
+  if (shot) await page.screenshot({ path: shot });
   await page.close();
   if (r.error) throw new Error(`${name}: ${r.error}\n${log.join('\n')}`);
   return r;
@@ -93,7 +98,9 @@ async function main() {
   mkdirSync(app, { recursive: true });
   for (const name of ['cesium', 'threejs']) {
     writeFileSync(join(app, `${name}.html`), `<!doctype html><html><head><meta charset="utf-8">
-<style>html,body,#view{margin:0;width:${width}px;height:${height}px;overflow:hidden}</style>
+<style>html,body,#view{margin:0;width:${width}px;height:${height}px;overflow:hidden}
+#view canvas{display:block;width:${width}px;height:${height}px}
+.cesium-widget-credits{display:none}</style>
 <script>window.CESIUM_BASE_URL = '/cesium/';</script></head>
 <body><div id="view"></div><script src="/app/${name}.js"></script></body></html>`);
   }
@@ -121,17 +128,23 @@ async function main() {
     ],
   });
   try {
-    const params = { pose: pose(args.path, Number(args.pose ?? 0)), sse: Number(args.sse ?? 16), width, height };
-    const summary = (r) => ({ tiles: r.tiles, triangles: r.triangles, pick: r.pick, webgl2: r.webgl2,
-      deepest: Math.max(0, ...r.selected.map((s) => s.depth ?? 0)) });
+    // Pixel centres of a 16 x 9 grid, (x, y) from the top-left pixel.
+    const grid = [];
+    for (let j = 0; j < 9; j++) for (let i = 0; i < 16; i++) grid.push([Math.floor((i + 0.5) * width / 16), Math.floor((j + 0.5) * height / 9)]);
+    const params = { pose: pose(args.path, Number(args.pose ?? 0), Number(args.near ?? 0.05)), sse: Number(args.sse ?? 16), width, height, grid };
+    const summary = (r) => ({ tiles: r.tiles, triangles: r.triangles, webgl2: r.webgl2,
+      picked: r.picks.filter(Boolean).length, pick: r.picks.find(Boolean) ?? null });
     result.pose = params.pose;
     result.sse = params.sse;
-    const cesium = await client(browser, base, 'cesium', params);
-    result.cesium = { ...summary(cesium), selected: cesium.selected };
-    console.log(`cesium: ${JSON.stringify(summary(cesium))}`);
-    const three = await client(browser, base, 'threejs', { ...params, pickAt: cesium.pick });
-    result.threejs = { ...summary(three), selected: three.selected };
-    console.log(`threejs: ${JSON.stringify(summary(three))}`);
+    result.width = width;
+    result.height = height;
+    result.grid = grid;
+    if (args.shots) mkdirSync(args.shots, { recursive: true });
+    for (const name of ['cesium', 'threejs']) {
+      const r = await client(browser, base, name, params, args.shots && join(args.shots, `${name}.png`));
+      result[name] = { ...summary(r), selected: r.selected, picks: r.picks };
+      console.log(`${name}: ${JSON.stringify(summary(r))}`);
+    }
   } finally {
     await browser.close();
     server.close();

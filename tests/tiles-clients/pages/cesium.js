@@ -8,7 +8,7 @@ import {
 import { params, report, fail } from './common.js';
 
 async function main() {
-  const { pose, sse, width, height } = params;
+  const { pose, sse, width, height, grid } = params;
   const widget = new CesiumWidget('view', {
     globe: false, skyBox: false, skyAtmosphere: false, baseLayer: false,
     useDefaultRenderLoop: false, shadows: false, scene3DOnly: true,
@@ -33,10 +33,13 @@ async function main() {
   frustum.near = pose.near;
   frustum.far = pose.far;
   camera.frustum = frustum;
-  camera.setView({
-    destination: new Cartesian3(...pose.position),
-    orientation: { direction: new Cartesian3(...pose.direction), up: new Cartesian3(...pose.up) },
-  });
+  // The pose as it is: position, direction and up in the tileset's frame
+  // (setView would go through heading, pitch and roll in the east-north-up
+  // frame of the ellipsoid point below the eye, which is not this frame).
+  camera.position = new Cartesian3(...pose.position);
+  camera.direction = Cartesian3.normalize(new Cartesian3(...pose.direction), new Cartesian3());
+  camera.up = Cartesian3.normalize(new Cartesian3(...pose.up), new Cartesian3());
+  camera.right = Cartesian3.cross(camera.direction, camera.up, new Cartesian3());
   let stable = 0;
   const t0 = performance.now();
   while (stable < 5) {
@@ -47,29 +50,24 @@ async function main() {
     if (performance.now() - t0 > 120000) throw new Error('tiles did not load in 120 s');
   }
   widget.render();
-  const st = tileset.statistics;
+  // Statistics are counted again by every pass, picks included: read
+  // them now, after the last render.
+  const st = { ...tileset.statistics };
   const selected = [];
   for (const t of tileset._selectedTiles ?? []) {
-    if (t.content && t.content.url) selected.push({ uri: new URL(t.content.url, location.href).pathname, error: t.geometricError, depth: t._depth });
+    if (t.content && t.content.url) selected.push({ uri: new URL(t.content.url, location.href).pathname, error: t.geometricError });
   }
-  // The first pixel on a grid, from the centre out, that picks a feature.
-  let pick = null;
-  const canvas = scene.canvas;
-  const cw = canvas.clientWidth, ch = canvas.clientHeight;
-  const points = [];
-  for (let j = 0; j <= 12; j++) for (let i = 0; i <= 16; i++) points.push([i / 16, j / 12]);
-  points.sort((a, b) => Math.hypot(a[0] - 0.5, a[1] - 0.5) - Math.hypot(b[0] - 0.5, b[1] - 0.5));
-  for (const [u, v] of points) {
-    const p = new Cartesian2(Math.min(cw - 1, Math.round(u * cw)), Math.min(ch - 1, Math.round(v * ch)));
-    const f = scene.pick(p);
-    if (f instanceof Cesium3DTileFeature && f.getProperty('name') !== undefined) {
-      pick = { x: p.x, y: p.y, featureId: f.featureId, name: f.getProperty('name'), objectId: f.getProperty('objectId'), path: f.getProperty('path') };
-      break;
-    }
-  }
+  // What each pixel of the grid picks (at the pixel's centre): a feature
+  // (its ID, the object's index and name), or null (nothing, or a tile
+  // without features).
+  const picks = grid.map(([x, y]) => {
+    const f = scene.pick(new Cartesian2(x + 0.5, y + 0.5), 1, 1);
+    if (!(f instanceof Cesium3DTileFeature) || f.getProperty('name') === undefined) return null;
+    return { x, y, featureId: f.featureId, name: f.getProperty('name'), objectId: f.getProperty('objectId'), path: f.getProperty('path') };
+  });
   report({
     tiles: st.selected, triangles: st.numberOfTrianglesSelected, loaded: st.numberOfTilesWithContentReady,
-    features: st.numberOfFeaturesSelected, selected, pick, webgl2: scene.context.webgl2,
+    features: st.numberOfFeaturesSelected, selected, picks, webgl2: scene.context.webgl2,
   });
 }
 main().catch(fail);

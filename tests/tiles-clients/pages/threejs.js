@@ -7,8 +7,8 @@ import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.j
 import { params, report, fail } from './common.js';
 
 async function main() {
-  const { pose, sse, width, height, pickAt } = params;
-  const renderer = new THREE.WebGLRenderer({ antialias: false });
+  const { pose, sse, width, height, grid } = params;
+  const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
   renderer.setSize(width, height);
   document.getElementById('view').appendChild(renderer.domElement);
   const scene = new THREE.Scene();
@@ -44,27 +44,23 @@ async function main() {
   });
   const selected = [];
   for (const t of tiles.visibleTiles) {
-    if (t.content && t.content.uri) selected.push({ uri: new URL(t.content.uri, location.href).pathname, error: t.geometricError, depth: t.__depth });
+    if (t.content && t.content.uri) selected.push({ uri: new URL(t.content.uri, location.href).pathname, error: t.geometricError });
   }
-  // What the pixel Cesium picked at picks here.
-  let pick = null;
-  const candidates = [];
-  if (pickAt) candidates.push([pickAt.x, pickAt.y]);
-  for (let j = 0; j <= 12; j++) for (let i = 0; i <= 16; i++) candidates.push([i / 16 * width, j / 12 * height]);
+  // What each pixel of the grid picks (a ray through the pixel's centre
+  // against the tiles drawn): a feature, or null.
   const ray = new THREE.Raycaster();
-  for (const [px, py] of candidates) {
-    ray.setFromCamera(new THREE.Vector2(px / width * 2 - 1, 1 - py / height * 2), camera);
+  const picks = grid.map(([x, y]) => {
+    ray.setFromCamera(new THREE.Vector2((x + 0.5) / width * 2 - 1, 1 - (y + 0.5) / height * 2), camera);
     const hit = ray.intersectObject(tiles.group, true)[0];
     const mf = hit && hit.object.userData.meshFeatures;
     const sm = hit && hit.object.userData.structuralMetadata;
-    if (!mf || !sm) continue;
+    if (!mf || !sm) return null;
     const ids = mf.getFeatures(hit.faceIndex, hit.barycoord);
     const info = mf.getFeatureInfo()[0];
-    if (ids[0] === null || ids[0] === undefined) continue;
+    if (ids[0] === null || ids[0] === undefined) return null;
     const row = sm.getPropertyTableData(info.propertyTable, ids[0]);
-    pick = { x: Math.round(px), y: Math.round(py), featureId: ids[0], name: row.name, objectId: row.objectId, path: row.path };
-    break;
-  }
-  report({ tiles: selected.length, triangles, selected, pick, webgl2: renderer.capabilities.isWebGL2 });
+    return { x, y, featureId: ids[0], name: row.name, objectId: row.objectId, path: row.path };
+  });
+  report({ tiles: selected.length, triangles, selected, picks, webgl2: renderer.capabilities.isWebGL2 });
 }
 main().catch(fail);

@@ -36,7 +36,10 @@ pub enum Verdict {
 /// box can show in the final image, `VisibleBelow` only when nothing below
 /// the node could be occluded by it.
 pub trait Culler {
-    /// What a node hands its children (`()` for most cullers).
+    /// What a node hands its children (`()` for most cullers). Traversal
+    /// may hand children an ancestor's context instead of their parent's
+    /// (past the contexts a frame can index), so a context must only
+    /// narrow what later tests look at, never what they may call occluded.
     type Ctx: Clone + Default;
 
     /// Whether [`Culler::queued`] does anything (traversal skips preparing

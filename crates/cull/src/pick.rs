@@ -123,16 +123,10 @@ pub fn pick<E>(
         (near <= far).then_some(near)
     };
     if let Some(t) = enter(0) {
-        heap.push(Entry {
-            distance: t,
-            node: 0,
-            item: (),
-        });
+        heap.push(Entry::new(t, 0, ()));
     }
-    while let Some(Entry {
-        distance: t, node, ..
-    }) = heap.pop()
-    {
+    while let Some(e) = heap.pop() {
+        let (t, node) = (e.distance(), e.node);
         if best.is_some_and(|b| b.distance < t) {
             break;
         }
@@ -143,11 +137,7 @@ pub fn pick<E>(
         if !n.is_leaf() {
             for c in n.children() {
                 if let Some(t) = enter(c) {
-                    heap.push(Entry {
-                        distance: t,
-                        node: c,
-                        item: (),
-                    });
+                    heap.push(Entry::new(t, c, ()));
                 }
             }
             continue;

@@ -82,18 +82,47 @@ pub struct TraversalStats {
     pub section_culled: u64,
 }
 
-/// What traversal keeps beside a queued node.
+/// What traversal keeps beside a queued node, in one word so that a
+/// queue entry is 16 bytes: the frustum planes still to test (5 bits),
+/// whether the culler still tests it (false below a node the culler
+/// called [`Verdict::VisibleBelow`]), and the index of the culler context
+/// it was queued with (the rest).
 #[derive(Clone, Copy, Debug)]
-struct Queued {
-    mask: PlaneMask,
-    /// False below a node the culler called [`Verdict::VisibleBelow`].
-    test: bool,
-    /// Index of the culler context the node was queued with.
-    ctx: u32,
+struct Queued(u32);
+
+impl Queued {
+    const MASK_BITS: u32 = 5;
+    const TEST_BIT: u32 = 1 << Self::MASK_BITS;
+    const CTX_SHIFT: u32 = Self::MASK_BITS + 1;
+    /// Contexts a frame can index; past it a node's children share its
+    /// own context (see `traverse_culled`).
+    const MAX_CTX: u32 = u32::MAX >> Self::CTX_SHIFT;
+
+    fn new(mask: PlaneMask, test: bool, ctx: u32) -> Queued {
+        debug_assert!(u32::from(mask) < Self::TEST_BIT && ctx <= Self::MAX_CTX);
+        let test = if test { Self::TEST_BIT } else { 0 };
+        Queued(u32::from(mask) | test | ctx << Self::CTX_SHIFT)
+    }
+
+    fn mask(self) -> PlaneMask {
+        (self.0 & (Self::TEST_BIT - 1)) as PlaneMask
+    }
+
+    fn test(self) -> bool {
+        self.0 & Self::TEST_BIT != 0
+    }
+
+    fn ctx(self) -> u32 {
+        self.0 >> Self::CTX_SHIFT
+    }
 }
+
+const _: () = assert!(ALL_PLANES as u32 >> Queued::MASK_BITS == 0);
 
 /// A queued node, nearest first.
 type Entry = Nearest<Queued>;
+
+const _: () = assert!(std::mem::size_of::<Entry>() == 16);
 
 /// What to do with a node that survived culling.
 enum Choice {
@@ -108,11 +137,13 @@ enum Choice {
 /// GigaWalk Section 5.3).
 ///
 /// `(min, max)` is the node's box relative to the camera
-/// ([`CullView::rel_f64`]), which both callers already hold.
+/// ([`CullView::rel_f64`]) and `nearest` the distance to its nearest
+/// point ([`distance_to_rel_box`]), which both callers already hold.
 fn choose(
     skeleton: &Skeleton,
     node: u32,
     (min, max): (DVec3, DVec3),
+    nearest: f64,
     view: &CullView,
     o: &TraversalOptions,
 ) -> Choice {
@@ -137,12 +168,29 @@ fn choose(
         // Too coarse even at its finest: draw the finest, there is no finer.
         return Choice::Draw(l.unwrap_or(0) as u32);
     }
-    if o.hlod && !full_detail {
+    if o.hlod && !full_detail && !refines_at(lods, nearest, view, o) {
         if let Some(l) = select_lod(lods, distance(), view.pixels_per_radian, o.pixel_error) {
             return Choice::Draw(l as u32);
         }
     }
     Choice::Refine
+}
+
+/// Whether even the finest of `lods` is too coarse at the box's nearest
+/// distance, so that [`select_lod`] at [`CullView::lod_distance`] (the
+/// nearest distance times a squared cosine, at most it) would find none:
+/// the common case of a node near the eye, decided without the off-axis
+/// factor. The slack of 1e-9 covers a cosine rounded above 1, so this
+/// says yes only where `select_lod` says none.
+fn refines_at(
+    lods: &[gigawalk_scene::LodInfo],
+    nearest: f64,
+    view: &CullView,
+    o: &TraversalOptions,
+) -> bool {
+    lods.first().is_none_or(|finest| {
+        finest.error as f64 * view.pixels_per_radian > o.pixel_error * (nearest * (1.0 + 1e-9))
+    })
 }
 
 /// Traverses a skeleton for one view; keeps its queue between calls so a
@@ -244,19 +292,16 @@ impl Traverser {
                 let b = crate::RelBox::from_f64(min, max);
                 culler.queued(view, node, &b, &contexts[ctx as usize]);
             }
-            heap.push(Entry {
-                distance: distance_to_rel_box(min, max),
+            heap.push(Entry::new(
+                distance_to_rel_box(min, max),
                 node,
-                item: Queued { mask, test, ctx },
-            });
+                Queued::new(mask, test, ctx),
+            ));
         };
         queue(&mut self.heap, culler, &contexts, 0, ALL_PLANES, true, 0);
-        while let Some(Entry {
-            node,
-            item: Queued { mask, test, ctx },
-            ..
-        }) = self.heap.pop()
-        {
+        while let Some(entry) = self.heap.pop() {
+            let node = entry.node;
+            let (mask, test, ctx) = (entry.item.mask(), entry.item.test(), entry.item.ctx());
             stats.visited += 1;
             if view.show(node) == NodeShow::Hidden {
                 stats.hidden_culled += 1;
@@ -291,12 +336,21 @@ impl Traverser {
                     Verdict::Visible => {}
                     Verdict::VisibleBelow => child_test = false,
                 }
-                if !n.is_leaf() && child_test {
+                // A culler whose context is empty hands its children
+                // nothing: no context a node. Past the contexts a queue
+                // entry can index, children keep their parent's context,
+                // what it knew before this test: a context only narrows
+                // what later tests look at, so an older one is as safe.
+                if !n.is_leaf()
+                    && child_test
+                    && std::mem::size_of::<K::Ctx>() > 0
+                    && contexts.len() <= Queued::MAX_CTX as usize
+                {
                     child_ctx = contexts.len() as u32;
                     contexts.push(next);
                 }
             }
-            match choose(skeleton, node, (min, max), view, options) {
+            match choose(skeleton, node, (min, max), entry.distance(), view, options) {
                 Choice::Draw(lod) => {
                     stats.drawn_nodes += 1;
                     stats.drawn_triangles +=
@@ -378,7 +432,8 @@ pub fn reselect_lods<S: DrawSink + ?Sized>(
             {
                 continue;
             }
-            match choose(skeleton, node, (min, max), view, options) {
+            let nearest = distance_to_rel_box(min, max);
+            match choose(skeleton, node, (min, max), nearest, view, options) {
                 Choice::Draw(lod) => {
                     count += 1;
                     sink.draw(DrawItem { node, lod });

@@ -286,97 +286,129 @@ impl Traverser {
                      node: u32,
                      mask: PlaneMask,
                      test: bool,
-                     ctx: u32| {
+                     ctx: u32,
+                     replace_top: bool| {
             let (min, max) = view.rel_f64(&skeleton.node(node).bounds);
             if K::HEARS_QUEUED && occlusion && test {
                 let b = crate::RelBox::from_f64(min, max);
                 culler.queued(view, node, &b, &contexts[ctx as usize]);
             }
-            heap.push(Entry::new(
+            let entry = Entry::new(
                 distance_to_rel_box(min, max),
                 node,
                 Queued::new(mask, test, ctx),
-            ));
+            );
+            if replace_top {
+                if let Some(mut top) = heap.peek_mut() {
+                    *top = entry;
+                    return;
+                }
+            }
+            heap.push(entry);
         };
-        queue(&mut self.heap, culler, &contexts, 0, ALL_PLANES, true, 0);
-        while let Some(entry) = self.heap.pop() {
+        queue(
+            &mut self.heap,
+            culler,
+            &contexts,
+            0,
+            ALL_PLANES,
+            true,
+            0,
+            false,
+        );
+        // The nearest node stays at the top of the queue while it is
+        // visited: refined, its first child takes its place (one sift
+        // down instead of a pop and a push); otherwise it is popped. The
+        // order nodes come out in is the same: (distance, node) is a total
+        // order on distinct nodes.
+        while let Some(&entry) = self.heap.peek() {
             let node = entry.node;
-            let (mask, test, ctx) = (entry.item.mask(), entry.item.test(), entry.item.ctx());
-            stats.visited += 1;
-            if view.show(node) == NodeShow::Hidden {
-                stats.hidden_culled += 1;
-                continue;
-            }
             let n = skeleton.node(node);
-            let (min, max) = view.rel_f64(&n.bounds);
-            if view.section_side(min, max) == BoxSide::Removed {
-                stats.section_culled += 1;
-                continue;
-            }
-            let (containment, child_mask) = if mask == 0 {
-                (Containment::Inside, 0)
-            } else {
-                view.frustum.test(min, max, mask)
+            let refine = 'visit: {
+                let (mask, test, ctx) = (entry.item.mask(), entry.item.test(), entry.item.ctx());
+                stats.visited += 1;
+                if view.show(node) == NodeShow::Hidden {
+                    stats.hidden_culled += 1;
+                    break 'visit None;
+                }
+                let (min, max) = view.rel_f64(&n.bounds);
+                if view.section_side(min, max) == BoxSide::Removed {
+                    stats.section_culled += 1;
+                    break 'visit None;
+                }
+                let (containment, child_mask) = if mask == 0 {
+                    (Containment::Inside, 0)
+                } else {
+                    view.frustum.test(min, max, mask)
+                };
+                if containment == Containment::Outside {
+                    stats.frustum_culled += 1;
+                    culled(node, CullReason::Frustum);
+                    break 'visit None;
+                }
+                let (mut child_test, mut child_ctx) = (test, ctx);
+                if occlusion && test {
+                    let b = crate::RelBox::from_f64(min, max);
+                    let (verdict, next) = culler.test(view, node, &b, &contexts[ctx as usize]);
+                    match verdict {
+                        Verdict::Occluded => {
+                            stats.occlusion_culled += 1;
+                            culled(node, CullReason::Occlusion);
+                            break 'visit None;
+                        }
+                        Verdict::Visible => {}
+                        Verdict::VisibleBelow => child_test = false,
+                    }
+                    // A culler whose context is empty hands its children
+                    // nothing: no context a node. Past the contexts a queue
+                    // entry can index, children keep their parent's context,
+                    // what it knew before this test: a context only narrows
+                    // what later tests look at, so an older one is as safe.
+                    if !n.is_leaf()
+                        && child_test
+                        && std::mem::size_of::<K::Ctx>() > 0
+                        && contexts.len() <= Queued::MAX_CTX as usize
+                    {
+                        child_ctx = contexts.len() as u32;
+                        contexts.push(next);
+                    }
+                }
+                match choose(skeleton, node, (min, max), entry.distance(), view, options) {
+                    Choice::Draw(lod) => {
+                        stats.drawn_nodes += 1;
+                        stats.drawn_triangles +=
+                            match view.visibility().and_then(|v| v.pieces(n.first_lod + lod)) {
+                                Some(p) => p.iter().map(|p| p.triangles as u64).sum(),
+                                None => skeleton.lod(n.first_lod + lod).triangles as u64,
+                            };
+                        let item = DrawItem { node, lod };
+                        sink.draw(item);
+                        if occlusion {
+                            culler.drawn(view, item);
+                        }
+                        None
+                    }
+                    Choice::Skip => None,
+                    Choice::Refine => Some((child_mask, child_test, child_ctx)),
+                }
             };
-            if containment == Containment::Outside {
-                stats.frustum_culled += 1;
-                culled(node, CullReason::Frustum);
-                continue;
-            }
-            let (mut child_test, mut child_ctx) = (test, ctx);
-            if occlusion && test {
-                let b = crate::RelBox::from_f64(min, max);
-                let (verdict, next) = culler.test(view, node, &b, &contexts[ctx as usize]);
-                match verdict {
-                    Verdict::Occluded => {
-                        stats.occlusion_culled += 1;
-                        culled(node, CullReason::Occlusion);
-                        continue;
-                    }
-                    Verdict::Visible => {}
-                    Verdict::VisibleBelow => child_test = false,
-                }
-                // A culler whose context is empty hands its children
-                // nothing: no context a node. Past the contexts a queue
-                // entry can index, children keep their parent's context,
-                // what it knew before this test: a context only narrows
-                // what later tests look at, so an older one is as safe.
-                if !n.is_leaf()
-                    && child_test
-                    && std::mem::size_of::<K::Ctx>() > 0
-                    && contexts.len() <= Queued::MAX_CTX as usize
-                {
-                    child_ctx = contexts.len() as u32;
-                    contexts.push(next);
-                }
-            }
-            match choose(skeleton, node, (min, max), entry.distance(), view, options) {
-                Choice::Draw(lod) => {
-                    stats.drawn_nodes += 1;
-                    stats.drawn_triangles +=
-                        match view.visibility().and_then(|v| v.pieces(n.first_lod + lod)) {
-                            Some(p) => p.iter().map(|p| p.triangles as u64).sum(),
-                            None => skeleton.lod(n.first_lod + lod).triangles as u64,
-                        };
-                    let item = DrawItem { node, lod };
-                    sink.draw(item);
-                    if occlusion {
-                        culler.drawn(view, item);
-                    }
-                }
-                Choice::Skip => {}
-                Choice::Refine => {
-                    for child in n.children() {
+            match refine {
+                Some((mask, test, ctx)) if n.child_count > 0 => {
+                    for (i, child) in n.children().enumerate() {
                         queue(
                             &mut self.heap,
                             culler,
                             &contexts,
                             child,
-                            child_mask,
-                            child_test,
-                            child_ctx,
+                            mask,
+                            test,
+                            ctx,
+                            i == 0,
                         );
                     }
+                }
+                _ => {
+                    self.heap.pop();
                 }
             }
         }

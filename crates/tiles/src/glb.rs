@@ -293,7 +293,6 @@ pub(crate) fn content(
         "attributes": attributes,
         "indices": index_accessor,
         "material": 0,
-        "mode": 4,
     });
     if !primitive_ext.is_empty() {
         primitive["extensions"] = Value::Object(primitive_ext);
@@ -313,13 +312,13 @@ pub(crate) fn content(
         used.push("EXT_structural_metadata");
     }
     let mut doc = json!({
-        "asset": {"version": "2.0", "generator": concat!("gigawalk export-tiles ", env!("CARGO_PKG_VERSION"))},
+        "asset": {"version": "2.0"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [node],
         "meshes": [{"primitives": [primitive]}],
         "materials": [{
-            "pbrMetallicRoughness": {"baseColorFactor": base, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "pbrMetallicRoughness": material_factors(base),
             // Models' windings are not consistent enough to cull back faces
             // (gigawalk draws both sides too).
             "doubleSided": true,
@@ -589,8 +588,6 @@ const U16: u32 = 5123;
 const I16: u32 = 5122;
 const U32: u32 = 5125;
 const F32: u32 = 5126;
-const ARRAY_BUFFER: u32 = 34962;
-const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
 /// The binary chunk, buffer views and accessors of one content.
 struct Builder {
@@ -629,7 +626,10 @@ impl Builder {
         let off = self.bin.len();
         self.bin.extend_from_slice(bytes);
         self.views
-            .push(json!({"buffer": 0, "byteOffset": off, "byteLength": bytes.len()}));
+            .push(json!({"buffer": 0, "byteLength": bytes.len()}));
+        if off > 0 {
+            self.views.last_mut().expect("just pushed")["byteOffset"] = json!(off);
+        }
         self.views.len() - 1
     }
 
@@ -641,7 +641,6 @@ impl Builder {
         if !self.meshopt {
             let v = self.plain_view(raw);
             self.views[v]["byteStride"] = json!(stride);
-            self.views[v]["target"] = json!(ARRAY_BUFFER);
             return Ok(v);
         }
         // Version 0 of the vertex codec: the one EXT_meshopt_compression
@@ -656,7 +655,6 @@ impl Builder {
             "ATTRIBUTES",
             filter,
             Some(stride),
-            ARRAY_BUFFER,
         ))
     }
 
@@ -670,7 +668,6 @@ impl Builder {
         mode: &str,
         filter: Option<&str>,
         view_stride: Option<usize>,
-        target: u32,
     ) -> usize {
         self.align();
         let off = self.bin.len();
@@ -679,16 +676,22 @@ impl Builder {
         let fb = self.fallback;
         self.fallback += len;
         let mut ext = json!({
-            "buffer": 0, "byteOffset": off, "byteLength": enc.len(),
+            "buffer": 0, "byteLength": enc.len(),
             "byteStride": stride, "count": count, "mode": mode,
         });
+        if off > 0 {
+            ext["byteOffset"] = json!(off);
+        }
         if let Some(f) = filter {
             ext["filter"] = json!(f);
         }
         let mut view = json!({
-            "buffer": 1, "byteOffset": fb, "byteLength": len, "target": target,
+            "buffer": 1, "byteLength": len,
             "extensions": {"EXT_meshopt_compression": ext},
         });
+        if fb > 0 {
+            view["byteOffset"] = json!(fb);
+        }
         if let Some(s) = view_stride {
             view["byteStride"] = json!(s);
         }
@@ -711,7 +714,6 @@ impl Builder {
                 "TRIANGLES",
                 None,
                 None,
-                ELEMENT_ARRAY_BUFFER,
             )
         } else {
             let v = if narrow {
@@ -720,7 +722,6 @@ impl Builder {
             } else {
                 self.plain_view(bytemuck::cast_slice(indices))
             };
-            self.views[v]["target"] = json!(ELEMENT_ARRAY_BUFFER);
             v
         };
         Ok(self.accessor(v, ty, false, indices.len(), "SCALAR", None))
@@ -746,6 +747,17 @@ impl Builder {
         }
         self.accessors.push(a);
         self.accessors.len() - 1
+    }
+}
+
+/// A material's factors, defaults left out (the glTF JSON is most of a
+/// small content): no metal, fully rough, the base colour only when not
+/// white.
+fn material_factors(base: [f32; 4]) -> Value {
+    if base == [1.0; 4] {
+        json!({"metallicFactor": 0})
+    } else {
+        json!({"baseColorFactor": base, "metallicFactor": 0})
     }
 }
 

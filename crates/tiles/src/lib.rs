@@ -322,6 +322,7 @@ fn write_all(
         contents: &contents,
         root_transform,
         top_error: diagonal.max(plan.tiles[0].error),
+        quantum: tileset::Quantum::for_extent(diagonal),
     };
     if files.roots.len() > 1 {
         let d = out.join("tilesets");

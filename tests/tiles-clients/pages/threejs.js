@@ -36,7 +36,7 @@ async function main() {
     const s = tiles.stats;
     const busy = s.queued + s.downloading + s.parsing;
     stable = busy === 0 && tiles.root ? stable + 1 : 0;
-    if (performance.now() - t0 > 120000) throw new Error('tiles did not load in 120 s');
+    if (performance.now() - t0 > 220000) throw new Error('tiles did not load in 220 s');
   }
   let triangles = 0;
   tiles.group.traverseVisible((o) => {

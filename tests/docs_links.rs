@@ -2,14 +2,22 @@
 //! or directory that exists and, with a `#fragment`, to a heading of that
 //! file (GitHub's anchors: lowercase, spaces to '-', punctuation dropped).
 //! Links to other sites are not followed. Build output (`target/`), hidden
-//! directories and the fuzzers' generated corpora are not read.
+//! directories, the fuzzers' generated corpora and installed npm packages
+//! are not read.
 
 use std::collections::HashSet;
 use std::path::{Component, Path, PathBuf};
 
 /// Directories under the repository root that hold no documentation of
-/// ours: build output and what the fuzzers generate.
-const SKIPPED: [&str; 4] = ["target", "fuzz/corpus", "fuzz/artifacts", "fuzz/target"];
+/// ours: build output, what the fuzzers generate and the tiles clients'
+/// installed packages (`npm ci`).
+const SKIPPED: [&str; 5] = [
+    "target",
+    "fuzz/corpus",
+    "fuzz/artifacts",
+    "fuzz/target",
+    "tests/tiles-clients/node_modules",
+];
 
 #[test]
 fn no_markdown_file_links_to_a_missing_file_or_heading() {

@@ -116,6 +116,7 @@ fn dequantize(origin: [f32; 3], step: [f32; 3], q: [u32; 3]) -> [f32; 3] {
 /// sum to the LOD's), triangles are reordered only within each run, so a
 /// run's triangles stay consecutive and in place (a leaf's runs per
 /// object, docs/scene-format.md "OBJT").
+#[cfg(not(target_arch = "wasm32"))]
 fn reorder(s: &Streams, runs: &[u32]) -> Streams {
     let nv = s.positions.len();
     let indices = if runs.is_empty() {
@@ -156,12 +157,14 @@ fn reorder(s: &Streams, runs: &[u32]) -> Streams {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// meshoptimizer's vertex codec at its default level (level 3 of
 /// format version 1 gave the same bytes on the 1M plant).
 fn vertex_codec<T>(v: &[T]) -> meshopt::Result<Vec<u8>> {
     meshopt::encode_vertex_buffer(v)
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// Encodes `s` with positions on a grid of `bits` bits (in
 /// [`POSITION_BITS`]). Positions must be finite and indices in range (the
 /// writer checks both first).
@@ -169,6 +172,7 @@ pub fn encode(s: &Streams, bits: u8, normal_bits: u8) -> Result<Encoded, String>
     encode_in_runs(s, bits, normal_bits, &[])
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// [`encode`], reordering triangles only within each of `runs` (triangle
 /// counts summing to the LOD's; empty: one run).
 pub fn encode_in_runs(
@@ -477,16 +481,14 @@ pub fn decode_grid(
             "{vertices} vertices for {triangles} triangles: more than they can use"
         ));
     }
-    let err = |what: &str, e: meshopt::Error| format!("the {what} stream does not decode: {e:?}");
+    let err = |what: &str, e: String| format!("the {what} stream does not decode: {e}");
     let positions = if bits > 16 {
         GridPositions::U32(
-            meshopt::decode_vertex_buffer::<[u32; 3]>(pos, vertices)
-                .map_err(|e| err("positions", e))?,
+            crate::unpack::vertices::<[u32; 3]>(pos, vertices).map_err(|e| err("positions", e))?,
         )
     } else {
         GridPositions::U16(
-            meshopt::decode_vertex_buffer::<[u16; 4]>(pos, vertices)
-                .map_err(|e| err("positions", e))?,
+            crate::unpack::vertices::<[u16; 4]>(pos, vertices).map_err(|e| err("positions", e))?,
         )
     };
     let top = ((1u64 << bits) - 1) as u32;
@@ -495,25 +497,19 @@ pub fn decode_grid(
     }
     let normals = if normal_bits == 16 {
         OctNormals::Snorm16(
-            meshopt::decode_vertex_buffer::<[i16; 2]>(nor, vertices)
-                .map_err(|e| err("normals", e))?,
+            crate::unpack::vertices::<[i16; 2]>(nor, vertices).map_err(|e| err("normals", e))?,
         )
     } else {
         OctNormals::Snorm8(
-            meshopt::decode_vertex_buffer::<[i8; 4]>(nor, vertices)
-                .map_err(|e| err("normals", e))?,
+            crate::unpack::vertices::<[i8; 4]>(nor, vertices).map_err(|e| err("normals", e))?,
         )
     };
     let colours = if colours {
-        Some(
-            meshopt::decode_vertex_buffer::<[u8; 4]>(col, vertices)
-                .map_err(|e| err("colours", e))?,
-        )
+        Some(crate::unpack::vertices::<[u8; 4]>(col, vertices).map_err(|e| err("colours", e))?)
     } else {
         None
     };
-    let indices =
-        meshopt::decode_index_buffer::<u32>(idx, 3 * triangles).map_err(|e| err("indices", e))?;
+    let indices = crate::unpack::indices(idx, 3 * triangles).map_err(|e| err("indices", e))?;
     Ok(GridStreams {
         bits,
         normal_bits,

@@ -11,11 +11,15 @@
 //! [`SceneReader::open`] loads and validates the skeleton only;
 //! [`SceneReader::read_lod`] reads one LOD's geometry on demand.
 //!
-//! This crate knows nothing about GPUs or threads.
+//! This crate knows nothing about GPUs or threads. Its wasm32 build (the
+//! browser viewer) reads scenes and writes none: see `unpack`.
 
 #![forbid(unsafe_code)]
+// The browser build only reads: the writer's helpers go unused there.
+#![cfg_attr(target_arch = "wasm32", allow(dead_code, unused_imports))]
 
 mod aabb;
+#[cfg(not(target_arch = "wasm32"))]
 mod atomic;
 pub mod codec;
 mod error;
@@ -31,11 +35,14 @@ mod skeleton;
 mod squeeze;
 mod stats;
 pub mod units;
+mod unpack;
 mod validate;
 pub mod views;
+#[cfg(not(target_arch = "wasm32"))]
 mod write;
 
 pub use aabb::Aabb;
+#[cfg(not(target_arch = "wasm32"))]
 pub use atomic::{
     remove_temp_files, stale_temp_files_removed, temp_file_for, work_dir_prefix, write_atomic,
     TempFile,
@@ -48,4 +55,5 @@ pub use skeleton::{
     GridBits, IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE,
 };
 pub use stats::{DepthLevels, NodeSwitch, PositionStats, SceneStats, SwitchFactors};
+#[cfg(not(target_arch = "wasm32"))]
 pub use write::{EncodedLod, LodEncoder, SceneWriter, WriteSummary, DEFAULT_POSITION_BITS};

@@ -251,7 +251,7 @@ impl ObjectTable {
         let body = match compressed {
             0 if body_len == stored.len() as u64 => stored.to_vec(),
             1 if body_len <= MAX_EXPANSION * stored.len() as u64 + 4096 => {
-                let b = zstd::bulk::decompress(stored, body_len as usize)
+                let b = crate::unpack::decompress(stored, None, body_len as usize)
                     .map_err(|e| (24, format!("the body does not decompress: {e}")))?;
                 if b.len() as u64 != body_len {
                     return Err((24, format!("the body is {} bytes, not {body_len}", b.len())));
@@ -517,6 +517,7 @@ pub const COMPRESSION_JOB_BYTES: usize = 2 << 20;
 
 /// `body` as one zstd frame compressed on `workers` (at least one) worker
 /// threads; `None` if zstd fails.
+#[cfg(not(target_arch = "wasm32"))]
 fn compress(body: &[u8], workers: usize) -> Option<Vec<u8>> {
     use zstd::stream::raw::CParameter;
     let mut z = zstd::bulk::Compressor::new(19).ok()?;
@@ -527,6 +528,13 @@ fn compress(body: &[u8], workers: usize) -> Option<Vec<u8>> {
     z.set_parameter(CParameter::JobSize(COMPRESSION_JOB_BYTES as u32))
         .ok()?;
     z.compress(body).ok()
+}
+
+/// The wasm32 build has no zstd compressor: a table it encodes is stored
+/// plain (a reader takes either).
+#[cfg(target_arch = "wasm32")]
+fn compress(_body: &[u8], _workers: usize) -> Option<Vec<u8>> {
+    None
 }
 
 #[cfg(test)]

@@ -199,6 +199,7 @@ impl CameraPath {
         s
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     /// Writes the path atomically: a temporary file in the same directory,
     /// renamed over `path` once complete, so readers never see half a file.
     pub fn write(&self, path: &Path) -> Result<(), PathWriteError> {

@@ -42,6 +42,14 @@ impl ReadAt for File {
             }
             Ok(())
         }
+        #[cfg(not(any(unix, windows)))]
+        {
+            let _ = (buf, offset);
+            Err(io::Error::new(
+                io::ErrorKind::Unsupported,
+                "positioned reads of files are not available on this platform",
+            ))
+        }
     }
     fn size(&self) -> io::Result<u64> {
         Ok(self.metadata()?.len())

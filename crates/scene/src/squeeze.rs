@@ -6,9 +6,11 @@
 //! dictionary on the scene's first blobs (0.61-0.63x) and stores it once,
 //! in the ZDIC section.
 
+#[cfg(not(target_arch = "wasm32"))]
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+#[cfg(not(target_arch = "wasm32"))]
 use zstd::stream::raw::CParameter;
 
 /// zstd's level: 9 made 3% smaller blobs than 3 on the 1M plant, and
@@ -24,8 +26,8 @@ pub const SAMPLE_BYTES: usize = 4 << 20;
 /// process (each thread keeps a decompression context for the last one).
 #[derive(Debug)]
 pub struct Dictionary {
-    id: u64,
-    bytes: Vec<u8>,
+    pub(crate) id: u64,
+    pub(crate) bytes: Vec<u8>,
 }
 
 impl Dictionary {
@@ -38,6 +40,7 @@ impl Dictionary {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// The writer's compressor: a dictionary trained on sample blobs, or
 /// none when there were too few to train one.
 pub struct Squeezer {
@@ -47,6 +50,7 @@ pub struct Squeezer {
     pub id: u64,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// A compressor with the writer's settings and `dictionary`.
 fn compressor(dictionary: Option<&[u8]>) -> Result<zstd::bulk::Compressor<'static>, String> {
     let err = |e: std::io::Error| format!("zstd: {e}");
@@ -67,6 +71,7 @@ fn compressor(dictionary: Option<&[u8]>) -> Result<zstd::bulk::Compressor<'stati
     Ok(compressor)
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 impl Squeezer {
     pub fn train(samples: &[&[u8]]) -> Result<Squeezer, String> {
         static NEXT: AtomicU64 = AtomicU64::new(1);
@@ -89,6 +94,7 @@ impl Squeezer {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 thread_local! {
     /// A compressor with the dictionary of the last [`Squeezer`] id this
     /// thread compressed for.
@@ -96,6 +102,7 @@ thread_local! {
         const { RefCell::new(None) };
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// [`Squeezer::compress`] for the squeezer `id` (with `dictionary`) on any
 /// thread: the same bytes.
 pub fn compress_with(id: u64, dictionary: Option<&[u8]>, blob: &[u8]) -> Result<Vec<u8>, String> {
@@ -109,12 +116,6 @@ pub fn compress_with(id: u64, dictionary: Option<&[u8]>, blob: &[u8]) -> Result<
     })
 }
 
-thread_local! {
-    /// A decompression context with the last dictionary this thread used.
-    static CONTEXT: RefCell<Option<(u64, zstd::bulk::Decompressor<'static>)>> =
-        const { RefCell::new(None) };
-}
-
 /// Decompresses a stored blob of at most `limit` bytes (what its counts
 /// allow), with the file's dictionary.
 pub fn decompress(
@@ -122,36 +123,23 @@ pub fn decompress(
     dictionary: Option<&Dictionary>,
     limit: usize,
 ) -> Result<Vec<u8>, String> {
-    let size = match zstd::zstd_safe::get_frame_content_size(blob) {
-        Ok(Some(size)) => size,
-        _ => return Err("the compressed blob is not a zstd frame stating its size".into()),
+    let size = match crate::unpack::frame_content_size(blob) {
+        Some(size) => size,
+        None => return Err("the compressed blob is not a zstd frame stating its size".into()),
     };
     if size > limit as u64 {
         return Err(format!(
             "the compressed blob says {size} bytes, more than its counts allow ({limit})"
         ));
     }
-    let id = dictionary.map_or(0, |d| d.id);
-    CONTEXT.with(|c| {
-        let mut c = c.borrow_mut();
-        if c.as_ref().is_none_or(|(have, _)| *have != id) {
-            let d = match dictionary {
-                Some(d) => zstd::bulk::Decompressor::with_dictionary(&d.bytes),
-                None => zstd::bulk::Decompressor::new(),
-            }
-            .map_err(|e| format!("zstd: {e}"))?;
-            *c = Some((id, d));
-        }
-        let (_, d) = c.as_mut().expect("set above");
-        let out = d
-            .decompress(blob, size as usize)
-            .map_err(|e| format!("the compressed blob does not decompress: {e}"))?;
-        if out.len() as u64 != size {
-            return Err(format!(
-                "the compressed blob gave {} bytes, not the {size} it states",
-                out.len()
-            ));
-        }
-        Ok(out)
-    })
+    let size = usize::try_from(size).map_err(|_| "the compressed blob is too large")?;
+    let out = crate::unpack::decompress(blob, dictionary, size)
+        .map_err(|e| format!("the compressed blob does not decompress: {e}"))?;
+    if out.len() != size {
+        return Err(format!(
+            "the compressed blob gave {} bytes, not the {size} it states",
+            out.len()
+        ));
+    }
+    Ok(out)
 }

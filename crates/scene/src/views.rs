@@ -185,6 +185,7 @@ impl Views {
         Ok(v)
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     /// Writes the views to `file` atomically.
     pub fn write(&self, file: &Path) -> Result<(), ViewsError> {
         let text = serde_json::to_string_pretty(self).map_err(|e| ViewsError::Write {

@@ -35,6 +35,7 @@
 mod camera;
 mod ct;
 mod culler;
+pub mod fly;
 mod frustum;
 mod grid;
 mod hzb;

@@ -454,6 +454,15 @@ pub(crate) fn second_adapter(
 }
 
 pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, GpuError> {
+    pollster::block_on(open_async(adapter, name))
+}
+
+/// [`open`] without blocking: what a browser, whose device arrives
+/// through the event loop, awaits.
+pub(crate) async fn open_async(
+    adapter: &wgpu::Adapter,
+    name: &str,
+) -> Result<GpuContext, GpuError> {
     let info = adapter.get_info();
     let label = format!("{name} ({}, {:?})", info.name, info.backend);
     let caps = Capabilities::of(adapter);
@@ -465,18 +474,20 @@ pub(crate) fn open(adapter: &wgpu::Adapter, name: &str) -> Result<GpuContext, Gp
         max_storage_buffer_binding_size: adapter.limits().max_storage_buffer_binding_size,
         ..wgpu::Limits::downlevel_defaults()
     };
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some(&label),
-        // Line mode for the viewer's wireframe and clip distances for
-        // sections, where the adapter has them.
-        required_features: caps.features(),
-        required_limits: limits,
-        ..Default::default()
-    }))
-    .map_err(|source| GpuError::RequestDevice {
-        adapter: label.clone(),
-        source,
-    })?;
+    let (device, queue) = adapter
+        .request_device(&wgpu::DeviceDescriptor {
+            label: Some(&label),
+            // Line mode for the viewer's wireframe and clip distances for
+            // sections, where the adapter has them.
+            required_features: caps.features(),
+            required_limits: limits,
+            ..Default::default()
+        })
+        .await
+        .map_err(|source| GpuError::RequestDevice {
+            adapter: label.clone(),
+            source,
+        })?;
     let errors = Arc::new(Mutex::new(None));
     let slot = errors.clone();
     device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {

@@ -42,6 +42,8 @@ pub use passes::{
     LookChoice, PassFigures, PyramidPath, View, VisiblePass, COLOUR_FORMAT, DEPTH_COPY_WGSL,
     DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL, LOOK_WGSL,
 };
+#[cfg(target_arch = "wasm32")]
+pub use present::open_device_for_canvas;
 pub use present::{open_devices_for_window, Presented, WindowError, WindowSurface, BLIT_WGSL};
 pub use queries::{query_counts, QueryBox, QueryCounts, QueryPass, QUERY_BOX_WGSL};
 pub use residency::{

@@ -89,6 +89,44 @@ where
     ))
 }
 
+/// Opens one device that presents to a browser page's `canvas`, on
+/// WebGPU (wasm32 only). A page has one thread and one device: OR and
+/// RVG share it, and the device arrives through the event loop, so this
+/// is awaited rather than blocked on.
+#[cfg(target_arch = "wasm32")]
+pub async fn open_device_for_canvas(
+    canvas: web_sys::HtmlCanvasElement,
+) -> Result<(GpuContext, WindowSurface), WindowError> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::BROWSER_WEBGPU;
+    let instance = wgpu::Instance::new(desc);
+    let surface = instance
+        .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
+        .map_err(WindowError::Surface)?;
+    let adapter = instance
+        .request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            compatible_surface: Some(&surface),
+            force_fallback_adapter: false,
+            ..Default::default()
+        })
+        .await
+        .map_err(|e| WindowError::NoPresentableAdapter {
+            adapters: format!("the browser offers no WebGPU adapter: {e}"),
+        })?;
+    let ctx = crate::context::open_async(&adapter, "page").await?;
+    let caps = surface.get_capabilities(&adapter);
+    Ok((
+        ctx,
+        WindowSurface {
+            surface,
+            caps,
+            config: None,
+            gpu: None,
+        },
+    ))
+}
+
 /// A window's surface and what presenting to it needs on the presenting
 /// device (created on the first [`WindowSurface::present`]).
 pub struct WindowSurface {

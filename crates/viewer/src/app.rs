@@ -40,7 +40,6 @@ use winit::event_loop::EventLoop;
 use winit::platform::pump_events::{EventLoopExtPumpEvents, PumpStatus};
 
 use crate::boxes::CullSets;
-use crate::controller::FlyController;
 use crate::hud::{FrameClock, ViewerState};
 use crate::image::ScreenshotError;
 use crate::measure::Measure;
@@ -50,6 +49,7 @@ use crate::sections::Sections;
 use crate::settings::Settings;
 use camera_source::LiveSource;
 use frame_loop::LoopState;
+use gigawalk_cull::fly::FlyController;
 use presenter::ViewerPresenter;
 use window::App;
 

@@ -54,17 +54,8 @@ pub enum Action {
     Quit,
 }
 
-/// Held movement keys.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Movement {
-    Forward,
-    Back,
-    Left,
-    Right,
-    Down,
-    Up,
-    Fast,
-}
+/// Held movement keys (the controller's).
+pub use gigawalk_cull::fly::Movement;
 
 /// One line of the bindings table.
 pub struct Binding {

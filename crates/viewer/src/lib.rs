@@ -18,7 +18,6 @@
 
 mod app;
 mod boxes;
-mod controller;
 pub mod controls;
 mod hud;
 mod image;
@@ -30,7 +29,7 @@ mod settings;
 
 pub use app::{run, DisplayError, ViewArgs, ViewError};
 pub use boxes::{overlay_boxes, CullSets};
-pub use controller::{FlyController, EYE_HEIGHT};
+pub use gigawalk_cull::fly::{FlyController, EYE_HEIGHT};
 pub use hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
 pub use image::{image_stats, read_png, write_png, ImageStats, ScreenshotError};
 pub use measure::{screen_segment, Measure};

@@ -2,7 +2,7 @@
 //! reads: a level of the HZB pyramid built here on the device (the
 //! default), or the whole image (the CPU builds the pyramid).
 
-use std::time::Instant;
+use web_time::Instant;
 
 use crate::passes::hzb::{level_size, Pyramid};
 use crate::passes::{

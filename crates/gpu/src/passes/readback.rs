@@ -5,7 +5,7 @@
 //! fills it (never for the whole device), what each step cost the CPU
 //! ([`PassFigures`]), and the error a device failure becomes.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use crate::passes::{
     draw_fullscreen, fullscreen_pipeline, target, DepthImage, DEPTH_COPY_FORMAT, DEPTH_COPY_WGSL,

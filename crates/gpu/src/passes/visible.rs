@@ -1,7 +1,7 @@
 //! RVG: the visible set's colour and depth, drawn in chunks as the list
 //! arrives, with an optional wireframe pipeline and a scissor for tiles.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use crate::passes::look::{LookPass, NORMAL_FORMAT};
 use crate::passes::{

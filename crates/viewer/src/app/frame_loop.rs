@@ -21,7 +21,6 @@ use winit::dpi::PhysicalSize;
 
 use super::window::{App, Input};
 use super::{aspect, Shared};
-use crate::controller::FlyController;
 use crate::controls::Action;
 use crate::hud::ViewerState;
 use crate::measure::Measure;
@@ -29,6 +28,7 @@ use crate::objects::{frame_box, save_view, view_names, Objects};
 use crate::recorder::{next_free_name, PathRecorder};
 use crate::sections::{view_box, Sections, VIEW_BOX_DEPTH};
 use crate::settings::Settings;
+use gigawalk_cull::fly::FlyController;
 
 /// Shown when wireframe is asked for on a device without line mode.
 const WIREFRAME_UNSUPPORTED: &str =

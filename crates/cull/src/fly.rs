@@ -1,15 +1,26 @@
 //! The fly / walk camera controller: mouse look (yaw and pitch, no roll),
 //! WASD/QE movement in the view's frame, Shift for speed, scroll to scale
 //! the speed, and a walk mode that keeps the eye level at eye height above
-//! the scene's floor.
+//! the scene's floor. The native viewer and the browser page both drive it.
 
 use std::collections::HashSet;
 
-use gigawalk_cull::Camera;
 use gigawalk_scene::Aabb;
 use glam::{DQuat, DVec3};
 
-use crate::controls::Movement;
+use crate::Camera;
+
+/// Held movement keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Movement {
+    Forward,
+    Back,
+    Left,
+    Right,
+    Down,
+    Up,
+    Fast,
+}
 
 /// Eye height in walk mode, metres: a person's eye. In model units it is
 /// this over the model's metres per unit (`--units`; glTF's unit, which

@@ -1,0 +1,646 @@
+//! The page (wasm32): [`start`] opens the page's one WebGPU device on a
+//! canvas, opens the scene through range requests and runs the frame
+//! loop on `requestAnimationFrame`; [`stats`] is what the page and its
+//! tests read back.
+//!
+//! One animation frame: take what fetches brought (decode, admit under
+//! the budget, put on the device), move the camera, traverse (frustum
+//! culling and LOD selection, gigawalk-cull's `Traverser`), plan fetches
+//! and stand-ins ([`Streamer`]), draw with RVG's pass and present with
+//! the HUD. Fetches run as promises between frames; nothing blocks.
+
+use std::cell::RefCell;
+use std::collections::HashSet;
+use std::ops::Range;
+use std::rc::Rc;
+
+use gigawalk_cull::fly::{FlyController, Movement};
+use gigawalk_cull::{
+    default_near, CullView, DrawItem, NoOcclusion, TraversalOptions, Traverser, Viewport,
+};
+use gigawalk_gpu::{
+    ClipPlanes, DecodedLod, DrawStyle, GeometryPool, GpuContext, Look, OverlayFrame, OverlayText,
+    VisiblePass, WindowSurface,
+};
+use gigawalk_scene::SceneReader;
+use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
+use wasm_bindgen_futures::{spawn_local, JsFuture};
+use web_sys::{
+    HtmlCanvasElement, KeyboardEvent, MouseEvent, Request, RequestInit, Response, WheelEvent,
+};
+
+use crate::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
+use crate::stream::{Admit, Streamer};
+
+/// Vertical field of view of the page's camera.
+const FOVY_DEGREES: f64 = 60.0;
+/// Range requests in flight at once: browsers open about six connections
+/// to one host; more queue in the browser.
+const MAX_IN_FLIGHT: usize = 6;
+/// Device bytes for geometry when the page's URL does not say
+/// (`?budget=MB`).
+const DEFAULT_BUDGET_MB: u64 = 256;
+
+/// What traversal draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// View-frustum culling alone, full detail.
+    Vfc,
+    /// Frustum culling and HLODs at the pixel error.
+    Hlod,
+}
+
+impl Mode {
+    fn name(self) -> &'static str {
+        match self {
+            Mode::Vfc => "vfc",
+            Mode::Hlod => "hlod",
+        }
+    }
+}
+
+/// What the page reports (as JSON, through [`stats`]).
+#[derive(Default)]
+struct Stats {
+    state: String,
+    error: Option<String>,
+    backend: String,
+    frames: u64,
+    fps: f64,
+    triangles: u64,
+    draws: usize,
+    stand_ins: usize,
+    missing: usize,
+    visited: u64,
+    file_bytes: u64,
+    fetched_bytes: u64,
+    requests: u64,
+    resident_bytes: u64,
+    first_frame_ms: Option<f64>,
+    failed_lods: u64,
+    mode: String,
+    pixel_error: f64,
+}
+
+impl Stats {
+    fn json(&self) -> String {
+        let s = |v: &str| format!("{v:?}");
+        let opt = |v: Option<f64>| v.map_or("null".into(), |v| format!("{v:.1}"));
+        format!(
+            "{{\"state\":{},\"error\":{},\"backend\":{},\"frames\":{},\"fps\":{:.2},\
+             \"triangles\":{},\"draws\":{},\"stand_ins\":{},\"missing\":{},\"visited\":{},\
+             \"file_bytes\":{},\"fetched_bytes\":{},\"requests\":{},\"resident_bytes\":{},\
+             \"first_frame_ms\":{},\"failed_lods\":{},\"mode\":{},\"pixel_error\":{}}}",
+            s(&self.state),
+            self.error.as_deref().map_or("null".into(), s),
+            s(&self.backend),
+            self.frames,
+            self.fps,
+            self.triangles,
+            self.draws,
+            self.stand_ins,
+            self.missing,
+            self.visited,
+            self.file_bytes,
+            self.fetched_bytes,
+            self.requests,
+            self.resident_bytes,
+            opt(self.first_frame_ms),
+            self.failed_lods,
+            s(&self.mode),
+            self.pixel_error,
+        )
+    }
+}
+
+thread_local! {
+    static STATS: RefCell<Stats> = RefCell::new(Stats {
+        state: "starting".into(),
+        ..Stats::default()
+    });
+}
+
+fn set_stats(f: impl FnOnce(&mut Stats)) {
+    STATS.with(|s| f(&mut s.borrow_mut()));
+}
+
+/// The page's state as JSON: `state` (starting, opening, running,
+/// error), `error`, frame and fetch counts. Tests poll it.
+#[wasm_bindgen]
+pub fn stats() -> String {
+    STATS.with(|s| s.borrow().json())
+}
+
+fn now_ms() -> f64 {
+    web_sys::window()
+        .and_then(|w| w.performance())
+        .map_or(0.0, |p| p.now())
+}
+
+fn js_err(e: JsValue) -> String {
+    e.as_string()
+        .or_else(|| {
+            e.dyn_ref::<js_sys::Error>()
+                .map(|e| String::from(e.message()))
+        })
+        .unwrap_or_else(|| format!("{e:?}"))
+}
+
+/// One range request: the bytes and the file's length from
+/// `Content-Range`. A server that answers with the whole file (200) or
+/// anything but 206 is an error: the page never downloads a scene whole.
+async fn fetch_range(url: &str, range: Range<u64>) -> Result<(Vec<u8>, Option<u64>), String> {
+    let window = web_sys::window().ok_or("no window")?;
+    let init = RequestInit::new();
+    init.set_method("GET");
+    let headers = web_sys::Headers::new().map_err(js_err)?;
+    headers
+        .set("Range", &format!("bytes={}-{}", range.start, range.end - 1))
+        .map_err(js_err)?;
+    init.set_headers(&headers);
+    let request = Request::new_with_str_and_init(url, &init).map_err(js_err)?;
+    let response: Response = JsFuture::from(window.fetch_with_request(&request))
+        .await
+        .map_err(|e| format!("cannot fetch {url}: {}", js_err(e)))?
+        .dyn_into()
+        .map_err(js_err)?;
+    match response.status() {
+        206 => {}
+        200 => {
+            return Err(format!(
+                "the server does not answer range requests for {url} (it sent the whole \
+                 file, HTTP 200): serve the page from one that does, e.g. `gigawalk serve`"
+            ))
+        }
+        s => {
+            return Err(format!(
+                "cannot fetch {url}: HTTP {s} {}",
+                response.status_text()
+            ))
+        }
+    }
+    let total = response
+        .headers()
+        .get("Content-Range")
+        .ok()
+        .flatten()
+        .and_then(|v| {
+            v.rsplit('/')
+                .next()
+                .and_then(|n| n.trim().parse::<u64>().ok())
+        });
+    let buffer = JsFuture::from(response.array_buffer().map_err(js_err)?)
+        .await
+        .map_err(|e| format!("cannot read {url}: {}", js_err(e)))?;
+    let bytes = js_sys::Uint8Array::new(&buffer).to_vec();
+    let want = range.end - range.start;
+    if let Some(t) = total {
+        let expect = want.min(t.saturating_sub(range.start));
+        if bytes.len() as u64 != expect {
+            return Err(format!(
+                "{url} answered bytes {}..{} with {} bytes",
+                range.start,
+                range.end,
+                bytes.len()
+            ));
+        }
+    }
+    Ok((bytes, total))
+}
+
+/// Opens the scene at `url`: the first range gives the file's length,
+/// then as many rounds as the reader asks for.
+async fn open_scene(url: &str) -> Result<(Box<SceneReader<Sparse>>, Sparse, u64, u64), String> {
+    let (first, total) = fetch_range(url, 0..OPEN_CHUNK).await?;
+    let len = total.ok_or_else(|| {
+        format!("{url}: the server's range answer has no Content-Range with the file's length")
+    })?;
+    let sparse = Sparse::new(len);
+    let mut fetched = first.len() as u64;
+    let mut requests = 1;
+    sparse.insert(0, first)?;
+    let name = url.rsplit('/').next().unwrap_or(url).to_string();
+    loop {
+        match open_step(&sparse, &name) {
+            OpenStep::Open(r) => return Ok((r, sparse, fetched, requests)),
+            OpenStep::Fetch(range) => {
+                let (bytes, _) = fetch_range(url, range.clone()).await?;
+                fetched += bytes.len() as u64;
+                requests += 1;
+                sparse.insert(range.start, bytes)?;
+            }
+            OpenStep::Failed(e) => return Err(format!("{name} cannot be opened as a scene: {e}")),
+        }
+    }
+}
+
+/// A query parameter of the page's URL.
+fn query(name: &str) -> Option<String> {
+    let search = web_sys::window()?.location().search().ok()?;
+    search
+        .trim_start_matches('?')
+        .split('&')
+        .filter_map(|kv| kv.split_once('='))
+        .find(|(k, _)| *k == name)
+        .map(|(_, v)| v.to_string())
+}
+
+/// The page's movement keys (`KeyboardEvent.code`), as the native viewer's.
+fn movement(code: &str) -> Option<Movement> {
+    Some(match code {
+        "KeyW" | "ArrowUp" => Movement::Forward,
+        "KeyS" | "ArrowDown" => Movement::Back,
+        "KeyA" | "ArrowLeft" => Movement::Left,
+        "KeyD" | "ArrowRight" => Movement::Right,
+        "KeyQ" | "ControlLeft" => Movement::Down,
+        "KeyE" | "Space" => Movement::Up,
+        "ShiftLeft" | "ShiftRight" => Movement::Fast,
+        _ => return None,
+    })
+}
+
+/// A LOD fetch's outcome, handed from its promise to the next frame.
+type Arrivals = Rc<RefCell<Vec<(u32, Result<Vec<u8>, String>)>>>;
+
+struct App {
+    url: String,
+    ctx: GpuContext,
+    surface: WindowSurface,
+    canvas: HtmlCanvasElement,
+    pass: VisiblePass,
+    pool: GeometryPool,
+    reader: Box<SceneReader<Sparse>>,
+    sparse: Sparse,
+    streamer: Streamer,
+    fly: FlyController,
+    held: HashSet<Movement>,
+    drag: Option<(i32, i32)>,
+    arrivals: Arrivals,
+    traverser: Traverser,
+    items: Vec<DrawItem>,
+    mode: Mode,
+    pixel_error: f64,
+    hud: bool,
+    near: f64,
+    frame: u64,
+    last_ms: f64,
+    started_ms: f64,
+}
+
+impl App {
+    fn size(&self) -> (u32, u32) {
+        (self.canvas.width().max(1), self.canvas.height().max(1))
+    }
+
+    /// Takes what fetches brought: decoded, admitted, put on the device.
+    fn take_arrivals(&mut self) {
+        let arrived: Vec<_> = self.arrivals.borrow_mut().drain(..).collect();
+        for (lod, result) in arrived {
+            let info = self.reader.skeleton().lods()[lod as usize];
+            let range = info.offset..info.offset + info.len;
+            let decoded = result.and_then(|bytes| {
+                self.sparse.insert(range.start, bytes)?;
+                let r = self.reader.read_lod_stored(lod).map_err(|e| e.to_string());
+                self.sparse.forget(range.clone());
+                r.map(DecodedLod::from_stored)
+            });
+            match decoded {
+                Ok(d) => match self.streamer.arrived(lod, d.bytes()) {
+                    Admit::Insert { evict } => {
+                        for e in evict {
+                            self.pool.remove(e);
+                        }
+                        if !self.pool.insert(&self.ctx, lod, &d) {
+                            self.streamer.not_inserted(lod);
+                        }
+                    }
+                    Admit::Refused => {}
+                },
+                Err(e) => {
+                    web_sys::console::warn_1(&format!("LOD {lod}: {e}").into());
+                    self.streamer.failed(lod);
+                    set_stats(|s| s.failed_lods += 1);
+                }
+            }
+        }
+    }
+
+    fn fetch(&self, lod: u32) {
+        let info = self.reader.skeleton().lods()[lod as usize];
+        let url = self.url.clone();
+        let arrivals = self.arrivals.clone();
+        set_stats(|s| s.requests += 1);
+        spawn_local(async move {
+            let r = fetch_range(&url, info.offset..info.offset + info.len)
+                .await
+                .map(|(b, _)| b);
+            if let Ok(b) = &r {
+                let n = b.len() as u64;
+                set_stats(|s| s.fetched_bytes += n);
+            }
+            arrivals.borrow_mut().push((lod, r));
+        });
+    }
+
+    fn frame(&mut self, now: f64) -> Result<(), String> {
+        self.take_arrivals();
+        let dt = ((now - self.last_ms) / 1e3).clamp(0.0, 0.25);
+        self.last_ms = now;
+        self.fly.update(dt, &self.held);
+        let (w, h) = self.size();
+        if self.pass.size() != (w, h) {
+            self.pass = VisiblePass::new(&self.ctx, w, h);
+        }
+        let camera = self.fly.camera(w as f64 / h as f64, self.near);
+        let view = CullView::new(camera, Viewport::new(w, h));
+        let options = TraversalOptions {
+            occlusion: false,
+            hlod: self.mode == Mode::Hlod,
+            pixel_error: match self.mode {
+                Mode::Vfc => 0.0,
+                Mode::Hlod => self.pixel_error,
+            },
+        };
+        self.items.clear();
+        let items = &mut self.items;
+        let traversal = self.traverser.traverse(
+            self.reader.skeleton(),
+            &view,
+            &NoOcclusion,
+            &options,
+            &mut |i| items.push(i),
+        );
+        let plan = self
+            .streamer
+            .frame(self.frame, &self.items, self.reader.skeleton());
+        for &lod in &plan.fetch {
+            self.fetch(lod);
+        }
+        let gpu_view = gigawalk_gpu::View {
+            eye: view.camera.position,
+            view_proj: view.camera.view_projection_rel(),
+            forward: view.camera.forward().as_vec3(),
+            clip: ClipPlanes::NONE,
+        };
+        self.pass
+            .begin(&self.ctx, &gpu_view, DrawStyle::Shaded, Look::PLAIN);
+        self.pass.draw(&self.ctx, &self.pool, &plan.draw);
+        self.pass.end(&self.ctx).map_err(|e| e.to_string())?;
+        let lods = self.reader.skeleton().lods();
+        let triangles: u64 = plan
+            .draw
+            .iter()
+            .map(|&l| lods[l as usize].triangles as u64)
+            .sum();
+        self.frame += 1;
+        let first = self.frame == 1;
+        let since_start = now - self.started_ms;
+        set_stats(|s| {
+            s.state = "running".into();
+            s.frames = self.frame;
+            let fps = if dt > 0.0 { 1.0 / dt } else { 0.0 };
+            s.fps = if s.fps == 0.0 {
+                fps
+            } else {
+                0.9 * s.fps + 0.1 * fps
+            };
+            s.triangles = triangles;
+            s.draws = plan.draw.len();
+            s.stand_ins = plan.stand_ins;
+            s.missing = plan.missing;
+            s.visited = traversal.visited;
+            s.resident_bytes = self.streamer.resident_bytes();
+            s.mode = self.mode.name().into();
+            s.pixel_error = self.pixel_error;
+            if first {
+                s.first_frame_ms = Some(since_start);
+            }
+        });
+        let overlay = OverlayFrame {
+            view_proj: gpu_view.view_proj,
+            boxes: Vec::new(),
+            lines: Vec::new(),
+            text: if self.hud {
+                self.hud_text(w)
+            } else {
+                Vec::new()
+            },
+        };
+        self.surface
+            .present(&self.ctx, &self.pass, &overlay, (w, h), false)
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    }
+
+    fn hud_text(&self, width: u32) -> Vec<OverlayText> {
+        let lines = STATS.with(|s| {
+            let s = s.borrow();
+            vec![
+                format!("gigawalk  {}  {}", s.backend, s.mode),
+                format!(
+                    "{:.0} fps  {} triangles  {} draws",
+                    s.fps, s.triangles, s.draws
+                ),
+                format!(
+                    "fetched {:.1} of {:.1} MB in {} requests",
+                    s.fetched_bytes as f64 / 1e6,
+                    s.file_bytes as f64 / 1e6,
+                    s.requests
+                ),
+                format!(
+                    "resident {:.1} MB  waiting {}  stand-ins {}",
+                    s.resident_bytes as f64 / 1e6,
+                    s.missing,
+                    s.stand_ins
+                ),
+                format!(
+                    "pixel error {}  (V: vfc/hlod, [ ]: error, H: HUD)",
+                    s.pixel_error
+                ),
+            ]
+        });
+        vec![OverlayText {
+            x: 8.0,
+            y: 8.0,
+            scale: if width >= 1600 { 2 } else { 1 },
+            lines,
+            colour: [1.0, 1.0, 1.0, 1.0],
+            background: [0.0, 0.0, 0.0, 0.55],
+        }]
+    }
+
+    fn key(&mut self, code: &str, down: bool) {
+        if let Some(m) = movement(code) {
+            if down {
+                self.held.insert(m);
+            } else {
+                self.held.remove(&m);
+            }
+            return;
+        }
+        if !down {
+            return;
+        }
+        match code {
+            "KeyV" => {
+                self.mode = match self.mode {
+                    Mode::Vfc => Mode::Hlod,
+                    Mode::Hlod => Mode::Vfc,
+                }
+            }
+            "BracketLeft" => self.pixel_error = (self.pixel_error / 2.0).max(0.25),
+            "BracketRight" => self.pixel_error = (self.pixel_error * 2.0).min(64.0),
+            "KeyH" => self.hud = !self.hud,
+            _ => {}
+        }
+    }
+}
+
+/// Shows `message` as the page's error (and in the stats).
+fn fail(message: String) -> JsValue {
+    web_sys::console::error_1(&message.clone().into());
+    set_stats(|s| {
+        s.state = "error".into();
+        s.error = Some(message.clone());
+    });
+    JsValue::from_str(&message)
+}
+
+/// Starts the page on `canvas` with the scene at `scene_url`; resolves
+/// once the first frame is scheduled, rejects with a message a person can
+/// act on (no WebGPU, no scene, a server without range requests, a file
+/// that is not a scene).
+#[wasm_bindgen]
+pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), JsValue> {
+    let started_ms = now_ms();
+    set_stats(|s| s.state = "opening".into());
+    let has_webgpu = web_sys::window().is_some_and(|w| {
+        js_sys::Reflect::get(&w.navigator(), &"gpu".into()).is_ok_and(|g| !g.is_undefined())
+    });
+    if !has_webgpu {
+        return Err(fail(
+            "this browser has no WebGPU (navigator.gpu is missing): use a current Chrome, Edge \
+             or Firefox, or enable WebGPU in its settings"
+                .into(),
+        ));
+    }
+    let (ctx, surface) = gigawalk_gpu::open_device_for_canvas(canvas.clone())
+        .await
+        .map_err(|e| fail(format!("WebGPU could not start: {e}")))?;
+    let (reader, sparse, fetched, requests) = open_scene(&scene_url).await.map_err(fail)?;
+    let skeleton = reader.skeleton();
+    let lods = skeleton.lods().len();
+    let bounds = skeleton.bounds();
+    let budget = query("budget")
+        .and_then(|v| v.parse::<u64>().ok())
+        .unwrap_or(DEFAULT_BUDGET_MB)
+        << 20;
+    let max_buffer = ctx.max_buffer_size().min(128 << 20);
+    let pool = GeometryPool::new(&ctx, lods, budget, max_buffer)
+        .map_err(|e| fail(format!("no room for the geometry budget: {e}")))?;
+    set_stats(|s| {
+        s.backend = ctx.adapter_name().to_string();
+        s.file_bytes = sparse.len();
+        s.fetched_bytes = fetched;
+        s.requests = requests;
+    });
+    let (w, h) = (canvas.width().max(1), canvas.height().max(1));
+    let app = App {
+        url: scene_url,
+        pass: VisiblePass::new(&ctx, w, h),
+        pool,
+        surface,
+        canvas: canvas.clone(),
+        streamer: Streamer::new(lods, budget, MAX_IN_FLIGHT),
+        fly: FlyController::overview(&bounds, FOVY_DEGREES.to_radians()),
+        held: HashSet::new(),
+        drag: None,
+        arrivals: Rc::new(RefCell::new(Vec::new())),
+        traverser: Traverser::new(),
+        items: Vec::new(),
+        mode: Mode::Hlod,
+        pixel_error: query("pixel_error")
+            .and_then(|v| v.parse().ok())
+            .filter(|v: &f64| v.is_finite() && *v > 0.0)
+            .unwrap_or(1.0),
+        hud: true,
+        near: default_near(&bounds),
+        frame: 0,
+        last_ms: now_ms(),
+        started_ms,
+        ctx,
+        reader,
+        sparse,
+    };
+    let app = Rc::new(RefCell::new(app));
+    listen(&canvas, app.clone())?;
+    run_frames(app);
+    Ok(())
+}
+
+/// Keys on the window, mouse drag and wheel on the canvas.
+fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsValue> {
+    let window = web_sys::window().ok_or("no window")?;
+    for down in [true, false] {
+        let a = app.clone();
+        let f = Closure::<dyn FnMut(KeyboardEvent)>::new(move |e: KeyboardEvent| {
+            a.borrow_mut().key(&e.code(), down);
+        });
+        let name = if down { "keydown" } else { "keyup" };
+        window.add_event_listener_with_callback(name, f.as_ref().unchecked_ref())?;
+        f.forget();
+    }
+    let a = app.clone();
+    let f = Closure::<dyn FnMut(MouseEvent)>::new(move |e: MouseEvent| {
+        a.borrow_mut().drag = Some((e.client_x(), e.client_y()));
+    });
+    canvas.add_event_listener_with_callback("mousedown", f.as_ref().unchecked_ref())?;
+    f.forget();
+    let a = app.clone();
+    let f = Closure::<dyn FnMut(MouseEvent)>::new(move |_: MouseEvent| {
+        a.borrow_mut().drag = None;
+    });
+    window.add_event_listener_with_callback("mouseup", f.as_ref().unchecked_ref())?;
+    f.forget();
+    let a = app.clone();
+    let f = Closure::<dyn FnMut(MouseEvent)>::new(move |e: MouseEvent| {
+        let mut app = a.borrow_mut();
+        if let Some((x, y)) = app.drag {
+            let (nx, ny) = (e.client_x(), e.client_y());
+            app.fly.look((nx - x) as f64, (ny - y) as f64);
+            app.drag = Some((nx, ny));
+        }
+    });
+    window.add_event_listener_with_callback("mousemove", f.as_ref().unchecked_ref())?;
+    f.forget();
+    let a = app;
+    let f = Closure::<dyn FnMut(WheelEvent)>::new(move |e: WheelEvent| {
+        e.prevent_default();
+        a.borrow_mut().fly.scroll(-e.delta_y().signum());
+    });
+    canvas.add_event_listener_with_callback("wheel", f.as_ref().unchecked_ref())?;
+    f.forget();
+    Ok(())
+}
+
+/// Runs [`App::frame`] on every animation frame until one fails.
+fn run_frames(app: Rc<RefCell<App>>) {
+    type Tick = Rc<RefCell<Option<Closure<dyn FnMut(f64)>>>>;
+    let tick: Tick = Rc::new(RefCell::new(None));
+    let next = tick.clone();
+    *tick.borrow_mut() = Some(Closure::new(move |now: f64| {
+        if let Err(e) = app.borrow_mut().frame(now) {
+            fail(e);
+            return;
+        }
+        request_frame(next.borrow().as_ref().expect("set below"));
+    }));
+    request_frame(tick.borrow().as_ref().expect("just set"));
+}
+
+fn request_frame(f: &Closure<dyn FnMut(f64)>) {
+    if let Some(w) = web_sys::window() {
+        let _ = w.request_animation_frame(f.as_ref().unchecked_ref());
+    }
+}

@@ -1,0 +1,296 @@
+//! Which LODs a page fetches, keeps and draws, under a memory budget.
+//!
+//! A page has one thread: traversal hands each frame's draw list (front
+//! to back) to [`Streamer::frame`], which says what to draw now and what
+//! to fetch. A LOD not resident yet is drawn as a stand-in, the nearest
+//! resident level of the same node (coarser first: it covers what the
+//! wanted level covers, within its larger error), or not at all until
+//! one arrives. Fetches go out in the list's order, nearest first, at
+//! most [`Streamer::max_in_flight`] at once. An arrival makes room by
+//! evicting the least recently drawn LODs, never one the current frame
+//! draws; when the frame's own LODs fill the budget, the arrival is
+//! refused and the stand-in stays.
+
+use gigawalk_cull::DrawItem;
+use gigawalk_scene::Skeleton;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Absent,
+    InFlight,
+    Resident {
+        last_drawn: u64,
+        bytes: u64,
+    },
+    /// Its fetch or decode failed: never asked for again.
+    Failed,
+}
+
+/// What one frame draws and fetches.
+#[derive(Debug, Default, PartialEq, Eq)]
+pub struct FramePlan {
+    /// LOD ids to draw (wanted ones where resident, else stand-ins).
+    pub draw: Vec<u32>,
+    /// LOD ids to fetch now.
+    pub fetch: Vec<u32>,
+    /// Wanted LODs drawn by a stand-in.
+    pub stand_ins: usize,
+    /// Wanted LODs drawn not at all (nothing of their node resident).
+    pub missing: usize,
+}
+
+/// What an arrival came to.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Admit {
+    /// Put it on the device after taking these LODs off it.
+    Insert { evict: Vec<u32> },
+    /// No room without evicting what this frame draws: drop it.
+    Refused,
+}
+
+pub struct Streamer {
+    states: Vec<State>,
+    budget: u64,
+    resident_bytes: u64,
+    in_flight: usize,
+    pub max_in_flight: usize,
+    frame: u64,
+}
+
+impl Streamer {
+    /// A streamer for `lods` LODs keeping at most `budget` bytes resident.
+    pub fn new(lods: usize, budget: u64, max_in_flight: usize) -> Streamer {
+        Streamer {
+            states: vec![State::Absent; lods],
+            budget,
+            resident_bytes: 0,
+            in_flight: 0,
+            max_in_flight: max_in_flight.max(1),
+            frame: 0,
+        }
+    }
+
+    pub fn resident_bytes(&self) -> u64 {
+        self.resident_bytes
+    }
+
+    pub fn in_flight(&self) -> usize {
+        self.in_flight
+    }
+
+    pub fn is_resident(&self, lod: u32) -> bool {
+        matches!(self.states.get(lod as usize), Some(State::Resident { .. }))
+    }
+
+    /// Plans frame `frame` for traversal's `wanted` items (front to back).
+    pub fn frame(&mut self, frame: u64, wanted: &[DrawItem], skeleton: &Skeleton) -> FramePlan {
+        self.frame = frame;
+        let mut plan = FramePlan::default();
+        for item in wanted {
+            let node = skeleton.node(item.node);
+            let first = node.first_lod;
+            let count = node.lod_count;
+            let want = first + item.lod;
+            if self.touch(want) {
+                plan.draw.push(want);
+            } else {
+                // Coarser levels first, then finer ones.
+                let stand_in = (item.lod + 1..count)
+                    .chain((0..item.lod).rev())
+                    .map(|l| first + l)
+                    .find(|&l| self.touch(l));
+                match stand_in {
+                    Some(l) => {
+                        plan.draw.push(l);
+                        plan.stand_ins += 1;
+                    }
+                    None => plan.missing += 1,
+                }
+                if self.states[want as usize] == State::Absent
+                    && self.in_flight + plan.fetch.len() < self.max_in_flight
+                {
+                    plan.fetch.push(want);
+                }
+            }
+        }
+        for &l in &plan.fetch {
+            self.states[l as usize] = State::InFlight;
+        }
+        self.in_flight += plan.fetch.len();
+        plan
+    }
+
+    /// Marks `lod` drawn this frame if it is resident.
+    fn touch(&mut self, lod: u32) -> bool {
+        match &mut self.states[lod as usize] {
+            State::Resident { last_drawn, .. } => {
+                *last_drawn = self.frame;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// `lod` arrived, taking `bytes` once resident: room is made, or it is
+    /// refused (and may be fetched again later).
+    pub fn arrived(&mut self, lod: u32, bytes: u64) -> Admit {
+        self.in_flight = self.in_flight.saturating_sub(1);
+        if self.states[lod as usize] != State::InFlight {
+            return Admit::Refused;
+        }
+        let mut evict = Vec::new();
+        if self.resident_bytes + bytes > self.budget {
+            let mut old: Vec<(u64, u32, u64)> = self
+                .states
+                .iter()
+                .enumerate()
+                .filter_map(|(i, s)| match *s {
+                    State::Resident { last_drawn, bytes } if last_drawn < self.frame => {
+                        Some((last_drawn, i as u32, bytes))
+                    }
+                    _ => None,
+                })
+                .collect();
+            old.sort_unstable();
+            let mut freed = 0;
+            for (_, id, b) in old {
+                if self.resident_bytes - freed + bytes <= self.budget {
+                    break;
+                }
+                freed += b;
+                evict.push(id);
+            }
+            if self.resident_bytes - freed + bytes > self.budget {
+                self.states[lod as usize] = State::Absent;
+                return Admit::Refused;
+            }
+            for &id in &evict {
+                self.states[id as usize] = State::Absent;
+            }
+            self.resident_bytes -= freed;
+        }
+        self.states[lod as usize] = State::Resident {
+            last_drawn: self.frame,
+            bytes,
+        };
+        self.resident_bytes += bytes;
+        Admit::Insert { evict }
+    }
+
+    /// The device could not take `lod` after all (out of room in one
+    /// piece): forget it was admitted.
+    pub fn not_inserted(&mut self, lod: u32) {
+        if let State::Resident { bytes, .. } = self.states[lod as usize] {
+            self.resident_bytes -= bytes;
+            self.states[lod as usize] = State::Absent;
+        }
+    }
+
+    /// `lod`'s fetch or decode failed: it is not asked for again.
+    pub fn failed(&mut self, lod: u32) {
+        if self.states[lod as usize] == State::InFlight {
+            self.in_flight = self.in_flight.saturating_sub(1);
+        }
+        self.states[lod as usize] = State::Failed;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, Skeleton, NO_NODE};
+    use glam::DVec3;
+
+    /// Two leaves of three LODs each under a root of one.
+    fn skeleton() -> Skeleton {
+        let b = Aabb::new(DVec3::ZERO, DVec3::ONE);
+        let node = |parent, first_child, child_count, first_lod, lod_count| Node {
+            bounds: b,
+            parent,
+            first_child,
+            child_count,
+            first_lod,
+            lod_count,
+        };
+        let nodes = vec![
+            node(NO_NODE, 1, 2, 0, 1),
+            node(0, 0, 0, 1, 3),
+            node(0, 0, 0, 4, 3),
+        ];
+        let lod = |error: f32| LodInfo {
+            error,
+            triangles: 12,
+            vertices: 36,
+            origin: DVec3::ZERO,
+            index_format: IndexFormat::U16,
+            uniform_colour: None,
+            encoded: false,
+            grid: None,
+            compressed: false,
+            offset: 0,
+            len: 0,
+            checksum: 0,
+        };
+        let lods = [4.0, 0.0, 1.0, 2.0, 0.0, 1.0, 2.0].map(lod).to_vec();
+        Skeleton::new(DVec3::ZERO, b, nodes, lods, Provenance::default()).expect("a valid skeleton")
+    }
+
+    fn item(node: u32, lod: u32) -> DrawItem {
+        DrawItem { node, lod }
+    }
+
+    #[test]
+    fn a_missing_lod_is_fetched_and_drawn_by_a_stand_in_meanwhile() {
+        let sk = skeleton();
+        let mut s = Streamer::new(7, 1000, 8);
+        let p = s.frame(0, &[item(1, 0), item(2, 1)], &sk);
+        assert_eq!(p.fetch, vec![1, 5]);
+        assert_eq!((p.draw.len(), p.missing), (0, 2));
+        // Asked once: in flight.
+        let p = s.frame(1, &[item(1, 0), item(2, 1)], &sk);
+        assert!(p.fetch.is_empty());
+        assert_eq!(s.arrived(5, 100), Admit::Insert { evict: vec![] });
+        // Node 2 now wants its finest level: its coarser one stands in.
+        let p = s.frame(2, &[item(2, 0)], &sk);
+        assert_eq!(
+            (p.draw.clone(), p.stand_ins, p.fetch.clone()),
+            (vec![5], 1, vec![4])
+        );
+        assert_eq!(s.arrived(4, 100), Admit::Insert { evict: vec![] });
+        let p = s.frame(3, &[item(2, 0)], &sk);
+        assert_eq!((p.draw, p.stand_ins, p.missing), (vec![4], 0, 0));
+    }
+
+    #[test]
+    fn arrivals_evict_the_least_recently_drawn_never_this_frames() {
+        let sk = skeleton();
+        let mut s = Streamer::new(7, 250, 8);
+        s.frame(0, &[item(1, 0), item(1, 1), item(1, 2)], &sk);
+        assert_eq!(s.arrived(1, 100), Admit::Insert { evict: vec![] });
+        assert_eq!(s.arrived(2, 100), Admit::Insert { evict: vec![] });
+        s.frame(1, &[item(1, 1)], &sk);
+        s.frame(2, &[item(1, 0)], &sk);
+        // LOD 2 was drawn at frame 1, LOD 1 at frame 2 (now): 2 goes.
+        assert_eq!(s.arrived(3, 100), Admit::Insert { evict: vec![2] });
+        assert_eq!(s.resident_bytes(), 200);
+        // Both residents are drawn this frame: a new arrival is refused.
+        s.frame(3, &[item(1, 0), item(1, 2), item(2, 0)], &sk);
+        assert_eq!(s.arrived(4, 100), Admit::Refused);
+        assert!(s.resident_bytes() <= 250);
+        // Refused means absent: it is asked for again.
+        let p = s.frame(4, &[item(2, 0)], &sk);
+        assert_eq!(p.fetch, vec![4]);
+    }
+
+    #[test]
+    fn fetches_stay_within_the_in_flight_cap_and_failures_are_not_retried() {
+        let sk = skeleton();
+        let mut s = Streamer::new(7, 1000, 2);
+        let p = s.frame(0, &[item(1, 0), item(2, 0), item(0, 0)], &sk);
+        assert_eq!(p.fetch, vec![1, 4]);
+        s.failed(1);
+        let p = s.frame(1, &[item(1, 0), item(2, 0), item(0, 0)], &sk);
+        assert_eq!(p.fetch, vec![0]);
+        assert_eq!(s.in_flight(), 2);
+    }
+}

@@ -50,7 +50,7 @@ pub use atomic::{
 pub use error::{ReadError, ReadErrorKind, WriteError};
 pub use format::{MAJOR as FORMAT_MAJOR, MINOR as FORMAT_MINOR};
 pub use mesh::{decode_normal, encode_normal, Colours, LodMesh};
-pub use read::{GridLod, ReadAt, SceneReader, SectionInfo, StoredLod};
+pub use read::{opening_reads, GridLod, ReadAt, SceneReader, SectionInfo, StoredLod};
 pub use skeleton::{
     GridBits, IndexFormat, LodInfo, Node, Provenance, Skeleton, SkeletonError, NO_NODE,
 };

@@ -361,7 +361,9 @@ fn corrupt(section: &str, offset: u64, detail: impl Into<String>) -> ReadErrorKi
     }
 }
 
-fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> {
+/// The header and table of contents, read and checked: the first two
+/// reads of opening a scene.
+fn header_and_toc<R: ReadAt + ?Sized>(src: &R) -> Result<(Header, Vec<TocEntry>), ReadErrorKind> {
     let actual = src.size()?;
     if actual < format::HEADER_LEN as u64 {
         return Err(
@@ -427,7 +429,7 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
             ),
         ));
     }
-    let toc_bytes = read_bytes(&src, h.toc_offset, toc_len)?;
+    let toc_bytes = read_bytes(src, h.toc_offset, toc_len)?;
     if crc32fast::hash(&toc_bytes) != h.toc_crc {
         return Err(ReadErrorKind::Checksum {
             section: "table of contents".into(),
@@ -455,6 +457,32 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
             ));
         }
     }
+    Ok((h, toc))
+}
+
+/// The byte ranges opening a scene reads besides the header and the table
+/// of contents (which this reads): its required sections but the
+/// geometry. What a reader that fetches bytes over a network fetches
+/// before [`SceneReader::from_source`], in one request when they lie
+/// together (the writer puts them together).
+pub fn opening_reads<R: ReadAt + ?Sized>(
+    src: &R,
+    name: &str,
+) -> Result<Vec<std::ops::Range<u64>>, ReadError> {
+    let (_, toc) = header_and_toc(src).map_err(|kind| ReadError {
+        file: name.to_string(),
+        kind,
+    })?;
+    Ok(toc
+        .iter()
+        .filter(|e| e.flags & format::SECTION_OPTIONAL == 0 && e.tag != format::TAG_GEOMETRY)
+        .map(|e| e.offset..e.offset + e.len)
+        .collect())
+}
+
+fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> {
+    let actual = src.size()?;
+    let (h, toc) = header_and_toc(&src)?;
     let mut sorted: Vec<&TocEntry> = toc.iter().collect();
     sorted.sort_by_key(|e| e.offset);
     for w in sorted.windows(2) {
@@ -632,7 +660,11 @@ fn open<R: ReadAt>(src: R, name: &str) -> Result<SceneReader<R>, ReadErrorKind> 
     })
 }
 
-fn read_bytes<R: ReadAt>(src: &R, offset: u64, len: u64) -> Result<Vec<u8>, ReadErrorKind> {
+fn read_bytes<R: ReadAt + ?Sized>(
+    src: &R,
+    offset: u64,
+    len: u64,
+) -> Result<Vec<u8>, ReadErrorKind> {
     // Callers have checked offset + len against the file's real length, so
     // this allocation is bounded by the file size.
     let mut b = vec![0u8; len as usize];

@@ -79,6 +79,12 @@ struct Stats {
     resident_bytes: u64,
     first_frame_ms: Option<f64>,
     failed_lods: u64,
+    /// The last LOD that failed to fetch or decode, and why.
+    lod_error: Option<String>,
+    in_flight: usize,
+    /// Whether the last frame drew every LOD it wanted, with nothing in
+    /// flight: what tests wait for before they read an image.
+    settled: bool,
     mode: String,
     pixel_error: f64,
 }
@@ -91,7 +97,8 @@ impl Stats {
             "{{\"state\":{},\"error\":{},\"backend\":{},\"frames\":{},\"fps\":{:.2},\
              \"triangles\":{},\"draws\":{},\"stand_ins\":{},\"missing\":{},\"visited\":{},\
              \"file_bytes\":{},\"fetched_bytes\":{},\"requests\":{},\"resident_bytes\":{},\
-             \"first_frame_ms\":{},\"failed_lods\":{},\"mode\":{},\"pixel_error\":{}}}",
+             \"first_frame_ms\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
+             \"settled\":{},\"mode\":{},\"pixel_error\":{}}}",
             s(&self.state),
             self.error.as_deref().map_or("null".into(), s),
             s(&self.backend),
@@ -108,6 +115,9 @@ impl Stats {
             self.resident_bytes,
             opt(self.first_frame_ms),
             self.failed_lods,
+            self.lod_error.as_deref().map_or("null".into(), s),
+            self.in_flight,
+            self.settled,
             s(&self.mode),
             self.pixel_error,
         )
@@ -283,6 +293,10 @@ struct App {
     pixel_error: f64,
     hud: bool,
     near: f64,
+    /// A camera path's poses (`load_path`) and the one shown exactly
+    /// (`show_pose`) until the mouse or a key moves the camera.
+    path: Vec<gigawalk_scene::path::Pose>,
+    pose: Option<usize>,
     frame: u64,
     last_ms: f64,
     started_ms: f64,
@@ -320,7 +334,10 @@ impl App {
                 Err(e) => {
                     web_sys::console::warn_1(&format!("LOD {lod}: {e}").into());
                     self.streamer.failed(lod);
-                    set_stats(|s| s.failed_lods += 1);
+                    set_stats(|s| {
+                        s.failed_lods += 1;
+                        s.lod_error = Some(format!("LOD {lod}: {e}"));
+                    });
                 }
             }
         }
@@ -352,7 +369,10 @@ impl App {
         if self.pass.size() != (w, h) {
             self.pass = VisiblePass::new(&self.ctx, w, h);
         }
-        let camera = self.fly.camera(w as f64 / h as f64, self.near);
+        let camera = match self.pose.and_then(|i| self.path.get(i)) {
+            Some(p) => gigawalk_cull::Camera::of_pose(p, Viewport::new(w, h), self.near),
+            None => self.fly.camera(w as f64 / h as f64, self.near),
+        };
         let view = CullView::new(camera, Viewport::new(w, h));
         let options = TraversalOptions {
             occlusion: false,
@@ -411,6 +431,8 @@ impl App {
             s.missing = plan.missing;
             s.visited = traversal.visited;
             s.resident_bytes = self.streamer.resident_bytes();
+            s.in_flight = self.streamer.in_flight();
+            s.settled = plan.missing == 0 && plan.stand_ins == 0 && s.in_flight == 0;
             s.mode = self.mode.name().into();
             s.pixel_error = self.pixel_error;
             if first {
@@ -459,6 +481,13 @@ impl App {
                     s.pixel_error
                 ),
             ]
+            .into_iter()
+            .chain(
+                s.lod_error
+                    .iter()
+                    .map(|e| format!("{} LODs failed; last {e}", s.failed_lods)),
+            )
+            .collect()
         });
         vec![OverlayText {
             x: 8.0,
@@ -470,8 +499,16 @@ impl App {
         }]
     }
 
+    /// Leaves a shown pose for the fly controller, at that pose.
+    fn leave_pose(&mut self) {
+        if let Some(p) = self.pose.take().and_then(|i| self.path.get(i)) {
+            self.fly.set_pose(p.position, p.orientation, p.fovy);
+        }
+    }
+
     fn key(&mut self, code: &str, down: bool) {
         if let Some(m) = movement(code) {
+            self.leave_pose();
             if down {
                 self.held.insert(m);
             } else {
@@ -495,6 +532,69 @@ impl App {
             _ => {}
         }
     }
+}
+
+thread_local! {
+    /// The running page, for the calls below.
+    static APP: RefCell<Option<Rc<RefCell<App>>>> = const { RefCell::new(None) };
+}
+
+fn with_app<T>(f: impl FnOnce(&mut App) -> Result<T, String>) -> Result<T, JsValue> {
+    APP.with(|a| match a.borrow().as_ref() {
+        Some(app) => f(&mut app.borrow_mut()).map_err(|e| JsValue::from_str(&e)),
+        None => Err(JsValue::from_str("the page has not started")),
+    })
+}
+
+/// Loads a camera path (docs/path-format.md, as text); returns its
+/// number of poses.
+#[wasm_bindgen]
+pub fn load_path(text: &str) -> Result<u32, JsValue> {
+    let path = gigawalk_scene::path::CameraPath::parse(text)
+        .map_err(|e| JsValue::from_str(&format!("the camera path: {e}")))?;
+    with_app(|app| {
+        app.path = path.poses;
+        app.pose = None;
+        Ok(app.path.len() as u32)
+    })
+}
+
+/// Shows pose `i` of the loaded path, exactly (roll included).
+#[wasm_bindgen]
+pub fn show_pose(i: u32) -> Result<(), JsValue> {
+    with_app(|app| {
+        if i as usize >= app.path.len() {
+            return Err(format!("pose {i} of a path of {}", app.path.len()));
+        }
+        app.pose = Some(i as usize);
+        Ok(())
+    })
+}
+
+/// Sets what traversal draws: "vfc" (frustum culling, full detail) or
+/// "hlod" (and levels of detail at the pixel error).
+#[wasm_bindgen]
+pub fn set_mode(mode: &str) -> Result<(), JsValue> {
+    with_app(|app| {
+        app.mode = match mode {
+            "vfc" => Mode::Vfc,
+            "hlod" => Mode::Hlod,
+            m => return Err(format!("mode {m:?}: vfc or hlod")),
+        };
+        Ok(())
+    })
+}
+
+/// Sets the pixel error hlod selects levels by (positive, finite).
+#[wasm_bindgen]
+pub fn set_pixel_error(pixel_error: f64) -> Result<(), JsValue> {
+    with_app(|app| {
+        if !(pixel_error.is_finite() && pixel_error > 0.0) {
+            return Err(format!("pixel error {pixel_error}: a positive number"));
+        }
+        app.pixel_error = pixel_error;
+        Ok(())
+    })
 }
 
 /// Shows `message` as the page's error (and in the stats).
@@ -532,15 +632,31 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     let skeleton = reader.skeleton();
     let lods = skeleton.lods().len();
     let bounds = skeleton.bounds();
-    let budget = query("budget")
-        .and_then(|v| v.parse::<u64>().ok())
-        .unwrap_or(DEFAULT_BUDGET_MB)
-        << 20;
+    let budget_mb = match query("budget") {
+        None => DEFAULT_BUDGET_MB as f64,
+        Some(v) => v
+            .parse::<f64>()
+            .ok()
+            .filter(|b| b.is_finite() && *b > 0.0)
+            .ok_or_else(|| fail(format!("?budget={v}: megabytes, a positive number")))?,
+    };
+    let budget = (budget_mb * (1u64 << 20) as f64) as u64;
+    let pixel_error = match query("pixel_error") {
+        None => 1.0,
+        Some(v) => v
+            .parse::<f64>()
+            .ok()
+            .filter(|p| p.is_finite() && *p > 0.0)
+            .ok_or_else(|| fail(format!("?pixel_error={v}: pixels, a positive number")))?,
+    };
     let max_buffer = ctx.max_buffer_size().min(128 << 20);
     let pool = GeometryPool::new(&ctx, lods, budget, max_buffer)
         .map_err(|e| fail(format!("no room for the geometry budget: {e}")))?;
     set_stats(|s| {
-        s.backend = ctx.adapter_name().to_string();
+        s.backend = match ctx.adapter_name() {
+            "" => "WebGPU".to_string(),
+            name => format!("WebGPU ({name})"),
+        };
         s.file_bytes = sparse.len();
         s.fetched_bytes = fetched;
         s.requests = requests;
@@ -560,12 +676,11 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         traverser: Traverser::new(),
         items: Vec::new(),
         mode: Mode::Hlod,
-        pixel_error: query("pixel_error")
-            .and_then(|v| v.parse().ok())
-            .filter(|v: &f64| v.is_finite() && *v > 0.0)
-            .unwrap_or(1.0),
+        pixel_error,
         hud: true,
         near: default_near(&bounds),
+        path: Vec::new(),
+        pose: None,
         frame: 0,
         last_ms: now_ms(),
         started_ms,
@@ -574,6 +689,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         sparse,
     };
     let app = Rc::new(RefCell::new(app));
+    APP.with(|a| *a.borrow_mut() = Some(app.clone()));
     listen(&canvas, app.clone())?;
     run_frames(app);
     Ok(())
@@ -608,6 +724,7 @@ fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsVal
         let mut app = a.borrow_mut();
         if let Some((x, y)) = app.drag {
             let (nx, ny) = (e.client_x(), e.client_y());
+            app.leave_pose();
             app.fly.look((nx - x) as f64, (ny - y) as f64);
             app.drag = Some((nx, ny));
         }

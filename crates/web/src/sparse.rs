@@ -19,10 +19,10 @@ use std::rc::Rc;
 
 use gigawalk_scene::{ReadAt, ReadError, SceneReader};
 
-/// The least a page fetches at once while opening a scene: one round
-/// brings the header, the table of contents and, in small and middling
-/// scenes, the skeleton too.
-pub const OPEN_CHUNK: u64 = 256 << 10;
+/// The least a page fetches at once while opening a scene: the first
+/// round brings the header, the second the table of contents at the end
+/// with the sections just before it.
+pub const OPEN_CHUNK: u64 = 64 << 10;
 
 /// The fetched chunks of one file of `len` bytes.
 #[derive(Debug, Default)]
@@ -130,6 +130,15 @@ impl Sparse {
             .sum()
     }
 
+    /// Whether every byte of `range` is held.
+    pub fn holds(&self, range: &Range<u64>) -> bool {
+        let c = self.0.borrow();
+        c.chunks
+            .range(..=range.start)
+            .next_back()
+            .is_some_and(|(s, b)| s + b.len() as u64 >= range.end)
+    }
+
     /// The range the last failed read wanted, if a read failed for want
     /// of bytes since the last call.
     pub fn take_missing(&self) -> Option<Range<u64>> {
@@ -180,17 +189,32 @@ pub enum OpenStep {
     Failed(ReadError),
 }
 
-/// Tries to open the scene with what `sparse` holds.
+/// Tries to open the scene with what `sparse` holds. The rounds: the
+/// header (the page's first range), the table of contents at the end of
+/// the file (with [`OPEN_CHUNK`] before it), then every section opening
+/// reads, in one request when they lie together, as the writer puts
+/// them: the skeleton and nothing of the geometry or the optional
+/// sections (object table, occluders), which are read when used.
 pub fn open_step(sparse: &Sparse, name: &str) -> OpenStep {
+    let missed = |e| match sparse.take_missing() {
+        Some(m) => OpenStep::Fetch(widen(m, OPEN_CHUNK, sparse.len())),
+        None => OpenStep::Failed(e),
+    };
     sparse.take_missing();
+    let reads = match gigawalk_scene::opening_reads(sparse, name) {
+        Ok(r) => r,
+        Err(e) => return missed(e),
+    };
+    let missing: Vec<&Range<u64>> = reads.iter().filter(|r| !sparse.holds(r)).collect();
+    if let (Some(start), Some(end)) = (
+        missing.iter().map(|r| r.start).min(),
+        missing.iter().map(|r| r.end).max(),
+    ) {
+        return OpenStep::Fetch(start..end);
+    }
     match SceneReader::from_source(sparse.clone(), name) {
         Ok(r) => OpenStep::Open(Box::new(r)),
-        Err(e) => match sparse.take_missing() {
-            // Each round fetches at least as much as all before it, so a
-            // skeleton of any size takes a handful of rounds.
-            Some(m) => OpenStep::Fetch(widen(m, OPEN_CHUNK.max(sparse.held_bytes()), sparse.len())),
-            None => OpenStep::Failed(e),
-        },
+        Err(e) => missed(e),
     }
 }
 

@@ -1,11 +1,21 @@
 // Starts gigawalk's wasm module on the page's canvas with the scene that
 // config.json (written by `gigawalk web`) or ?scene=URL names, and shows
 // any failure on the page. window.gigawalkStats() is what tests read.
-import init, { start, stats } from './gigawalk_web.js';
+// ?budget=MB bounds the geometry kept on the device, ?pixel_error=P the
+// error levels are chosen by.
+import init, {
+  start, stats, load_path, show_pose, set_mode, set_pixel_error,
+} from './gigawalk_web.js';
 
 const status = document.getElementById('status');
 const canvas = document.getElementById('view');
 let failure = null;
+
+// What tests and scripts drive: a camera path's poses, the mode and the
+// pixel error (see crates/web/src/page.rs).
+window.gigawalk = {
+  loadPath: load_path, showPose: show_pose, setMode: set_mode, setPixelError: set_pixel_error,
+};
 
 window.gigawalkStats = () => {
   if (failure) return { state: 'error', error: failure };

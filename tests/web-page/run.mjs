@@ -1,0 +1,164 @@
+// Drives gigawalk's browser page (crates/web) in headless Chromium with
+// WebGPU on SwiftShader, and prints a JSON report: what the page said
+// (its stats, or its error), and with --path, each pose's triangles,
+// frame rate and how much of the image the scene covers, per mode.
+//
+//   node run.mjs --url URL [--query Q] [--path FILE --poses 0,10,20]
+//                [--modes vfc,hlod] [--shots DIR] [--timeout S]
+//                [--serve DIR [--no-range]] [--no-webgpu]
+//
+// --serve DIR serves DIR itself (ranges answered, or with --no-range
+// every request answered whole, as a server without range support
+// does) and opens it instead of --url. --no-webgpu starts Chromium
+// without WebGPU. Exit status 0 whenever a report was written (tests
+// judge it); 2 when Chromium or the page could not be driven at all.
+import fs from 'node:fs';
+import http from 'node:http';
+import path from 'node:path';
+import { execFileSync } from 'node:child_process';
+import puppeteer from 'puppeteer-core';
+
+const args = process.argv.slice(2);
+const opt = (name, dflt) => {
+  const i = args.indexOf(`--${name}`);
+  return i >= 0 && i + 1 < args.length ? args[i + 1] : dflt;
+};
+const flag = (name) => args.includes(`--${name}`);
+const timeoutMs = Number(opt('timeout', '180')) * 1000;
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+/// Chromium's own SwiftShader Vulkan driver: WebGPU needs a Vulkan ICD.
+function swiftshaderIcd() {
+  if (process.env.VK_ICD_FILENAMES) return process.env.VK_ICD_FILENAMES;
+  for (const p of ['/usr/lib/chromium/vk_swiftshader_icd.json']) if (fs.existsSync(p)) return p;
+  try {
+    const listed = execFileSync('dpkg', ['-L', 'chromium-common'], { encoding: 'utf8' });
+    return listed.split('\n').find((l) => l.endsWith('vk_swiftshader_icd.json'));
+  } catch (e) { return undefined; }
+}
+
+function serve(dir, ranges) {
+  const types = { '.html': 'text/html', '.js': 'text/javascript', '.wasm': 'application/wasm', '.json': 'application/json' };
+  const server = http.createServer((req, res) => {
+    const name = path.basename(decodeURIComponent(new URL(req.url, 'http://x').pathname)) || 'index.html';
+    const file = path.join(dir, name);
+    if (!fs.existsSync(file)) { res.writeHead(404); res.end(); return; }
+    const len = fs.statSync(file).size;
+    const head = { 'Content-Type': types[path.extname(file)] || 'application/octet-stream' };
+    const m = /^bytes=(\d+)-(\d*)$/.exec(req.headers.range || '');
+    if (ranges && m && Number(m[1]) < len) {
+      const s = Number(m[1]);
+      const e = m[2] ? Math.min(Number(m[2]), len - 1) : len - 1;
+      res.writeHead(206, { ...head, 'Accept-Ranges': 'bytes', 'Content-Range': `bytes ${s}-${e}/${len}`, 'Content-Length': e - s + 1 });
+      fs.createReadStream(file, { start: s, end: e }).pipe(res);
+    } else {
+      res.writeHead(200, { ...head, 'Content-Length': len });
+      fs.createReadStream(file).pipe(res);
+    }
+  });
+  return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
+}
+
+const report = { pages: [] };
+let server;
+let browser;
+try {
+  let url = opt('url');
+  if (opt('serve')) {
+    server = await serve(opt('serve'), !flag('no-range'));
+    url = `http://127.0.0.1:${server.address().port}/`;
+  }
+  if (!url) throw new Error('--url or --serve is needed');
+  const webgpu = flag('no-webgpu')
+    ? ['--disable-webgpu']
+    : ['--enable-unsafe-webgpu', '--enable-features=Vulkan', '--use-vulkan=swiftshader', '--use-angle=vulkan'];
+  browser = await puppeteer.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: 'new',
+    env: { ...process.env, VK_ICD_FILENAMES: swiftshaderIcd() || '' },
+    args: ['--no-sandbox', '--disable-background-networking', '--disable-component-update',
+      '--no-first-run', '--disable-sync', '--disable-quic', ...webgpu],
+  });
+  const page = await browser.newPage();
+  const consoleLines = [];
+  page.on('console', (m) => consoleLines.push(`${m.type()}: ${m.text()}`.slice(0, 500)));
+  page.on('pageerror', (e) => consoleLines.push(`pageerror: ${e.message}`.slice(0, 500)));
+  await page.setViewport({ width: 640, height: 360 });
+  const query = ['size=640x360', opt('query')].filter(Boolean).join('&');
+  const started = Date.now();
+  await page.goto(`${url}?${query}`);
+  const stats = () => page.evaluate(() => (window.gigawalkStats ? window.gigawalkStats() : { state: 'loading' }));
+  let s = await stats();
+  while (s.state !== 'error' && !(s.state === 'running' && s.frames > 0) && Date.now() - started < timeoutMs) {
+    await sleep(100);
+    s = await stats();
+  }
+  report.first = { ...s, wall_ms: Date.now() - started };
+  report.status_text = await page.evaluate(() => document.getElementById('status')?.textContent || '');
+  const shots = opt('shots');
+  if (shots) fs.mkdirSync(shots, { recursive: true });
+
+  /// The share of the page's pixels that are not the background.
+  async function coverage(name) {
+    const png = await page.screenshot({ encoding: 'base64' });
+    if (shots) fs.writeFileSync(path.join(shots, `${name}.png`), Buffer.from(png, 'base64'));
+    return page.evaluate(async (data) => {
+      const img = new Image();
+      img.src = `data:image/png;base64,${data}`;
+      await img.decode();
+      const c = document.createElement('canvas');
+      c.width = img.width; c.height = img.height;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      const bg = [d[d.length - 4], d[d.length - 3], d[d.length - 2]];
+      let lit = 0;
+      // The HUD's panel (top left) is left out.
+      for (let y = 60; y < c.height; y++) {
+        for (let x = 0; x < c.width; x++) {
+          const i = 4 * (y * c.width + x);
+          if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 12) lit++;
+        }
+      }
+      return lit / (c.width * (c.height - 60));
+    }, png);
+  }
+
+  if (opt('path') && s.state === 'running') {
+    const poses = (opt('poses') || '0').split(',').map(Number);
+    report.path_poses = await page.evaluate((t) => window.gigawalk.loadPath(t), fs.readFileSync(opt('path'), 'utf8'));
+    report.poses = [];
+    for (const mode of (opt('modes') || 'vfc,hlod').split(',')) {
+      await page.evaluate((m) => window.gigawalk.setMode(m), mode);
+      for (const pose of poses) {
+        await page.evaluate((i) => window.gigawalk.showPose(i), pose);
+        const t0 = Date.now();
+        const f0 = (await stats()).frames;
+        // Settled: every wanted LOD drawn, nothing in flight, a few
+        // frames after the pose was set.
+        let p = await stats();
+        while (!(p.settled && p.frames >= f0 + 3) && p.state !== 'error' && Date.now() - t0 < timeoutMs / 4) {
+          await sleep(100);
+          p = await stats();
+        }
+        const settle_ms = Date.now() - t0;
+        // Frame rate over two seconds at the settled pose.
+        const a = await stats();
+        const ta = Date.now();
+        await sleep(2000);
+        const b = await stats();
+        const fps = ((b.frames - a.frames) * 1000) / (Date.now() - ta);
+        report.poses.push({ mode, pose, settle_ms, fps, coverage: await coverage(`${mode}-${pose}`), ...b });
+      }
+    }
+  }
+  report.last = await stats();
+  report.console = consoleLines.slice(-40);
+  console.log(JSON.stringify(report, null, 1));
+} catch (e) {
+  console.error(`cannot drive the page: ${e && e.stack ? e.stack : e}`);
+  process.exitCode = 2;
+} finally {
+  if (browser) await browser.close();
+  if (server) server.close();
+}

@@ -5,11 +5,14 @@
 //
 //   node run.mjs --url URL [--query Q] [--path FILE --poses 0,10,20]
 //                [--modes vfc,hlod] [--shots DIR] [--timeout S]
+//                [--settle S] [--linger S]
 //                [--serve DIR [--no-range]] [--no-webgpu]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
 // every request answered whole, as a server without range support
-// does) and opens it instead of --url. --no-webgpu starts Chromium
+// does) and opens it instead of --url. --settle bounds the wait for a
+// pose to draw all it wants (a budget too small never lets it);
+// --linger waits before the last stats. --no-webgpu starts Chromium
 // without WebGPU. Exit status 0 whenever a report was written (tests
 // judge it); 2 when Chromium or the page could not be driven at all.
 import fs from 'node:fs';
@@ -94,6 +97,10 @@ try {
     s = await stats();
   }
   report.first = { ...s, wall_ms: Date.now() - started };
+  // The page shows an error once start() has rejected, just after the
+  // stats say so.
+  const shown = () => page.evaluate(() => document.getElementById('status')?.className === 'error');
+  for (let i = 0; s.state === 'error' && i < 50 && !(await shown()); i++) await sleep(100);
   report.status_text = await page.evaluate(() => document.getElementById('status')?.textContent || '');
   const shots = opt('shots');
   if (shots) fs.mkdirSync(shots, { recursive: true });
@@ -137,7 +144,8 @@ try {
         // Settled: every wanted LOD drawn, nothing in flight, a few
         // frames after the pose was set.
         let p = await stats();
-        while (!(p.settled && p.frames >= f0 + 3) && p.state !== 'error' && Date.now() - t0 < timeoutMs / 4) {
+        const settleMs = Number(opt('settle', String(timeoutMs / 4000))) * 1000;
+        while (!(p.settled && p.frames >= f0 + 3) && p.state !== 'error' && Date.now() - t0 < settleMs) {
           await sleep(100);
           p = await stats();
         }
@@ -152,6 +160,7 @@ try {
       }
     }
   }
+  await sleep(Number(opt('linger', '0')) * 1000);
   report.last = await stats();
   report.console = consoleLines.slice(-40);
   console.log(JSON.stringify(report, null, 1));

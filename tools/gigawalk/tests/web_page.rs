@@ -1,0 +1,334 @@
+//! The browser page (crates/web) in headless Chromium with WebGPU on
+//! SwiftShader, driven by tests/web-page/run.mjs: a walk along a camera
+//! path served by `gigawalk serve`, drawing what native traversal draws;
+//! a scene ten times the memory budget; and every failure the page must
+//! name instead of showing a blank canvas.
+//!
+//! Needs the page's bundle (crates/web/build.sh), Node with
+//! tests/web-page's packages (npm ci there) and Chromium. Without them
+//! each test prints a SKIP line; CI sets GIGAWALK_REQUIRE_BROWSER=1,
+//! which makes that a failure.
+
+mod common;
+
+use std::io::BufRead as _;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+use common::{gigawalk_ok, json, plant, s, BIN};
+use serde_json::Value;
+
+/// The bundle build.sh writes beside the binary's target directory.
+fn bundle() -> PathBuf {
+    match std::env::var_os("GIGAWALK_WEB_BUNDLE") {
+        Some(b) => PathBuf::from(b),
+        None => Path::new(BIN)
+            .parent()
+            .and_then(Path::parent)
+            .expect("the binary lies in a target directory")
+            .join("web/bundle"),
+    }
+}
+
+fn harness() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/web-page")
+}
+
+/// Why the browser tests cannot run here, if they cannot.
+fn browser_missing() -> Option<String> {
+    let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
+    let node = Command::new("node").arg("--version").output();
+    if !node.is_ok_and(|o| o.status.success()) {
+        Some("node is not installed".into())
+    } else if !harness().join("node_modules").exists() {
+        Some(format!(
+            "{}: no node_modules (run npm ci there)",
+            harness().display()
+        ))
+    } else if !Path::new(&chromium).exists() {
+        Some(format!(
+            "{chromium}: no Chromium (apt-get install chromium)"
+        ))
+    } else if !bundle().join("gigawalk_web_bg.wasm").exists() {
+        Some(format!(
+            "{}: no page bundle (run crates/web/build.sh)",
+            bundle().display()
+        ))
+    } else {
+        None
+    }
+}
+
+/// Whether `test` can run; prints SKIP (or fails under CI) when not.
+fn can_run(test: &str) -> bool {
+    let Some(why) = browser_missing() else {
+        return true;
+    };
+    if std::env::var("GIGAWALK_REQUIRE_BROWSER").is_ok_and(|v| v == "1") {
+        panic!("GIGAWALK_REQUIRE_BROWSER=1 but {why}");
+    }
+    println!("SKIP {test}: {why}");
+    false
+}
+
+/// Runs the page driver with `args`; returns its report.
+#[track_caller]
+fn drive(args: &[&str]) -> Value {
+    let out = Command::new("node")
+        .current_dir(harness())
+        .arg("run.mjs")
+        .args(args)
+        .output()
+        .expect("node runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "run.mjs {args:?} failed: {}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    json(&stdout)
+}
+
+/// `gigawalk serve` on a free port, killed when dropped.
+struct Served {
+    child: Child,
+    url: String,
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn serve(scene: &Path) -> Served {
+    let mut child = Command::new(BIN)
+        .args(["serve", s(scene), "--port", "0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("gigawalk serve starts");
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().expect("piped"))
+        .read_line(&mut line)
+        .expect("serve prints its URL");
+    let url = line.trim().to_string();
+    assert!(url.starts_with("http://127.0.0.1:"), "{url:?}");
+    Served { child, url }
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"))
+}
+
+/// Triangles native traversal draws at each pose of `path`, per mode, at
+/// the page's viewport (`gigawalk replay` on the null adapter).
+fn native_triangles(gwk: &Path, path: &Path, out: &Path, modes: &str) -> Vec<(String, usize, f64)> {
+    gigawalk_ok(&[
+        "replay",
+        s(gwk),
+        "--path",
+        s(path),
+        "--out",
+        s(out),
+        "--adapter",
+        "null",
+        "--modes",
+        modes,
+        "--width",
+        "640",
+        "--height",
+        "360",
+    ]);
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name| head.iter().position(|h| *h == name).unwrap();
+    let (mode, frame, tris) = (col("mode"), col("frame"), col("drawn_triangles"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[mode].to_string(),
+                f[frame].parse().unwrap(),
+                f[tris].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
+    if !can_run("the_page_walks_a_plant_and_draws_what_native_traversal_draws") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk) = plant(dir.path(), "60k");
+    let served = serve(&gwk);
+    let poses = "0,5,11";
+    let report = drive(&[
+        "--url",
+        &served.url,
+        "--path",
+        s(&path),
+        "--poses",
+        poses,
+        "--modes",
+        "vfc,hlod",
+    ]);
+    let first = &report["first"];
+    assert_eq!(first["state"], "running", "{report}");
+    let file_bytes = num(first, "file_bytes");
+    assert_eq!(file_bytes, std::fs::metadata(&gwk).unwrap().len() as f64);
+    // The first frame does not wait for the file: opening fetched the
+    // skeleton, not the geometry.
+    assert!(
+        num(first, "fetched_bytes") < 0.5 * file_bytes,
+        "first frame after {} of {file_bytes} bytes",
+        first["fetched_bytes"]
+    );
+    let native = native_triangles(&gwk, &path, &dir.path().join("replay"), "vfc,hlod");
+    let pose_list: Vec<&Value> = report["poses"].as_array().unwrap().iter().collect();
+    assert_eq!(pose_list.len(), 6, "{report}");
+    for p in &pose_list {
+        let (mode, pose) = (p["mode"].as_str().unwrap(), num(p, "pose") as usize);
+        assert_eq!(p["state"], "running", "{p}");
+        assert_eq!(
+            p["settled"], true,
+            "{mode} pose {pose} never drew all it wanted: {p}"
+        );
+        assert!(
+            num(p, "coverage") > 0.02,
+            "{mode} pose {pose} drew nothing: {p}"
+        );
+        let want = native
+            .iter()
+            .find(|(m, f, _)| m == mode && *f == pose)
+            .unwrap_or_else(|| panic!("no native {mode} frame {pose}"))
+            .2;
+        assert_eq!(
+            num(p, "triangles"),
+            want,
+            "{mode} pose {pose}: the page drew {} triangles, native traversal {want}",
+            p["triangles"]
+        );
+    }
+    assert_eq!(report["last"]["failed_lods"], 0, "{report}");
+    assert!(num(&report["last"], "fetched_bytes") <= file_bytes);
+}
+
+#[test]
+fn a_scene_ten_times_the_budget_walks_within_it() {
+    if !can_run("a_scene_ten_times_the_budget_walks_within_it") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk) = plant(dir.path(), "60k");
+    let file = std::fs::metadata(&gwk).unwrap().len() as f64;
+    let budget_mb = file / 10.0 / (1u64 << 20) as f64;
+    let served = serve(&gwk);
+    let report = drive(&[
+        "--url",
+        &served.url,
+        "--query",
+        &format!("budget={budget_mb:.4}"),
+        "--path",
+        s(&path),
+        "--poses",
+        "0,2,4,6,8,10,11",
+        "--modes",
+        "hlod",
+        "--settle",
+        "6",
+    ]);
+    let budget = (budget_mb * (1u64 << 20) as f64).floor();
+    assert_eq!(report["first"]["state"], "running", "{report}");
+    let mut frames = 0.0;
+    for p in report["poses"].as_array().unwrap() {
+        assert_eq!(p["state"], "running", "{p}");
+        assert!(num(p, "resident_bytes") <= budget, "{p} over {budget}");
+        assert!(num(p, "triangles") > 0.0, "{p}");
+        assert!(num(p, "frames") > frames, "frames stopped: {p}");
+        frames = num(p, "frames");
+    }
+    assert_eq!(report["last"]["failed_lods"], 0, "{report}");
+}
+
+/// A site written by `gigawalk web` with its scene replaced by `bytes`
+/// (or removed), served by the driver (`--no-range`: a server that
+/// answers every request whole).
+fn bad_site(dir: &Path, gwk: &Path, name: &str, bytes: Option<Vec<u8>>) -> PathBuf {
+    let site = dir.join(name);
+    gigawalk_ok(&["web", s(gwk), "-o", s(&site)]);
+    match bytes {
+        Some(b) => std::fs::write(site.join("scene.gwk"), b).unwrap(),
+        None => std::fs::remove_file(site.join("scene.gwk")).unwrap(),
+    }
+    site
+}
+
+#[track_caller]
+fn says(report: &Value, words: &[&str]) {
+    assert_eq!(report["first"]["state"], "error", "{report}");
+    let e = report["first"]["error"].as_str().unwrap_or_default();
+    for w in words {
+        assert!(e.contains(w), "{e:?} does not say {w:?}");
+    }
+    let shown = report["status_text"].as_str().unwrap_or_default();
+    assert_eq!(shown, e, "the page shows the error");
+}
+
+#[test]
+fn the_page_says_what_is_wrong() {
+    if !can_run("the_page_says_what_is_wrong") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (_, gwk) = plant(dir.path(), "8k");
+    let scene = std::fs::read(&gwk).unwrap();
+    let d = dir.path();
+
+    let site = bad_site(d, &gwk, "text", Some(b"<html>not a scene</html>".to_vec()));
+    says(
+        &drive(&["--serve", s(&site)]),
+        &["scene.gwk", "cannot be opened as a scene"],
+    );
+
+    let site = bad_site(d, &gwk, "cut", Some(scene[..scene.len() / 2].to_vec()));
+    says(
+        &drive(&["--serve", s(&site)]),
+        &["scene.gwk", "cannot be opened as a scene"],
+    );
+
+    let site = bad_site(d, &gwk, "gone", None);
+    says(&drive(&["--serve", s(&site)]), &["scene.gwk", "HTTP 404"]);
+
+    let site = bad_site(d, &gwk, "whole", Some(scene.clone()));
+    says(
+        &drive(&["--serve", s(&site), "--no-range"]),
+        &["does not answer range requests"],
+    );
+
+    says(&drive(&["--serve", s(&site), "--no-webgpu"]), &["WebGPU"]);
+
+    says(
+        &drive(&["--serve", s(&site), "--query", "budget=lots"]),
+        &["?budget=lots"],
+    );
+
+    // Corrupt geometry: the page keeps walking, and says which LODs
+    // failed their checksums instead of drawing them.
+    let mut corrupt = scene.clone();
+    let reader = gigawalk_scene::SceneReader::open(&gwk).unwrap();
+    for lod in reader.skeleton().lods() {
+        corrupt[(lod.offset + lod.len / 2) as usize] ^= 0x5a;
+    }
+    let site = bad_site(d, &gwk, "corrupt", Some(corrupt));
+    let report = drive(&["--serve", s(&site), "--linger", "4"]);
+    let last = &report["last"];
+    assert_eq!(last["state"], "running", "{report}");
+    assert!(num(last, "failed_lods") > 0.0, "{report}");
+    let e = last["lod_error"].as_str().unwrap_or_default();
+    assert!(e.contains("checksum"), "{e:?}");
+}

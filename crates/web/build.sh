@@ -21,10 +21,14 @@ if [ "$have" != "$want" ]; then
     "cargo install wasm-bindgen-cli --version $want" >&2
   exit 1
 fi
-cargo build --release --target wasm32-unknown-unknown -p gigawalk-web
+# No debug info and no name section in the page: they are a third of
+# the .wasm otherwise.
+CARGO_PROFILE_RELEASE_DEBUG=false \
+  cargo build --release --target wasm32-unknown-unknown -p gigawalk-web
 rm -rf "$out.tmp"
 mkdir -p "$out.tmp"
-wasm-bindgen --target web --no-typescript --out-dir "$out.tmp" \
+wasm-bindgen --target web --no-typescript --remove-name-section --remove-producers-section \
+  --out-dir "$out.tmp" \
   "$target_dir/wasm32-unknown-unknown/release/gigawalk_web.wasm"
 if command -v wasm-opt >/dev/null 2>&1; then
   wasm-opt -O2 --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \

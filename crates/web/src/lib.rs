@@ -18,6 +18,8 @@
 //!
 //! The parts that do not touch the browser build and are tested natively.
 
+#![forbid(unsafe_code)]
+
 pub mod sparse;
 pub mod stream;
 

@@ -45,6 +45,10 @@ for m in ['vfc', 'hlod']:
     ps = [p for p in page['poses'] if p['mode'] == m]
     browser[m] = (statistics.median(p['fps'] for p in ps), statistics.median(p['triangles'] for p in ps),
                   all(p['settled'] for p in ps))
+    print(f"page {m}: the page's thread {statistics.median(p['cpu_ms'] for p in ps):.1f} ms a frame, "
+          f"traversal {statistics.median(p['traversal_ms'] for p in ps):.1f} ms, "
+          f"{statistics.median(p['draws'] for p in ps):.0f} draws; settled after "
+          f"{', '.join(str(p['settle_ms']) for p in ps)} ms")
 print("| mode | browser fps | browser triangles | native lavapipe fps | native triangles | browser / vfc | native / vfc |")
 print("|---|---:|---:|---:|---:|---:|---:|")
 for m in ['vfc', 'hlod', 'occ', 'och']:

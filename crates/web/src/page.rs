@@ -31,13 +31,14 @@ use web_sys::{
 };
 
 use crate::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
-use crate::stream::{Admit, Streamer};
+use crate::stream::{batches, Admit, Batch, Streamer};
 
 /// Vertical field of view of the page's camera.
 const FOVY_DEGREES: f64 = 60.0;
-/// Range requests in flight at once: browsers open about six connections
-/// to one host; more queue in the browser.
-const MAX_IN_FLIGHT: usize = 6;
+/// LODs in flight at once. Nearby blobs share a range request
+/// ([`batches`]); browsers run about six requests to one host at a time
+/// and queue the rest.
+const MAX_IN_FLIGHT: usize = 192;
 /// Device bytes for geometry when the page's URL does not say
 /// (`?budget=MB`).
 const DEFAULT_BUDGET_MB: u64 = 256;
@@ -85,6 +86,10 @@ struct Stats {
     /// Whether the last frame drew every LOD it wanted, with nothing in
     /// flight: what tests wait for before they read an image.
     settled: bool,
+    /// The last frame's time on the page's thread, all of it and its
+    /// traversal's (milliseconds).
+    cpu_ms: f64,
+    traversal_ms: f64,
     mode: String,
     pixel_error: f64,
 }
@@ -98,7 +103,8 @@ impl Stats {
              \"triangles\":{},\"draws\":{},\"stand_ins\":{},\"missing\":{},\"visited\":{},\
              \"file_bytes\":{},\"fetched_bytes\":{},\"requests\":{},\"resident_bytes\":{},\
              \"first_frame_ms\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
-             \"settled\":{},\"mode\":{},\"pixel_error\":{}}}",
+             \"settled\":{},\"cpu_ms\":{:.2},\"traversal_ms\":{:.2},\"mode\":{},\
+             \"pixel_error\":{}}}",
             s(&self.state),
             self.error.as_deref().map_or("null".into(), s),
             s(&self.backend),
@@ -118,6 +124,8 @@ impl Stats {
             self.lod_error.as_deref().map_or("null".into(), s),
             self.in_flight,
             self.settled,
+            self.cpu_ms,
+            self.traversal_ms,
             s(&self.mode),
             self.pixel_error,
         )
@@ -343,24 +351,55 @@ impl App {
         }
     }
 
-    fn fetch(&self, lod: u32) {
-        let info = self.reader.skeleton().lods()[lod as usize];
-        let url = self.url.clone();
-        let arrivals = self.arrivals.clone();
-        set_stats(|s| s.requests += 1);
-        spawn_local(async move {
-            let r = fetch_range(&url, info.offset..info.offset + info.len)
-                .await
-                .map(|(b, _)| b);
-            if let Ok(b) = &r {
-                let n = b.len() as u64;
-                set_stats(|s| s.fetched_bytes += n);
-            }
-            arrivals.borrow_mut().push((lod, r));
-        });
+    /// Fetches `lods` in as few range requests as [`batches`] makes.
+    fn fetch(&self, lods: &[u32]) {
+        let all = self.reader.skeleton().lods();
+        let wanted: Vec<(u32, Range<u64>)> = lods
+            .iter()
+            .map(|&l| {
+                let i = all[l as usize];
+                (l, i.offset..i.offset + i.len)
+            })
+            .collect();
+        for Batch { range, lods } in batches(&wanted) {
+            let url = self.url.clone();
+            let arrivals = self.arrivals.clone();
+            let blobs: Vec<(u32, Range<u64>)> = lods
+                .iter()
+                .map(|&l| {
+                    let i = all[l as usize];
+                    (l, i.offset - range.start..i.offset - range.start + i.len)
+                })
+                .collect();
+            set_stats(|s| s.requests += 1);
+            spawn_local(async move {
+                let r = fetch_range(&url, range).await.map(|(b, _)| b);
+                let mut arrived = arrivals.borrow_mut();
+                match r {
+                    Ok(bytes) => {
+                        let n = bytes.len() as u64;
+                        set_stats(|s| s.fetched_bytes += n);
+                        for (lod, at) in blobs {
+                            let blob = bytes.get(at.start as usize..at.end as usize);
+                            arrived.push((
+                                lod,
+                                blob.map(<[u8]>::to_vec)
+                                    .ok_or_else(|| "the range came back short".to_string()),
+                            ));
+                        }
+                    }
+                    Err(e) => {
+                        for (lod, _) in blobs {
+                            arrived.push((lod, Err(e.clone())));
+                        }
+                    }
+                }
+            });
+        }
     }
 
     fn frame(&mut self, now: f64) -> Result<(), String> {
+        let t0 = now_ms();
         self.take_arrivals();
         let dt = ((now - self.last_ms) / 1e3).clamp(0.0, 0.25);
         self.last_ms = now;
@@ -382,6 +421,7 @@ impl App {
                 Mode::Hlod => self.pixel_error,
             },
         };
+        let t_traverse = now_ms();
         self.items.clear();
         let items = &mut self.items;
         let traversal = self.traverser.traverse(
@@ -391,12 +431,11 @@ impl App {
             &options,
             &mut |i| items.push(i),
         );
+        let traversal_ms = now_ms() - t_traverse;
         let plan = self
             .streamer
             .frame(self.frame, &self.items, self.reader.skeleton());
-        for &lod in &plan.fetch {
-            self.fetch(lod);
-        }
+        self.fetch(&plan.fetch);
         let gpu_view = gigawalk_gpu::View {
             eye: view.camera.position,
             view_proj: view.camera.view_projection_rel(),
@@ -452,6 +491,11 @@ impl App {
         self.surface
             .present(&self.ctx, &self.pass, &overlay, (w, h), false)
             .map_err(|e| e.to_string())?;
+        let cpu_ms = now_ms() - t0;
+        set_stats(|s| {
+            s.cpu_ms = cpu_ms;
+            s.traversal_ms = traversal_ms;
+        });
         Ok(())
     }
 

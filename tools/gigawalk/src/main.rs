@@ -25,8 +25,10 @@ mod objects;
 mod preprocess;
 mod replay;
 mod section;
+mod serve;
 mod signals;
 mod view;
+mod web;
 
 use clap::{Parser, Subcommand};
 
@@ -62,6 +64,12 @@ enum Command {
     Find(objects::FindArgs),
     /// Write a scene as a 3D Tiles 1.1 tileset (CesiumJS, three.js): HLOD tiles with measured geometric errors, objects as features
     ExportTiles(export_tiles::Args),
+    /// Write the browser viewer and a scene as a static site (served by anything that answers HTTP range requests)
+    #[command(long_about = web::LONG_ABOUT)]
+    Web(web::Args),
+    /// Serve the browser viewer of a scene over HTTP, with the range requests it reads the scene by
+    #[command(long_about = serve::LONG_ABOUT)]
+    Serve(serve::Args),
     /// benches/gpu-run.sh's last step: results.json and summary.md from its step records
     #[command(hide = true)]
     GpuRunResults(gpu_run::Args),
@@ -113,6 +121,8 @@ fn main() -> std::process::ExitCode {
         Command::Pick(a) => objects::pick(a),
         Command::Find(a) => objects::find(a),
         Command::ExportTiles(a) => export_tiles::run(a),
+        Command::Web(a) => web::run(a),
+        Command::Serve(a) => serve::run(a),
         Command::GpuRunResults(a) => gpu_run::run(a),
     };
     // Temporaries of killed gigawalk runs found beside this run's outputs.

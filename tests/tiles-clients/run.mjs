@@ -3,7 +3,10 @@
 //                [--chromium /usr/bin/chromium] [--report out.json]
 //                [--shots DIR] [--near D]
 // 1. the Khronos glTF validator over every content of --validate (and of
-//    --tiles): no errors allowed;
+//    --tiles): no errors allowed; and the structure checks of
+//    structure.mjs on both tilesets as 3d-tiles-tools parses them (errors
+//    never increase down the tree, children inside their parents, every
+//    content URI resolves): no failure allowed;
 // 2. CesiumJS (@cesium/engine) and 3d-tiles-renderer (three.js) in
 //    headless Chromium (WebGL2 on SwiftShader), from pose N of a gigawalk
 //    camera path at screen-space error S: the tiles and triangles each
@@ -19,6 +22,7 @@ import { fileURLToPath } from 'node:url';
 import * as esbuild from 'esbuild';
 import puppeteer from 'puppeteer-core';
 import { validateAll } from './validate.mjs';
+import { checkStructure, summary as structureSummary } from './structure.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const args = {};
@@ -92,6 +96,13 @@ async function main() {
   };
   console.log(`validator: ${result.validator.contents} contents, ${result.validator.errors} errors, ${result.validator.warnings} warnings`);
   for (const m of result.validator.messages) console.log(`  ${m}`);
+  result.structure = [];
+  for (const d of [args.validate, tiles].filter(Boolean)) {
+    const r = await checkStructure(resolve(d));
+    result.structure.push(r);
+    console.log(structureSummary(r));
+    for (const f of r.failures) console.log(`  ${JSON.stringify(f)}`);
+  }
 
   // The pages, bundled.
   const app = join(here, 'out', 'app');
@@ -151,7 +162,7 @@ async function main() {
     rmSync(profile, { recursive: true, force: true });
   }
   if (args.report) writeFileSync(args.report, JSON.stringify(result, null, 1));
-  const ok = result.validator.errors === 0 && result.cesium.pick && result.threejs.pick;
+  const ok = result.validator.errors === 0 && result.structure.every((r) => r.ok) && result.cesium.pick && result.threejs.pick;
   process.exit(ok ? 0 : 1);
 }
 main().catch((e) => { console.error(e); process.exit(2); });

@@ -1,9 +1,10 @@
 //! `gigawalk export-tiles`: the tileset's structure (errors never increase
 //! down the tree, children inside their parents, every URI resolves,
 //! every content parses and holds what the scene stores, feature IDs name
-//! the scene's objects), bad input, and the real clients (glTF validator,
-//! CesiumJS, 3d-tiles-renderer) through tests/tiles-clients when Node and
-//! Chromium are there.
+//! the scene's objects), bad input, the same structure checks on what
+//! 3d-tiles-tools parses, and the real clients (glTF validator, CesiumJS,
+//! 3d-tiles-renderer), through tests/tiles-clients when Node and Chromium
+//! are there.
 
 mod common;
 
@@ -77,6 +78,24 @@ fn walk(dir: &Path, scene: &Path) -> Walk {
     w.files += 1;
     tile(&doc["root"], &main, None, &mut w, objects.as_ref());
     w
+}
+
+/// Runs `gigawalk export-tiles gwk -o out --json` with `args`; returns the
+/// summary it prints.
+#[track_caller]
+fn export(gwk: &Path, out: &Path, args: &[&str]) -> Value {
+    let mut all = vec!["export-tiles", s(gwk), "-o", s(out), "--json"];
+    all.extend_from_slice(args);
+    json(&gigawalk_ok(&all).stdout)
+}
+
+/// The level a content file holds: its name is the level's index.
+fn lod_of(content: &Path) -> usize {
+    content
+        .file_stem()
+        .and_then(|n| n.to_str())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{}: not a level's content", content.display()))
 }
 
 fn read_json(p: &Path) -> Value {
@@ -197,18 +216,11 @@ fn a_small_plant_exports_a_tileset_whose_structure_holds() {
     let reader = SceneReader::open(&gwk).unwrap();
     for (encoding, per_file) in [("meshopt", "20"), ("quantized", "4000"), ("plain", "7")] {
         let out = dir.path().join(encoding);
-        let o = gigawalk_ok(&[
-            "export-tiles",
-            s(&gwk),
-            "-o",
-            s(&out),
-            "--encoding",
-            encoding,
-            "--tiles-per-file",
-            per_file,
-            "--json",
-        ]);
-        let summary = json(&o.stdout);
+        let summary = export(
+            &gwk,
+            &out,
+            &["--encoding", encoding, "--tiles-per-file", per_file],
+        );
         let w = walk(&out, &gwk);
         assert_eq!(
             w.tiles as u64,
@@ -227,8 +239,7 @@ fn a_small_plant_exports_a_tileset_whose_structure_holds() {
         // (written as the shortest decimal at or above it).
         let lods = reader.skeleton().lods();
         for (path, error) in &w.errors {
-            let lod: usize = path.file_stem().unwrap().to_str().unwrap().parse().unwrap();
-            let stored = lods[lod].error as f64;
+            let stored = lods[lod_of(path)].error as f64;
             assert!(
                 *error >= stored && *error - stored <= stored * 1e-7,
                 "{}: {error} for a stored {stored}",
@@ -328,9 +339,14 @@ fn bad_input_is_an_error_naming_the_thing() {
     assert!(!ok && err.contains("not a directory"), "{err}");
 }
 
-/// Why the real clients cannot run here (Node, the harness's packages or
-/// Chromium missing), or `None` when they can.
-fn clients_missing(harness: &Path, chromium: &str) -> Option<String> {
+/// tests/tiles-clients: the Node harness of the real clients.
+fn harness() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/tiles-clients")
+}
+
+/// Why the real clients cannot run here (Node, the harness's packages or,
+/// when `chromium` is given, Chromium missing), or `None` when they can.
+fn clients_missing(harness: &Path, chromium: Option<&str>) -> Option<String> {
     if std::process::Command::new("node")
         .arg("--version")
         .output()
@@ -343,13 +359,77 @@ fn clients_missing(harness: &Path, chromium: &str) -> Option<String> {
             "{}: no node_modules (run npm ci there)",
             harness.display()
         ))
-    } else if !Path::new(chromium).exists() {
+    } else if !harness.join("node_modules/3d-tiles-tools").exists() {
         Some(format!(
-            "{chromium}: no Chromium (apt-get install chromium)"
+            "{}: no 3d-tiles-tools in node_modules (run npm ci there)",
+            harness.display()
         ))
     } else {
-        None
+        chromium
+            .filter(|c| !Path::new(c).exists())
+            .map(|c| format!("{c}: no Chromium (apt-get install chromium)"))
     }
+}
+
+/// Whether `test` goes on: without the clients it prints one SKIP line
+/// and does not, unless GIGAWALK_REQUIRE_CLIENTS=1 (CI), which makes that
+/// a failure.
+#[track_caller]
+fn clients_here(test: &str, harness: &Path, chromium: Option<&str>) -> bool {
+    let Some(why) = clients_missing(harness, chromium) else {
+        return true;
+    };
+    if std::env::var("GIGAWALK_REQUIRE_CLIENTS").is_ok_and(|v| v == "1") {
+        panic!("GIGAWALK_REQUIRE_CLIENTS=1 but {why}");
+    }
+    println!("SKIP {test}: {why}");
+    false
+}
+
+/// Runs tests/tiles-clients/structure.mjs (the structure checks on what
+/// 3d-tiles-tools parses) over `dirs`: whether every check passed, and
+/// its report, one entry a directory.
+fn structure_checks(harness: &Path, dirs: &[&Path], report: &Path) -> (bool, Value) {
+    let out = std::process::Command::new("node")
+        .current_dir(harness)
+        .arg("structure.mjs")
+        .args(dirs)
+        .args(["--report", s(report)])
+        .output()
+        .expect("node runs");
+    println!("{}", String::from_utf8_lossy(&out.stdout));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "structure.mjs did not run: {stderr}"
+    );
+    (out.status.success(), read_json(report))
+}
+
+/// A structure report of 3d-tiles-tools' traversal (structure.mjs) agrees
+/// with the export's summary and found no fault: every tile the exporter
+/// wrote was visited (an external tileset's root beside the tile that
+/// references it), every content is a glb, and each check ran on every
+/// tile.
+#[track_caller]
+fn assert_structure_holds(r: &Value, summary: &Value, what: &str) {
+    let n = |v: &Value| v.as_u64().unwrap_or_else(|| panic!("{what}: {v} in {r}"));
+    assert_eq!(r["ok"], true, "{what}: {r}");
+    assert!(
+        r["failed"].as_object().unwrap().values().all(|v| v == 0),
+        "{what}: {r}"
+    );
+    let (tiles, external) = (n(&r["tiles"]), n(&r["externalTilesets"]));
+    assert_eq!(tiles - external, n(&summary["tiles"]), "{what}: {r}");
+    assert_eq!(external + 1, n(&summary["tileset_files"]), "{what}: {r}");
+    assert_eq!(n(&r["glb"]), n(&summary["contents"]), "{what}: {r}");
+    assert_eq!(n(&r["contents"]), n(&summary["contents"]) + external);
+    let checked = &r["checked"];
+    // Every tile against its parent, and the root against the tileset.
+    assert_eq!(n(&checked["errors"]), tiles, "{what}: {r}");
+    assert_eq!(n(&checked["boxes"]), tiles - 1, "{what}: {r}");
+    assert_eq!(n(&checked["contentBoxes"]), n(&summary["contents"]));
+    assert_eq!(n(&checked["uris"]), n(&r["contents"]), "{what}: {r}");
 }
 
 /// Runs tests/tiles-clients/run.mjs with `args`; returns its report.
@@ -581,35 +661,21 @@ fn interior_objects(
 /// makes that a failure.
 #[test]
 fn real_clients_load_the_tileset_and_pick_objects() {
-    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/tiles-clients");
+    let harness = harness();
     let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
-    if let Some(why) = clients_missing(&harness, &chromium) {
-        if std::env::var("GIGAWALK_REQUIRE_CLIENTS").is_ok_and(|v| v == "1") {
-            panic!("GIGAWALK_REQUIRE_CLIENTS=1 but {why}");
-        }
-        println!("SKIP real_clients_load_the_tileset_and_pick_objects: {why}");
+    if !clients_here(
+        "real_clients_load_the_tileset_and_pick_objects",
+        &harness,
+        Some(&chromium),
+    ) {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let (path, gwk) = small_plant(dir.path());
     let tiles = dir.path().join("tiles");
     let quantized = dir.path().join("tiles-quantized");
-    gigawalk_ok(&[
-        "export-tiles",
-        s(&gwk),
-        "-o",
-        s(&tiles),
-        "--tiles-per-file",
-        "200",
-    ]);
-    gigawalk_ok(&[
-        "export-tiles",
-        s(&gwk),
-        "-o",
-        s(&quantized),
-        "--encoding",
-        "quantized",
-    ]);
+    let meshopt_summary = export(&gwk, &tiles, &["--tiles-per-file", "200"]);
+    let quantized_summary = export(&gwk, &quantized, &["--encoding", "quantized"]);
     let reader = SceneReader::open(&gwk).unwrap();
     let near = gigawalk_cull::default_near(&reader.skeleton().bounds()).to_string();
     let (pose, sse) = (6, 8.0);
@@ -633,6 +699,11 @@ fn real_clients_load_the_tileset_and_pick_objects() {
         &dir.path().join("clients.json"),
     );
     assert_eq!(r["validator"]["errors"], 0, "{r}");
+    // The structure as 3d-tiles-tools parses it, --validate's first.
+    let structure = r["structure"].as_array().unwrap();
+    assert_eq!(structure.len(), 2);
+    assert_structure_holds(&structure[0], &quantized_summary, "quantized");
+    assert_structure_holds(&structure[1], &meshopt_summary, "meshopt");
     let table = reader.objects().unwrap().unwrap();
     for client in ["cesium", "threejs"] {
         let c = &r[client];
@@ -695,6 +766,113 @@ fn real_clients_load_the_tileset_and_pick_objects() {
     assert_same_depth(&compare_depths(&gwk, &path, pose, &r));
 }
 
+/// 3d-tiles-tools (CesiumGS's 3D Tiles library) parses the tileset and,
+/// following its external tilesets through its own traversal, the
+/// structure checks of tests/tiles-clients/structure.mjs pass on what it
+/// parsed: errors never increase down the tree, every child's box lies
+/// inside its parent's and every content's inside its tile's, every
+/// content URI resolves to a glb or a tileset. The same checks fail on a
+/// copy broken on purpose: a child's error raised above its parent's, an
+/// external tileset's root box grown past the tile that references it,
+/// and a content file removed. Skipped as the real clients' test is
+/// (Chromium not needed).
+#[test]
+fn tiles_tools_parse_the_tileset_and_its_structure_holds() {
+    let harness = harness();
+    if !clients_here(
+        "tiles_tools_parse_the_tileset_and_its_structure_holds",
+        &harness,
+        None,
+    ) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (_, gwk) = small_plant(dir.path());
+    let tiles = dir.path().join("tiles");
+    // Small files, so the tree spans external tilesets.
+    let summary = export(&gwk, &tiles, &["--tiles-per-file", "20"]);
+    assert!(summary["tileset_files"].as_u64().unwrap() > 1, "{summary}");
+    let (ok, r) = structure_checks(&harness, &[&tiles], &dir.path().join("good.json"));
+    assert!(ok, "{r}");
+    assert_structure_holds(&r[0], &summary, "external tilesets");
+
+    let broken = dir.path().join("broken");
+    copy_dir(&tiles, &broken);
+    // A child of the root with an error above the root's.
+    let main = broken.join("tileset.json");
+    let mut doc = read_json(&main);
+    let raised = doc["root"]["geometricError"].as_f64().unwrap() * 2.0 + 1.0;
+    doc["root"]["children"][0]["geometricError"] = raised.into();
+    std::fs::write(&main, doc.to_string()).unwrap();
+    // An external tileset's root box grown tenfold about its centre.
+    let external = std::fs::read_dir(broken.join("tilesets"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let mut ext = read_json(&external);
+    for half in ext["root"]["boundingVolume"]["box"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .skip(3)
+    {
+        *half = (half.as_f64().unwrap() * 10.0).into();
+    }
+    std::fs::write(&external, ext.to_string()).unwrap();
+    // A content the tree names, gone.
+    let gone = walk(&tiles, &gwk).errors.into_keys().next().unwrap();
+    let gone = broken.join(gone.strip_prefix(tiles.canonicalize().unwrap()).unwrap());
+    std::fs::remove_file(&gone).unwrap();
+
+    let (ok, r) = structure_checks(&harness, &[&broken], &dir.path().join("broken.json"));
+    let r = &r[0];
+    assert!(!ok && r["ok"] == false, "{r}");
+    assert_eq!(r["failed"]["errors"], 1, "{r}");
+    assert_eq!(r["failed"]["boxes"], 1, "{r}");
+    assert_eq!(r["failed"]["uris"], 1, "{r}");
+    assert_eq!(r["failed"]["read"], 0, "{r}");
+    let kinds: Vec<&str> = r["failures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds.len(), 3, "{r}");
+    let uri = r["failures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["kind"] == "uris")
+        .unwrap()["uri"]
+        .as_str()
+        .unwrap();
+    assert!(
+        gone.ends_with(uri.trim_start_matches("../")),
+        "{uri} for {}",
+        gone.display()
+    );
+
+    // Not a tileset at all: a failure to read, not a crash.
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let (ok, r) = structure_checks(&harness, &[&empty], &dir.path().join("empty.json"));
+    assert!(!ok && r[0]["failed"]["read"] == 1, "{r}");
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &to.join(e.file_name()));
+        } else {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
 /// Each client draws what the 3D Tiles rule selects on the exported tree
 /// (a mean depth within half a level, triangles within 1.25x either way:
 /// clients also cull by each content's own box and keep tiles that are
@@ -742,9 +920,9 @@ fn clients_against_gigawalk_at_scale() {
     );
     let pose: usize = std::env::var("GIGAWALK_TILES_POSE").map_or(100, |v| v.parse().unwrap());
     let sse: f64 = std::env::var("GIGAWALK_TILES_SSE").map_or(4.0, |v| v.parse().unwrap());
-    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/tiles-clients");
+    let harness = harness();
     let chromium = std::env::var("CHROMIUM").unwrap_or_else(|_| "/usr/bin/chromium".into());
-    if let Some(why) = clients_missing(&harness, &chromium) {
+    if let Some(why) = clients_missing(&harness, Some(&chromium)) {
         panic!("{why}");
     }
     let reader = SceneReader::open(&gwk).unwrap();
@@ -767,6 +945,7 @@ fn clients_against_gigawalk_at_scale() {
         ],
         &report,
     );
+    assert_eq!(r["structure"][0]["ok"], true, "{}", r["structure"]);
     let ours = interior_objects(&gwk, &path, pose, &r, sse.ceil() as u32);
     for client in ["cesium", "threejs"] {
         let mut agree = 0;
@@ -868,21 +1047,12 @@ fn exported_errors_bound_the_distance_to_full_detail() {
     let nodes: Vec<u32> = (0..sk.nodes().len() as u32).step_by(3).collect();
     for encoding in ["quantized", "plain"] {
         let out = dir.path().join(encoding);
-        let o = gigawalk_ok(&[
-            "export-tiles",
-            s(&gwk),
-            "-o",
-            s(&out),
-            "--encoding",
-            encoding,
-            "--json",
-        ]);
-        let summary = json(&o.stdout);
+        let summary = export(&gwk, &out, &["--encoding", encoding]);
         // Each content's error as the tileset states it.
         let w = walk(&out, &gwk);
         let mut errors: Vec<f32> = sk.lods().iter().map(|l| l.error).collect();
         for (path, e) in &w.errors {
-            let lod: usize = path.file_stem().unwrap().to_str().unwrap().parse().unwrap();
+            let lod = lod_of(path);
             // The f32 at or below the stated error: a check against it is
             // at least as strict as one against the stated number.
             let mut f = *e as f32;

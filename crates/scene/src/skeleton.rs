@@ -97,6 +97,29 @@ pub struct LodInfo {
     pub checksum: u32,
 }
 
+impl LodInfo {
+    /// A level that stands only for its error: one triangle, no geometry
+    /// stored (raw, u16 indices, per-vertex colours, at offset 0). For
+    /// building skeletons where only the tree and its errors matter, as
+    /// the tests of code that plans over them do.
+    pub fn placeholder(error: f32) -> LodInfo {
+        LodInfo {
+            error,
+            triangles: 1,
+            vertices: 3,
+            origin: DVec3::ZERO,
+            index_format: IndexFormat::U16,
+            uniform_colour: None,
+            encoded: false,
+            grid: None,
+            compressed: false,
+            offset: 0,
+            len: 0,
+            checksum: 0,
+        }
+    }
+}
+
 /// The bits of an encoded LOD: grid positions per axis
 /// ([`codec::POSITION_BITS`](crate::codec::POSITION_BITS)) and octahedral
 /// normals ([`codec::NORMAL_BITS`](crate::codec::NORMAL_BITS)).
@@ -266,20 +289,7 @@ mod tests {
     use super::*;
 
     fn lod(error: f32) -> LodInfo {
-        LodInfo {
-            error,
-            triangles: 1,
-            vertices: 3,
-            origin: DVec3::ZERO,
-            index_format: IndexFormat::U16,
-            uniform_colour: None,
-            encoded: false,
-            grid: None,
-            compressed: false,
-            offset: 0,
-            len: 0,
-            checksum: 0,
-        }
+        LodInfo::placeholder(error)
     }
 
     /// A root over two leaves, each with two LODs; the root has one.

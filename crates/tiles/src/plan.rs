@@ -178,30 +178,16 @@ pub fn files(plan: &Plan, max_tiles: usize, max_depth: usize) -> Files {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use gigawalk_scene::{Aabb, IndexFormat, LodInfo, Node, Provenance, NO_NODE};
+    use gigawalk_scene::{Aabb, LodInfo, Node, Provenance, NO_NODE};
     use glam::DVec3;
-
-    fn lod(error: f32) -> LodInfo {
-        LodInfo {
-            error,
-            triangles: 1,
-            vertices: 3,
-            origin: DVec3::ZERO,
-            index_format: IndexFormat::U16,
-            uniform_colour: Some([255; 4]),
-            encoded: false,
-            grid: None,
-            compressed: false,
-            offset: 0,
-            len: 0,
-            checksum: 0,
-        }
-    }
 
     /// A root with `root_errors` and two leaves with `leaf_errors` each.
     fn skeleton(root_errors: &[f32], leaf_errors: &[&[f32]]) -> Skeleton {
         let b = Aabb::new(DVec3::ZERO, DVec3::ONE);
-        let mut lods: Vec<LodInfo> = root_errors.iter().map(|&e| lod(e)).collect();
+        let mut lods: Vec<LodInfo> = root_errors
+            .iter()
+            .map(|&e| LodInfo::placeholder(e))
+            .collect();
         let mut nodes = vec![Node {
             bounds: b,
             parent: NO_NODE,
@@ -219,7 +205,7 @@ mod tests {
                 first_lod: lods.len() as u32,
                 lod_count: errors.len() as u32,
             });
-            lods.extend(errors.iter().map(|&e| lod(e)));
+            lods.extend(errors.iter().map(|&e| LodInfo::placeholder(e)));
         }
         Skeleton::new(DVec3::ZERO, b, nodes, lods, Provenance::default()).unwrap()
     }

@@ -2,7 +2,7 @@
 //! or object identity, far from its origin; a failed write; an existing
 //! output directory.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use gigawalk_scene::Aabb;
 use gigawalk_testkit::scenes::{box_mesh, write_leaf_scene};
@@ -10,8 +10,11 @@ use gigawalk_tiles::{export, Encoding, ExportError, ExportOptions, Quiet};
 use glam::DVec3;
 
 /// Three boxes a million units from the origin, a leaf each, the root
-/// without levels, no object table.
-fn far_boxes(path: &Path) -> Vec<Aabb> {
+/// without levels, no object table, written as `boxes.gwk` in a new
+/// temporary directory: the directory, the scene file and the boxes.
+fn far_boxes() -> (tempfile::TempDir, PathBuf, Vec<Aabb>) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("boxes.gwk");
     let boxes: Vec<Aabb> = (0..3)
         .map(|i| {
             let min = DVec3::new(1.0e6 + 3.0 * i as f64, 2.0e6, -1.0e6);
@@ -22,8 +25,8 @@ fn far_boxes(path: &Path) -> Vec<Aabb> {
         .iter()
         .map(|b| (*b, box_mesh(b, [200, 100, 50, 255])))
         .collect();
-    write_leaf_scene(path, 8, &leaves);
-    boxes
+    write_leaf_scene(&path, 8, &leaves);
+    (dir, path, boxes)
 }
 
 fn json(p: &Path) -> serde_json::Value {
@@ -32,9 +35,7 @@ fn json(p: &Path) -> serde_json::Value {
 
 #[test]
 fn a_scene_without_levels_or_identity_far_from_its_origin() {
-    let dir = tempfile::tempdir().unwrap();
-    let gwk = dir.path().join("boxes.gwk");
-    let boxes = far_boxes(&gwk);
+    let (dir, gwk, boxes) = far_boxes();
     for encoding in [Encoding::Meshopt, Encoding::Quantized, Encoding::Plain] {
         let out = dir.path().join(encoding.name());
         let options = ExportOptions {
@@ -82,9 +83,7 @@ fn a_scene_without_levels_or_identity_far_from_its_origin() {
 
 #[test]
 fn a_failed_write_leaves_no_tileset() {
-    let dir = tempfile::tempdir().unwrap();
-    let gwk = dir.path().join("boxes.gwk");
-    far_boxes(&gwk);
+    let (dir, gwk, _) = far_boxes();
     let out = dir.path().join("tiles");
     let options = ExportOptions {
         fail_after_contents: Some(1),
@@ -103,9 +102,7 @@ fn a_failed_write_leaves_no_tileset() {
 
 #[test]
 fn an_existing_directory_needs_force_which_replaces_the_tileset_first() {
-    let dir = tempfile::tempdir().unwrap();
-    let gwk = dir.path().join("boxes.gwk");
-    far_boxes(&gwk);
+    let (dir, gwk, _) = far_boxes();
     let out = dir.path().join("tiles");
     export(&gwk, &out, &ExportOptions::default(), &Quiet).unwrap();
     let e = export(&gwk, &out, &ExportOptions::default(), &Quiet).unwrap_err();

@@ -1,13 +1,11 @@
 //! `gigawalk export-tiles`: a scene file as a 3D Tiles 1.1 tileset
 //! (gigawalk-tiles does the work; docs/tiles.md says what is written).
 
-use std::io::IsTerminal as _;
 use std::path::PathBuf;
-use std::sync::Mutex;
 
+use crate::preprocess::PhaseBar;
 use anyhow::Context as _;
 use gigawalk_tiles::{Encoding, ExportError, ExportOptions, Georef, Progress};
-use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -82,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         tiles_per_file: args.tiles_per_file,
         ..ExportOptions::default()
     };
-    let display = Display::new();
+    let display = PhaseBar::new();
     let s = match gigawalk_tiles::export(&args.scene, &args.out, &options, &display) {
         Ok(s) => s,
         Err(e @ ExportError::OutputExists(_)) => {
@@ -146,53 +144,23 @@ fn mib(b: u64) -> String {
     format!("{:.2} MiB", b as f64 / (1 << 20) as f64)
 }
 
-/// Progress on stderr: a bar on a terminal, a line a phase otherwise.
-struct Display {
-    terminal: bool,
-    bar: Mutex<Option<ProgressBar>>,
-}
-
-impl Display {
-    fn new() -> Self {
-        Display {
-            terminal: std::io::stderr().is_terminal(),
-            bar: Mutex::new(None),
-        }
-    }
-}
-
-impl Progress for Display {
+/// The export's phases: a bar on a terminal, a line a phase.
+impl Progress for PhaseBar {
     fn start(&self, phase: &str, total: u64) {
-        if !self.terminal {
-            return;
-        }
-        let bar = ProgressBar::new(total);
-        if let Ok(style) = ProgressStyle::with_template(
+        self.show(
+            phase,
+            total,
             "{prefix:>9} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
-        ) {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        bar.set_prefix(phase.to_string());
-        bar.enable_steady_tick(std::time::Duration::from_millis(200));
-        if let Ok(mut b) = self.bar.lock() {
-            *b = Some(bar);
-        }
+            None,
+        );
     }
 
     fn advance(&self, n: u64) {
-        if let Ok(b) = self.bar.lock() {
-            if let Some(bar) = b.as_ref() {
-                bar.inc(n);
-            }
-        }
+        self.inc(n);
     }
 
     fn finish(&self, phase: &str, seconds: f64) {
-        if let Ok(mut b) = self.bar.lock() {
-            if let Some(bar) = b.take() {
-                bar.finish_and_clear();
-            }
-        }
+        self.clear();
         eprintln!("{phase:>9} done in {seconds:.2} s");
     }
 }

@@ -184,7 +184,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Bad flags fail before the (possibly long) import.
     params.validate().context("bad parameter")?;
 
-    let progress = Display::new();
+    let progress = PhaseBar::new();
     let budget = preprocess_budget(args.memory_budget)?;
     if let Some(b) = budget {
         threads_within(b, &progress);
@@ -346,52 +346,46 @@ fn preprocess_budget(b: gigawalk_runtime::MemoryBudget) -> anyhow::Result<Option
     })
 }
 
-/// Progress on stderr: an indicatif bar per phase on a terminal, one plain
-/// line per phase otherwise (logs, CI).
-struct Display {
+/// Progress on stderr: an indicatif bar per phase on a terminal, nothing
+/// off one (logs, CI), where the commands print one plain line per phase
+/// themselves. Preprocessing and the tiles export show their phases with
+/// it.
+pub(crate) struct PhaseBar {
     terminal: bool,
     bar: Mutex<Option<ProgressBar>>,
 }
 
-impl Display {
-    fn new() -> Self {
-        Display {
+impl PhaseBar {
+    pub(crate) fn new() -> Self {
+        PhaseBar {
             terminal: std::io::stderr().is_terminal(),
             bar: Mutex::new(None),
         }
     }
-}
 
-impl Progress for Display {
-    fn line(&self, s: &str) {
-        eprintln!("{s}");
-    }
-
-    fn start(&self, phase: Phase, total: u64) {
+    /// Shows a bar of `total` steps prefixed with `phase` and drawn by
+    /// `template`; a spinner drawn by `spinner` instead when `total` is 0
+    /// and one is given.
+    pub(crate) fn show(&self, phase: &str, total: u64, template: &str, spinner: Option<&str>) {
         if !self.terminal {
             return;
         }
-        let bar = if total > 0 {
-            ProgressBar::new(total)
-        } else {
-            ProgressBar::new_spinner()
-        };
-        let template = if total > 0 {
-            "{prefix:>13} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}"
-        } else {
-            "{prefix:>13} {spinner} {elapsed_precise}"
+        let (bar, template) = match spinner {
+            Some(spinner) if total == 0 => (ProgressBar::new_spinner(), spinner),
+            _ => (ProgressBar::new(total), template),
         };
         if let Ok(style) = ProgressStyle::with_template(template) {
             bar.set_style(style.progress_chars("=> "));
         }
-        bar.set_prefix(phase.name());
+        bar.set_prefix(phase.to_string());
         bar.enable_steady_tick(std::time::Duration::from_millis(200));
         if let Ok(mut b) = self.bar.lock() {
             *b = Some(bar);
         }
     }
 
-    fn advance(&self, n: u64) {
+    /// Moves the shown bar on by `n` steps.
+    pub(crate) fn inc(&self, n: u64) {
         if let Ok(b) = self.bar.lock() {
             if let Some(bar) = b.as_ref() {
                 bar.inc(n);
@@ -399,12 +393,36 @@ impl Progress for Display {
         }
     }
 
-    fn finish(&self, phase: Phase, seconds: f64) {
+    /// Takes the shown bar off the terminal.
+    pub(crate) fn clear(&self) {
         if let Ok(mut b) = self.bar.lock() {
             if let Some(bar) = b.take() {
                 bar.finish_and_clear();
             }
         }
+    }
+}
+
+impl Progress for PhaseBar {
+    fn line(&self, s: &str) {
+        eprintln!("{s}");
+    }
+
+    fn start(&self, phase: Phase, total: u64) {
+        self.show(
+            phase.name(),
+            total,
+            "{prefix:>13} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
+            Some("{prefix:>13} {spinner} {elapsed_precise}"),
+        );
+    }
+
+    fn advance(&self, n: u64) {
+        self.inc(n);
+    }
+
+    fn finish(&self, phase: Phase, seconds: f64) {
+        self.clear();
         // The peak so far, so a run near the machine's memory shows it
         // before the end.
         match gigawalk_preprocess::stats::peak_memory_bytes() {

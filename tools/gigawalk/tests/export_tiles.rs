@@ -432,12 +432,25 @@ fn assert_structure_holds(r: &Value, summary: &Value, what: &str) {
     assert_eq!(n(&checked["uris"]), n(&r["contents"]), "{what}: {r}");
 }
 
-/// Runs tests/tiles-clients/run.mjs with `args`; returns its report.
-fn run_clients(harness: &Path, chromium: &str, args: &[&str], report: &Path) -> Value {
+/// Runs tests/tiles-clients/run.mjs on `tilesets` (its `--tiles` and
+/// `--validate` arguments) from pose `pose` of the camera path `path` at
+/// screen-space error `sse`, with gigawalk's near plane for the scene
+/// `gwk`; returns its report.
+fn run_clients(
+    harness: &Path,
+    chromium: &str,
+    tilesets: &[&str],
+    (gwk, path, pose, sse): (&Path, &Path, usize, f64),
+    report: &Path,
+) -> Value {
+    let reader = SceneReader::open(gwk).unwrap();
+    let near = gigawalk_cull::default_near(&reader.skeleton().bounds()).to_string();
     let out = std::process::Command::new("node")
         .current_dir(harness)
         .arg("run.mjs")
-        .args(args)
+        .args(tilesets)
+        .args(["--path", s(path), "--pose", &pose.to_string()])
+        .args(["--sse", &sse.to_string(), "--near", &near])
         .args(["--chromium", chromium, "--report", s(report)])
         .output()
         .expect("node runs");
@@ -677,25 +690,12 @@ fn real_clients_load_the_tileset_and_pick_objects() {
     let meshopt_summary = export(&gwk, &tiles, &["--tiles-per-file", "200"]);
     let quantized_summary = export(&gwk, &quantized, &["--encoding", "quantized"]);
     let reader = SceneReader::open(&gwk).unwrap();
-    let near = gigawalk_cull::default_near(&reader.skeleton().bounds()).to_string();
     let (pose, sse) = (6, 8.0);
     let r = run_clients(
         &harness,
         &chromium,
-        &[
-            "--tiles",
-            s(&tiles),
-            "--validate",
-            s(&quantized),
-            "--path",
-            s(&path),
-            "--pose",
-            &pose.to_string(),
-            "--sse",
-            &sse.to_string(),
-            "--near",
-            &near,
-        ],
+        &["--tiles", s(&tiles), "--validate", s(&quantized)],
+        (&gwk, &path, pose, sse),
         &dir.path().join("clients.json"),
     );
     assert_eq!(r["validator"]["errors"], 0, "{r}");
@@ -925,24 +925,12 @@ fn clients_against_gigawalk_at_scale() {
     if let Some(why) = clients_missing(&harness, Some(&chromium)) {
         panic!("{why}");
     }
-    let reader = SceneReader::open(&gwk).unwrap();
-    let near = gigawalk_cull::default_near(&reader.skeleton().bounds()).to_string();
     let report = tiles.with_extension("clients.json");
     let r = run_clients(
         &harness,
         &chromium,
-        &[
-            "--tiles",
-            s(&tiles),
-            "--path",
-            s(&path),
-            "--pose",
-            &pose.to_string(),
-            "--sse",
-            &sse.to_string(),
-            "--near",
-            &near,
-        ],
+        &["--tiles", s(&tiles)],
+        (&gwk, &path, pose, sse),
         &report,
     );
     assert_eq!(r["structure"][0]["ok"], true, "{}", r["structure"]);

@@ -9,14 +9,15 @@ use std::collections::HashSet;
 use std::path::{Component, Path, PathBuf};
 
 /// Directories under the repository root that hold no documentation of
-/// ours: build output, what the fuzzers generate and the tiles clients'
-/// installed packages (`npm ci`).
-const SKIPPED: [&str; 5] = [
+/// ours: build output, what the fuzzers generate, and the packages
+/// that `npm ci` installs for the tiles clients and the page driver.
+const SKIPPED: [&str; 6] = [
     "target",
     "fuzz/corpus",
     "fuzz/artifacts",
     "fuzz/target",
     "tests/tiles-clients/node_modules",
+    "tests/web-page/node_modules",
 ];
 
 #[test]

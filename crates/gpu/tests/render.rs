@@ -300,6 +300,55 @@ fn the_device_pyramid_is_the_cpu_pyramid_of_the_same_depth_level_by_level() {
     assert!(d.depth.iter().any(|&z| z > 0.0) && d.depth.contains(&0.0));
 }
 
+/// A level submitted without waiting (`submit_level`, as the browser's
+/// page does) is the level `render_level` reads, bit for bit, whichever
+/// frame takes it; until the device has made it `try_take_level` gives it
+/// back instead of blocking, and a second one submitted meanwhile is read
+/// on its own.
+#[test]
+fn a_level_read_without_waiting_is_the_level_read_waiting() {
+    let Some(ctx) = devices_or_skip(1, "gpu hzb async level").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    let shift = DVec3::new(0.3, 0.2, 0.0);
+    let geometry = upload_scene(&ctx, shift, VertexLayout::Wide);
+    let (w, h) = (97, 61);
+    let near = view(shift + DVec3::new(1.3, -0.7, 0.0), w, h);
+    let far = view(shift + DVec3::new(0.4, 0.1, 0.0), w, h);
+    let mut or = DepthPass::new(&ctx, w, h);
+    let take = |or: &mut DepthPass, mut p: gigawalk_gpu::PendingLevel| {
+        let t = std::time::Instant::now();
+        loop {
+            match or.try_take_level(&ctx, p) {
+                Ok(level) => return level.unwrap(),
+                Err(back) => p = back,
+            }
+            assert!(t.elapsed().as_secs() < 60, "the level never arrived");
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+    };
+    for k in [0, 1, 3, or.top_level()] {
+        let want_near = or.render_level(&ctx, &geometry, &near, &[0, 1], k).unwrap();
+        let want_far = or.render_level(&ctx, &geometry, &far, &[0, 1], k).unwrap();
+        if k <= 3 {
+            assert_ne!(want_near.image, want_far.image, "level {k}: the views differ");
+        }
+        let first = or.submit_level(&ctx, &geometry, &near, &[0, 1], k);
+        assert_eq!(first.level(), k);
+        let second = or.submit_level(&ctx, &geometry, &far, &[0, 1], k);
+        let got_far = take(&mut or, second);
+        let got_near = take(&mut or, first);
+        for (got, want) in [(&got_near, &want_near), (&got_far, &want_far)] {
+            assert_eq!(
+                (got.level, got.width, got.height),
+                (want.level, want.width, want.height)
+            );
+            assert_eq!(got.image, want.image, "level {k}");
+            assert_eq!(got.figures.read_bytes, want.figures.read_bytes);
+        }
+    }
+}
+
 /// LODs 0 and 1 of `geometry` drawn at 64x48 by RVG (colour, depth) and
 /// OR (depth).
 fn draw_both(

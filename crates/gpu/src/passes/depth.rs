@@ -6,8 +6,8 @@ use web_time::Instant;
 
 use crate::passes::hzb::{level_size, Pyramid};
 use crate::passes::{
-    depth_attachment, ms_since, pipeline, target, DepthImage, Drawer, PassFigures, PyramidPath,
-    ReadBack, ScenePipelines, View, DEPTH_FORMAT,
+    depth_attachment, ms_since, pipeline, target, DepthImage, Drawer, PassFigures, Pending,
+    PyramidPath, ReadBack, Rows, ScenePipelines, View, DEPTH_FORMAT,
 };
 use crate::residency::Residency;
 use crate::shader_types;
@@ -120,6 +120,58 @@ impl DepthPass {
         lods: &[u32],
         level: u32,
     ) -> Result<DepthLevel, GpuError> {
+        let (enc, rows, mut shape) = self.record_level(ctx, residency, view, lods, level);
+        let bits = self
+            .readback
+            .submit_and_read(ctx, enc, rows, &mut shape.figures)?;
+        Ok(shape.with(bits))
+    }
+
+    /// As [`DepthPass::render_level`], without waiting: the level is
+    /// taken by [`DepthPass::try_take_level`] once the device has made it.
+    /// Where nothing may block (a browser's page thread), OR submits one
+    /// frame's occluders and a later frame takes their depth.
+    pub fn submit_level(
+        &mut self,
+        ctx: &GpuContext,
+        residency: &dyn Residency,
+        view: &View,
+        lods: &[u32],
+        level: u32,
+    ) -> PendingLevel {
+        let (enc, rows, mut shape) = self.record_level(ctx, residency, view, lods, level);
+        let pending = self
+            .readback
+            .submit_async(ctx, enc, rows, &mut shape.figures);
+        PendingLevel { pending, shape }
+    }
+
+    /// The level `pending` read, once the device has made it; `Err` gives
+    /// `pending` back while it has not. Never blocks.
+    pub fn try_take_level(
+        &mut self,
+        ctx: &GpuContext,
+        pending: PendingLevel,
+    ) -> Result<Result<DepthLevel, GpuError>, PendingLevel> {
+        let PendingLevel { pending, mut shape } = pending;
+        match self.readback.try_finish(ctx, pending, &mut shape.figures) {
+            Err(pending) => Err(PendingLevel { pending, shape }),
+            Ok(bits) => Ok(bits.and_then(|bits| {
+                ctx.check()?;
+                Ok(shape.with(bits))
+            })),
+        }
+    }
+
+    /// Records the depth of `lods` and the making and copy of `level`.
+    fn record_level(
+        &mut self,
+        ctx: &GpuContext,
+        residency: &dyn Residency,
+        view: &View,
+        lods: &[u32],
+        level: u32,
+    ) -> (wgpu::CommandEncoder, Rows, LevelShape) {
         let level = level.min(self.top_level());
         let mut figures = PassFigures::default();
         let t = Instant::now();
@@ -150,16 +202,52 @@ impl DepthPass {
             pyramid.record(ctx, &mut enc, &self.depth, size, level, &mut self.readback)
         };
         figures.encode_ms += ms_since(t);
-        let bits = self
-            .readback
-            .submit_and_read(ctx, enc, rows, &mut figures)?;
-        let (w, h) = level_size(size.0, size.1, level);
-        Ok(DepthLevel {
+        let shape = LevelShape {
             level,
             width: size.0,
             height: size.1,
-            image: DepthImage::from_bits(w, h, bits),
             figures,
-        })
+        };
+        (enc, rows, shape)
+    }
+
+    /// The size of level 0 (the depth image).
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+}
+
+/// A level of OR's pyramid submitted and not yet read
+/// ([`DepthPass::submit_level`]).
+pub struct PendingLevel {
+    pending: Pending,
+    shape: LevelShape,
+}
+
+impl PendingLevel {
+    /// The level asked for (as [`DepthLevel::level`] will be).
+    pub fn level(&self) -> u32 {
+        self.shape.level
+    }
+}
+
+/// All of a [`DepthLevel`] but its texels.
+struct LevelShape {
+    level: u32,
+    width: u32,
+    height: u32,
+    figures: PassFigures,
+}
+
+impl LevelShape {
+    fn with(self, bits: Vec<u32>) -> DepthLevel {
+        let (w, h) = level_size(self.width, self.height, self.level);
+        DepthLevel {
+            level: self.level,
+            width: self.width,
+            height: self.height,
+            image: DepthImage::from_bits(w, h, bits),
+            figures: self.figures,
+        }
     }
 }

@@ -21,7 +21,7 @@ use glam::{DVec3, Mat4, Vec3};
 use crate::shader_types::MAX_CLIP_PLANES;
 use crate::GpuContext;
 
-pub use depth::{DepthLevel, DepthPass};
+pub use depth::{DepthLevel, DepthPass, PendingLevel};
 pub(crate) use drawer::Drawer;
 pub use hzb::{PyramidPath, HZB_DOWNSAMPLE_WGSL};
 pub use look::{Antialias, Look, LookChoice, LOOK_WGSL};
@@ -30,7 +30,7 @@ pub(crate) use pipelines::{
     pipeline, scene_pipelines, ScenePipelines, Surface,
 };
 pub use readback::PassFigures;
-pub(crate) use readback::{device_error, map_and_wait, ms_since, ReadBack, Rows};
+pub(crate) use readback::{device_error, map_and_wait, ms_since, Pending, ReadBack, Rows};
 pub use visible::VisiblePass;
 
 /// What a pass needs to know about the camera. `view_proj` has no

@@ -284,6 +284,67 @@ impl ReadBack {
         let index = figures.submit(ctx, enc);
         let buf = self.buffer.take().expect("a copy was recorded");
         map_and_wait(ctx, buf.slice(..), index, figures)?;
+        self.unpack(ctx, buf, rows, figures)
+    }
+
+    /// Submits `enc` (which ends with a copy recorded here) and asks for
+    /// the buffer's mapping without waiting: [`ReadBack::try_finish`]
+    /// takes the rows once the device has filled it. The buffer is the
+    /// pending read-back's until then, so no other copy may be recorded
+    /// here meanwhile (a new buffer would be made).
+    pub(crate) fn submit_async(
+        &mut self,
+        ctx: &GpuContext,
+        enc: wgpu::CommandEncoder,
+        rows: Rows,
+        figures: &mut PassFigures,
+    ) -> Pending {
+        figures.submit(ctx, enc);
+        let buffer = self.buffer.take().expect("a copy was recorded");
+        let mapped: MapResult = Default::default();
+        let slot = mapped.clone();
+        buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(r);
+        });
+        Pending {
+            buffer,
+            rows,
+            mapped,
+        }
+    }
+
+    /// The rows of `pending` as `T`s once its buffer is mapped (`Err`
+    /// gives `pending` back while it is not). Never blocks: on native
+    /// backends it polls the device once; in a browser the mapping
+    /// arrives between the page's tasks.
+    pub(crate) fn try_finish<T: bytemuck::Pod>(
+        &mut self,
+        ctx: &GpuContext,
+        pending: Pending,
+        figures: &mut PassFigures,
+    ) -> Result<Result<Vec<T>, GpuError>, Pending> {
+        let _ = ctx.device.poll(wgpu::PollType::Poll);
+        let state = pending
+            .mapped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
+        match state {
+            None => Err(pending),
+            Some(Err(e)) => Ok(Err(device_error(ctx, e))),
+            Some(Ok(())) => Ok(self.unpack(ctx, pending.buffer, pending.rows, figures)),
+        }
+    }
+
+    /// The mapped `buf`'s `rows`, unpadded, as `T`s; unmaps it and keeps
+    /// it for the next read-back.
+    fn unpack<T: bytemuck::Pod>(
+        &mut self,
+        ctx: &GpuContext,
+        buf: wgpu::Buffer,
+        rows: Rows,
+        figures: &mut PassFigures,
+    ) -> Result<Vec<T>, GpuError> {
         let t = Instant::now();
         let data = buf.get_mapped_range(..).map_err(|e| device_error(ctx, e))?;
         let (row, padded) = (rows.row as usize, rows.padded as usize);
@@ -307,6 +368,16 @@ impl ReadBack {
         self.buffer = Some(buf);
         Ok(out)
     }
+}
+
+/// What the mapping callback of a pending read-back reports.
+type MapResult = std::sync::Arc<std::sync::Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>;
+
+/// A read-back submitted and not yet taken ([`ReadBack::submit_async`]).
+pub(crate) struct Pending {
+    buffer: wgpu::Buffer,
+    rows: Rows,
+    mapped: MapResult,
 }
 
 /// The depth copy pass (`shaders/depth_copy.wgsl`), with its target and

@@ -23,7 +23,7 @@ server=$!
 for _ in $(seq 50); do [ -s "$out/url" ] && break; sleep 0.1; done
 url=$(head -1 "$out/url")
 node "$root/tests/web-page/run.mjs" --url "$url" --path "$path" --poses "$poses" \
-  --modes vfc,hlod --settle 120 --timeout 600 > "$out/page.json"
+  --modes vfc,hlod,occ,och --settle 120 --timeout 600 > "$out/page.json"
 "$bin" replay "$scene" --path "$path" --modes vfc,hlod,occ,och --width 640 --height 360 \
   --accuracy-every 0 --out "$out/native" > "$out/native.log" 2>&1
 python3 - "$out/page.json" "$out/native/frames.csv" "$poses" "$bundle" <<'PY'
@@ -32,8 +32,8 @@ page = json.load(open(sys.argv[1]))
 poses = [int(p) for p in sys.argv[3].split(',')]
 first = page['first']
 print(f"page: {first['backend']}, first frame {first['first_frame_ms']:.0f} ms after start "
-      f"({first['wall_ms']} ms after navigation), fetched {first['fetched_bytes'] / 1e6:.2f} of "
-      f"{first['file_bytes'] / 1e6:.2f} MB by then ({100 * first['fetched_bytes'] / first['file_bytes']:.1f}%)")
+      f"({first['wall_ms']} ms after navigation), fetched {first['first_frame_fetched'] / 1e6:.2f} of "
+      f"{first['file_bytes'] / 1e6:.2f} MB by then ({100 * first['first_frame_fetched'] / first['file_bytes']:.1f}%)")
 rows = list(csv.DictReader(open(sys.argv[2])))
 native = {}
 for m in ['vfc', 'hlod', 'occ', 'och']:

@@ -5,7 +5,7 @@
 //
 //   node run.mjs --url URL [--query Q] [--path FILE --poses 0,10,20]
 //                [--modes vfc,hlod] [--shots DIR] [--timeout S]
-//                [--settle S] [--linger S]
+//                [--settle S] [--linger S] [--no-hud] [--compare M:REF,...]
 //                [--serve DIR [--no-range]] [--no-webgpu]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
@@ -13,7 +13,10 @@
 // does) and opens it instead of --url. --settle bounds the wait for a
 // pose to draw all it wants (a budget too small never lets it);
 // --linger waits before the last stats. --no-webgpu starts Chromium
-// without WebGPU. Exit status 0 whenever a report was written (tests
+// without WebGPU. --no-hud hides the HUD; --compare occ:vfc,och:hlod
+// compares mode M's image at each pose with mode REF's (run before it),
+// pixel by pixel ("diff": pixels that differ, and the largest difference
+// of a channel). Exit status 0 whenever a report was written (tests
 // judge it); 2 when Chromium or the page could not be driven at all.
 import fs from 'node:fs';
 import http from 'node:http';
@@ -105,11 +108,42 @@ try {
   const shots = opt('shots');
   if (shots) fs.mkdirSync(shots, { recursive: true });
 
-  /// The share of the page's pixels that are not the background.
-  async function coverage(name) {
+  /// How two screenshots (base64 PNGs of one size) differ: pixels with
+  /// any channel different, and the largest difference of a channel.
+  const diff = (a, b) => page.evaluate(async (pa, pb) => {
+    const pixels = async (data) => {
+      const img = new Image();
+      img.src = `data:image/png;base64,${data}`;
+      await img.decode();
+      const c = document.createElement('canvas');
+      c.width = img.width; c.height = img.height;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      return g.getImageData(0, 0, c.width, c.height).data;
+    };
+    const [da, db] = [await pixels(pa), await pixels(pb)];
+    if (da.length !== db.length) return { pixels: -1, max: 255 };
+    let n = 0; let max = 0;
+    for (let i = 0; i < da.length; i += 4) {
+      let d = 0;
+      for (let k = 0; k < 3; k++) d = Math.max(d, Math.abs(da[i + k] - db[i + k]));
+      if (d > 0) n++;
+      max = Math.max(max, d);
+    }
+    return { pixels: n, max };
+  }, a, b);
+
+  /// The page as a PNG (base64), kept under --shots as NAME.png.
+  async function shot(name) {
     const png = await page.screenshot({ encoding: 'base64' });
     if (shots) fs.writeFileSync(path.join(shots, `${name}.png`), Buffer.from(png, 'base64'));
-    return page.evaluate(async (data) => {
+    return png;
+  }
+
+  /// The share of the page's pixels that are not the background (the
+  /// HUD's rows left out).
+  async function coverage(png) {
+    return page.evaluate(async (data, hudRows) => {
       const img = new Image();
       img.src = `data:image/png;base64,${data}`;
       await img.decode();
@@ -121,20 +155,23 @@ try {
       const bg = [d[d.length - 4], d[d.length - 3], d[d.length - 2]];
       let lit = 0;
       // The HUD's panel (top left) is left out.
-      for (let y = 60; y < c.height; y++) {
+      for (let y = hudRows; y < c.height; y++) {
         for (let x = 0; x < c.width; x++) {
           const i = 4 * (y * c.width + x);
           if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 12) lit++;
         }
       }
-      return lit / (c.width * (c.height - 60));
-    }, png);
+      return lit / (c.width * (c.height - hudRows));
+    }, png, flag('no-hud') ? 0 : 60);
   }
 
   if (opt('path') && s.state === 'running') {
     const poses = (opt('poses') || '0').split(',').map(Number);
     report.path_poses = await page.evaluate((t) => window.gigawalk.loadPath(t), fs.readFileSync(opt('path'), 'utf8'));
     report.poses = [];
+    if (flag('no-hud')) await page.evaluate(() => window.gigawalk.setHud(false));
+    const references = new Map((opt('compare') || '').split(',').filter(Boolean).map((c) => c.split(':')));
+    const images = new Map();
     for (const mode of (opt('modes') || 'vfc,hlod').split(',')) {
       await page.evaluate((m) => window.gigawalk.setMode(m), mode);
       for (const pose of poses) {
@@ -156,7 +193,12 @@ try {
         await sleep(2000);
         const b = await stats();
         const fps = ((b.frames - a.frames) * 1000) / (Date.now() - ta);
-        report.poses.push({ mode, pose, settle_ms, fps, coverage: await coverage(`${mode}-${pose}`), ...b });
+        const png = await shot(`${mode}-${pose}`);
+        images.set(`${mode}-${pose}`, png);
+        const row = { mode, pose, settle_ms, fps, coverage: await coverage(png), ...b };
+        const ref = images.get(`${references.get(mode)}-${pose}`);
+        if (ref) row.diff = { against: references.get(mode), ...(await diff(ref, png)) };
+        report.poses.push(row);
       }
     }
   }

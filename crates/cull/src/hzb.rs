@@ -20,6 +20,23 @@
 
 use rayon::prelude::*;
 
+/// Texels of the level OR reads back by default: the finest level with at
+/// most this many (2^17: 0.5 MiB of f32 depth; level 3 at 3840x2160, 2
+/// at 1920x1080, 1 at 640x360). What each level costs and culls is in
+/// docs/results.md, "Frame cost on the CPU (null GPU)". OR reads it back;
+/// the browser's page reads the same level.
+pub const HZB_READ_TEXELS: u64 = 1 << 17;
+
+/// The finest level of a `w x h` depth image's pyramid with at most
+/// [`HZB_READ_TEXELS`] texels.
+pub fn auto_hzb_level(w: u32, h: u32) -> u32 {
+    let (mut w, mut h, mut k) = (w as u64, h as u64, 0);
+    while w * h > HZB_READ_TEXELS {
+        (w, h, k) = (w.div_ceil(2), h.div_ceil(2), k + 1);
+    }
+    k
+}
+
 /// How a 2x2 block of full-resolution texels becomes one level-1 cell.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Reduction {

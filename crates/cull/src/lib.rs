@@ -63,7 +63,7 @@ pub use gigawalk_scene::section::{
 pub use grid::{
     GridCuller, GridStats, LodTriangles, OcclusionGrid, TriangleSource, DEFAULT_GRID_CELL,
 };
-pub use hzb::{level_sizes, Hzb, HzbError, HzbLevel, Reduction};
+pub use hzb::{auto_hzb_level, level_sizes, Hzb, HzbError, HzbLevel, Reduction, HZB_READ_TEXELS};
 pub use lod::select_lod;
 pub use object_space::{occlusion, pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
 pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, MAX_SPLITS, SPLITS};

@@ -331,7 +331,10 @@ fn a_level_read_without_waiting_is_the_level_read_waiting() {
         let want_near = or.render_level(&ctx, &geometry, &near, &[0, 1], k).unwrap();
         let want_far = or.render_level(&ctx, &geometry, &far, &[0, 1], k).unwrap();
         if k <= 3 {
-            assert_ne!(want_near.image, want_far.image, "level {k}: the views differ");
+            assert_ne!(
+                want_near.image, want_far.image,
+                "level {k}: the views differ"
+            );
         }
         let first = or.submit_level(&ctx, &geometry, &near, &[0, 1], k);
         assert_eq!(first.level(), k);

@@ -1,6 +1,7 @@
 //! Runtime options: every speed/accuracy knob of the pipeline.
 
 use gigawalk_cull::tiles::{TileGrid, TileMethod};
+pub use gigawalk_cull::{auto_hzb_level, HZB_READ_TEXELS};
 use gigawalk_cull::{Reduction, TraversalOptions};
 
 pub use crate::cullers::{CullMethod, CullerOptions, CullerOptionsError};
@@ -258,22 +259,6 @@ impl std::str::FromStr for HzbLevel {
 /// The coarsest level a run may ask for: a 16384-pixel side's pyramid
 /// reaches 1x1 at level 14.
 pub const MAX_HZB_LEVEL: u32 = 14;
-
-/// Texels of the level OR reads back by default: the finest level with at
-/// most this many (2^17: 0.5 MiB of f32 depth; level 3 at 3840x2160, 2
-/// at 1920x1080, 1 at 640x360). What each level costs and culls is in
-/// docs/results.md, "Frame cost on the CPU (null GPU)".
-pub const HZB_READ_TEXELS: u64 = 1 << 17;
-
-/// The finest level of a `w x h` depth image's pyramid with at most
-/// [`HZB_READ_TEXELS`] texels.
-pub fn auto_hzb_level(w: u32, h: u32) -> u32 {
-    let (mut w, mut h, mut k) = (w as u64, h as u64, 0);
-    while w * h > HZB_READ_TEXELS {
-        (w, h, k) = (w.div_ceil(2), h.div_ceil(2), k + 1);
-    }
-    k
-}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeOptions {

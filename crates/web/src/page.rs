@@ -5,9 +5,21 @@
 //!
 //! One animation frame: take what fetches brought (decode, admit under
 //! the budget, put on the device), move the camera, traverse (frustum
-//! culling and LOD selection, gigawalk-cull's `Traverser`), plan fetches
-//! and stand-ins ([`Streamer`]), draw with RVG's pass and present with
-//! the HUD. Fetches run as promises between frames; nothing blocks.
+//! culling, occlusion culling against the HZB and LOD selection,
+//! gigawalk-cull's `Traverser`), plan fetches and stand-ins
+//! ([`Streamer`]), draw with RVG's pass and present with the HUD.
+//! Fetches run as promises between frames; nothing blocks.
+//!
+//! GigaWalk's three stages (Section 5) run as an interleaved schedule on
+//! the page's one thread and one device. With occlusion on, a frame's
+//! camera is fixed when OR's occluders (the last frame's visible set, its
+//! LODs chosen again for this camera, resident ones only) are submitted
+//! with their pyramid level's read-back; a later animation frame, once the
+//! read-back has arrived, builds the HZB from it, traverses and draws that
+//! camera. So occlusion costs one animation frame of latency and never a
+//! wait: an animation frame whose read-back has not arrived presents
+//! nothing new (`hzb_waits` counts them). The HZB is always the depth of
+//! the camera it culls for, so culling stays conservative.
 
 use std::cell::RefCell;
 use std::collections::HashSet;
@@ -16,11 +28,12 @@ use std::rc::Rc;
 
 use gigawalk_cull::fly::{FlyController, Movement};
 use gigawalk_cull::{
-    default_near, CullView, DrawItem, NoOcclusion, TraversalOptions, Traverser, Viewport,
+    auto_hzb_level, default_near, reselect_lods, CullView, DrawItem, Hzb, HzbOcclusion,
+    NoOcclusion, OcclusionTest, Reduction, TraversalOptions, Traverser, Viewport,
 };
 use gigawalk_gpu::{
-    ClipPlanes, DecodedLod, DrawStyle, GeometryPool, GpuContext, Look, OverlayFrame, OverlayText,
-    VisiblePass, WindowSurface,
+    ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, Look, OverlayFrame,
+    OverlayText, PendingLevel, VisiblePass, WindowSurface,
 };
 use gigawalk_scene::SceneReader;
 use wasm_bindgen::prelude::*;
@@ -43,22 +56,45 @@ const MAX_IN_FLIGHT: usize = 192;
 /// (`?budget=MB`).
 const DEFAULT_BUDGET_MB: u64 = 256;
 
-/// What traversal draws.
+/// What traversal culls and draws: frustum culling always, occlusion
+/// culling against the HZB, HLODs at the pixel error (replay's modes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Mode {
-    /// View-frustum culling alone, full detail.
-    Vfc,
-    /// Frustum culling and HLODs at the pixel error.
-    Hlod,
+struct Mode {
+    occlusion: bool,
+    hlod: bool,
 }
 
 impl Mode {
-    fn name(self) -> &'static str {
-        match self {
-            Mode::Vfc => "vfc",
-            Mode::Hlod => "hlod",
-        }
+    const ALL: [(&'static str, Mode); 4] = [
+        ("vfc", Mode::new(false, false)),
+        ("hlod", Mode::new(false, true)),
+        ("occ", Mode::new(true, false)),
+        ("och", Mode::new(true, true)),
+    ];
+
+    const fn new(occlusion: bool, hlod: bool) -> Mode {
+        Mode { occlusion, hlod }
     }
+
+    fn name(self) -> &'static str {
+        Mode::ALL
+            .iter()
+            .find(|(_, m)| *m == self)
+            .map_or("?", |(n, _)| n)
+    }
+
+    fn parse(name: &str) -> Option<Mode> {
+        Mode::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m)
+    }
+}
+
+/// A camera whose occluders' depth is on its way back from the device.
+struct Awaited {
+    view: CullView,
+    level: PendingLevel,
+    /// Occluder LODs drawn, and their triangles.
+    occluders: usize,
+    occluder_triangles: u64,
 }
 
 /// What the page reports (as JSON, through [`stats`]).
@@ -79,6 +115,8 @@ struct Stats {
     requests: u64,
     resident_bytes: u64,
     first_frame_ms: Option<f64>,
+    /// Bytes fetched when the first frame was drawn.
+    first_frame_fetched: u64,
     failed_lods: u64,
     /// The last LOD that failed to fetch or decode, and why.
     lod_error: Option<String>,
@@ -92,6 +130,17 @@ struct Stats {
     traversal_ms: f64,
     mode: String,
     pixel_error: f64,
+    /// Nodes the last frame culled by occlusion, whether it had an HZB
+    /// (not in the startup frame or with no occluder resident), and the
+    /// occluders drawn for it.
+    occlusion_culled: u64,
+    occlusion_used: bool,
+    occluders: usize,
+    occluder_triangles: u64,
+    /// Animation frames that presented nothing new because OR's read-back
+    /// had not arrived, in all; and the level read back.
+    hzb_waits: u64,
+    hzb_level: u32,
 }
 
 impl Stats {
@@ -102,9 +151,10 @@ impl Stats {
             "{{\"state\":{},\"error\":{},\"backend\":{},\"frames\":{},\"fps\":{:.2},\
              \"triangles\":{},\"draws\":{},\"stand_ins\":{},\"missing\":{},\"visited\":{},\
              \"file_bytes\":{},\"fetched_bytes\":{},\"requests\":{},\"resident_bytes\":{},\
-             \"first_frame_ms\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
+             \"first_frame_ms\":{},\"first_frame_fetched\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
              \"settled\":{},\"cpu_ms\":{:.2},\"traversal_ms\":{:.2},\"mode\":{},\
-             \"pixel_error\":{}}}",
+             \"pixel_error\":{},\"occlusion_culled\":{},\"occlusion_used\":{},\
+             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{}}}",
             s(&self.state),
             self.error.as_deref().map_or("null".into(), s),
             s(&self.backend),
@@ -120,6 +170,7 @@ impl Stats {
             self.requests,
             self.resident_bytes,
             opt(self.first_frame_ms),
+            self.first_frame_fetched,
             self.failed_lods,
             self.lod_error.as_deref().map_or("null".into(), s),
             self.in_flight,
@@ -128,6 +179,12 @@ impl Stats {
             self.traversal_ms,
             s(&self.mode),
             self.pixel_error,
+            self.occlusion_culled,
+            self.occlusion_used,
+            self.occluders,
+            self.occluder_triangles,
+            self.hzb_waits,
+            self.hzb_level,
         )
     }
 }
@@ -287,6 +344,11 @@ struct App {
     surface: WindowSurface,
     canvas: HtmlCanvasElement,
     pass: VisiblePass,
+    /// OR's depth pass (the canvas's size), the camera waiting for its
+    /// read-back, and the HZB built from the last one.
+    depth: DepthPass,
+    awaited: Option<Awaited>,
+    hzb: Hzb,
     pool: GeometryPool,
     reader: Box<SceneReader<Sparse>>,
     sparse: Sparse,
@@ -407,27 +469,142 @@ impl App {
         let (w, h) = self.size();
         if self.pass.size() != (w, h) {
             self.pass = VisiblePass::new(&self.ctx, w, h);
+            self.depth = DepthPass::new(&self.ctx, w, h);
+            self.awaited = None;
         }
         let camera = match self.pose.and_then(|i| self.path.get(i)) {
             Some(p) => gigawalk_cull::Camera::of_pose(p, Viewport::new(w, h), self.near),
             None => self.fly.camera(w as f64 / h as f64, self.near),
         };
         let view = CullView::new(camera, Viewport::new(w, h));
-        let options = TraversalOptions {
-            occlusion: false,
-            hlod: self.mode == Mode::Hlod,
-            pixel_error: match self.mode {
-                Mode::Vfc => 0.0,
-                Mode::Hlod => self.pixel_error,
+        if !self.mode.occlusion {
+            self.awaited = None;
+            return self.draw(&view, None, t0, dt, now);
+        }
+        match self.awaited.take() {
+            // The startup frame (or the first after a resize or a change
+            // of mode): drawn unculled; its visible set is the next
+            // frame's occluders.
+            None => self.draw(&view, None, t0, dt, now)?,
+            Some(a) => match self.depth.try_take_level(&self.ctx, a.level) {
+                Err(level) => {
+                    self.awaited = Some(Awaited { level, ..a });
+                    set_stats(|s| s.hzb_waits += 1);
+                    return Ok(());
+                }
+                Ok(level) => {
+                    let level = level.map_err(|e| format!("occluder depth: {e}"))?;
+                    // The device's depth may lie this far off the exact
+                    // surface (0 on WebGPU's float depth; GL's rounding
+                    // otherwise): lowered by it, the HZB is never nearer.
+                    let e = self.ctx.depth_error();
+                    let depth: Vec<f32> = level
+                        .image
+                        .depth
+                        .iter()
+                        .map(|&z| (z - e).max(0.0))
+                        .collect();
+                    match level.level {
+                        0 => {
+                            self.hzb
+                                .rebuild(level.width, level.height, &depth, Reduction::Farthest)
+                        }
+                        k => self
+                            .hzb
+                            .rebuild_from_level(level.width, level.height, k, &depth),
+                    }
+                    .map_err(|e| format!("the HZB: {e}"))?;
+                    set_stats(|s| {
+                        s.occluders = a.occluders;
+                        s.occluder_triangles = a.occluder_triangles;
+                        s.hzb_level = level.level;
+                    });
+                    let hzb = std::mem::take(&mut self.hzb);
+                    let drawn = self.draw(&a.view, Some(&HzbOcclusion::new(&hzb)), t0, dt, now);
+                    self.hzb = hzb;
+                    drawn?;
+                }
             },
-        };
+        }
+        self.submit_occluders(view);
+        let cpu_ms = now_ms() - t0;
+        set_stats(|s| s.cpu_ms = cpu_ms);
+        Ok(())
+    }
+
+    /// What traversal takes for this frame's mode.
+    fn traversal_options(&self, occlusion: bool) -> TraversalOptions {
+        TraversalOptions {
+            occlusion,
+            hlod: self.mode.hlod,
+            pixel_error: if self.mode.hlod {
+                self.pixel_error
+            } else {
+                0.0
+            },
+        }
+    }
+
+    /// OR for `view`: the last frame's visible set with its LODs chosen
+    /// again for `view`, those resident drawn depth-only; the level read
+    /// back is awaited by a later frame. With no occluder resident the
+    /// next frame draws unculled.
+    fn submit_occluders(&mut self, view: CullView) {
+        let skeleton = self.reader.skeleton();
+        let options = self.traversal_options(true);
+        let mut lods = Vec::with_capacity(self.items.len());
+        reselect_lods(
+            skeleton,
+            &view,
+            &options,
+            &self.items,
+            &mut |i: DrawItem| lods.push(skeleton.node(i.node).first_lod + i.lod),
+        );
+        lods.retain(|&l| self.pool.contains(l));
+        lods.sort_unstable();
+        lods.dedup();
+        if lods.is_empty() {
+            return;
+        }
+        let occluder_triangles = lods
+            .iter()
+            .map(|&l| skeleton.lods()[l as usize].triangles as u64)
+            .sum();
+        let (w, h) = self.depth.size();
+        let level = self.depth.submit_level(
+            &self.ctx,
+            &self.pool,
+            &gpu_view(&view),
+            &lods,
+            auto_hzb_level(w, h),
+        );
+        self.awaited = Some(Awaited {
+            view,
+            level,
+            occluders: lods.len(),
+            occluder_triangles,
+        });
+    }
+
+    /// Traverses `view` (culled by `occlusion` where given), plans
+    /// fetches, draws what is resident and presents it with the HUD.
+    fn draw(
+        &mut self,
+        view: &CullView,
+        occlusion: Option<&dyn OcclusionTest>,
+        t0: f64,
+        dt: f64,
+        now: f64,
+    ) -> Result<(), String> {
+        let (w, h) = (view.viewport.width, view.viewport.height);
+        let options = self.traversal_options(occlusion.is_some());
         let t_traverse = now_ms();
         self.items.clear();
         let items = &mut self.items;
         let traversal = self.traverser.traverse(
             self.reader.skeleton(),
-            &view,
-            &NoOcclusion,
+            view,
+            occlusion.unwrap_or(&NoOcclusion),
             &options,
             &mut |i| items.push(i),
         );
@@ -436,12 +613,7 @@ impl App {
             .streamer
             .frame(self.frame, &self.items, self.reader.skeleton());
         self.fetch(&plan.fetch);
-        let gpu_view = gigawalk_gpu::View {
-            eye: view.camera.position,
-            view_proj: view.camera.view_projection_rel(),
-            forward: view.camera.forward().as_vec3(),
-            clip: ClipPlanes::NONE,
-        };
+        let gpu_view = gpu_view(view);
         self.pass
             .begin(&self.ctx, &gpu_view, DrawStyle::Shaded, Look::PLAIN);
         self.pass.draw(&self.ctx, &self.pool, &plan.draw);
@@ -469,13 +641,24 @@ impl App {
             s.stand_ins = plan.stand_ins;
             s.missing = plan.missing;
             s.visited = traversal.visited;
+            s.occlusion_culled = traversal.occlusion_culled;
+            s.occlusion_used = occlusion.is_some();
+            if !s.occlusion_used {
+                s.occluders = 0;
+                s.occluder_triangles = 0;
+            }
             s.resident_bytes = self.streamer.resident_bytes();
             s.in_flight = self.streamer.in_flight();
-            s.settled = plan.missing == 0 && plan.stand_ins == 0 && s.in_flight == 0;
+            // An occlusion mode has settled only on a culled frame.
+            s.settled = plan.missing == 0
+                && plan.stand_ins == 0
+                && s.in_flight == 0
+                && (s.occlusion_used || !self.mode.occlusion);
             s.mode = self.mode.name().into();
             s.pixel_error = self.pixel_error;
             if first {
                 s.first_frame_ms = Some(since_start);
+                s.first_frame_fetched = s.fetched_bytes;
             }
         });
         let overlay = OverlayFrame {
@@ -521,7 +704,11 @@ impl App {
                     s.stand_ins
                 ),
                 format!(
-                    "pixel error {}  (V: vfc/hlod, [ ]: error, H: HUD)",
+                    "culled by occlusion {}  occluders {} ({} triangles)",
+                    s.occlusion_culled, s.occluders, s.occluder_triangles
+                ),
+                format!(
+                    "pixel error {}  (O: occlusion, L: HLOD, -/+: error, H: HUD)",
                     s.pixel_error
                 ),
             ]
@@ -564,14 +751,14 @@ impl App {
             return;
         }
         match code {
-            "KeyV" => {
-                self.mode = match self.mode {
-                    Mode::Vfc => Mode::Hlod,
-                    Mode::Hlod => Mode::Vfc,
-                }
+            "KeyO" => self.mode.occlusion = !self.mode.occlusion,
+            "KeyL" => self.mode.hlod = !self.mode.hlod,
+            "Minus" | "NumpadSubtract" | "PageDown" | "BracketLeft" => {
+                self.pixel_error = (self.pixel_error / 2.0).max(0.25)
             }
-            "BracketLeft" => self.pixel_error = (self.pixel_error / 2.0).max(0.25),
-            "BracketRight" => self.pixel_error = (self.pixel_error * 2.0).min(64.0),
+            "Equal" | "NumpadAdd" | "PageUp" | "BracketRight" => {
+                self.pixel_error = (self.pixel_error * 2.0).min(64.0)
+            }
             "KeyH" => self.hud = !self.hud,
             _ => {}
         }
@@ -615,16 +802,15 @@ pub fn show_pose(i: u32) -> Result<(), JsValue> {
     })
 }
 
-/// Sets what traversal draws: "vfc" (frustum culling, full detail) or
-/// "hlod" (and levels of detail at the pixel error).
+/// Sets what traversal culls and draws, as replay's modes: "vfc"
+/// (frustum culling, full detail), "hlod" (and levels of detail at the
+/// pixel error), "occ" (frustum and occlusion culling, full detail) or
+/// "och" (all three).
 #[wasm_bindgen]
 pub fn set_mode(mode: &str) -> Result<(), JsValue> {
     with_app(|app| {
-        app.mode = match mode {
-            "vfc" => Mode::Vfc,
-            "hlod" => Mode::Hlod,
-            m => return Err(format!("mode {m:?}: vfc or hlod")),
-        };
+        app.mode =
+            Mode::parse(mode).ok_or_else(|| format!("mode {mode:?}: vfc, hlod, occ or och"))?;
         Ok(())
     })
 }
@@ -637,6 +823,25 @@ pub fn set_pixel_error(pixel_error: f64) -> Result<(), JsValue> {
             return Err(format!("pixel error {pixel_error}: a positive number"));
         }
         app.pixel_error = pixel_error;
+        Ok(())
+    })
+}
+
+/// The GPU passes' view of `view`'s camera.
+fn gpu_view(view: &CullView) -> gigawalk_gpu::View {
+    gigawalk_gpu::View {
+        eye: view.camera.position,
+        view_proj: view.camera.view_projection_rel(),
+        forward: view.camera.forward().as_vec3(),
+        clip: ClipPlanes::NONE,
+    }
+}
+
+/// Shows or hides the HUD (tests compare images without it).
+#[wasm_bindgen]
+pub fn set_hud(on: bool) -> Result<(), JsValue> {
+    with_app(|app| {
+        app.hud = on;
         Ok(())
     })
 }
@@ -709,6 +914,9 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     let app = App {
         url: scene_url,
         pass: VisiblePass::new(&ctx, w, h),
+        depth: DepthPass::new(&ctx, w, h),
+        awaited: None,
+        hzb: Hzb::new(),
         pool,
         surface,
         canvas: canvas.clone(),
@@ -719,7 +927,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         arrivals: Rc::new(RefCell::new(Vec::new())),
         traverser: Traverser::new(),
         items: Vec::new(),
-        mode: Mode::Hlod,
+        mode: Mode::new(true, true),
         pixel_error,
         hud: true,
         near: default_near(&bounds),

@@ -4,17 +4,18 @@
 // ?budget=MB bounds the geometry kept on the device, ?pixel_error=P the
 // error levels are chosen by.
 import init, {
-  start, stats, load_path, show_pose, set_mode, set_pixel_error,
+  start, stats, load_path, show_pose, set_mode, set_pixel_error, set_hud,
 } from './gigawalk_web.js';
 
 const status = document.getElementById('status');
 const canvas = document.getElementById('view');
 let failure = null;
 
-// What tests and scripts drive: a camera path's poses, the mode and the
-// pixel error (see crates/web/src/page.rs).
+// What tests and scripts drive: a camera path's poses, the mode, the
+// pixel error and the HUD (see crates/web/src/page.rs).
 window.gigawalk = {
   loadPath: load_path, showPose: show_pose, setMode: set_mode, setPixelError: set_pixel_error,
+  setHud: set_hud,
 };
 
 window.gigawalkStats = () => {

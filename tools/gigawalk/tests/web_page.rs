@@ -1,6 +1,7 @@
 //! The browser page (crates/web) in headless Chromium with WebGPU on
 //! SwiftShader, driven by tests/web-page/run.mjs: a walk along a camera
-//! path served by `gigawalk serve`, drawing what native traversal draws;
+//! path served by `gigawalk serve`, drawing what native traversal draws,
+//! and with occlusion culling the unculled image pixel for pixel;
 //! a scene ten times the memory budget; and every failure the page must
 //! name instead of showing a blank canvas.
 //!
@@ -175,7 +176,10 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
         "--poses",
         poses,
         "--modes",
-        "vfc,hlod",
+        "vfc,hlod,occ,och",
+        "--no-hud",
+        "--compare",
+        "occ:vfc,och:hlod",
     ]);
     let first = &report["first"];
     assert_eq!(first["state"], "running", "{report}");
@@ -184,13 +188,19 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     // The first frame does not wait for the file: opening fetched the
     // skeleton, not the geometry.
     assert!(
-        num(first, "fetched_bytes") < 0.5 * file_bytes,
+        num(first, "first_frame_fetched") < 0.5 * file_bytes,
         "first frame after {} of {file_bytes} bytes",
-        first["fetched_bytes"]
+        first["first_frame_fetched"]
     );
     let native = native_triangles(&gwk, &path, &dir.path().join("replay"), "vfc,hlod");
     let pose_list: Vec<&Value> = report["poses"].as_array().unwrap().iter().collect();
-    assert_eq!(pose_list.len(), 6, "{report}");
+    assert_eq!(pose_list.len(), 12, "{report}");
+    let row = |mode: &str, pose: usize| {
+        *pose_list
+            .iter()
+            .find(|p| p["mode"] == mode && num(p, "pose") as usize == pose)
+            .unwrap_or_else(|| panic!("no {mode} pose {pose} in {report}"))
+    };
     for p in &pose_list {
         let (mode, pose) = (p["mode"].as_str().unwrap(), num(p, "pose") as usize);
         assert_eq!(p["state"], "running", "{p}");
@@ -202,6 +212,16 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
             num(p, "coverage") > 0.02,
             "{mode} pose {pose} drew nothing: {p}"
         );
+        if mode == "occ" || mode == "och" {
+            // Culled against the HZB of the camera it draws, and the
+            // image is the unculled mode's, pixel for pixel.
+            assert_eq!(p["occlusion_used"], true, "{p}");
+            let diff = &p["diff"];
+            assert_eq!(num(diff, "pixels"), 0.0, "{mode} pose {pose}: {diff}");
+            let unculled = row(if mode == "occ" { "vfc" } else { "hlod" }, pose);
+            assert!(num(p, "triangles") <= num(unculled, "triangles"), "{p}");
+            continue;
+        }
         let want = native
             .iter()
             .find(|(m, f, _)| m == mode && *f == pose)
@@ -216,6 +236,13 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     }
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
     assert!(num(&report["last"], "fetched_bytes") <= file_bytes);
+    // Occlusion culled something on this plant.
+    assert!(
+        pose_list
+            .iter()
+            .any(|p| p["mode"] == "occ" && num(p, "occlusion_culled") > 0.0),
+        "{report}"
+    );
 }
 
 #[test]

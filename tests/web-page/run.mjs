@@ -108,10 +108,9 @@ try {
   const shots = opt('shots');
   if (shots) fs.mkdirSync(shots, { recursive: true });
 
-  /// How two screenshots (base64 PNGs of one size) differ: pixels with
-  /// any channel different, and the largest difference of a channel.
-  const diff = (a, b) => page.evaluate(async (pa, pb) => {
-    const pixels = async (data) => {
+  // A base64 PNG's RGBA pixels and width, decoded in the page.
+  await page.evaluate(() => {
+    window.gigawalkPngPixels = async (data) => {
       const img = new Image();
       img.src = `data:image/png;base64,${data}`;
       await img.decode();
@@ -119,9 +118,15 @@ try {
       c.width = img.width; c.height = img.height;
       const g = c.getContext('2d');
       g.drawImage(img, 0, 0);
-      return g.getImageData(0, 0, c.width, c.height).data;
+      return { d: g.getImageData(0, 0, c.width, c.height).data, width: c.width, height: c.height };
     };
-    const [da, db] = [await pixels(pa), await pixels(pb)];
+  });
+
+  /// How two screenshots (base64 PNGs of one size) differ: pixels with
+  /// any channel different, and the largest difference of a channel.
+  const diff = (a, b) => page.evaluate(async (pa, pb) => {
+    const da = (await window.gigawalkPngPixels(pa)).d;
+    const db = (await window.gigawalkPngPixels(pb)).d;
     if (da.length !== db.length) return { pixels: -1, max: 255 };
     let n = 0; let max = 0;
     for (let i = 0; i < da.length; i += 4) {
@@ -144,14 +149,8 @@ try {
   /// HUD's rows left out).
   async function coverage(png) {
     return page.evaluate(async (data, hudRows) => {
-      const img = new Image();
-      img.src = `data:image/png;base64,${data}`;
-      await img.decode();
-      const c = document.createElement('canvas');
-      c.width = img.width; c.height = img.height;
-      const g = c.getContext('2d');
-      g.drawImage(img, 0, 0);
-      const d = g.getImageData(0, 0, c.width, c.height).data;
+      const { d, width, height } = await window.gigawalkPngPixels(data);
+      const c = { width, height };
       const bg = [d[d.length - 4], d[d.length - 3], d[d.length - 2]];
       let lit = 0;
       // The HUD's panel (top left) is left out.

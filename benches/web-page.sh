@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The browser page against native, on one scene and path at 640x360: the
 # page (headless Chromium, WebGPU on SwiftShader, served by `gigawalk
-# serve`) at a set of poses in vfc and hlod, its first frame after load
+# serve`) at a set of poses in vfc, hlod, occ and och, its first frame after load
 # and what it had fetched by then; native replay on lavapipe in vfc,
 # hlod, occ and och over the same poses; the speed-ups over vfc side by
 # side; the bundle's sizes.
@@ -41,13 +41,16 @@ for m in ['vfc', 'hlod', 'occ', 'och']:
     tris = [int(r['drawn_triangles']) for r in rows if r['mode'] == m and int(r['frame']) in poses]
     native[m] = (statistics.median(fps) if fps else float('nan'), statistics.median(tris) if tris else 0)
 browser = {}
-for m in ['vfc', 'hlod']:
+for m in ['vfc', 'hlod', 'occ', 'och']:
     ps = [p for p in page['poses'] if p['mode'] == m]
+    if not ps:
+        continue
     browser[m] = (statistics.median(p['fps'] for p in ps), statistics.median(p['triangles'] for p in ps),
                   all(p['settled'] for p in ps))
     print(f"page {m}: the page's thread {statistics.median(p['cpu_ms'] for p in ps):.1f} ms a frame, "
           f"traversal {statistics.median(p['traversal_ms'] for p in ps):.1f} ms, "
-          f"{statistics.median(p['draws'] for p in ps):.0f} draws; settled after "
+          f"{statistics.median(p['draws'] for p in ps):.0f} draws, "
+          f"{statistics.median(p['waits_per_frame'] for p in ps):.2f} animation frames waiting for OR per frame drawn; settled after "
           f"{', '.join(str(p['settle_ms']) for p in ps)} ms")
 print("| mode | browser fps | browser triangles | native lavapipe fps | native triangles | browser / vfc | native / vfc |")
 print("|---|---:|---:|---:|---:|---:|---:|")

@@ -3,10 +3,11 @@
 // (its stats, or its error), and with --path, each pose's triangles,
 // frame rate and how much of the image the scene covers, per mode.
 //
-//   node run.mjs --url URL [--query Q] [--path FILE --poses 0,10,20]
+//   node run.mjs --url URL [--query Q] [--fragment F] [--path FILE --poses 0,10,20]
 //                [--modes vfc,hlod] [--shots DIR] [--timeout S]
 //                [--settle S] [--linger S] [--no-hud] [--compare M:REF,...]
 //                [--serve DIR [--no-range]] [--no-webgpu]
+//                [--review POSE --pick X,Y]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
 // every request answered whole, as a server without range support
@@ -16,8 +17,15 @@
 // without WebGPU. --no-hud hides the HUD; --compare occ:vfc,och:hlod
 // compares mode M's image at each pose with mode REF's (run before it),
 // pixel by pixel ("diff": pixels that differ, and the largest difference
-// of a channel). Exit status 0 whenever a report was written (tests
-// judge it); 2 when Chromium or the page could not be driven at all.
+// of a channel). --fragment F opens the page at URL#F (a view link).
+// --review POSE walks the review tools at that pose of --path (after
+// the modes), as a user does, in occ with the HUD off: pick at pixel
+// X,Y; click it (select); X with the pointer there (a section plane);
+// H (hide it); occ against vfc with both; the view's link opened in a
+// second tab; U and Delete (show all, no section). Each step's stats,
+// picks and image comparisons are in the report's "review". Exit
+// status 0 whenever a report was written (tests judge it); 2 when
+// Chromium or the page could not be driven at all.
 import fs from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
@@ -92,7 +100,7 @@ try {
   await page.setViewport({ width: 640, height: 360 });
   const query = ['size=640x360', opt('query')].filter(Boolean).join('&');
   const started = Date.now();
-  await page.goto(`${url}?${query}`);
+  await page.goto(`${url}?${query}${opt('fragment') ? `#${opt('fragment')}` : ''}`);
   const stats = () => page.evaluate(() => (window.gigawalkStats ? window.gigawalkStats() : { state: 'loading' }));
   let s = await stats();
   while (s.state !== 'error' && !(s.state === 'running' && s.frames > 0) && Date.now() - started < timeoutMs) {
@@ -164,6 +172,91 @@ try {
     }, png, flag('no-hud') ? 0 : 60);
   }
 
+  /// Waits until the page has drawn all it wants, a few frames after
+  /// now; its stats then.
+  async function settle(p = page) {
+    const st = () => p.evaluate(() => window.gigawalkStats());
+    const t0 = Date.now();
+    const f0 = (await st()).frames;
+    let x = await st();
+    while (!(x.settled && x.frames >= f0 + 3) && x.state !== 'error' && Date.now() - t0 < timeoutMs / 4) {
+      await sleep(100);
+      x = await st();
+    }
+    return x;
+  }
+
+  /// Polls until `ok(stats)` holds (or a quarter of the timeout).
+  async function until(ok) {
+    const t0 = Date.now();
+    let x = await stats();
+    while (!ok(x) && Date.now() - t0 < timeoutMs / 4) { await sleep(100); x = await stats(); }
+    return x;
+  }
+
+  /// The review tools at `pose`, pixel (px, py): see the header.
+  async function review(p, pose, [px, py]) {
+    const r = { pose, pixel: [px, py] };
+    await p.evaluate(() => window.gigawalk.setHud(false));
+    await p.evaluate(() => window.gigawalk.setMode('occ'));
+    await p.evaluate((i) => window.gigawalk.showPose(i), pose);
+    r.before = await settle();
+    const before = await shot('review-before');
+    await until((x) => x.objects !== null);
+    r.pick = await p.evaluate((x, y) => window.gigawalk.pick(x, y), px, py);
+    // A click with the mouse selects what is there.
+    await p.mouse.click(px + 0.5, py + 0.5);
+    r.selected = (await until((x) => x.selected !== null)).selected;
+    r.selected_stats = await settle();
+    // A section plane where the pointer is, facing the eye.
+    await p.mouse.move(px + 0.5, py + 0.5);
+    await p.keyboard.press('KeyX');
+    await until((x) => x.section !== null);
+    r.cut = await settle();
+    const cut = await shot('review-cut');
+    r.pick_cut = await p.evaluate((x, y) => window.gigawalk.pick(x, y), px, py);
+    await p.keyboard.press('KeyH');
+    await until((x) => x.hidden > 0);
+    r.hidden = await settle();
+    const hidden = await shot('review-hidden');
+    r.hidden_vs_cut = await diff(cut, hidden);
+    r.pick_hidden = await p.evaluate((x, y) => window.gigawalk.pick(x, y), px, py);
+    r.view = await p.evaluate(() => window.gigawalk.view());
+    // With the section and the hidden object, occlusion culling against
+    // frustum culling alone.
+    await p.evaluate(() => window.gigawalk.setMode('vfc'));
+    r.hidden_vfc = await settle();
+    r.occ_vs_vfc = await diff(await shot('review-hidden-vfc'), hidden);
+    await p.evaluate(() => window.gigawalk.setMode('occ'));
+    await settle();
+    // The view's link in a second tab shows the same image.
+    r.link = await p.evaluate(() => window.gigawalk.viewLink());
+    const tab = await browser.newPage();
+    await tab.setViewport({ width: 640, height: 360 });
+    await tab.goto(r.link);
+    const tabStats = () => tab.evaluate(() => (window.gigawalkStats ? window.gigawalkStats() : { state: 'loading' }));
+    const t0 = Date.now();
+    let x = await tabStats();
+    while (!(x.state === 'running' && x.objects !== null && x.hidden > 0) && x.state !== 'error' && Date.now() - t0 < timeoutMs / 4) {
+      await sleep(100);
+      x = await tabStats();
+    }
+    await tab.evaluate(() => { window.gigawalk.setHud(false); window.gigawalk.setMode('occ'); });
+    r.link_stats = await settle(tab);
+    const linked = await tab.screenshot({ encoding: 'base64' });
+    if (shots) fs.writeFileSync(path.join(shots, 'review-link.png'), Buffer.from(linked, 'base64'));
+    r.link_vs_hidden = await diff(hidden, linked);
+    await tab.close();
+    // U shows all again; Delete clears the section: the first image.
+    await p.bringToFront();
+    await p.keyboard.press('KeyU');
+    await p.keyboard.press('Delete');
+    await until((x) => x.hidden === 0 && x.section === null);
+    r.restored = await settle();
+    r.restored_vs_before = await diff(before, await shot('review-restored'));
+    return r;
+  }
+
   if (opt('path') && s.state === 'running') {
     const poses = (opt('poses') || '0').split(',').map(Number);
     report.path_poses = await page.evaluate((t) => window.gigawalk.loadPath(t), fs.readFileSync(opt('path'), 'utf8'));
@@ -194,12 +287,18 @@ try {
         const fps = ((b.frames - a.frames) * 1000) / (Date.now() - ta);
         const png = await shot(`${mode}-${pose}`);
         images.set(`${mode}-${pose}`, png);
-        const row = { mode, pose, settle_ms, fps, coverage: await coverage(png), ...b };
+        // Animation frames that waited for OR's read-back in those two
+        // seconds, per frame drawn.
+        const waits = (b.hzb_waits - a.hzb_waits) / Math.max(1, b.frames - a.frames);
+        const row = { mode, pose, settle_ms, fps, waits_per_frame: waits, coverage: await coverage(png), ...b };
         const ref = images.get(`${references.get(mode)}-${pose}`);
         if (ref) row.diff = { against: references.get(mode), ...(await diff(ref, png)) };
         report.poses.push(row);
       }
     }
+  }
+  if (opt('review') && opt('path') && s.state === 'running') {
+    report.review = await review(page, Number(opt('review')), opt('pick', '320,180').split(',').map(Number));
   }
   await sleep(Number(opt('linger', '0')) * 1000);
   report.last = await stats();

@@ -249,6 +249,39 @@ impl Hzb {
         Ok(())
     }
 
+    /// Rebuilds from a device's read-back of its depth pyramid: `level`
+    /// 0 (the depth image itself, reduced here by `reduction`) or a
+    /// coarser level ([`Hzb::rebuild_from_level`]) of a `width x height`
+    /// image. Every texel is first lowered by `depth_error`, the most the
+    /// device's depth may lie off the exact surface (0 for float depth),
+    /// so the HZB is never nearer than the surface; `scratch` holds the
+    /// lowered copy, kept between frames. Lowering every texel lowers the
+    /// farthest of any block by as much: the same whether the device
+    /// reduced first or not.
+    #[allow(clippy::too_many_arguments)]
+    pub fn rebuild_from_device(
+        &mut self,
+        width: u32,
+        height: u32,
+        level: u32,
+        depth: &[f32],
+        depth_error: f32,
+        reduction: Reduction,
+        scratch: &mut Vec<f32>,
+    ) -> Result<(), HzbError> {
+        let depth = if depth_error > 0.0 {
+            scratch.clear();
+            scratch.extend(depth.iter().map(|&z| (z - depth_error).max(0.0)));
+            scratch.as_slice()
+        } else {
+            depth
+        };
+        match level {
+            0 => self.rebuild(width, height, depth, reduction),
+            k => self.rebuild_from_level(width, height, k, depth),
+        }
+    }
+
     /// Sizes the levels of a `width x height` image's pyramid held from
     /// level `base` on (the finer ones empty), reusing allocations;
     /// returns the sizes.

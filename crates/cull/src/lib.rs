@@ -45,6 +45,7 @@ mod object_space;
 mod occlusion;
 pub mod pick;
 mod raster;
+pub mod review;
 pub mod select;
 #[cfg(test)]
 mod test_rng;

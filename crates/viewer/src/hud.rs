@@ -4,6 +4,7 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
+pub use gigawalk_cull::review::group;
 use gigawalk_cull::TraversalStats;
 
 use crate::settings::Settings;
@@ -231,30 +232,9 @@ fn culler_line(w: &gigawalk_runtime::CullerWork) -> String {
     format!("{c}: {}", counts.join(", "))
 }
 
-/// 1234567 -> "1,234,567": counts of millions read at a glance.
-pub fn group(n: u64) -> String {
-    let s = n.to_string();
-    let mut out = String::with_capacity(s.len() + s.len() / 3);
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn group_thousands() {
-        assert_eq!(group(0), "0");
-        assert_eq!(group(999), "999");
-        assert_eq!(group(1000), "1,000");
-        assert_eq!(group(1234567), "1,234,567");
-    }
 
     #[test]
     fn fps_over_evenly_spaced_frames() {

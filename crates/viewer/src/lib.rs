@@ -22,10 +22,10 @@ pub mod controls;
 mod hud;
 mod image;
 mod measure;
-mod objects;
 mod recorder;
-mod sections;
 mod settings;
+
+use gigawalk_cull::review::{objects, sections};
 
 pub use app::{run, DisplayError, ViewArgs, ViewError};
 pub use boxes::{overlay_boxes, CullSets};

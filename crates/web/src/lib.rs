@@ -10,6 +10,8 @@
 //!
 //! - [`sparse`]: the scene file as the byte ranges fetched so far; the
 //!   scene reader opens and reads LODs from it, every checksum checked.
+//! - [`link`]: a saved view (camera, selection, hidden objects, section)
+//!   as the page URL's `#view=` fragment, to share.
 //! - [`stream`]: which LODs to fetch, keep and draw under a byte budget,
 //!   with stand-ins while one is on its way.
 //! - `page` (wasm32 only): the page's entry point, its loop, input and
@@ -20,6 +22,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod link;
 pub mod sparse;
 pub mod stream;
 

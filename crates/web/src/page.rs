@@ -22,14 +22,16 @@
 //! the camera it culls for, so culling stays conservative.
 
 use std::cell::RefCell;
-use std::collections::HashSet;
+use std::collections::{HashSet, VecDeque};
 use std::ops::Range;
 use std::rc::Rc;
+use std::sync::Arc;
 
 use gigawalk_cull::fly::{FlyController, Movement};
+use gigawalk_cull::review::sections::Sections;
 use gigawalk_cull::{
-    auto_hzb_level, default_near, reselect_lods, CullView, DrawItem, Hzb, HzbOcclusion,
-    NoOcclusion, OcclusionTest, Reduction, TraversalOptions, Traverser, Viewport,
+    auto_hzb_level, default_near, reselect_lods, Camera, CullView, DrawItem, Hzb, HzbOcclusion,
+    NoOcclusion, OcclusionTest, Reduction, TraversalOptions, Traverser, Viewport, Visibility,
 };
 use gigawalk_gpu::{
     ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, Look, OverlayFrame,
@@ -40,11 +42,13 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::{spawn_local, JsFuture};
 use web_sys::{
-    HtmlCanvasElement, KeyboardEvent, MouseEvent, Request, RequestInit, Response, WheelEvent,
+    HtmlCanvasElement, KeyboardEvent, PointerEvent, Request, RequestInit, Response, WheelEvent,
 };
 
 use crate::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
 use crate::stream::{batches, Admit, Batch, Streamer};
+
+mod review;
 
 /// Vertical field of view of the page's camera.
 const FOVY_DEGREES: f64 = 60.0;
@@ -52,6 +56,12 @@ const FOVY_DEGREES: f64 = 60.0;
 /// ([`batches`]); browsers run about six requests to one host at a time
 /// and queue the rest.
 const MAX_IN_FLIGHT: usize = 192;
+/// OR submissions awaiting their read-back at once: a frame is submitted
+/// while the one before it is still on its way, so the page draws on
+/// every animation frame whose read-back has arrived instead of every
+/// other one; the visible set that makes a submission's occluders is
+/// then two frames old, as in GigaWalk's pipeline (Section 5).
+const OR_IN_FLIGHT: usize = 2;
 /// Device bytes for geometry when the page's URL does not say
 /// (`?budget=MB`).
 const DEFAULT_BUDGET_MB: u64 = 256;
@@ -141,6 +151,14 @@ struct Stats {
     /// had not arrived, in all; and the level read back.
     hzb_waits: u64,
     hzb_level: u32,
+    /// The object table's size once read (`None` before, or without
+    /// one), objects hidden, the selection's `file/path`, the section in
+    /// effect and the last message the page showed.
+    objects: Option<usize>,
+    hidden: usize,
+    selected: Option<String>,
+    section: Option<String>,
+    message: Option<String>,
 }
 
 impl Stats {
@@ -154,7 +172,8 @@ impl Stats {
              \"first_frame_ms\":{},\"first_frame_fetched\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
              \"settled\":{},\"cpu_ms\":{:.2},\"traversal_ms\":{:.2},\"mode\":{},\
              \"pixel_error\":{},\"occlusion_culled\":{},\"occlusion_used\":{},\
-             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{}}}",
+             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{},\
+             \"objects\":{},\"hidden\":{},\"selected\":{},\"section\":{},\"message\":{}}}",
             s(&self.state),
             self.error.as_deref().map_or("null".into(), s),
             s(&self.backend),
@@ -185,6 +204,11 @@ impl Stats {
             self.occluder_triangles,
             self.hzb_waits,
             self.hzb_level,
+            self.objects.map_or("null".into(), |n| n.to_string()),
+            self.hidden,
+            self.selected.as_deref().map_or("null".into(), s),
+            self.section.as_deref().map_or("null".into(), s),
+            self.message.as_deref().map_or("null".into(), s),
         )
     }
 }
@@ -329,11 +353,15 @@ fn movement(code: &str) -> Option<Movement> {
         "KeyA" | "ArrowLeft" => Movement::Left,
         "KeyD" | "ArrowRight" => Movement::Right,
         "KeyQ" | "ControlLeft" => Movement::Down,
-        "KeyE" | "Space" => Movement::Up,
+        "Space" => Movement::Up,
         "ShiftLeft" | "ShiftRight" => Movement::Fast,
         _ => return None,
     })
 }
+
+/// A pointer down on the canvas: its id, where it is now and where it
+/// was pressed (CSS pixels).
+type Pointer = (i32, (f64, f64), (f64, f64));
 
 /// A LOD fetch's outcome, handed from its promise to the next frame.
 type Arrivals = Rc<RefCell<Vec<(u32, Result<Vec<u8>, String>)>>>;
@@ -344,18 +372,24 @@ struct App {
     surface: WindowSurface,
     canvas: HtmlCanvasElement,
     pass: VisiblePass,
-    /// OR's depth pass (the canvas's size), the camera waiting for its
-    /// read-back, and the HZB built from the last one.
+    /// OR's depth pass (the canvas's size), the cameras waiting for their
+    /// read-backs (oldest first, at most [`OR_IN_FLIGHT`]), and the HZB
+    /// built from the last one.
     depth: DepthPass,
-    awaited: Option<Awaited>,
+    awaited: VecDeque<Awaited>,
     hzb: Hzb,
+    /// The read-back depth lowered by the device's depth error, kept
+    /// between frames.
+    lowered: Vec<f32>,
     pool: GeometryPool,
     reader: Box<SceneReader<Sparse>>,
     sparse: Sparse,
     streamer: Streamer,
     fly: FlyController,
     held: HashSet<Movement>,
-    drag: Option<(i32, i32)>,
+    /// Pointers down on the canvas: one looks around, two pinch to fly.
+    pointers: Vec<Pointer>,
+    review: review::Review,
     arrivals: Arrivals,
     traverser: Traverser,
     items: Vec<DrawItem>,
@@ -363,18 +397,39 @@ struct App {
     pixel_error: f64,
     hud: bool,
     near: f64,
-    /// A camera path's poses (`load_path`) and the one shown exactly
-    /// (`show_pose`) until the mouse or a key moves the camera.
+    /// A camera path's poses (`load_path`), and the pose shown exactly
+    /// (one of them, `show_pose`, or a link's) until the mouse or a key
+    /// moves the camera.
     path: Vec<gigawalk_scene::path::Pose>,
-    pose: Option<usize>,
+    shown: Option<gigawalk_scene::path::Pose>,
     frame: u64,
     last_ms: f64,
+    /// When the last frame was drawn (the HUD's frame rate).
+    last_drawn_ms: f64,
     started_ms: f64,
 }
 
 impl App {
     fn size(&self) -> (u32, u32) {
         (self.canvas.width().max(1), self.canvas.height().max(1))
+    }
+
+    /// A point on the canvas in CSS pixels, in the canvas's own pixels
+    /// (what the image and a pick count in).
+    fn canvas_point(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        let (w, h) = self.size();
+        let cw = self.canvas.client_width().max(1) as f64;
+        let ch = self.canvas.client_height().max(1) as f64;
+        (x * w as f64 / cw, y * h as f64 / ch)
+    }
+
+    /// The camera shown now: a path's pose, or the fly controller's.
+    fn camera(&self) -> Camera {
+        let (w, h) = self.size();
+        match &self.shown {
+            Some(p) => Camera::of_pose(p, Viewport::new(w, h), self.near),
+            None => self.fly.camera(w as f64 / h as f64, self.near),
+        }
     }
 
     /// Takes what fetches brought: decoded, admitted, put on the device.
@@ -470,63 +525,57 @@ impl App {
         if self.pass.size() != (w, h) {
             self.pass = VisiblePass::new(&self.ctx, w, h);
             self.depth = DepthPass::new(&self.ctx, w, h);
-            self.awaited = None;
+            self.awaited.clear();
         }
-        let camera = match self.pose.and_then(|i| self.path.get(i)) {
-            Some(p) => gigawalk_cull::Camera::of_pose(p, Viewport::new(w, h), self.near),
-            None => self.fly.camera(w as f64 / h as f64, self.near),
-        };
-        let view = CullView::new(camera, Viewport::new(w, h));
+        self.refresh_visibility();
+        let view = CullView::new(self.camera(), Viewport::new(w, h))
+            .with_section(self.review.sections.current())
+            .with_visibility(self.review.visibility.clone());
         if !self.mode.occlusion {
-            self.awaited = None;
-            return self.draw(&view, None, t0, dt, now);
+            self.awaited.clear();
+            return self.draw(&view, None, t0, now);
         }
-        match self.awaited.take() {
-            // The startup frame (or the first after a resize or a change
-            // of mode): drawn unculled; its visible set is the next
-            // frame's occluders.
-            None => self.draw(&view, None, t0, dt, now)?,
+        match self.awaited.pop_front() {
+            // The startup frame (or the first after a resize, a change of
+            // mode or a frame with no occluder resident): drawn unculled;
+            // its visible set is the next submissions' occluders.
+            None => self.draw(&view, None, t0, now)?,
             Some(a) => match self.depth.try_take_level(&self.ctx, a.level) {
                 Err(level) => {
-                    self.awaited = Some(Awaited { level, ..a });
+                    self.awaited.push_front(Awaited { level, ..a });
                     set_stats(|s| s.hzb_waits += 1);
-                    return Ok(());
                 }
                 Ok(level) => {
                     let level = level.map_err(|e| format!("occluder depth: {e}"))?;
                     // The device's depth may lie this far off the exact
-                    // surface (0 on WebGPU's float depth; GL's rounding
-                    // otherwise): lowered by it, the HZB is never nearer.
-                    let e = self.ctx.depth_error();
-                    let depth: Vec<f32> = level
-                        .image
-                        .depth
-                        .iter()
-                        .map(|&z| (z - e).max(0.0))
-                        .collect();
-                    match level.level {
-                        0 => {
-                            self.hzb
-                                .rebuild(level.width, level.height, &depth, Reduction::Farthest)
-                        }
-                        k => self
-                            .hzb
-                            .rebuild_from_level(level.width, level.height, k, &depth),
-                    }
-                    .map_err(|e| format!("the HZB: {e}"))?;
+                    // surface (0 on WebGPU's float depth): lowered by it,
+                    // the HZB is never nearer.
+                    self.hzb
+                        .rebuild_from_device(
+                            level.width,
+                            level.height,
+                            level.level,
+                            &level.image.depth,
+                            self.ctx.depth_error(),
+                            Reduction::Farthest,
+                            &mut self.lowered,
+                        )
+                        .map_err(|e| format!("the HZB: {e}"))?;
                     set_stats(|s| {
                         s.occluders = a.occluders;
                         s.occluder_triangles = a.occluder_triangles;
                         s.hzb_level = level.level;
                     });
                     let hzb = std::mem::take(&mut self.hzb);
-                    let drawn = self.draw(&a.view, Some(&HzbOcclusion::new(&hzb)), t0, dt, now);
+                    let drawn = self.draw(&a.view, Some(&HzbOcclusion::new(&hzb)), t0, now);
                     self.hzb = hzb;
                     drawn?;
                 }
             },
         }
-        self.submit_occluders(view);
+        if self.awaited.len() < OR_IN_FLIGHT {
+            self.submit_occluders(view);
+        }
         let cpu_ms = now_ms() - t0;
         set_stats(|s| s.cpu_ms = cpu_ms);
         Ok(())
@@ -571,6 +620,7 @@ impl App {
             .map(|&l| skeleton.lods()[l as usize].triangles as u64)
             .sum();
         let (w, h) = self.depth.size();
+        self.depth.set_pieces(pieces(&view));
         let level = self.depth.submit_level(
             &self.ctx,
             &self.pool,
@@ -578,7 +628,7 @@ impl App {
             &lods,
             auto_hzb_level(w, h),
         );
-        self.awaited = Some(Awaited {
+        self.awaited.push_back(Awaited {
             view,
             level,
             occluders: lods.len(),
@@ -593,7 +643,6 @@ impl App {
         view: &CullView,
         occlusion: Option<&dyn OcclusionTest>,
         t0: f64,
-        dt: f64,
         now: f64,
     ) -> Result<(), String> {
         let (w, h) = (view.viewport.width, view.viewport.height);
@@ -609,11 +658,15 @@ impl App {
             &mut |i| items.push(i),
         );
         let traversal_ms = now_ms() - t_traverse;
+        let review = &self.review;
         let plan = self
             .streamer
-            .frame(self.frame, &self.items, self.reader.skeleton());
+            .frame(self.frame, &self.items, self.reader.skeleton(), &|n| {
+                review.partial(n)
+            });
         self.fetch(&plan.fetch);
         let gpu_view = gpu_view(view);
+        self.pass.set_pieces(pieces(view));
         self.pass
             .begin(&self.ctx, &gpu_view, DrawStyle::Shaded, Look::PLAIN);
         self.pass.draw(&self.ctx, &self.pool, &plan.draw);
@@ -626,11 +679,20 @@ impl App {
             .sum();
         self.frame += 1;
         let first = self.frame == 1;
+        let selected = self.review.objects.selection().and_then(|sel| {
+            let t = self.review.objects.table().ok()?;
+            t.object(sel.object).map(|o| o.full_path())
+        });
+        let section = self.review.sections.hud_line();
         let since_start = now - self.started_ms;
+        let drawn_dt = (now - self.last_drawn_ms) / 1e3;
+        self.last_drawn_ms = now;
         set_stats(|s| {
             s.state = "running".into();
             s.frames = self.frame;
-            let fps = if dt > 0.0 { 1.0 / dt } else { 0.0 };
+            // Frames drawn, not animation frames: one that waits for
+            // OR's read-back presents nothing.
+            let fps = if drawn_dt > 0.0 { 1.0 / drawn_dt } else { 0.0 };
             s.fps = if s.fps == 0.0 {
                 fps
             } else {
@@ -656,6 +718,8 @@ impl App {
                 && (s.occlusion_used || !self.mode.occlusion);
             s.mode = self.mode.name().into();
             s.pixel_error = self.pixel_error;
+            s.selected = selected;
+            s.section = section;
             if first {
                 s.first_frame_ms = Some(since_start);
                 s.first_frame_fetched = s.fetched_bytes;
@@ -708,7 +772,7 @@ impl App {
                     s.occlusion_culled, s.occluders, s.occluder_triangles
                 ),
                 format!(
-                    "pixel error {}  (O: occlusion, L: HLOD, -/+: error, H: HUD)",
+                    "pixel error {}  (O: occlusion, L: HLOD, -/+: error, Tab: HUD)",
                     s.pixel_error
                 ),
             ]
@@ -718,8 +782,19 @@ impl App {
                     .iter()
                     .map(|e| format!("{} LODs failed; last {e}", s.failed_lods)),
             )
-            .collect()
+            .collect::<Vec<_>>()
         });
+        let review = &self.review;
+        let lines = lines
+            .into_iter()
+            .chain(review.objects.hud_lines())
+            .chain(review.sections.hud_line())
+            .chain(
+                review
+                    .message()
+                    .map(gigawalk_cull::review::objects::hud_text),
+            )
+            .collect();
         vec![OverlayText {
             x: 8.0,
             y: 8.0,
@@ -732,12 +807,13 @@ impl App {
 
     /// Leaves a shown pose for the fly controller, at that pose.
     fn leave_pose(&mut self) {
-        if let Some(p) = self.pose.take().and_then(|i| self.path.get(i)) {
+        if let Some(p) = self.shown.take() {
             self.fly.set_pose(p.position, p.orientation, p.fovy);
         }
     }
 
-    fn key(&mut self, code: &str, down: bool) {
+    /// A key went down or up; whether the page used it.
+    fn key(&mut self, code: &str, down: bool, app: &Rc<RefCell<App>>) -> bool {
         if let Some(m) = movement(code) {
             self.leave_pose();
             if down {
@@ -745,23 +821,25 @@ impl App {
             } else {
                 self.held.remove(&m);
             }
-            return;
+            return true;
         }
         if !down {
-            return;
+            return false;
         }
         match code {
             "KeyO" => self.mode.occlusion = !self.mode.occlusion,
             "KeyL" => self.mode.hlod = !self.mode.hlod,
-            "Minus" | "NumpadSubtract" | "PageDown" | "BracketLeft" => {
+            "Minus" | "NumpadSubtract" | "PageDown" => {
                 self.pixel_error = (self.pixel_error / 2.0).max(0.25)
             }
-            "Equal" | "NumpadAdd" | "PageUp" | "BracketRight" => {
+            "Equal" | "NumpadAdd" | "PageUp" => {
                 self.pixel_error = (self.pixel_error * 2.0).min(64.0)
             }
-            "KeyH" => self.hud = !self.hud,
-            _ => {}
+            "Tab" => self.hud = !self.hud,
+            "KeyG" => self.fly.toggle_walk(),
+            _ => return self.review_key(code, app),
         }
+        true
     }
 }
 
@@ -785,7 +863,7 @@ pub fn load_path(text: &str) -> Result<u32, JsValue> {
         .map_err(|e| JsValue::from_str(&format!("the camera path: {e}")))?;
     with_app(|app| {
         app.path = path.poses;
-        app.pose = None;
+        app.shown = None;
         Ok(app.path.len() as u32)
     })
 }
@@ -797,7 +875,7 @@ pub fn show_pose(i: u32) -> Result<(), JsValue> {
         if i as usize >= app.path.len() {
             return Err(format!("pose {i} of a path of {}", app.path.len()));
         }
-        app.pose = Some(i as usize);
+        app.shown = Some(app.path[i as usize]);
         Ok(())
     })
 }
@@ -827,14 +905,23 @@ pub fn set_pixel_error(pixel_error: f64) -> Result<(), JsValue> {
     })
 }
 
-/// The GPU passes' view of `view`'s camera.
+/// The GPU passes' view of `view`'s camera and section.
 fn gpu_view(view: &CullView) -> gigawalk_gpu::View {
     gigawalk_gpu::View {
         eye: view.camera.position,
         view_proj: view.camera.view_projection_rel(),
         forward: view.camera.forward().as_vec3(),
-        clip: ClipPlanes::NONE,
+        clip: view
+            .section()
+            .and_then(|s| ClipPlanes::new(&s.relative_to(view.camera.position)))
+            .unwrap_or(ClipPlanes::NONE),
     }
+}
+
+/// The LODs `view`'s visibility draws in pieces (`None`: all whole).
+fn pieces(view: &CullView) -> Option<Arc<gigawalk_scene::objects::LodPieces>> {
+    view.visibility()
+        .and_then(|v: &Arc<Visibility>| v.lod_pieces())
 }
 
 /// Shows or hides the HUD (tests compare images without it).
@@ -844,6 +931,92 @@ pub fn set_hud(on: bool) -> Result<(), JsValue> {
         app.hud = on;
         Ok(())
     })
+}
+
+/// What is under canvas pixel `(x, y)` (its centre) of the camera shown
+/// now, as `gigawalk pick --json` says it: `object` (null when nothing
+/// is there; else its index `id`, `name`, `file`, `path` and
+/// `metadata`), `point` and `distance`. Hidden objects and what the
+/// section cuts away are skipped. Selects nothing.
+#[wasm_bindgen]
+pub async fn pick(x: f64, y: f64) -> Result<String, JsValue> {
+    let app = APP
+        .with(|a| a.borrow().clone())
+        .ok_or_else(|| JsValue::from_str("the page has not started"))?;
+    review::ask_for_table(&app);
+    let hit = review::pick_at(&app, (x, y))
+        .await
+        .map_err(|e| JsValue::from_str(&e))?;
+    let a = app.borrow();
+    let object = hit
+        .and_then(|h| h.object)
+        .and_then(|o| {
+            let t = a.review.objects.table().ok()?;
+            t.object(o).map(|r| (o, r.clone()))
+        })
+        .map_or("null".to_string(), |(id, r)| {
+            format!(
+                "{{\"id\":{id},\"name\":{:?},\"file\":{:?},\"path\":{:?},\"metadata\":{}}}",
+                r.name,
+                r.file,
+                r.path,
+                r.metadata
+                    .as_deref()
+                    .map_or("null".into(), |m| format!("{m:?}"))
+            )
+        });
+    let (point, distance) = hit.map_or(("null".to_string(), "null".to_string()), |h| {
+        (
+            format!("[{:?},{:?},{:?}]", h.point.x, h.point.y, h.point.z),
+            format!("{:?}", h.distance),
+        )
+    });
+    Ok(format!(
+        "{{\"object\":{object},\"point\":{point},\"distance\":{distance}}}"
+    ))
+}
+
+/// A click at canvas pixel `(x, y)`, as with the mouse: selects the
+/// object there (or clears the selection).
+#[wasm_bindgen]
+pub async fn click(x: f64, y: f64) -> Result<(), JsValue> {
+    let app = APP
+        .with(|a| a.borrow().clone())
+        .ok_or_else(|| JsValue::from_str("the page has not started"))?;
+    review::click(app, (x, y)).await;
+    Ok(())
+}
+
+/// Finds objects by name or path (`*` and `?` wildcards), as `/` does:
+/// selects and frames the first match; the same text again, the next.
+#[wasm_bindgen]
+pub fn find(text: &str) -> Result<(), JsValue> {
+    with_app(|app| {
+        let found = app.review.objects.find(text);
+        app.after_find(found);
+        Ok(())
+    })
+}
+
+/// This view (camera, selection, hidden objects, section) as a link:
+/// the page's address with `#view=`.
+#[wasm_bindgen]
+pub fn view_link() -> Result<String, JsValue> {
+    with_app(|app| app.view_link())
+}
+
+/// This view as a saved view's JSON (docs/views-format.md).
+#[wasm_bindgen]
+pub fn view_json() -> Result<String, JsValue> {
+    with_app(|app| serde_json::to_string(&app.saved_view()).map_err(|e| e.to_string()))
+}
+
+/// Shows the view a link's `#view=` text holds (the page does this for
+/// its own address when it starts).
+#[wasm_bindgen]
+pub fn show_view(text: &str) -> Result<(), JsValue> {
+    let view = crate::link::decode(text).map_err(|e| JsValue::from_str(&e))?;
+    with_app(|app| app.restore_view(view))
 }
 
 /// Shows `message` as the page's error (and in the stats).
@@ -915,15 +1088,17 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         url: scene_url,
         pass: VisiblePass::new(&ctx, w, h),
         depth: DepthPass::new(&ctx, w, h),
-        awaited: None,
+        awaited: VecDeque::new(),
         hzb: Hzb::new(),
+        lowered: Vec::new(),
         pool,
         surface,
         canvas: canvas.clone(),
         streamer: Streamer::new(lods, budget, MAX_IN_FLIGHT),
         fly: FlyController::overview(&bounds, FOVY_DEGREES.to_radians()),
         held: HashSet::new(),
-        drag: None,
+        pointers: Vec::new(),
+        review: review::Review::new(),
         arrivals: Rc::new(RefCell::new(Vec::new())),
         traverser: Traverser::new(),
         items: Vec::new(),
@@ -932,9 +1107,10 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         hud: true,
         near: default_near(&bounds),
         path: Vec::new(),
-        pose: None,
+        shown: None,
         frame: 0,
         last_ms: now_ms(),
+        last_drawn_ms: now_ms(),
         started_ms,
         ctx,
         reader,
@@ -942,47 +1118,125 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     };
     let app = Rc::new(RefCell::new(app));
     APP.with(|a| *a.borrow_mut() = Some(app.clone()));
+    // A shared link's view: shown from the first frame; a bad one is
+    // said and the page starts at the overview.
+    let fragment = web_sys::window()
+        .and_then(|w| w.location().hash().ok())
+        .unwrap_or_default();
+    if let Some(view) = crate::link::from_fragment(&fragment) {
+        let mut a = app.borrow_mut();
+        if let Err(e) = view.and_then(|v| a.restore_view(v)) {
+            a.review.say(format!("{e}; showing the overview"));
+        }
+    }
     listen(&canvas, app.clone())?;
     run_frames(app);
     Ok(())
 }
 
-/// Keys on the window, mouse drag and wheel on the canvas.
+/// Touch: spreading two fingers this many CSS pixels apart flies one
+/// second forward at the current speed (pinching in flies back).
+const PINCH_PIXELS_PER_SECOND: f64 = 100.0;
+/// A press and release closer than this (CSS pixels) is a click, not a
+/// drag.
+const CLICK_SLOP: f64 = 4.0;
+
+/// Where a pointer event is on the canvas, in CSS pixels.
+fn css_point(e: &PointerEvent) -> (f64, f64) {
+    (e.offset_x() as f64, e.offset_y() as f64)
+}
+
+/// Keys on the window; pointers (mouse, pen, touch) and the wheel on the
+/// canvas: drag looks around, a click picks, two fingers pinch to fly.
 fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsValue> {
     let window = web_sys::window().ok_or("no window")?;
     for down in [true, false] {
         let a = app.clone();
         let f = Closure::<dyn FnMut(KeyboardEvent)>::new(move |e: KeyboardEvent| {
-            a.borrow_mut().key(&e.code(), down);
+            // The browser's own shortcuts (Ctrl+L, Cmd+R, Alt+arrows)
+            // stay the browser's; Ctrl alone is the viewer's "down".
+            let code = e.code();
+            let modified = e.meta_key() || e.alt_key() || (e.ctrl_key() && code != "ControlLeft");
+            if down && modified {
+                return;
+            }
+            let used = {
+                let mut app = a.borrow_mut();
+                app.key(&code, down, &a)
+            };
+            if used {
+                e.prevent_default();
+            }
         });
         let name = if down { "keydown" } else { "keyup" };
         window.add_event_listener_with_callback(name, f.as_ref().unchecked_ref())?;
         f.forget();
     }
     let a = app.clone();
-    let f = Closure::<dyn FnMut(MouseEvent)>::new(move |e: MouseEvent| {
-        a.borrow_mut().drag = Some((e.client_x(), e.client_y()));
-    });
-    canvas.add_event_listener_with_callback("mousedown", f.as_ref().unchecked_ref())?;
-    f.forget();
-    let a = app.clone();
-    let f = Closure::<dyn FnMut(MouseEvent)>::new(move |_: MouseEvent| {
-        a.borrow_mut().drag = None;
-    });
-    window.add_event_listener_with_callback("mouseup", f.as_ref().unchecked_ref())?;
-    f.forget();
-    let a = app.clone();
-    let f = Closure::<dyn FnMut(MouseEvent)>::new(move |e: MouseEvent| {
+    let c = canvas.clone();
+    let f = Closure::<dyn FnMut(PointerEvent)>::new(move |e: PointerEvent| {
+        let _ = c.set_pointer_capture(e.pointer_id());
+        let _ = c.focus();
+        let p = css_point(&e);
         let mut app = a.borrow_mut();
-        if let Some((x, y)) = app.drag {
-            let (nx, ny) = (e.client_x(), e.client_y());
-            app.leave_pose();
-            app.fly.look((nx - x) as f64, (ny - y) as f64);
-            app.drag = Some((nx, ny));
-        }
+        app.review.cursor = app.canvas_point(p);
+        let id = e.pointer_id();
+        app.pointers.retain(|q| q.0 != id);
+        app.pointers.push((id, p, p));
     });
-    window.add_event_listener_with_callback("mousemove", f.as_ref().unchecked_ref())?;
+    canvas.add_event_listener_with_callback("pointerdown", f.as_ref().unchecked_ref())?;
     f.forget();
+    let a = app.clone();
+    let f = Closure::<dyn FnMut(PointerEvent)>::new(move |e: PointerEvent| {
+        let p = css_point(&e);
+        let mut app = a.borrow_mut();
+        app.review.cursor = app.canvas_point(p);
+        let id = e.pointer_id();
+        let Some(i) = app.pointers.iter().position(|q| q.0 == id) else {
+            return;
+        };
+        let before = app.pointers[i].1;
+        match app.pointers.len() {
+            1 => {
+                app.leave_pose();
+                app.fly.look(p.0 - before.0, p.1 - before.1);
+            }
+            2 => {
+                let other = app.pointers[1 - i].1;
+                let gap = |q: (f64, f64)| (q.0 - other.0).hypot(q.1 - other.1);
+                let spread = gap(p) - gap(before);
+                app.leave_pose();
+                let forward = app.fly.orientation() * glam::DVec3::NEG_Z;
+                let step = app.fly.speed * spread / PINCH_PIXELS_PER_SECOND;
+                app.fly.position += forward * step;
+            }
+            _ => {}
+        }
+        app.pointers[i].1 = p;
+    });
+    canvas.add_event_listener_with_callback("pointermove", f.as_ref().unchecked_ref())?;
+    f.forget();
+    for name in ["pointerup", "pointercancel"] {
+        let a = app.clone();
+        let f = Closure::<dyn FnMut(PointerEvent)>::new(move |e: PointerEvent| {
+            let id = e.pointer_id();
+            let click = {
+                let mut app = a.borrow_mut();
+                let Some(i) = app.pointers.iter().position(|q| q.0 == id) else {
+                    return;
+                };
+                let (_, now, pressed) = app.pointers.remove(i);
+                let still = (now.0 - pressed.0).hypot(now.1 - pressed.1) < CLICK_SLOP;
+                (e.type_() == "pointerup" && still && app.pointers.is_empty() && e.button() == 0)
+                    .then(|| app.canvas_point(css_point(&e)))
+            };
+            if let Some(at) = click {
+                spawn_local(review::click(a.clone(), at));
+            }
+        });
+        canvas.add_event_listener_with_callback(name, f.as_ref().unchecked_ref())?;
+        f.forget();
+    }
     let a = app;
     let f = Closure::<dyn FnMut(WheelEvent)>::new(move |e: WheelEvent| {
         e.prevent_default();
@@ -1002,6 +1256,11 @@ fn run_frames(app: Rc<RefCell<App>>) {
         if let Err(e) = app.borrow_mut().frame(now) {
             fail(e);
             return;
+        }
+        // The object table (pick, find, hide, a link's objects) comes
+        // after the first frame: it never delays it.
+        if app.borrow().frame >= 1 {
+            review::ask_for_table(&app);
         }
         request_frame(next.borrow().as_ref().expect("set below"));
     }));

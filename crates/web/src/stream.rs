@@ -5,7 +5,10 @@
 //! to fetch. A LOD not resident yet is drawn as a stand-in, the nearest
 //! resident level of the same node (coarser first: it covers what the
 //! wanted level covers, within its larger error), or not at all until
-//! one arrives. Fetches go out in the list's order, nearest first, at
+//! one arrives. A node with hidden objects (a *partial* node,
+//! `gigawalk_cull::visibility`) has no stand-in: its other levels merge
+//! the hidden objects with the shown ones, so only the wanted level, the
+//! shown objects' pieces, is drawn. Fetches go out in the list's order, nearest first, at
 //! most [`Streamer::max_in_flight`] at once. An arrival makes room by
 //! evicting the least recently drawn LODs, never one the current frame
 //! draws; when the frame's own LODs fill the budget, the arrival is
@@ -84,8 +87,15 @@ impl Streamer {
         matches!(self.states.get(lod as usize), Some(State::Resident { .. }))
     }
 
-    /// Plans frame `frame` for traversal's `wanted` items (front to back).
-    pub fn frame(&mut self, frame: u64, wanted: &[DrawItem], skeleton: &Skeleton) -> FramePlan {
+    /// Plans frame `frame` for traversal's `wanted` items (front to back);
+    /// nodes `partial` names get no stand-in.
+    pub fn frame(
+        &mut self,
+        frame: u64,
+        wanted: &[DrawItem],
+        skeleton: &Skeleton,
+        partial: &dyn Fn(u32) -> bool,
+    ) -> FramePlan {
         self.frame = frame;
         let mut plan = FramePlan::default();
         for item in wanted {
@@ -97,10 +107,14 @@ impl Streamer {
                 plan.draw.push(want);
             } else {
                 // Coarser levels first, then finer ones.
-                let stand_in = (item.lod + 1..count)
-                    .chain((0..item.lod).rev())
-                    .map(|l| first + l)
-                    .find(|&l| self.touch(l));
+                let stand_in = if partial(item.node) {
+                    None
+                } else {
+                    (item.lod + 1..count)
+                        .chain((0..item.lod).rev())
+                        .map(|l| first + l)
+                        .find(|&l| self.touch(l))
+                };
                 match stand_in {
                     Some(l) => {
                         plan.draw.push(l);
@@ -292,42 +306,60 @@ mod tests {
     fn a_missing_lod_is_fetched_and_drawn_by_a_stand_in_meanwhile() {
         let sk = skeleton();
         let mut s = Streamer::new(7, 1000, 8);
-        let p = s.frame(0, &[item(1, 0), item(2, 1)], &sk);
+        let p = s.frame(0, &[item(1, 0), item(2, 1)], &sk, &|_| false);
         assert_eq!(p.fetch, vec![1, 5]);
         assert_eq!((p.draw.len(), p.missing), (0, 2));
         // Asked once: in flight.
-        let p = s.frame(1, &[item(1, 0), item(2, 1)], &sk);
+        let p = s.frame(1, &[item(1, 0), item(2, 1)], &sk, &|_| false);
         assert!(p.fetch.is_empty());
         assert_eq!(s.arrived(5, 100), Admit::Insert { evict: vec![] });
         // Node 2 now wants its finest level: its coarser one stands in.
-        let p = s.frame(2, &[item(2, 0)], &sk);
+        let p = s.frame(2, &[item(2, 0)], &sk, &|_| false);
         assert_eq!(
             (p.draw.clone(), p.stand_ins, p.fetch.clone()),
             (vec![5], 1, vec![4])
         );
         assert_eq!(s.arrived(4, 100), Admit::Insert { evict: vec![] });
-        let p = s.frame(3, &[item(2, 0)], &sk);
+        let p = s.frame(3, &[item(2, 0)], &sk, &|_| false);
         assert_eq!((p.draw, p.stand_ins, p.missing), (vec![4], 0, 0));
+    }
+
+    #[test]
+    fn a_partial_node_has_no_stand_in() {
+        let sk = skeleton();
+        let mut s = Streamer::new(7, 1000, 8);
+        s.frame(0, &[item(2, 1)], &sk, &|_| false);
+        assert_eq!(s.arrived(5, 100), Admit::Insert { evict: vec![] });
+        // Node 2's level 1 is resident, but with a hidden object in node
+        // 2 it merges that object: its finest level waits, undrawn.
+        let p = s.frame(1, &[item(2, 0)], &sk, &|n| n == 2);
+        assert_eq!(
+            (p.draw.clone(), p.stand_ins, p.missing, p.fetch.clone()),
+            (vec![], 0, 1, vec![4])
+        );
+        assert_eq!(s.arrived(4, 100), Admit::Insert { evict: vec![] });
+        let p = s.frame(2, &[item(2, 0)], &sk, &|n| n == 2);
+        assert_eq!((p.draw, p.missing), (vec![4], 0));
     }
 
     #[test]
     fn arrivals_evict_the_least_recently_drawn_never_this_frames() {
         let sk = skeleton();
         let mut s = Streamer::new(7, 250, 8);
-        s.frame(0, &[item(1, 0), item(1, 1), item(1, 2)], &sk);
+        s.frame(0, &[item(1, 0), item(1, 1), item(1, 2)], &sk, &|_| false);
         assert_eq!(s.arrived(1, 100), Admit::Insert { evict: vec![] });
         assert_eq!(s.arrived(2, 100), Admit::Insert { evict: vec![] });
-        s.frame(1, &[item(1, 1)], &sk);
-        s.frame(2, &[item(1, 0)], &sk);
+        s.frame(1, &[item(1, 1)], &sk, &|_| false);
+        s.frame(2, &[item(1, 0)], &sk, &|_| false);
         // LOD 2 was drawn at frame 1, LOD 1 at frame 2 (now): 2 goes.
         assert_eq!(s.arrived(3, 100), Admit::Insert { evict: vec![2] });
         assert_eq!(s.resident_bytes(), 200);
         // Both residents are drawn this frame: a new arrival is refused.
-        s.frame(3, &[item(1, 0), item(1, 2), item(2, 0)], &sk);
+        s.frame(3, &[item(1, 0), item(1, 2), item(2, 0)], &sk, &|_| false);
         assert_eq!(s.arrived(4, 100), Admit::Refused);
         assert!(s.resident_bytes() <= 250);
         // Refused means absent: it is asked for again.
-        let p = s.frame(4, &[item(2, 0)], &sk);
+        let p = s.frame(4, &[item(2, 0)], &sk, &|_| false);
         assert_eq!(p.fetch, vec![4]);
     }
 
@@ -377,10 +409,10 @@ mod tests {
     fn fetches_stay_within_the_in_flight_cap_and_failures_are_not_retried() {
         let sk = skeleton();
         let mut s = Streamer::new(7, 1000, 2);
-        let p = s.frame(0, &[item(1, 0), item(2, 0), item(0, 0)], &sk);
+        let p = s.frame(0, &[item(1, 0), item(2, 0), item(0, 0)], &sk, &|_| false);
         assert_eq!(p.fetch, vec![1, 4]);
         s.failed(1);
-        let p = s.frame(1, &[item(1, 0), item(2, 0), item(0, 0)], &sk);
+        let p = s.frame(1, &[item(1, 0), item(2, 0), item(0, 0)], &sk, &|_| false);
         assert_eq!(p.fetch, vec![0]);
         assert_eq!(s.in_flight(), 2);
     }

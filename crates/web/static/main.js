@@ -2,9 +2,10 @@
 // config.json (written by `gigawalk web`) or ?scene=URL names, and shows
 // any failure on the page. window.gigawalkStats() is what tests read.
 // ?budget=MB bounds the geometry kept on the device, ?pixel_error=P the
-// error levels are chosen by.
+// error levels are chosen by; #view=... (V in the page) is a saved view.
 import init, {
-  start, stats, load_path, show_pose, set_mode, set_pixel_error, set_hud,
+  start, stats, load_path, show_pose, set_mode, set_pixel_error, set_hud, pick, click, find,
+  view_link, view_json, show_view,
 } from './gigawalk_web.js';
 
 const status = document.getElementById('status');
@@ -12,10 +13,12 @@ const canvas = document.getElementById('view');
 let failure = null;
 
 // What tests and scripts drive: a camera path's poses, the mode, the
-// pixel error and the HUD (see crates/web/src/page.rs).
+// pixel error, the HUD, pick and find, and view links (see
+// crates/web/src/page.rs).
 window.gigawalk = {
   loadPath: load_path, showPose: show_pose, setMode: set_mode, setPixelError: set_pixel_error,
-  setHud: set_hud,
+  setHud: set_hud, pick: async (x, y) => JSON.parse(await pick(x, y)), click, find,
+  viewLink: view_link, view: () => JSON.parse(view_json()), showView: show_view,
 };
 
 window.gigawalkStats = () => {

@@ -1,9 +1,10 @@
 //! The browser page (crates/web) in headless Chromium with WebGPU on
 //! SwiftShader, driven by tests/web-page/run.mjs: a walk along a camera
 //! path served by `gigawalk serve`, drawing what native traversal draws,
-//! and with occlusion culling the unculled image pixel for pixel;
-//! a scene ten times the memory budget; and every failure the page must
-//! name instead of showing a blank canvas.
+//! and with occlusion culling the unculled image pixel for pixel; the
+//! review tools (pick as native pick answers, hide, a section, a view's
+//! link); a scene ten times the memory budget; and every failure the
+//! page must name instead of showing a blank canvas.
 //!
 //! Needs the page's bundle (crates/web/build.sh), Node with
 //! tests/web-page's packages (npm ci there) and Chromium. Without them
@@ -245,6 +246,110 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     );
 }
 
+/// `gigawalk pick --json` at pixel `(x, y)` of pose `frame`, 640x360.
+fn native_pick(gwk: &Path, path: &Path, frame: usize, (x, y): (u32, u32)) -> Value {
+    let out = gigawalk_ok(&[
+        "pick",
+        s(gwk),
+        "--path",
+        s(path),
+        "--frame",
+        &frame.to_string(),
+        "--pixel",
+        &format!("{x},{y}"),
+        "--json",
+    ]);
+    json(&out.stdout)
+}
+
+#[test]
+fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
+    if !can_run("the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk) = plant(dir.path(), "60k");
+    // A pixel of pose 0 that shows an object, from the centre outward.
+    let pose = 0;
+    let (pixel, native) = (0..9)
+        .flat_map(|r| [(0, 0), (1, 0), (0, 1), (-1, 0), (0, -1)].map(|(dx, dy)| (r, dx, dy)))
+        .map(|(r, dx, dy)| ((320 + 30 * r * dx) as u32, (180 + 18 * r * dy) as u32))
+        .map(|px| (px, native_pick(&gwk, &path, pose, px)))
+        .find(|(_, n)| n["object"].is_object())
+        .expect("pose 0 shows an object near the centre");
+    let served = serve(&gwk);
+    let report = drive(&[
+        "--url",
+        &served.url,
+        "--path",
+        s(&path),
+        "--review",
+        &pose.to_string(),
+        "--pick",
+        &format!("{},{}", pixel.0, pixel.1),
+        "--modes",
+        "occ",
+        "--poses",
+        "0",
+    ]);
+    let r = &report["review"];
+    assert!(r.is_object(), "{report}");
+    // Pick: the object and the point native pick finds, from the
+    // geometry the page fetched for it.
+    let (page, want) = (&r["pick"], &native["object"]);
+    assert_eq!(page["object"]["id"], want["id"], "{page} vs {native}");
+    assert_eq!(page["object"]["path"], want["path"], "{page}");
+    assert_eq!(page["object"]["name"], want["name"], "{page}");
+    let d = num(page, "distance");
+    assert!(
+        (d - num(&native, "distance")).abs() <= 1e-9 * d,
+        "{page} vs {native}"
+    );
+    // A click selects it; X cuts there (the plane through the point,
+    // facing the eye); H hides it: the image changes, and a pick there
+    // finds something else or nothing.
+    let full = format!(
+        "{}/{}",
+        want["file"].as_str().unwrap(),
+        want["path"].as_str().unwrap()
+    );
+    assert_eq!(r["selected"], full.as_str(), "{r}");
+    assert!(r["cut"]["section"].is_string(), "{}", r["cut"]);
+    let planes = r["view"]["section"]["planes"].as_array().unwrap();
+    assert_eq!(planes.len(), 1, "{r}");
+    let plane: Vec<f64> = planes[0]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let point: Vec<f64> = native["point"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let side = plane[0] * point[0] + plane[1] * point[1] + plane[2] * point[2] + plane[3];
+    assert!(side.abs() <= 1e-9 * (1.0 + d), "{plane:?} misses {point:?}");
+    assert_eq!(r["hidden"]["hidden"], 1, "{}", r["hidden"]);
+    assert_eq!(r["hidden"]["settled"], true, "{}", r["hidden"]);
+    assert!(num(&r["hidden_vs_cut"], "pixels") > 0.0, "{r}");
+    assert_ne!(r["pick_hidden"]["object"]["id"], want["id"], "{r}");
+    // With the section and the hidden object, occlusion culling loses no
+    // pixel against frustum culling alone.
+    assert_eq!(num(&r["occ_vs_vfc"], "pixels"), 0.0, "{r}");
+    assert!(num(&r["hidden_vfc"], "triangles") >= num(&r["hidden"], "triangles"));
+    // The view's link, opened in a second tab, shows the same image:
+    // camera, hidden object and section.
+    assert!(r["link"].as_str().unwrap().contains("#view="), "{r}");
+    assert_eq!(r["link_stats"]["hidden"], 1, "{}", r["link_stats"]);
+    assert_eq!(num(&r["link_vs_hidden"], "pixels"), 0.0, "{r}");
+    // U and Delete: the first image again.
+    assert_eq!(r["restored"]["hidden"], 0, "{}", r["restored"]);
+    assert_eq!(num(&r["restored_vs_before"], "pixels"), 0.0, "{r}");
+    assert_eq!(report["last"]["failed_lods"], 0, "{report}");
+}
+
 #[test]
 fn a_scene_ten_times_the_budget_walks_within_it() {
     if !can_run("a_scene_ten_times_the_budget_walks_within_it") {
@@ -343,6 +448,16 @@ fn the_page_says_what_is_wrong() {
         &drive(&["--serve", s(&site), "--query", "budget=lots"]),
         &["?budget=lots"],
     );
+
+    // A link whose view is cut short or made up: the page says so and
+    // shows the overview.
+    for fragment in ["view=eyJuYW1lIjoibGluayIsInBvc2l0aW9u", "view=%%%"] {
+        let report = drive(&["--serve", s(&site), "--fragment", fragment]);
+        assert_eq!(report["first"]["state"], "running", "{report}");
+        let m = report["first"]["message"].as_str().unwrap_or_default();
+        assert!(m.contains("the link's view"), "{m:?}");
+        assert!(m.contains("showing the overview"), "{m:?}");
+    }
 
     // Corrupt geometry: the page keeps walking, and says which LODs
     // failed their checksums instead of drawing them.

@@ -49,26 +49,17 @@ impl State {
         let d = &level.image;
         let t = Instant::now();
         let _s = tracing::info_span!("HZB build", frame).entered();
-        let depth = if self.or_depth_error > 0.0 {
-            let e = self.or_depth_error;
-            self.lowered.clear();
-            self.lowered
-                .extend(d.depth.iter().map(|&z| (z - e).max(0.0)));
-            &self.lowered
-        } else {
-            &d.depth
-        };
-        // Lowering every texel by the error lowers the farthest of any
-        // block by it: the same whether OR's device reduced first or not.
-        match level.level {
-            0 => self
-                .hzb
-                .rebuild(d.width, d.height, depth, opts.hzb_reduction),
-            k => self
-                .hzb
-                .rebuild_from_level(level.width, level.height, k, depth),
-        }
-        .map_err(|source| RuntimeError::Hzb { frame, source })?;
+        self.hzb
+            .rebuild_from_device(
+                level.width,
+                level.height,
+                level.level,
+                &d.depth,
+                self.or_depth_error,
+                opts.hzb_reduction,
+                &mut self.lowered,
+            )
+            .map_err(|source| RuntimeError::Hzb { frame, source })?;
         Ok((true, ms_since(t)))
     }
 

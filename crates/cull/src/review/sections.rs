@@ -1,4 +1,4 @@
-//! The viewer's section planes and section box, as design-review tools
+//! A reviewer's section planes and section box, as design-review tools
 //! cut a model open (xeokit's section planes, Navisworks' sectioning):
 //! a plane placed through the point under the cursor facing the camera,
 //! moved along its normal, flipped; a box around the selection or around
@@ -12,7 +12,7 @@
 
 use std::sync::Arc;
 
-use gigawalk_cull::{Camera, Section, SectionSpec};
+use crate::{Camera, Section, SectionSpec};
 use gigawalk_scene::Aabb;
 use glam::DVec3;
 
@@ -156,7 +156,7 @@ impl Sections {
             "section plane {} of {} through {} (] [ or Shift+wheel move it, \\ flips it)",
             self.planes.len(),
             Section::MAX_PLANES,
-            crate::objects::point_text(point)
+            super::objects::point_text(point)
         ))
     }
 
@@ -207,8 +207,8 @@ impl Sections {
         self.rebuild();
         Ok(format!(
             "section box {} .. {}",
-            crate::objects::point_text(min),
-            crate::objects::point_text(max)
+            super::objects::point_text(min),
+            super::objects::point_text(max)
         ))
     }
 

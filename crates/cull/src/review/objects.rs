@@ -1,19 +1,19 @@
-//! The viewer's side of object identity: the selection, the search, the
+//! A reviewer's side of object identity: the selection, the search, the
 //! hidden set and saved views, over the scene's object table
 //! (`gigawalk_scene::objects`), and the framing of an object's box.
 //!
-//! Pure state and text: the frame loop casts the pick ray (it reads the
-//! scene), flies the camera and shows the messages these return, so all
-//! of this is unit-tested without a window.
+//! Pure state and text: the frame loop (the native viewer's or the
+//! page's) casts the pick ray (it reads the scene), flies the camera and
+//! shows the messages these return, so all of this is unit-tested
+//! without a window.
 
-use std::path::Path;
 use std::sync::Arc;
 
-use gigawalk_cull::select::HiddenSet;
-use gigawalk_cull::Visibility;
+use crate::select::HiddenSet;
+use crate::Visibility;
 use gigawalk_scene::objects::{ObjectTable, Pattern};
 use gigawalk_scene::path::Pose;
-use gigawalk_scene::views::{self, ObjectRef, SavedView, Views, ViewsError};
+use gigawalk_scene::views::{self, ObjectRef, SavedView, Views};
 use gigawalk_scene::{Aabb, Skeleton};
 use glam::DVec3;
 
@@ -358,7 +358,7 @@ impl Objects {
                 lines.push(format!(
                     "selected: {} ({} tris; F frames it)",
                     o.name,
-                    crate::hud::group(o.triangles)
+                    super::group(o.triangles)
                 ));
                 lines.push(format!("  file {}  path {}", o.file, o.path));
                 if let Some(m) = &o.metadata {
@@ -469,10 +469,12 @@ pub fn frame_box(
 /// Saves a view made by `make` (given its name, `view N`) into `file`,
 /// atomically: an existing file that does not read is an error and is
 /// left as it is. The view's name and every name in the file, in order.
+/// (Not in the page: it has no files; its views are links.)
+#[cfg(not(target_arch = "wasm32"))]
 pub fn save_view(
-    file: &Path,
+    file: &std::path::Path,
     make: impl FnOnce(&str) -> SavedView,
-) -> Result<(String, Vec<String>), ViewsError> {
+) -> Result<(String, Vec<String>), views::ViewsError> {
     let mut views = Views::read(file)?;
     let name = views.next_name();
     views.put(make(&name));

@@ -7,7 +7,7 @@
 //                [--modes vfc,hlod] [--shots DIR] [--timeout S]
 //                [--settle S] [--linger S] [--no-hud] [--compare M:REF,...]
 //                [--serve DIR [--no-range]] [--no-webgpu]
-//                [--review POSE --pick X,Y]
+//                [--review POSE --pick X,Y] [--frames DIR]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
 // every request answered whole, as a server without range support
@@ -18,6 +18,9 @@
 // compares mode M's image at each pose with mode REF's (run before it),
 // pixel by pixel ("diff": pixels that differ, and the largest difference
 // of a channel). --fragment F opens the page at URL#F (a view link).
+// --frames DIR writes each pose's frame as RVG drew it
+// (window.gigawalk.readFrame): MODE-POSE.rgba (8-bit RGBA rows) and
+// MODE-POSE.depth (f32, little endian), its size in the report's rows.
 // --review POSE walks the review tools at that pose of --path (after
 // the modes), as a user does, in occ with the HUD off: pick at pixel
 // X,Y; click it (select); X with the pointer there (a section plane);
@@ -286,11 +289,27 @@ try {
         const b = await stats();
         const fps = ((b.frames - a.frames) * 1000) / (Date.now() - ta);
         const png = await shot(`${mode}-${pose}`);
+        let frame;
+        if (opt('frames')) {
+          fs.mkdirSync(opt('frames'), { recursive: true });
+          const f = await page.evaluate(async () => {
+            const r = await window.gigawalk.readFrame();
+            const b64 = (u8) => {
+              let s = '';
+              for (let i = 0; i < u8.length; i += 0x8000) s += String.fromCharCode(...u8.subarray(i, i + 0x8000));
+              return btoa(s);
+            };
+            return { width: r.width, height: r.height, colour: b64(r.colour), depth: b64(new Uint8Array(r.depth.buffer)) };
+          });
+          fs.writeFileSync(path.join(opt('frames'), `${mode}-${pose}.rgba`), Buffer.from(f.colour, 'base64'));
+          fs.writeFileSync(path.join(opt('frames'), `${mode}-${pose}.depth`), Buffer.from(f.depth, 'base64'));
+          frame = { width: f.width, height: f.height };
+        }
         images.set(`${mode}-${pose}`, png);
         // Animation frames that waited for OR's read-back in those two
         // seconds, per frame drawn.
         const waits = (b.hzb_waits - a.hzb_waits) / Math.max(1, b.frames - a.frames);
-        const row = { mode, pose, settle_ms, fps, waits_per_frame: waits, coverage: await coverage(png), ...b };
+        const row = { mode, pose, settle_ms, fps, waits_per_frame: waits, coverage: await coverage(png), frame, ...b };
         const ref = images.get(`${references.get(mode)}-${pose}`);
         if (ref) row.diff = { against: references.get(mode), ...(await diff(ref, png)) };
         report.poses.push(row);

@@ -39,8 +39,8 @@ pub use overlay::{
 };
 pub use passes::{
     Antialias, ClipPlanes, DepthImage, DepthLevel, DepthPass, DrawStyle, FrameImage, Look,
-    LookChoice, PassFigures, PendingLevel, PyramidPath, View, VisiblePass, COLOUR_FORMAT,
-    DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL, LOOK_WGSL,
+    LookChoice, PassFigures, PendingFrame, PendingLevel, PyramidPath, View, VisiblePass,
+    COLOUR_FORMAT, DEPTH_COPY_WGSL, DEPTH_FORMAT, HZB_DOWNSAMPLE_WGSL, LOOK_WGSL,
 };
 #[cfg(target_arch = "wasm32")]
 pub use present::open_device_for_canvas;

@@ -352,6 +352,39 @@ fn a_level_read_without_waiting_is_the_level_read_waiting() {
     }
 }
 
+/// A frame read without waiting (`submit_read_back`, as the browser's
+/// page reads its frames for tests) is the frame `read_back` gives, colour
+/// and depth bit for bit; until the device has copied it
+/// `try_take_frame` gives it back instead of blocking.
+#[test]
+fn a_frame_read_without_waiting_is_the_frame_read_waiting() {
+    let Some(ctx) = devices_or_skip(1, "gpu frame async read").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    let shift = DVec3::new(0.3, 0.2, 0.0);
+    let geometry = upload_scene(&ctx, shift, VertexLayout::Wide);
+    let (w, h) = (97, 61);
+    let v = view(shift + DVec3::new(1.3, -0.7, 0.0), w, h);
+    let mut rvg = VisiblePass::new(&ctx, w, h);
+    rvg.begin(&ctx, &v, DrawStyle::Shaded, Look::PLAIN);
+    rvg.draw(&ctx, &geometry, &[0, 1]);
+    rvg.end(&ctx).unwrap();
+    let want = rvg.read_back(&ctx).unwrap();
+    assert!(want.depth.depth.iter().any(|&z| z > 0.0), "something drawn");
+    let mut p = rvg.submit_read_back(&ctx);
+    let t = std::time::Instant::now();
+    let got = loop {
+        match rvg.try_take_frame(&ctx, p) {
+            Ok(frame) => break frame.unwrap(),
+            Err(back) => p = back,
+        }
+        assert!(t.elapsed().as_secs() < 60, "the frame never arrived");
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    };
+    assert_eq!(got.colour, want.colour);
+    assert_eq!(got.depth, want.depth);
+}
+
 /// LODs 0 and 1 of `geometry` drawn at 64x48 by RVG (colour, depth) and
 /// OR (depth).
 fn draw_both(

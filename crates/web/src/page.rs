@@ -12,14 +12,18 @@
 //!
 //! GigaWalk's three stages (Section 5) run as an interleaved schedule on
 //! the page's one thread and one device. With occlusion on, a frame's
-//! camera is fixed when OR's occluders (the last frame's visible set, its
+//! camera is fixed when OR's occluders (the last drawn visible set, its
 //! LODs chosen again for this camera, resident ones only) are submitted
 //! with their pyramid level's read-back; a later animation frame, once the
 //! read-back has arrived, builds the HZB from it, traverses and draws that
-//! camera. So occlusion costs one animation frame of latency and never a
-//! wait: an animation frame whose read-back has not arrived presents
-//! nothing new (`hzb_waits` counts them). The HZB is always the depth of
-//! the camera it culls for, so culling stays conservative.
+//! camera. Two submissions are in flight ([`OR_IN_FLIGHT`]). So occlusion
+//! costs latency and never a wait: an animation frame whose read-back has
+//! not arrived presents nothing new (`hzb_waits` counts them). The HZB is
+//! always the depth of the camera it culls for, so culling stays
+//! conservative.
+//!
+//! The review tools (pick, find, hide, sections, view links) are
+//! `review`'s.
 
 use std::cell::RefCell;
 use std::collections::{HashSet, VecDeque};
@@ -105,6 +109,8 @@ struct Awaited {
     /// Occluder LODs drawn, and their triangles.
     occluders: usize,
     occluder_triangles: u64,
+    /// When it was submitted (ms).
+    submitted_ms: f64,
 }
 
 /// What the page reports (as JSON, through [`stats`]).
@@ -151,6 +157,10 @@ struct Stats {
     /// had not arrived, in all; and the level read back.
     hzb_waits: u64,
     hzb_level: u32,
+    /// Animation frames run, and the last read-back's time from OR's
+    /// submission to the HZB built from it (ms).
+    animation_frames: u64,
+    hzb_latency_ms: f64,
     /// The object table's size once read (`None` before, or without
     /// one), objects hidden, the selection's `file/path`, the section in
     /// effect and the last message the page showed.
@@ -172,7 +182,7 @@ impl Stats {
              \"first_frame_ms\":{},\"first_frame_fetched\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
              \"settled\":{},\"cpu_ms\":{:.2},\"traversal_ms\":{:.2},\"mode\":{},\
              \"pixel_error\":{},\"occlusion_culled\":{},\"occlusion_used\":{},\
-             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{},\
+             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{},\"animation_frames\":{},\"hzb_latency_ms\":{:.1},\
              \"objects\":{},\"hidden\":{},\"selected\":{},\"section\":{},\"message\":{}}}",
             s(&self.state),
             self.error.as_deref().map_or("null".into(), s),
@@ -204,6 +214,8 @@ impl Stats {
             self.occluder_triangles,
             self.hzb_waits,
             self.hzb_level,
+            self.animation_frames,
+            self.hzb_latency_ms,
             self.objects.map_or("null".into(), |n| n.to_string()),
             self.hidden,
             self.selected.as_deref().map_or("null".into(), s),
@@ -517,6 +529,7 @@ impl App {
 
     fn frame(&mut self, now: f64) -> Result<(), String> {
         let t0 = now_ms();
+        set_stats(|s| s.animation_frames += 1);
         self.take_arrivals();
         let dt = ((now - self.last_ms) / 1e3).clamp(0.0, 0.25);
         self.last_ms = now;
@@ -561,10 +574,12 @@ impl App {
                             &mut self.lowered,
                         )
                         .map_err(|e| format!("the HZB: {e}"))?;
+                    let latency = now_ms() - a.submitted_ms;
                     set_stats(|s| {
                         s.occluders = a.occluders;
                         s.occluder_triangles = a.occluder_triangles;
                         s.hzb_level = level.level;
+                        s.hzb_latency_ms = latency;
                     });
                     let hzb = std::mem::take(&mut self.hzb);
                     let drawn = self.draw(&a.view, Some(&HzbOcclusion::new(&hzb)), t0, now);
@@ -629,6 +644,7 @@ impl App {
             auto_hzb_level(w, h),
         );
         self.awaited.push_back(Awaited {
+            submitted_ms: now_ms(),
             view,
             level,
             occluders: lods.len(),
@@ -974,6 +990,56 @@ pub async fn pick(x: f64, y: f64) -> Result<String, JsValue> {
     Ok(format!(
         "{{\"object\":{object},\"point\":{point},\"distance\":{distance}}}"
     ))
+}
+
+/// The last frame drawn, as RVG made it (before the HUD): `{width,
+/// height, colour, depth}`, colour as 8-bit sRGB RGBA rows from the top
+/// and depth as reversed-Z floats (1 at the near plane, 0 where nothing
+/// was drawn), what replay's accuracy measures compare. Read without
+/// blocking the page.
+#[wasm_bindgen]
+pub async fn read_frame() -> Result<js_sys::Object, JsValue> {
+    let app = APP
+        .with(|a| a.borrow().clone())
+        .ok_or_else(|| JsValue::from_str("the page has not started"))?;
+    let mut pending = {
+        let a = &mut *app.borrow_mut();
+        a.pass.submit_read_back(&a.ctx)
+    };
+    let frame = loop {
+        next_task().await;
+        let taken = {
+            let a = &mut *app.borrow_mut();
+            a.pass.try_take_frame(&a.ctx, pending)
+        };
+        match taken {
+            Ok(frame) => break frame.map_err(|e| JsValue::from_str(&e.to_string()))?,
+            Err(p) => pending = p,
+        }
+    };
+    let out = js_sys::Object::new();
+    let set = |k: &str, v: &JsValue| js_sys::Reflect::set(&out, &k.into(), v);
+    set("width", &frame.depth.width.into())?;
+    set("height", &frame.depth.height.into())?;
+    set(
+        "colour",
+        &js_sys::Uint8Array::from(&frame.colour[..]).into(),
+    )?;
+    set(
+        "depth",
+        &js_sys::Float32Array::from(&frame.depth.depth[..]).into(),
+    )?;
+    Ok(out)
+}
+
+/// Resolves after the page's other tasks have had a turn (a few ms).
+async fn next_task() {
+    let p = js_sys::Promise::new(&mut |resolve, _| {
+        if let Some(w) = web_sys::window() {
+            let _ = w.set_timeout_with_callback_and_timeout_and_arguments_0(&resolve, 4);
+        }
+    });
+    let _ = JsFuture::from(p).await;
 }
 
 /// A click at canvas pixel `(x, y)`, as with the mouse: selects the

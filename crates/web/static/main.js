@@ -5,7 +5,7 @@
 // error levels are chosen by; #view=... (V in the page) is a saved view.
 import init, {
   start, stats, load_path, show_pose, set_mode, set_pixel_error, set_hud, pick, click, find,
-  view_link, view_json, show_view,
+  view_link, view_json, show_view, read_frame,
 } from './gigawalk_web.js';
 
 const status = document.getElementById('status');
@@ -19,6 +19,7 @@ window.gigawalk = {
   loadPath: load_path, showPose: show_pose, setMode: set_mode, setPixelError: set_pixel_error,
   setHud: set_hud, pick: async (x, y) => JSON.parse(await pick(x, y)), click, find,
   viewLink: view_link, view: () => JSON.parse(view_json()), showView: show_view,
+  readFrame: read_frame,
 };
 
 window.gigawalkStats = () => {

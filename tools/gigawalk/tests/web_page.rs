@@ -169,7 +169,10 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     let (path, gwk) = plant(dir.path(), "60k");
     let served = serve(&gwk);
     let poses = "0,5,11";
+    let frames = dir.path().join("frames");
     let report = drive(&[
+        "--frames",
+        s(&frames),
         "--url",
         &served.url,
         "--path",
@@ -237,6 +240,27 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     }
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
     assert!(num(&report["last"], "fetched_bytes") <= file_bytes);
+    // The frames as RVG drew them, by replay's accuracy measures: occ's
+    // are vfc's and och's hlod's, colour and depth bit for bit; och
+    // against vfc (full detail) stays within the 1-pixel bound as native
+    // replay's tests require of och.
+    let camera_path = gigawalk_scene::path::CameraPath::read(&path).unwrap();
+    for pose in [0, 5, 11] {
+        let frame = |mode: &str| page_frame(&frames, mode, pose);
+        let (vfc, hlod, occ, och) = (frame("vfc"), frame("hlod"), frame("occ"), frame("och"));
+        assert!(occ == vfc, "pose {pose}: occ's frame is not vfc's");
+        assert!(och == hlod, "pose {pose}: och's frame is not hlod's");
+        let fovy = camera_path.poses[pose].fovy;
+        let ppr = 360.0 / (2.0 * (fovy / 2.0).tan());
+        let a = gigawalk_replay::Accuracy::compare(&vfc, &och, 1.0, ppr).unwrap();
+        let exceeding = a.bound_exceeding_pixels as f64 / a.pixels as f64;
+        println!("page och against vfc, pose {pose}: {a:?}");
+        assert!(exceeding <= 5e-4, "pose {pose}: {a:?}");
+        assert!(
+            vfc.depth.depth.iter().any(|&z| z > 0.0),
+            "pose {pose}: nothing drawn"
+        );
+    }
     // Occlusion culled something on this plant.
     assert!(
         pose_list
@@ -244,6 +268,25 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
             .any(|p| p["mode"] == "occ" && num(p, "occlusion_culled") > 0.0),
         "{report}"
     );
+}
+
+/// The frame run.mjs's `--frames` wrote for `mode` at `pose`.
+fn page_frame(dir: &Path, mode: &str, pose: usize) -> gigawalk_gpu::FrameImage {
+    let colour = std::fs::read(dir.join(format!("{mode}-{pose}.rgba"))).unwrap();
+    let depth: Vec<f32> = std::fs::read(dir.join(format!("{mode}-{pose}.depth")))
+        .unwrap()
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    assert_eq!((colour.len(), depth.len()), (640 * 360 * 4, 640 * 360));
+    gigawalk_gpu::FrameImage {
+        colour,
+        depth: gigawalk_gpu::DepthImage {
+            width: 640,
+            height: 360,
+            depth,
+        },
+    }
 }
 
 /// `gigawalk pick --json` at pixel `(x, y)` of pose `frame`, 640x360.

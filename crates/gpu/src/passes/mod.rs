@@ -31,7 +31,7 @@ pub(crate) use pipelines::{
 };
 pub use readback::PassFigures;
 pub(crate) use readback::{device_error, map_and_wait, ms_since, Pending, ReadBack, Rows};
-pub use visible::VisiblePass;
+pub use visible::{PendingFrame, VisiblePass};
 
 /// What a pass needs to know about the camera. `view_proj` has no
 /// translation: positions are made camera-relative per draw, in f64.

@@ -426,6 +426,109 @@ impl VisiblePass {
             .depth(ctx, &self.depth, w, h, &mut self.figures)?;
         Ok(FrameImage { colour, depth })
     }
+
+    /// Asks for the last finished frame's colour and depth without
+    /// waiting (a page's thread may not block): [`VisiblePass::try_take_frame`]
+    /// takes them once the device has copied them, the same image
+    /// [`VisiblePass::read_back`] gives. Until then no other read-back of
+    /// this pass may start.
+    pub fn submit_read_back(&mut self, ctx: &GpuContext) -> PendingFrame {
+        let (w, h) = (self.width, self.height);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let rows = self.colour_readback.record_texture(
+            ctx,
+            &mut enc,
+            &self.colour,
+            w,
+            h,
+            4,
+            wgpu::TextureAspect::All,
+        );
+        let colour = self
+            .colour_readback
+            .submit_async(ctx, enc, rows, &mut self.figures);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let rows = self
+            .depth_readback
+            .record_depth(ctx, &mut enc, &self.depth, w, h);
+        let depth = self
+            .depth_readback
+            .submit_async(ctx, enc, rows, &mut self.figures);
+        PendingFrame {
+            colour: Part::Waiting(colour),
+            depth: Part::Waiting(depth),
+            width: w,
+            height: h,
+        }
+    }
+
+    /// The frame `pending` read, once the device has copied it; `Err`
+    /// gives `pending` back while it has not. Never blocks.
+    pub fn try_take_frame(
+        &mut self,
+        ctx: &GpuContext,
+        pending: PendingFrame,
+    ) -> Result<Result<FrameImage, GpuError>, PendingFrame> {
+        let PendingFrame {
+            colour,
+            depth,
+            width,
+            height,
+        } = pending;
+        let colour = match colour.poll(&mut self.colour_readback, ctx, &mut self.figures) {
+            Ok(c) => c,
+            Err(e) => return Ok(Err(e)),
+        };
+        let depth = match depth.poll(&mut self.depth_readback, ctx, &mut self.figures) {
+            Ok(d) => d,
+            Err(e) => return Ok(Err(e)),
+        };
+        match (colour, depth) {
+            (Part::Done(colour), Part::Done(bits)) => Ok(Ok(FrameImage {
+                colour,
+                depth: crate::passes::DepthImage::from_bits(width, height, bits),
+            })),
+            (colour, depth) => Err(PendingFrame {
+                colour,
+                depth,
+                width,
+                height,
+            }),
+        }
+    }
+}
+
+/// A frame's colour and depth on their way back
+/// ([`VisiblePass::submit_read_back`]).
+pub struct PendingFrame {
+    colour: Part<u8>,
+    depth: Part<u32>,
+    width: u32,
+    height: u32,
+}
+
+/// One of a pending frame's read-backs: waiting, or its texels.
+enum Part<T> {
+    Waiting(crate::passes::Pending),
+    Done(Vec<T>),
+}
+
+impl<T: bytemuck::Pod> Part<T> {
+    /// Takes the texels if they have arrived.
+    fn poll(
+        self,
+        readback: &mut ReadBack,
+        ctx: &GpuContext,
+        figures: &mut PassFigures,
+    ) -> Result<Part<T>, GpuError> {
+        match self {
+            Part::Done(v) => Ok(Part::Done(v)),
+            Part::Waiting(p) => match readback.try_finish::<T>(ctx, p, figures) {
+                Err(p) => Ok(Part::Waiting(p)),
+                Ok(r) => r.map(Part::Done),
+            },
+        }
+    }
 }
 
 struct NoGeometry;

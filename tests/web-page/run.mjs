@@ -6,7 +6,7 @@
 //   node run.mjs --url URL [--query Q] [--fragment F] [--path FILE --poses 0,10,20]
 //                [--modes vfc,hlod] [--shots DIR] [--timeout S]
 //                [--settle S] [--linger S] [--no-hud] [--compare M:REF,...]
-//                [--serve DIR [--no-range]] [--no-webgpu]
+//                [--serve DIR [--no-range]] [--no-webgpu [--no-webgl]]
 //                [--review POSE --pick X,Y] [--frames DIR]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
@@ -14,7 +14,8 @@
 // does) and opens it instead of --url. --settle bounds the wait for a
 // pose to draw all it wants (a budget too small never lets it);
 // --linger waits before the last stats. --no-webgpu starts Chromium
-// without WebGPU. --no-hud hides the HUD; --compare occ:vfc,och:hlod
+// without WebGPU (the page falls back to WebGL2), --no-webgl without
+// WebGL too. --no-hud hides the HUD; --compare occ:vfc,och:hlod
 // compares mode M's image at each pose with mode REF's (run before it),
 // pixel by pixel ("diff": pixels that differ, and the largest difference
 // of a channel). --fragment F opens the page at URL#F (a view link).
@@ -87,7 +88,7 @@ try {
   }
   if (!url) throw new Error('--url or --serve is needed');
   const webgpu = flag('no-webgpu')
-    ? ['--disable-webgpu']
+    ? ['--disable-webgpu', ...(flag('no-webgl') ? ['--disable-3d-apis', '--disable-webgl'] : [])]
     : ['--enable-unsafe-webgpu', '--enable-features=Vulkan', '--use-vulkan=swiftshader', '--use-angle=vulkan'];
   browser = await puppeteer.launch({
     executablePath: process.env.CHROMIUM || '/usr/bin/chromium',

@@ -3,16 +3,18 @@
 //! passes is skipped with the reason, instead of failing with a validation
 //! error minutes into a run.
 //!
-//! Required (every pass): the downlevel flags in [`REQUIRED_DOWNLEVEL`],
-//! the limits of [`wgpu::Limits::downlevel_defaults`] (what [`crate::open_devices`]
+//! Required (every pass): the downlevel flags in [`REQUIRED_DOWNLEVEL`]
+//! (none now), the limits of [`base_limits`] (what [`crate::open_devices`]
 //! requests), and the texture formats in [`REQUIRED_FORMATS`].
 //! Optional, each with what happens without it ([`Optional`]): depth
 //! texture copies (without them depth is read back through a small pass
 //! that draws it into a colour target, `DepthCopy` in passes/readback.rs), line
 //! polygon mode (wireframe), index values beyond 2^24 (larger LODs), clip
 //! distances (sections clip in the rasterizer rather than discarding
-//! fragments), compute shaders (OR's HZB pyramid) and indirect draws with
-//! a first instance (a run of draws recorded as one multi-draw). [`Capabilities::of`]
+//! fragments), compute shaders (OR's HZB pyramid), indirect draws with
+//! a first instance (a run of draws recorded as one multi-draw), draws
+//! with a base vertex and one buffer bound as both vertex and index
+//! buffer (a browser's WebGL2 has neither). [`Capabilities::of`]
 //! decides them all once per adapter; a device is opened with what it
 //! decided, and the passes ask the device's [`Capabilities`], nothing else.
 //! Whether occlusion queries count samples (only `oq`'s adaptive culling
@@ -20,17 +22,9 @@
 
 use wgpu::{DownlevelFlags, Features, TextureFormat, TextureUsages};
 
-/// Downlevel flags every pass needs, each with why.
-pub const REQUIRED_DOWNLEVEL: [(DownlevelFlags, &str); 2] = [
-    (
-        DownlevelFlags::BASE_VERTEX,
-        "draws with a base vertex (many LODs share one buffer)",
-    ),
-    (
-        DownlevelFlags::UNRESTRICTED_INDEX_BUFFER,
-        "one buffer bound as both vertex and index buffer (the streaming pool)",
-    ),
-];
+/// Downlevel flags every pass needs, each with why: none (base vertex
+/// and shared buffers are [`Optional`]).
+pub const REQUIRED_DOWNLEVEL: [(DownlevelFlags, &str); 0] = [];
 
 /// Texture formats every pass needs, with the usages and why.
 pub const REQUIRED_FORMATS: [(TextureFormat, TextureUsages, &str); 3] = [
@@ -76,6 +70,15 @@ pub enum Optional {
     /// recorded as a call of its own instead of runs of draws as one
     /// multi-draw. The image is the same.
     MultiDraw,
+    /// Draws with a base vertex (`BASE_VERTEX`; WebGL2 lacks it): each
+    /// draw binds the vertex buffer at its LOD's first vertex. The image
+    /// is the same.
+    BaseVertex,
+    /// One buffer bound as both vertex and index buffer
+    /// (`UNRESTRICTED_INDEX_BUFFER`; WebGL2 forbids it): the streaming
+    /// pool keeps vertices and indices in buffers of their own, half the
+    /// pool each.
+    SharedBuffers,
 }
 
 impl Optional {
@@ -97,6 +100,12 @@ impl Optional {
             }
             Optional::MultiDraw => {
                 "no indirect first instance: each LOD is a draw call of its own, not one multi-draw a run"
+            }
+            Optional::BaseVertex => {
+                "no base vertex: each draw binds its LOD's vertices at their offset"
+            }
+            Optional::SharedBuffers => {
+                "no buffer both vertex and index buffer: the streaming pool splits vertices and indices"
             }
         }
     }
@@ -120,6 +129,11 @@ pub struct Capabilities {
     /// Runs of draws go as one `multi_draw_indexed_indirect`, each draw's
     /// instance data found by its first instance.
     pub multi_draw: bool,
+    /// Draws take a base vertex (else the vertex buffer is bound at the
+    /// LOD's first vertex for each draw).
+    pub base_vertex: bool,
+    /// One buffer may be bound as vertex and index buffer at once.
+    pub shared_buffers: bool,
 }
 
 impl Capabilities {
@@ -135,6 +149,8 @@ impl Capabilities {
                 && adapter.get_info().backend != wgpu::Backend::Gl,
             multi_draw: flags.contains(DownlevelFlags::INDIRECT_EXECUTION)
                 && features.contains(Features::INDIRECT_FIRST_INSTANCE),
+            base_vertex: flags.contains(DownlevelFlags::BASE_VERTEX),
+            shared_buffers: flags.contains(DownlevelFlags::UNRESTRICTED_INDEX_BUFFER),
         }
     }
 
@@ -162,6 +178,8 @@ impl Capabilities {
             (self.clip_distances, Optional::ClipDistances),
             (self.compute_pyramid, Optional::ComputePyramid),
             (self.multi_draw, Optional::MultiDraw),
+            (self.base_vertex, Optional::BaseVertex),
+            (self.shared_buffers, Optional::SharedBuffers),
         ]
         .into_iter()
         .filter(|(has, _)| !has)
@@ -194,7 +212,7 @@ impl AdapterReport {
             .map(|(_, why)| (*why).to_string())
             .collect();
         let mut limits = Vec::new();
-        wgpu::Limits::downlevel_defaults().check_limits_with_fail_fn(
+        base_limits(adapter).check_limits_with_fail_fn(
             &adapter.limits(),
             false,
             |name, needed, has| limits.push(format!("{name} {has} (needs {needed})")),
@@ -249,6 +267,17 @@ impl AdapterReport {
     }
 }
 
+/// The limits gigawalk asks a device for: [`wgpu::Limits::downlevel_defaults`],
+/// or on a browser's WebGL2, which has no storage buffers and no compute,
+/// WebGL2's own (OR's pyramid then takes its fragment path, as on GL).
+pub fn base_limits(adapter: &wgpu::Adapter) -> wgpu::Limits {
+    if cfg!(target_arch = "wasm32") && adapter.get_info().backend == wgpu::Backend::Gl {
+        wgpu::Limits::downlevel_webgl2_defaults()
+    } else {
+        wgpu::Limits::downlevel_defaults()
+    }
+}
+
 /// How to get an adapter gigawalk can use, for the "none" error.
 pub const HOW_TO_GET_ONE: &str = "on Linux without a GPU install Mesa's software Vulkan driver (apt-get install mesa-vulkan-drivers); otherwise install a GPU driver with Vulkan, Metal, DX12 or OpenGL 3.3+ / GLES 3.2";
 
@@ -292,6 +321,8 @@ mod tests {
             clip_distances: true,
             compute_pyramid: true,
             multi_draw: true,
+            base_vertex: true,
+            shared_buffers: true,
         };
         assert!(all.missing().is_empty());
         assert_eq!(
@@ -307,6 +338,8 @@ mod tests {
             clip_distances: false,
             compute_pyramid: false,
             multi_draw: false,
+            base_vertex: false,
+            shared_buffers: false,
         };
         assert_eq!(
             gl_like.missing(),
@@ -315,7 +348,9 @@ mod tests {
                 Optional::IndexRange,
                 Optional::ClipDistances,
                 Optional::ComputePyramid,
-                Optional::MultiDraw
+                Optional::MultiDraw,
+                Optional::BaseVertex,
+                Optional::SharedBuffers,
             ]
         );
         assert_eq!(gl_like.features(), Features::POLYGON_MODE_LINE);
@@ -324,6 +359,6 @@ mod tests {
         texts.push(Optional::Wireframe.describe());
         texts.sort_unstable();
         texts.dedup();
-        assert_eq!(texts.len(), 6);
+        assert_eq!(texts.len(), 8);
     }
 }

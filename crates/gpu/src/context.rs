@@ -71,6 +71,12 @@ impl GpuContext {
         &self.info.name
     }
 
+    /// Whether the device is on a GL backend (native GL, or a browser's
+    /// WebGL2).
+    pub fn is_gl(&self) -> bool {
+        self.info.backend == wgpu::Backend::Gl
+    }
+
     /// The largest side of a 2D texture (a viewport or depth image).
     pub fn max_texture_side(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
@@ -149,6 +155,18 @@ impl GpuContext {
     #[cfg(feature = "testing")]
     pub fn force_draw_calls(&mut self) {
         self.caps.multi_draw = false;
+    }
+
+    /// Takes the paths a browser's WebGL2 needs even where the adapter
+    /// has better (no multi-draw, no base vertex, no shared vertex and
+    /// index buffer, the fragment pyramid), so tests compare them on one
+    /// adapter.
+    #[cfg(feature = "testing")]
+    pub fn force_webgl2_paths(&mut self) {
+        self.caps.multi_draw = false;
+        self.caps.base_vertex = false;
+        self.caps.shared_buffers = false;
+        self.caps.compute_pyramid = false;
     }
 
     /// Builds OR's HZB pyramid with fragment passes even where compute
@@ -472,7 +490,7 @@ pub(crate) async fn open_async(
         max_texture_dimension_2d: adapter.limits().max_texture_dimension_2d,
         // OR's HZB pyramid is one storage buffer of a third of its depth.
         max_storage_buffer_binding_size: adapter.limits().max_storage_buffer_binding_size,
-        ..wgpu::Limits::downlevel_defaults()
+        ..crate::capabilities::base_limits(adapter)
     };
     let (device, queue) = adapter
         .request_device(&wgpu::DeviceDescriptor {

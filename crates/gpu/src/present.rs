@@ -89,20 +89,52 @@ where
     ))
 }
 
-/// Opens one device that presents to a browser page's `canvas`, on
-/// WebGPU (wasm32 only). A page has one thread and one device: OR and
-/// RVG share it, and the device arrives through the event loop, so this
-/// is awaited rather than blocked on.
+/// Opens one device that presents to a browser page's `canvas` (wasm32
+/// only): on WebGPU where the browser has it (`webgpu`: whether to try),
+/// else on WebGL2. A page has one thread and one device: OR and RVG
+/// share it, and the device arrives through the event loop, so this is
+/// awaited rather than blocked on. A canvas takes one kind of context
+/// for good, so WebGPU is tried before the canvas is touched.
 #[cfg(target_arch = "wasm32")]
 pub async fn open_device_for_canvas(
     canvas: web_sys::HtmlCanvasElement,
+    webgpu: bool,
 ) -> Result<(GpuContext, WindowSurface), WindowError> {
+    let mut tried = Vec::new();
+    if webgpu {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::BROWSER_WEBGPU;
+        let instance = wgpu::Instance::new(desc);
+        match instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                ..Default::default()
+            })
+            .await
+        {
+            Ok(adapter) => {
+                let surface = instance
+                    .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
+                    .map_err(WindowError::Surface)?;
+                return canvas_device(adapter, surface).await;
+            }
+            Err(e) => tried.push(format!("the browser offers no WebGPU adapter ({e})")),
+        }
+    } else {
+        tried.push("the browser has no WebGPU".to_string());
+    }
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::BROWSER_WEBGPU;
+    desc.backends = wgpu::Backends::GL;
     let instance = wgpu::Instance::new(desc);
-    let surface = instance
-        .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
-        .map_err(WindowError::Surface)?;
+    let surface = match instance.create_surface(wgpu::SurfaceTarget::Canvas(canvas)) {
+        Ok(s) => s,
+        Err(e) => {
+            tried.push(format!("nor WebGL2 ({e})"));
+            return Err(WindowError::NoPresentableAdapter {
+                adapters: tried.join("; "),
+            });
+        }
+    };
     let adapter = instance
         .request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
@@ -111,9 +143,28 @@ pub async fn open_device_for_canvas(
             ..Default::default()
         })
         .await
-        .map_err(|e| WindowError::NoPresentableAdapter {
-            adapters: format!("the browser offers no WebGPU adapter: {e}"),
+        .map_err(|e| {
+            tried.push(format!("nor a WebGL2 adapter ({e})"));
+            WindowError::NoPresentableAdapter {
+                adapters: tried.join("; "),
+            }
         })?;
+    let report = crate::AdapterReport::of(&adapter);
+    if !report.qualifies() {
+        tried.push(format!("WebGL2's {}", report.line()));
+        return Err(WindowError::NoPresentableAdapter {
+            adapters: tried.join("; "),
+        });
+    }
+    canvas_device(adapter, surface).await
+}
+
+/// The page's device on `adapter`, presenting to `surface`.
+#[cfg(target_arch = "wasm32")]
+async fn canvas_device(
+    adapter: wgpu::Adapter,
+    surface: wgpu::Surface<'static>,
+) -> Result<(GpuContext, WindowSurface), WindowError> {
     let ctx = crate::context::open_async(&adapter, "page").await?;
     let caps = surface.get_capabilities(&adapter);
     Ok((

@@ -344,6 +344,10 @@ const UNIT_BYTES: u64 = 4;
 struct Page {
     buffer: wgpu::Buffer,
     free: RangeAllocator<u32>,
+    /// Where one buffer may not be both vertex and index buffer
+    /// (`Capabilities::shared_buffers`; WebGL2): `buffer` holds vertices
+    /// and this one indices, each half the page.
+    indices: Option<(wgpu::Buffer, RangeAllocator<u32>)>,
 }
 
 /// Where a resident LOD sits in the pool.
@@ -351,6 +355,8 @@ struct Page {
 struct Slot {
     range: LodRange,
     units: Range<u32>,
+    /// Its indices' units in the page's index buffer, where it has one.
+    index_units: Option<Range<u32>>,
     bytes: u64,
 }
 
@@ -369,6 +375,11 @@ struct Slot {
 /// `base_vertex`): a range has room for that, at most a vertex less 4
 /// bytes more than the LOD's own bytes.
 ///
+/// Where the device may not bind one buffer as both (WebGL2), each page
+/// is a vertex buffer and an index buffer of half its bytes each, and a
+/// LOD takes a range in both; one that finds no room in either is
+/// refused, as a LOD that finds no room is.
+///
 /// Overwriting a removed LOD's range is safe while earlier frames still
 /// draw from it on the GPU: `Queue::write_buffer` takes effect at the next
 /// submission, after every command already submitted on the queue.
@@ -384,6 +395,14 @@ pub struct GeometryPool {
 fn pool_units(lod: &DecodedLod) -> Option<u32> {
     let bytes = lod.layout.stride() - UNIT_BYTES + lod.bytes();
     u32::try_from(bytes / UNIT_BYTES).ok()
+}
+
+/// Units `lod` takes in a split page's vertex buffer (room to align its
+/// vertices, then its vertices) and index buffer, if `u32`s hold them.
+fn split_units(lod: &DecodedLod) -> Option<(u32, u32)> {
+    let v = (lod.layout.stride() - UNIT_BYTES + lod.vertices.len() as u64) / UNIT_BYTES;
+    let i = (lod.indices.len() as u64).div_ceil(UNIT_BYTES);
+    Some((u32::try_from(v).ok()?, u32::try_from(i).ok()?))
 }
 
 impl GeometryPool {
@@ -411,15 +430,40 @@ impl GeometryPool {
         let pages = units.div_ceil(max).max(1);
         let per = units / pages;
         let mut out = Vec::with_capacity(pages as usize);
+        let split = !ctx.capabilities().shared_buffers;
         for p in 0..pages {
-            out.push(Page {
-                buffer: geometry_buffer(
-                    ctx,
-                    &format!("pool {p}"),
-                    per * UNIT_BYTES,
-                    wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::INDEX,
-                ),
-                free: RangeAllocator::new(0..per as u32),
+            out.push(if split {
+                let vertex_units = per / 2;
+                let index_units = per - vertex_units;
+                Page {
+                    buffer: geometry_buffer(
+                        ctx,
+                        &format!("pool {p} vertices"),
+                        vertex_units * UNIT_BYTES,
+                        wgpu::BufferUsages::VERTEX,
+                    ),
+                    free: RangeAllocator::new(0..vertex_units as u32),
+                    indices: Some((
+                        geometry_buffer(
+                            ctx,
+                            &format!("pool {p} indices"),
+                            index_units * UNIT_BYTES,
+                            wgpu::BufferUsages::INDEX,
+                        ),
+                        RangeAllocator::new(0..index_units as u32),
+                    )),
+                }
+            } else {
+                Page {
+                    buffer: geometry_buffer(
+                        ctx,
+                        &format!("pool {p}"),
+                        per * UNIT_BYTES,
+                        wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::INDEX,
+                    ),
+                    free: RangeAllocator::new(0..per as u32),
+                    indices: None,
+                }
             });
         }
         ctx.check()?;
@@ -456,10 +500,12 @@ impl GeometryPool {
 
     /// Whether `lod` could fit in an empty pool.
     pub fn could_hold(&self, lod: &DecodedLod) -> bool {
-        pool_units(lod).is_some_and(|u| {
-            self.pages
-                .iter()
-                .any(|p| p.free.initial_range().len() >= u as usize)
+        self.pages.iter().any(|p| match &p.indices {
+            None => pool_units(lod).is_some_and(|u| p.free.initial_range().len() >= u as usize),
+            Some((_, ifree)) => split_units(lod).is_some_and(|(v, i)| {
+                p.free.initial_range().len() >= v as usize
+                    && ifree.initial_range().len() >= i as usize
+            }),
         })
     }
 
@@ -477,18 +523,42 @@ impl GeometryPool {
             return false;
         }
         let stride = lod.layout.stride();
+        let split = split_units(lod);
         for (b, page) in self.pages.iter_mut().enumerate() {
-            let Ok(r) = page.free.allocate_range(units.max(1)) else {
+            let want = match (&page.indices, split) {
+                (None, _) => units,
+                (Some(_), Some((v, _))) => v,
+                (Some(_), None) => return false,
+            };
+            let Ok(r) = page.free.allocate_range(want.max(1)) else {
                 continue;
             };
             let vertices_at = (r.start as u64 * UNIT_BYTES).next_multiple_of(stride);
-            let indices_at = vertices_at + lod.vertices.len() as u64;
-            for (at, data) in [(vertices_at, &lod.vertices), (indices_at, &lod.indices)] {
-                if !data.is_empty() {
-                    ctx.queue.write_buffer(&page.buffer, at, data);
+            let (index_units, indices_at) = match (&mut page.indices, split) {
+                (Some((ibuf, ifree)), Some((_, i))) => {
+                    let Ok(ir) = ifree.allocate_range(i.max(1)) else {
+                        page.free.free_range(r);
+                        continue;
+                    };
+                    let at = ir.start as u64 * UNIT_BYTES;
+                    if !lod.indices.is_empty() {
+                        ctx.queue.write_buffer(ibuf, at, &lod.indices);
+                    }
+                    (Some(ir), at)
                 }
+                _ => {
+                    let at = vertices_at + lod.vertices.len() as u64;
+                    if !lod.indices.is_empty() {
+                        ctx.queue.write_buffer(&page.buffer, at, &lod.indices);
+                    }
+                    (None, at)
+                }
+            };
+            if !lod.vertices.is_empty() {
+                ctx.queue
+                    .write_buffer(&page.buffer, vertices_at, &lod.vertices);
             }
-            let bytes = r.len() as u64 * UNIT_BYTES;
+            let bytes = (r.len() + index_units.as_ref().map_or(0, |i| i.len())) as u64 * UNIT_BYTES;
             self.slots[id as usize] = Some(Slot {
                 range: LodRange {
                     buffer: b as u32,
@@ -501,6 +571,7 @@ impl GeometryPool {
                     scale: lod.scale,
                 },
                 units: r,
+                index_units,
                 bytes,
             });
             self.used_bytes += bytes;
@@ -515,9 +586,11 @@ impl GeometryPool {
             return;
         };
         self.used_bytes -= slot.bytes;
-        self.pages[slot.range.buffer as usize]
-            .free
-            .free_range(slot.units);
+        let page = &mut self.pages[slot.range.buffer as usize];
+        page.free.free_range(slot.units);
+        if let (Some((_, ifree)), Some(i)) = (&mut page.indices, slot.index_units) {
+            ifree.free_range(i);
+        }
     }
 }
 
@@ -526,7 +599,7 @@ impl Residency for GeometryPool {
         self.slots.get(lod as usize)?.as_ref().map(|s| s.range)
     }
     fn buffers(&self, buffer: u32) -> (&wgpu::Buffer, &wgpu::Buffer) {
-        let p = &self.pages[buffer as usize].buffer;
-        (p, p)
+        let p = &self.pages[buffer as usize];
+        (&p.buffer, p.indices.as_ref().map_or(&p.buffer, |(i, _)| i))
     }
 }

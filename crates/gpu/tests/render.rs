@@ -207,6 +207,64 @@ fn multi_draws_draw_what_one_call_a_draw_does() {
     assert!(calls.iter().all(|(d, _, _)| d.iter().any(|&b| b != 0)));
 }
 
+/// The paths a browser's WebGL2 takes (no base vertex: each draw binds
+/// its LOD's vertices at their offset; no buffer both vertex and index
+/// buffer: a pool of split buffers; no multi-draw; the fragment pyramid)
+/// draw what the adapter's own paths draw, bit for bit: RVG's colour and
+/// depth, OR's depth and a level of its pyramid, from resident geometry
+/// and from a streaming pool.
+#[test]
+fn the_webgl2_paths_draw_what_the_others_do() {
+    let Some(mut ctx) = devices_or_skip(1, "webgl2 paths").map(|mut d| d.remove(0)) else {
+        return;
+    };
+    let shift = DVec3::new(-3e5, 7e4, 1e6);
+    let (w, h) = (80, 50);
+    let v = view(shift + DVec3::new(0.0, -1.5, 0.0), w, h);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.gwk");
+    write_scene_with(&path, shift, 16);
+    let scene = SceneReader::open(&path).unwrap();
+    let mut out = Vec::new();
+    for forced in [false, true] {
+        if forced {
+            ctx.force_webgl2_paths();
+            let c = ctx.capabilities();
+            assert!(!(c.base_vertex || c.shared_buffers || c.multi_draw || c.compute_pyramid));
+        }
+        let resident = upload_scene(&ctx, shift, VertexLayout::Wide);
+        let mut pool = GeometryPool::new(&ctx, 2, 1 << 16, 1 << 20).unwrap();
+        // LOD 1 first: its vertices do not start the pool's buffer.
+        for l in [1, 0] {
+            assert!(pool.insert(&ctx, l, &DecodedLod::new(&scene.read_lod(l).unwrap())));
+        }
+        for geometry in [&resident as &dyn gigawalk_gpu::Residency, &pool] {
+            for lods in [&[0u32, 1][..], &[1, 0, 1]] {
+                let mut or = DepthPass::new(&ctx, w, h);
+                let depth = or.render(&ctx, geometry, &v, lods).unwrap();
+                let level = or.render_level(&ctx, geometry, &v, lods, 2).unwrap();
+                let mut rvg = VisiblePass::new(&ctx, w, h);
+                rvg.begin(&ctx, &v, DrawStyle::Shaded, Look::PLAIN);
+                rvg.draw(&ctx, geometry, lods);
+                let frame = rvg.finish(&ctx, true).unwrap().unwrap();
+                let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                out.push((
+                    bits(&depth.depth),
+                    bits(&level.image.depth),
+                    frame.colour,
+                    bits(&frame.depth.depth),
+                ));
+            }
+        }
+    }
+    let (own, webgl2) = out.split_at(out.len() / 2);
+    assert_eq!(own, webgl2);
+    // Something was drawn, the same from the pool as from resident
+    // geometry.
+    assert!(own.iter().all(|(d, _, _, _)| d.iter().any(|&b| b != 0)));
+    assert_eq!(own[0], own[2]);
+}
+
 /// Adapters without depth-texture copies (GL) read depth through a pass
 /// that draws it into an R32Uint target; the HZB and the accuracy
 /// reference compare depths exactly, so it must read the same bits, the

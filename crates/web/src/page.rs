@@ -66,6 +66,15 @@ const MAX_IN_FLIGHT: usize = 192;
 /// other one; the visible set that makes a submission's occluders is
 /// then two frames old, as in GigaWalk's pipeline (Section 5).
 const OR_IN_FLIGHT: usize = 2;
+/// Why occlusion culling is off on WebGL2: depth read back through the
+/// copy pass (`shaders/depth_copy.wgsl`) comes back all zeros there
+/// (measured on Chromium's WebGL2 over SwiftShader, through an R32Uint
+/// and through an RGBA8 target alike; not traced further), an HZB that
+/// hides nothing. Culling against it would stay conservative and cost OR's pass
+/// for nothing, so the page culls by frustum and levels of detail only.
+const NO_OCCLUSION_ON_WEBGL2: &str =
+    "occlusion culling needs WebGPU: on WebGL2 the page cannot read OR's depth back, so it \
+     culls by frustum and levels of detail only";
 /// Device bytes for geometry when the page's URL does not say
 /// (`?budget=MB`).
 const DEFAULT_BUDGET_MB: u64 = 256;
@@ -843,6 +852,7 @@ impl App {
             return false;
         }
         match code {
+            "KeyO" if self.ctx.is_gl() => self.review.say(NO_OCCLUSION_ON_WEBGL2.into()),
             "KeyO" => self.mode.occlusion = !self.mode.occlusion,
             "KeyL" => self.mode.hlod = !self.mode.hlod,
             "Minus" | "NumpadSubtract" | "PageDown" => {
@@ -903,8 +913,11 @@ pub fn show_pose(i: u32) -> Result<(), JsValue> {
 #[wasm_bindgen]
 pub fn set_mode(mode: &str) -> Result<(), JsValue> {
     with_app(|app| {
-        app.mode =
-            Mode::parse(mode).ok_or_else(|| format!("mode {mode:?}: vfc, hlod, occ or och"))?;
+        let m = Mode::parse(mode).ok_or_else(|| format!("mode {mode:?}: vfc, hlod, occ or och"))?;
+        if m.occlusion && app.ctx.is_gl() {
+            return Err(format!("mode {mode:?}: {NO_OCCLUSION_ON_WEBGL2}"));
+        }
+        app.mode = m;
         Ok(())
     })
 }
@@ -1106,16 +1119,14 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     let has_webgpu = web_sys::window().is_some_and(|w| {
         js_sys::Reflect::get(&w.navigator(), &"gpu".into()).is_ok_and(|g| !g.is_undefined())
     });
-    if !has_webgpu {
-        return Err(fail(
-            "this browser has no WebGPU (navigator.gpu is missing): use a current Chrome, Edge \
-             or Firefox, or enable WebGPU in its settings"
-                .into(),
-        ));
-    }
-    let (ctx, surface) = gigawalk_gpu::open_device_for_canvas(canvas.clone())
+    let (ctx, surface) = gigawalk_gpu::open_device_for_canvas(canvas.clone(), has_webgpu)
         .await
-        .map_err(|e| fail(format!("WebGPU could not start: {e}")))?;
+        .map_err(|e| {
+            fail(format!(
+                "this browser can run neither WebGPU nor WebGL2 here: {e}. Use a current \
+                 Chrome, Edge, Firefox or Safari, with hardware acceleration on"
+            ))
+        })?;
     let (reader, sparse, fetched, requests) = open_scene(&scene_url).await.map_err(fail)?;
     let skeleton = reader.skeleton();
     let lods = skeleton.lods().len();
@@ -1141,9 +1152,10 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     let pool = GeometryPool::new(&ctx, lods, budget, max_buffer)
         .map_err(|e| fail(format!("no room for the geometry budget: {e}")))?;
     set_stats(|s| {
+        let api = if ctx.is_gl() { "WebGL2" } else { "WebGPU" };
         s.backend = match ctx.adapter_name() {
-            "" => "WebGPU".to_string(),
-            name => format!("WebGPU ({name})"),
+            "" => api.to_string(),
+            name => format!("{api} ({name})"),
         };
         s.file_bytes = sparse.len();
         s.fetched_bytes = fetched;
@@ -1168,7 +1180,8 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         arrivals: Rc::new(RefCell::new(Vec::new())),
         traverser: Traverser::new(),
         items: Vec::new(),
-        mode: Mode::new(true, true),
+        // och, or hlod on WebGL2.
+        mode: Mode::new(!ctx.is_gl(), true),
         pixel_error,
         hud: true,
         near: default_near(&bounds),

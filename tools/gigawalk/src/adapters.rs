@@ -98,5 +98,7 @@ fn consequence(o: Optional) -> &'static str {
         Optional::ClipDistances => " (same images)",
         Optional::ComputePyramid => " (same HZB, more passes)",
         Optional::MultiDraw => " (same images, more CPU a draw)",
+        Optional::BaseVertex => " (same images, a vertex-buffer bind a draw)",
+        Optional::SharedBuffers => " (the streaming pool split half and half)",
     }
 }

@@ -393,6 +393,53 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
 }
 
+/// Without WebGPU the page runs on WebGL2, says so, and draws what
+/// native traversal draws (frustum culling and levels of detail; no
+/// occlusion culling there).
+#[test]
+fn without_webgpu_the_page_walks_on_webgl2() {
+    if !can_run("without_webgpu_the_page_walks_on_webgl2") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk) = plant(dir.path(), "60k");
+    let served = serve(&gwk);
+    let report = drive(&[
+        "--url",
+        &served.url,
+        "--no-webgpu",
+        "--path",
+        s(&path),
+        "--poses",
+        "0,11",
+        "--modes",
+        "vfc,hlod",
+    ]);
+    let first = &report["first"];
+    assert_eq!(first["state"], "running", "{report}");
+    assert!(
+        first["backend"].as_str().unwrap().starts_with("WebGL2"),
+        "{first}"
+    );
+    assert_eq!(first["mode"], "hlod", "{first}");
+    let native = native_triangles(&gwk, &path, &dir.path().join("replay"), "vfc,hlod");
+    for p in report["poses"].as_array().unwrap() {
+        let (mode, pose) = (p["mode"].as_str().unwrap(), num(p, "pose") as usize);
+        assert_eq!(p["settled"], true, "{p}");
+        assert!(
+            num(p, "coverage") > 0.02,
+            "{mode} pose {pose} drew nothing: {p}"
+        );
+        let want = native
+            .iter()
+            .find(|(m, f, _)| m == mode && *f == pose)
+            .unwrap()
+            .2;
+        assert_eq!(num(p, "triangles"), want, "{mode} pose {pose}: {p}");
+    }
+    assert_eq!(report["last"]["failed_lods"], 0, "{report}");
+}
+
 #[test]
 fn a_scene_ten_times_the_budget_walks_within_it() {
     if !can_run("a_scene_ten_times_the_budget_walks_within_it") {
@@ -485,7 +532,10 @@ fn the_page_says_what_is_wrong() {
         &["does not answer range requests"],
     );
 
-    says(&drive(&["--serve", s(&site), "--no-webgpu"]), &["WebGPU"]);
+    says(
+        &drive(&["--serve", s(&site), "--no-webgpu", "--no-webgl"]),
+        &["neither WebGPU nor WebGL2"],
+    );
 
     says(
         &drive(&["--serve", s(&site), "--query", "budget=lots"]),

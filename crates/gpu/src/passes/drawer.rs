@@ -42,6 +42,8 @@ pub(crate) struct Drawer {
     /// into, so caps can show).
     clip_planes: usize,
     caps: bool,
+    /// Whether draws take a base vertex (`Capabilities::base_vertex`).
+    base_vertex: bool,
 }
 
 impl Drawer {
@@ -91,6 +93,7 @@ impl Drawer {
             pieces: None,
             clip_planes: 0,
             caps: false,
+            base_vertex: ctx.capabilities().base_vertex,
         }
     }
 
@@ -255,6 +258,20 @@ impl Drawer {
                 }
                 pass.set_index_buffer(i.slice(..), r.index_format);
                 indices = Some((r.buffer, r.index_format));
+            }
+            if !self.base_vertex {
+                // No base vertex (WebGL2): the vertex buffer starts at the
+                // LOD's first vertex.
+                let (v, _) = residency.buffers(r.buffer);
+                let at = r.base_vertex as u64 * r.layout.stride();
+                pass.set_vertex_buffer(0, v.slice(at..));
+                vertices = None;
+                pass.draw_indexed(
+                    r.first_index..r.first_index + r.index_count,
+                    0,
+                    *instance..*instance + 1,
+                );
+                continue;
             }
             if self.indirect.is_none() {
                 pass.draw_indexed(

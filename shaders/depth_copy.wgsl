@@ -5,8 +5,13 @@
 // exactly, so this path must read what a direct copy reads.
 
 // Bound as unfilterable float, not texture_depth_2d: naga's GLSL output
-// cannot textureLoad a depth texture.
+// cannot textureLoad a depth texture. Read through a nearest sampler at
+// the texel's centre, not textureLoad: GL then takes the sampler's
+// filter, where a texel fetch takes the texture's own, which wgpu leaves
+// at GL's default for depth formats, and WebGL2 counts a float depth
+// texture with that filter as incomplete (a fetch reads 0).
 @group(0) @binding(0) var depth: texture_2d<f32>;
+@group(0) @binding(1) var nearest: sampler;
 
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
@@ -17,6 +22,8 @@ fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
 
 @fragment
 fn fs_main(@builtin(position) pixel: vec4<f32>) -> @location(0) u32 {
-    // A pixel's centre is at (x + 0.5, y + 0.5): truncation gives its texel.
-    return bitcast<u32>(textureLoad(depth, vec2<i32>(pixel.xy), 0).x);
+    // A pixel's centre is at (x + 0.5, y + 0.5), its texel's centre too:
+    // nearest sampling there reads that texel.
+    let size = vec2<f32>(textureDimensions(depth));
+    return bitcast<u32>(textureSampleLevel(depth, nearest, pixel.xy / size, 0.0).x);
 }

@@ -66,15 +66,6 @@ const MAX_IN_FLIGHT: usize = 192;
 /// other one; the visible set that makes a submission's occluders is
 /// then two frames old, as in GigaWalk's pipeline (Section 5).
 const OR_IN_FLIGHT: usize = 2;
-/// Why occlusion culling is off on WebGL2: depth read back through the
-/// copy pass (`shaders/depth_copy.wgsl`) comes back all zeros there
-/// (measured on Chromium's WebGL2 over SwiftShader, through an R32Uint
-/// and through an RGBA8 target alike; not traced further), an HZB that
-/// hides nothing. Culling against it would stay conservative and cost OR's pass
-/// for nothing, so the page culls by frustum and levels of detail only.
-const NO_OCCLUSION_ON_WEBGL2: &str =
-    "occlusion culling needs WebGPU: on WebGL2 the page cannot read OR's depth back, so it \
-     culls by frustum and levels of detail only";
 /// Device bytes for geometry when the page's URL does not say
 /// (`?budget=MB`).
 const DEFAULT_BUDGET_MB: u64 = 256;
@@ -645,13 +636,19 @@ impl App {
             .sum();
         let (w, h) = self.depth.size();
         self.depth.set_pieces(pieces(&view));
-        let level = self.depth.submit_level(
-            &self.ctx,
-            &self.pool,
-            &gpu_view(&view),
-            &lods,
-            auto_hzb_level(w, h),
-        );
+        // On WebGL2 OR's depth itself (through the copy pass), not a level
+        // of its pyramid: the pyramid's first pass fetches texels of the
+        // depth texture, which WebGL2 reads as 0 (see
+        // `shaders/depth_copy.wgsl`); the HZB is then built here from
+        // level 0.
+        let level = if self.ctx.is_gl() {
+            0
+        } else {
+            auto_hzb_level(w, h)
+        };
+        let level = self
+            .depth
+            .submit_level(&self.ctx, &self.pool, &gpu_view(&view), &lods, level);
         self.awaited.push_back(Awaited {
             submitted_ms: now_ms(),
             view,
@@ -852,7 +849,6 @@ impl App {
             return false;
         }
         match code {
-            "KeyO" if self.ctx.is_gl() => self.review.say(NO_OCCLUSION_ON_WEBGL2.into()),
             "KeyO" => self.mode.occlusion = !self.mode.occlusion,
             "KeyL" => self.mode.hlod = !self.mode.hlod,
             "Minus" | "NumpadSubtract" | "PageDown" => {
@@ -913,11 +909,8 @@ pub fn show_pose(i: u32) -> Result<(), JsValue> {
 #[wasm_bindgen]
 pub fn set_mode(mode: &str) -> Result<(), JsValue> {
     with_app(|app| {
-        let m = Mode::parse(mode).ok_or_else(|| format!("mode {mode:?}: vfc, hlod, occ or och"))?;
-        if m.occlusion && app.ctx.is_gl() {
-            return Err(format!("mode {mode:?}: {NO_OCCLUSION_ON_WEBGL2}"));
-        }
-        app.mode = m;
+        app.mode =
+            Mode::parse(mode).ok_or_else(|| format!("mode {mode:?}: vfc, hlod, occ or och"))?;
         Ok(())
     })
 }
@@ -1180,8 +1173,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         arrivals: Rc::new(RefCell::new(Vec::new())),
         traverser: Traverser::new(),
         items: Vec::new(),
-        // och, or hlod on WebGL2.
-        mode: Mode::new(!ctx.is_gl(), true),
+        mode: Mode::new(true, true),
         pixel_error,
         hud: true,
         near: default_near(&bounds),

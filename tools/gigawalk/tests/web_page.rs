@@ -393,9 +393,9 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
 }
 
-/// Without WebGPU the page runs on WebGL2, says so, and draws what
-/// native traversal draws (frustum culling and levels of detail; no
-/// occlusion culling there).
+/// Without WebGPU the page runs on WebGL2, says so, draws what native
+/// traversal draws, and culls by occlusion with the unculled image pixel
+/// for pixel.
 #[test]
 fn without_webgpu_the_page_walks_on_webgl2() {
     if !can_run("without_webgpu_the_page_walks_on_webgl2") {
@@ -413,7 +413,10 @@ fn without_webgpu_the_page_walks_on_webgl2() {
         "--poses",
         "0,11",
         "--modes",
-        "vfc,hlod",
+        "vfc,hlod,occ,och",
+        "--no-hud",
+        "--compare",
+        "occ:vfc,och:hlod",
     ]);
     let first = &report["first"];
     assert_eq!(first["state"], "running", "{report}");
@@ -421,7 +424,6 @@ fn without_webgpu_the_page_walks_on_webgl2() {
         first["backend"].as_str().unwrap().starts_with("WebGL2"),
         "{first}"
     );
-    assert_eq!(first["mode"], "hlod", "{first}");
     let native = native_triangles(&gwk, &path, &dir.path().join("replay"), "vfc,hlod");
     for p in report["poses"].as_array().unwrap() {
         let (mode, pose) = (p["mode"].as_str().unwrap(), num(p, "pose") as usize);
@@ -430,6 +432,11 @@ fn without_webgpu_the_page_walks_on_webgl2() {
             num(p, "coverage") > 0.02,
             "{mode} pose {pose} drew nothing: {p}"
         );
+        if mode == "occ" || mode == "och" {
+            assert_eq!(p["occlusion_used"], true, "{p}");
+            assert_eq!(num(&p["diff"], "pixels"), 0.0, "{mode} pose {pose}: {p}");
+            continue;
+        }
         let want = native
             .iter()
             .find(|(m, f, _)| m == mode && *f == pose)
@@ -438,6 +445,14 @@ fn without_webgpu_the_page_walks_on_webgl2() {
         assert_eq!(num(p, "triangles"), want, "{mode} pose {pose}: {p}");
     }
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
+    assert!(
+        report["poses"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["mode"] == "occ" && num(p, "occlusion_culled") > 0.0),
+        "{report}"
+    );
 }
 
 #[test]

@@ -59,12 +59,17 @@ impl PassFigures {
     }
 
     /// Waits until `index` has finished on the device (its time is
-    /// `wait_ms`).
+    /// `wait_ms`). Not in a browser: a page's thread may not block, and
+    /// the browser orders its submissions itself (WebGPU's poll does
+    /// nothing; WebGL2's can only time out).
     pub(crate) fn wait(
         &mut self,
         ctx: &GpuContext,
         index: wgpu::SubmissionIndex,
     ) -> Result<(), GpuError> {
+        if cfg!(target_arch = "wasm32") {
+            return ctx.check();
+        }
         let t = Instant::now();
         ctx.device
             .poll(wgpu::PollType::Wait {
@@ -385,6 +390,7 @@ pub(crate) struct Pending {
 struct DepthCopy {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
     /// The depth texture last copied, its bind group, and the target.
     bound: Option<(wgpu::Texture, wgpu::BindGroup, wgpu::Texture)>,
 }
@@ -394,16 +400,29 @@ impl DepthCopy {
         let d = &ctx.device;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("depth copy"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
                 },
-                count: None,
-            }],
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+                    count: None,
+                },
+            ],
+        });
+        // Nearest, clamped: what the shader reads at texel centres.
+        let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("depth copy"),
+            ..Default::default()
         });
         let pipeline = fullscreen_pipeline(
             ctx,
@@ -415,6 +434,7 @@ impl DepthCopy {
         DepthCopy {
             pipeline,
             layout,
+            sampler,
             bound: None,
         }
     }
@@ -441,10 +461,16 @@ impl DepthCopy {
             let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("depth copy"),
                 layout: &self.layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                }],
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                ],
             });
             let target = target(ctx, "depth copy", w, h, DEPTH_COPY_FORMAT);
             self.bound = Some((tex.clone(), bind_group, target));

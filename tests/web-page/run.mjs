@@ -26,10 +26,11 @@
 // the modes), as a user does, in occ with the HUD off: pick at pixel
 // X,Y; click it (select); X with the pointer there (a section plane);
 // H (hide it); occ against vfc with both; the view's link opened in a
-// second tab; U and Delete (show all, no section). Each step's stats,
-// picks and image comparisons are in the report's "review". Exit
-// status 0 whenever a report was written (tests judge it); 2 when
-// Chromium or the page could not be driven at all.
+// second tab; U and Delete (show all, no section); a finger dragged
+// across the canvas (touch). Each step's stats, picks and image
+// comparisons are in the report's "review". Exit status 0 whenever a
+// report was written (tests judge it); 2 when Chromium or the page could
+// not be driven at all.
 import fs from 'node:fs';
 import http from 'node:http';
 import path from 'node:path';
@@ -258,6 +259,15 @@ try {
     await until((x) => x.hidden === 0 && x.section === null);
     r.restored = await settle();
     r.restored_vs_before = await diff(before, await shot('review-restored'));
+    // A finger dragged across the canvas looks around, as the mouse does.
+    const viewBefore = await p.evaluate(() => window.gigawalk.view());
+    await p.touchscreen.touchStart(200, 180);
+    await p.touchscreen.touchMove(260, 180);
+    await p.touchscreen.touchMove(320, 180);
+    await p.touchscreen.touchEnd();
+    await sleep(300);
+    const viewAfter = await p.evaluate(() => window.gigawalk.view());
+    r.touch = { before: viewBefore.orientation, after: viewAfter.orientation };
     return r;
   }
 

@@ -390,6 +390,8 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
     // U and Delete: the first image again.
     assert_eq!(r["restored"]["hidden"], 0, "{}", r["restored"]);
     assert_eq!(num(&r["restored_vs_before"], "pixels"), 0.0, "{r}");
+    // A finger dragged sideways turns the camera.
+    assert_ne!(r["touch"]["before"], r["touch"]["after"], "{}", r["touch"]);
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
 }
 

@@ -6,7 +6,7 @@
 
 use crate::context::{candidates, device_name, open, rank, second_adapter};
 use crate::overlay::{OverlayFrame, OverlayRenderer};
-use crate::passes::{fullscreen_pipeline, ReadBack};
+use crate::passes::{fullscreen_pipeline, sampled_texture_layout, ReadBack};
 use crate::{GpuContext, GpuError, VisiblePass, COLOUR_FORMAT};
 
 pub const BLIT_WGSL: &str = include_str!("../../../shaders/blit.wgsl");
@@ -385,27 +385,7 @@ impl WindowSurface {
 impl PresentGpu {
     fn new(ctx: &GpuContext) -> PresentGpu {
         let d = &ctx.device;
-        let blit_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("blit"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
+        let blit_layout = sampled_texture_layout(ctx, "blit", true);
         let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("blit"),
             mag_filter: wgpu::FilterMode::Linear,

@@ -27,7 +27,7 @@ pub use hzb::{PyramidPath, HZB_DOWNSAMPLE_WGSL};
 pub use look::{Antialias, Look, LookChoice, LOOK_WGSL};
 pub(crate) use pipelines::{
     draw_fullscreen, fullscreen_pipeline, fullscreen_pipeline_entry, fullscreen_pipeline_with,
-    pipeline, scene_pipelines, ScenePipelines, Surface,
+    pipeline, sampled_texture_layout, scene_pipelines, ScenePipelines, Surface,
 };
 pub use readback::PassFigures;
 pub(crate) use readback::{device_error, map_and_wait, ms_since, Pending, ReadBack, Rows};

@@ -299,3 +299,42 @@ pub(crate) fn fullscreen_pipeline_with(
         cache: None,
     })
 }
+
+/// A bind group layout of one 2D texture (binding 0) and a sampler
+/// (binding 1) that a fragment shader reads it through: a filtering
+/// sampler of a filterable float texture, or with `filterable` false a
+/// non-filtering one of an unfilterable float texture (depth read as
+/// float).
+pub(crate) fn sampled_texture_layout(
+    ctx: &GpuContext,
+    label: &str,
+    filterable: bool,
+) -> wgpu::BindGroupLayout {
+    let sampler = if filterable {
+        wgpu::SamplerBindingType::Filtering
+    } else {
+        wgpu::SamplerBindingType::NonFiltering
+    };
+    ctx.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(sampler),
+                    count: None,
+                },
+            ],
+        })
+}

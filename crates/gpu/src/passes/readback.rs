@@ -8,7 +8,8 @@
 use web_time::Instant;
 
 use crate::passes::{
-    draw_fullscreen, fullscreen_pipeline, target, DepthImage, DEPTH_COPY_FORMAT, DEPTH_COPY_WGSL,
+    draw_fullscreen, fullscreen_pipeline, sampled_texture_layout, target, DepthImage,
+    DEPTH_COPY_FORMAT, DEPTH_COPY_WGSL,
 };
 use crate::{GpuContext, GpuError};
 
@@ -398,27 +399,7 @@ struct DepthCopy {
 impl DepthCopy {
     fn new(ctx: &GpuContext) -> DepthCopy {
         let d = &ctx.device;
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("depth copy"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
-                    count: None,
-                },
-            ],
-        });
+        let layout = sampled_texture_layout(ctx, "depth copy", false);
         // Nearest, clamped: what the shader reads at texel centres.
         let sampler = d.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("depth copy"),

@@ -109,8 +109,9 @@ struct Awaited {
     /// Occluder LODs drawn, and their triangles.
     occluders: usize,
     occluder_triangles: u64,
-    /// When it was submitted (ms).
+    /// When it was submitted (ms), and its number among submissions.
     submitted_ms: f64,
+    submission: u64,
 }
 
 /// What the page reports (as JSON, through [`stats`]).
@@ -161,6 +162,11 @@ struct Stats {
     /// submission to the HZB built from it (ms).
     animation_frames: u64,
     hzb_latency_ms: f64,
+    /// How many submissions back the camera lies whose visible set made a
+    /// submission's occluders, summed over submissions, and their count
+    /// (GigaWalk's lag, Section 5: 2).
+    occluder_lag_sum: u64,
+    submissions: u64,
     /// The object table's size once read (`None` before, or without
     /// one), objects hidden, the selection's `file/path`, the section in
     /// effect and the last message the page showed.
@@ -182,7 +188,7 @@ impl Stats {
              \"first_frame_ms\":{},\"first_frame_fetched\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
              \"settled\":{},\"cpu_ms\":{:.2},\"traversal_ms\":{:.2},\"mode\":{},\
              \"pixel_error\":{},\"occlusion_culled\":{},\"occlusion_used\":{},\
-             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{},\"animation_frames\":{},\"hzb_latency_ms\":{:.1},\
+             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{},\"animation_frames\":{},\"hzb_latency_ms\":{:.1},\"occluder_lag\":{:.3},\"submissions\":{},\
              \"objects\":{},\"hidden\":{},\"selected\":{},\"section\":{},\"message\":{}}}",
             s(&self.state),
             self.error.as_deref().map_or("null".into(), s),
@@ -216,6 +222,8 @@ impl Stats {
             self.hzb_level,
             self.animation_frames,
             self.hzb_latency_ms,
+            self.occluder_lag_sum as f64 / self.submissions.max(1) as f64,
+            self.submissions,
             self.objects.map_or("null".into(), |n| n.to_string()),
             self.hidden,
             self.selected.as_deref().map_or("null".into(), s),
@@ -418,6 +426,10 @@ struct App {
     last_ms: f64,
     /// When the last frame was drawn (the HUD's frame rate).
     last_drawn_ms: f64,
+    /// OR submissions so far, and the one whose camera was drawn last
+    /// (its visible set is the next submission's occluders).
+    submissions: u64,
+    drawn_submission: u64,
     started_ms: f64,
 }
 
@@ -552,7 +564,10 @@ impl App {
             // The startup frame (or the first after a resize, a change of
             // mode or a frame with no occluder resident): drawn unculled;
             // its visible set is the next submissions' occluders.
-            None => self.draw(&view, None, t0, now)?,
+            None => {
+                self.drawn_submission = self.submissions + 1;
+                self.draw(&view, None, t0, now)?
+            }
             Some(a) => match self.depth.try_take_level(&self.ctx, a.level) {
                 Err(level) => {
                     self.awaited.push_front(Awaited { level, ..a });
@@ -581,6 +596,7 @@ impl App {
                         s.hzb_level = level.level;
                         s.hzb_latency_ms = latency;
                     });
+                    self.drawn_submission = a.submission;
                     let hzb = std::mem::take(&mut self.hzb);
                     let drawn = self.draw(&a.view, Some(&HzbOcclusion::new(&hzb)), t0, now);
                     self.hzb = hzb;
@@ -649,7 +665,15 @@ impl App {
         let level = self
             .depth
             .submit_level(&self.ctx, &self.pool, &gpu_view(&view), &lods, level);
+        self.submissions += 1;
+        let lag = self.submissions.saturating_sub(self.drawn_submission);
+        let n = self.submissions;
+        set_stats(|s| {
+            s.occluder_lag_sum += lag;
+            s.submissions += 1;
+        });
         self.awaited.push_back(Awaited {
+            submission: n,
             submitted_ms: now_ms(),
             view,
             level,
@@ -1182,6 +1206,8 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         frame: 0,
         last_ms: now_ms(),
         last_drawn_ms: now_ms(),
+        submissions: 0,
+        drawn_submission: 0,
         started_ms,
         ctx,
         reader,

@@ -29,11 +29,15 @@ struct Level {
 }
 
 // Bound as unfilterable float, not texture_depth_2d: naga's GLSL output
-// cannot textureLoad a depth texture.
+// cannot textureLoad a depth texture. Read through a nearest sampler at
+// texel centres (as shaders/depth_copy.wgsl): a texel fetch would take
+// the texture's own filter, GL's default, with which WebGL2 reads a
+// float depth texture as 0.
 @group(0) @binding(0) var depth: texture_2d<f32>;
 @group(0) @binding(1) var<uniform> level: Level;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<u32>;
 @group(0) @binding(3) var src_bits: texture_2d<u32>;
+@group(0) @binding(4) var nearest: sampler;
 
 fn depth_bits(d: f32) -> u32 {
     return select(0u, bitcast<u32>(d), d > 0.0);
@@ -44,12 +48,19 @@ fn clamped(p: vec2<u32>) -> vec2<u32> {
     return min(p, level.src_size - vec2<u32>(1u));
 }
 
+// The depth of texel p (clamped to the source), read at its centre.
+fn depth_at(p: vec2<u32>) -> u32 {
+    let size = vec2<f32>(textureDimensions(depth));
+    let uv = (vec2<f32>(clamped(p)) + vec2<f32>(0.5)) / size;
+    return depth_bits(textureSampleLevel(depth, nearest, uv, 0.0).x);
+}
+
 fn farthest_of_depth(dst: vec2<u32>) -> u32 {
     let p = dst * 2u;
-    let a = depth_bits(textureLoad(depth, vec2<i32>(clamped(p)), 0).x);
-    let b = depth_bits(textureLoad(depth, vec2<i32>(clamped(p + vec2<u32>(1u, 0u))), 0).x);
-    let c = depth_bits(textureLoad(depth, vec2<i32>(clamped(p + vec2<u32>(0u, 1u))), 0).x);
-    let d = depth_bits(textureLoad(depth, vec2<i32>(clamped(p + vec2<u32>(1u, 1u))), 0).x);
+    let a = depth_at(p);
+    let b = depth_at(p + vec2<u32>(1u, 0u));
+    let c = depth_at(p + vec2<u32>(0u, 1u));
+    let d = depth_at(p + vec2<u32>(1u, 1u));
     return min(min(a, b), min(c, d));
 }
 

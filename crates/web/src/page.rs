@@ -652,19 +652,13 @@ impl App {
             .sum();
         let (w, h) = self.depth.size();
         self.depth.set_pieces(pieces(&view));
-        // On WebGL2 OR's depth itself (through the copy pass), not a level
-        // of its pyramid: the pyramid's first pass fetches texels of the
-        // depth texture, which WebGL2 reads as 0 (see
-        // `shaders/depth_copy.wgsl`); the HZB is then built here from
-        // level 0.
-        let level = if self.ctx.is_gl() {
-            0
-        } else {
-            auto_hzb_level(w, h)
-        };
-        let level = self
-            .depth
-            .submit_level(&self.ctx, &self.pool, &gpu_view(&view), &lods, level);
+        let level = self.depth.submit_level(
+            &self.ctx,
+            &self.pool,
+            &gpu_view(&view),
+            &lods,
+            auto_hzb_level(w, h),
+        );
         self.submissions += 1;
         let lag = self.submissions.saturating_sub(self.drawn_submission);
         let n = self.submissions;

@@ -67,6 +67,8 @@ pub(crate) struct Pyramid {
     storage: Option<Storage>,
     /// One uniform buffer and bind group per step (step k makes level k).
     steps: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// Nearest and clamped: the first step reads depth at texel centres.
+    nearest: wgpu::Sampler,
 }
 
 impl Pyramid {
@@ -103,6 +105,12 @@ impl Pyramid {
             },
             count: None,
         };
+        let sampler_entry = |visibility| wgpu::BindGroupLayoutEntry {
+            binding: 4,
+            visibility,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+            count: None,
+        };
         let uniform_entry = |visibility| wgpu::BindGroupLayoutEntry {
             binding: 1,
             visibility,
@@ -120,6 +128,7 @@ impl Pyramid {
                     label: Some("hzb downsample"),
                     entries: &[
                         depth_entry(cs),
+                        sampler_entry(cs),
                         uniform_entry(cs),
                         wgpu::BindGroupLayoutEntry {
                             binding: 2,
@@ -158,7 +167,7 @@ impl Pyramid {
                 let fs = wgpu::ShaderStages::FRAGMENT;
                 let depth_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("hzb downsample from depth"),
-                    entries: &[depth_entry(fs), uniform_entry(fs)],
+                    entries: &[depth_entry(fs), sampler_entry(fs), uniform_entry(fs)],
                 });
                 let level_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("hzb downsample from a level"),
@@ -206,6 +215,10 @@ impl Pyramid {
             made_for: None,
             storage: None,
             steps: Vec::new(),
+            nearest: d.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("hzb depth"),
+                ..Default::default()
+            }),
         }
     }
 
@@ -368,6 +381,10 @@ impl Pyramid {
                 binding: 0,
                 resource: wgpu::BindingResource::TextureView(&depth_view),
             };
+            let sampler_entry = wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::Sampler(&self.nearest),
+            };
             let bind_group = match (&self.pipelines, &storage) {
                 (Pipelines::Compute { layout, .. }, Storage::Compute { buffer, .. }) => d
                     .create_bind_group(&wgpu::BindGroupDescriptor {
@@ -375,6 +392,7 @@ impl Pyramid {
                         layout,
                         entries: &[
                             depth_entry,
+                            sampler_entry,
                             uniform,
                             wgpu::BindGroupEntry {
                                 binding: 2,
@@ -386,7 +404,7 @@ impl Pyramid {
                     .create_bind_group(&wgpu::BindGroupDescriptor {
                         label: Some("hzb level"),
                         layout: depth_layout,
-                        entries: &[depth_entry, uniform],
+                        entries: &[depth_entry, sampler_entry, uniform],
                     }),
                 (Pipelines::Fragment { level_layout, .. }, Storage::Fragment { textures }) => {
                     let src = textures[k - 2].create_view(&Default::default());

@@ -31,7 +31,9 @@ const MAX_ROUNDS: usize = 4096;
 /// How long a message stays in the HUD (milliseconds).
 const MESSAGE_MS: f64 = 6000.0;
 
-/// What a view link restores once the object table is in.
+/// The page's review state: the selection, search and hidden objects
+/// (the viewer's `Objects`), the sections, what they make of traversal's
+/// view, and what the HUD says.
 pub(super) struct Review {
     pub objects: Objects,
     pub sections: Sections,

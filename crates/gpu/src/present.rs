@@ -100,11 +100,18 @@ pub async fn open_device_for_canvas(
     canvas: web_sys::HtmlCanvasElement,
     webgpu: bool,
 ) -> Result<(GpuContext, WindowSurface), WindowError> {
+    let instance = |backends| {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        wgpu::Instance::new(desc)
+    };
+    // What was tried, for the error when nothing works.
+    let none = |tried: &[String]| WindowError::NoPresentableAdapter {
+        adapters: tried.join("; "),
+    };
     let mut tried = Vec::new();
     if webgpu {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Backends::BROWSER_WEBGPU;
-        let instance = wgpu::Instance::new(desc);
+        let instance = instance(wgpu::Backends::BROWSER_WEBGPU);
         match instance
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
@@ -123,16 +130,12 @@ pub async fn open_device_for_canvas(
     } else {
         tried.push("the browser has no WebGPU".to_string());
     }
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::GL;
-    let instance = wgpu::Instance::new(desc);
+    let instance = instance(wgpu::Backends::GL);
     let surface = match instance.create_surface(wgpu::SurfaceTarget::Canvas(canvas)) {
         Ok(s) => s,
         Err(e) => {
             tried.push(format!("nor WebGL2 ({e})"));
-            return Err(WindowError::NoPresentableAdapter {
-                adapters: tried.join("; "),
-            });
+            return Err(none(&tried));
         }
     };
     let adapter = instance
@@ -145,16 +148,12 @@ pub async fn open_device_for_canvas(
         .await
         .map_err(|e| {
             tried.push(format!("nor a WebGL2 adapter ({e})"));
-            WindowError::NoPresentableAdapter {
-                adapters: tried.join("; "),
-            }
+            none(&tried)
         })?;
     let report = crate::AdapterReport::of(&adapter);
     if !report.qualifies() {
         tried.push(format!("WebGL2's {}", report.line()));
-        return Err(WindowError::NoPresentableAdapter {
-            adapters: tried.join("; "),
-        });
+        return Err(none(&tried));
     }
     canvas_device(adapter, surface).await
 }

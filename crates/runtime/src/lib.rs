@@ -70,10 +70,7 @@ pub(crate) fn gpu_view(v: &gigawalk_cull::CullView) -> gigawalk_gpu::View {
         eye: v.camera.position,
         view_proj: v.camera.view_projection_rel(),
         forward: v.camera.forward().as_vec3(),
-        clip: v
-            .section()
-            .and_then(|s| gigawalk_gpu::ClipPlanes::new(&s.relative_to(v.camera.position)))
-            .unwrap_or(gigawalk_gpu::ClipPlanes::NONE),
+        clip: gigawalk_gpu::ClipPlanes::of_section(v.section().map(|s| &**s), v.camera.position),
     }
 }
 

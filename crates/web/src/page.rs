@@ -115,7 +115,7 @@ struct Awaited {
 }
 
 /// What the page reports (as JSON, through [`stats`]).
-#[derive(Default)]
+#[derive(Default, serde::Serialize)]
 struct Stats {
     state: String,
     error: Option<String>,
@@ -163,8 +163,10 @@ struct Stats {
     animation_frames: u64,
     hzb_latency_ms: f64,
     /// How many submissions back the camera lies whose visible set made a
-    /// submission's occluders, summed over submissions, and their count
-    /// (GigaWalk's lag, Section 5: 2).
+    /// submission's occluders, on average (GigaWalk's lag, Section 5: 2),
+    /// its sum and the submissions so far.
+    occluder_lag: f64,
+    #[serde(skip)]
     occluder_lag_sum: u64,
     submissions: u64,
     /// The object table's size once read (`None` before, or without
@@ -175,62 +177,6 @@ struct Stats {
     selected: Option<String>,
     section: Option<String>,
     message: Option<String>,
-}
-
-impl Stats {
-    fn json(&self) -> String {
-        let s = |v: &str| format!("{v:?}");
-        let opt = |v: Option<f64>| v.map_or("null".into(), |v| format!("{v:.1}"));
-        format!(
-            "{{\"state\":{},\"error\":{},\"backend\":{},\"frames\":{},\"fps\":{:.2},\
-             \"triangles\":{},\"draws\":{},\"stand_ins\":{},\"missing\":{},\"visited\":{},\
-             \"file_bytes\":{},\"fetched_bytes\":{},\"requests\":{},\"resident_bytes\":{},\
-             \"first_frame_ms\":{},\"first_frame_fetched\":{},\"failed_lods\":{},\"lod_error\":{},\"in_flight\":{},\
-             \"settled\":{},\"cpu_ms\":{:.2},\"traversal_ms\":{:.2},\"mode\":{},\
-             \"pixel_error\":{},\"occlusion_culled\":{},\"occlusion_used\":{},\
-             \"occluders\":{},\"occluder_triangles\":{},\"hzb_waits\":{},\"hzb_level\":{},\"animation_frames\":{},\"hzb_latency_ms\":{:.1},\"occluder_lag\":{:.3},\"submissions\":{},\
-             \"objects\":{},\"hidden\":{},\"selected\":{},\"section\":{},\"message\":{}}}",
-            s(&self.state),
-            self.error.as_deref().map_or("null".into(), s),
-            s(&self.backend),
-            self.frames,
-            self.fps,
-            self.triangles,
-            self.draws,
-            self.stand_ins,
-            self.missing,
-            self.visited,
-            self.file_bytes,
-            self.fetched_bytes,
-            self.requests,
-            self.resident_bytes,
-            opt(self.first_frame_ms),
-            self.first_frame_fetched,
-            self.failed_lods,
-            self.lod_error.as_deref().map_or("null".into(), s),
-            self.in_flight,
-            self.settled,
-            self.cpu_ms,
-            self.traversal_ms,
-            s(&self.mode),
-            self.pixel_error,
-            self.occlusion_culled,
-            self.occlusion_used,
-            self.occluders,
-            self.occluder_triangles,
-            self.hzb_waits,
-            self.hzb_level,
-            self.animation_frames,
-            self.hzb_latency_ms,
-            self.occluder_lag_sum as f64 / self.submissions.max(1) as f64,
-            self.submissions,
-            self.objects.map_or("null".into(), |n| n.to_string()),
-            self.hidden,
-            self.selected.as_deref().map_or("null".into(), s),
-            self.section.as_deref().map_or("null".into(), s),
-            self.message.as_deref().map_or("null".into(), s),
-        )
-    }
 }
 
 thread_local! {
@@ -248,7 +194,7 @@ fn set_stats(f: impl FnOnce(&mut Stats)) {
 /// error), `error`, frame and fetch counts. Tests poll it.
 #[wasm_bindgen]
 pub fn stats() -> String {
-    STATS.with(|s| s.borrow().json())
+    STATS.with(|s| serde_json::to_string(&*s.borrow()).expect("the stats serialize"))
 }
 
 fn now_ms() -> f64 {
@@ -664,7 +610,8 @@ impl App {
         let n = self.submissions;
         set_stats(|s| {
             s.occluder_lag_sum += lag;
-            s.submissions += 1;
+            s.submissions = n;
+            s.occluder_lag = s.occluder_lag_sum as f64 / n as f64;
         });
         self.awaited.push_back(Awaited {
             submission: n,
@@ -888,11 +835,14 @@ thread_local! {
     static APP: RefCell<Option<Rc<RefCell<App>>>> = const { RefCell::new(None) };
 }
 
+/// The running page, for calls that outlive one borrow of it (they await).
+fn running_app() -> Result<Rc<RefCell<App>>, JsValue> {
+    APP.with(|a| a.borrow().clone())
+        .ok_or_else(|| JsValue::from_str("the page has not started"))
+}
+
 fn with_app<T>(f: impl FnOnce(&mut App) -> Result<T, String>) -> Result<T, JsValue> {
-    APP.with(|a| match a.borrow().as_ref() {
-        Some(app) => f(&mut app.borrow_mut()).map_err(|e| JsValue::from_str(&e)),
-        None => Err(JsValue::from_str("the page has not started")),
-    })
+    f(&mut running_app()?.borrow_mut()).map_err(|e| JsValue::from_str(&e))
 }
 
 /// Loads a camera path (docs/path-format.md, as text); returns its
@@ -951,10 +901,7 @@ fn gpu_view(view: &CullView) -> gigawalk_gpu::View {
         eye: view.camera.position,
         view_proj: view.camera.view_projection_rel(),
         forward: view.camera.forward().as_vec3(),
-        clip: view
-            .section()
-            .and_then(|s| ClipPlanes::new(&s.relative_to(view.camera.position)))
-            .unwrap_or(ClipPlanes::NONE),
+        clip: ClipPlanes::of_section(view.section().map(|s| &**s), view.camera.position),
     }
 }
 
@@ -980,40 +927,24 @@ pub fn set_hud(on: bool) -> Result<(), JsValue> {
 /// section cuts away are skipped. Selects nothing.
 #[wasm_bindgen]
 pub async fn pick(x: f64, y: f64) -> Result<String, JsValue> {
-    let app = APP
-        .with(|a| a.borrow().clone())
-        .ok_or_else(|| JsValue::from_str("the page has not started"))?;
+    let app = running_app()?;
     review::ask_for_table(&app);
     let hit = review::pick_at(&app, (x, y))
         .await
         .map_err(|e| JsValue::from_str(&e))?;
     let a = app.borrow();
-    let object = hit
-        .and_then(|h| h.object)
-        .and_then(|o| {
-            let t = a.review.objects.table().ok()?;
-            t.object(o).map(|r| (o, r.clone()))
-        })
-        .map_or("null".to_string(), |(id, r)| {
-            format!(
-                "{{\"id\":{id},\"name\":{:?},\"file\":{:?},\"path\":{:?},\"metadata\":{}}}",
-                r.name,
-                r.file,
-                r.path,
-                r.metadata
-                    .as_deref()
-                    .map_or("null".into(), |m| format!("{m:?}"))
-            )
-        });
-    let (point, distance) = hit.map_or(("null".to_string(), "null".to_string()), |h| {
-        (
-            format!("[{:?},{:?},{:?}]", h.point.x, h.point.y, h.point.z),
-            format!("{:?}", h.distance),
-        )
+    let object = hit.and_then(|h| h.object).and_then(|o| {
+        let r = a.review.objects.table().ok()?.object(o)?;
+        Some(serde_json::json!({
+            "id": o, "name": r.name, "file": r.file, "path": r.path, "metadata": r.metadata,
+        }))
     });
-    Ok(format!(
-        "{{\"object\":{object},\"point\":{point},\"distance\":{distance}}}"
-    ))
+    Ok(serde_json::json!({
+        "object": object,
+        "point": hit.map(|h| h.point.to_array()),
+        "distance": hit.map(|h| h.distance),
+    })
+    .to_string())
 }
 
 /// The last frame drawn, as RVG made it (before the HUD): `{width,
@@ -1023,9 +954,7 @@ pub async fn pick(x: f64, y: f64) -> Result<String, JsValue> {
 /// blocking the page.
 #[wasm_bindgen]
 pub async fn read_frame() -> Result<js_sys::Object, JsValue> {
-    let app = APP
-        .with(|a| a.borrow().clone())
-        .ok_or_else(|| JsValue::from_str("the page has not started"))?;
+    let app = running_app()?;
     let mut pending = {
         let a = &mut *app.borrow_mut();
         a.pass.submit_read_back(&a.ctx)
@@ -1070,10 +999,7 @@ async fn next_task() {
 /// object there (or clears the selection).
 #[wasm_bindgen]
 pub async fn click(x: f64, y: f64) -> Result<(), JsValue> {
-    let app = APP
-        .with(|a| a.borrow().clone())
-        .ok_or_else(|| JsValue::from_str("the page has not started"))?;
-    review::click(app, (x, y)).await;
+    review::click(running_app()?, (x, y)).await;
     Ok(())
 }
 

@@ -263,14 +263,18 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     // against vfc (full detail) stays within the 1-pixel bound as native
     // replay's tests require of och.
     let camera_path = gigawalk_scene::path::CameraPath::read(&path).unwrap();
-    for pose in [0, 5, 11] {
+    let viewport = gigawalk_cull::Viewport::new(640, 360);
+    let ppr = |pose: usize| {
+        gigawalk_cull::Camera::of_pose(&camera_path.poses[pose], viewport, 1.0)
+            .pixels_per_radian(viewport)
+    };
+    let poses = [0, 5, 11];
+    for pose in poses {
         let frame = |mode: &str| page_frame(&frames, mode, pose);
         let (vfc, hlod, occ, och) = (frame("vfc"), frame("hlod"), frame("occ"), frame("och"));
         assert!(occ == vfc, "pose {pose}: occ's frame is not vfc's");
         assert!(och == hlod, "pose {pose}: och's frame is not hlod's");
-        let fovy = camera_path.poses[pose].fovy;
-        let ppr = 360.0 / (2.0 * (fovy / 2.0).tan());
-        let a = gigawalk_replay::Accuracy::compare(&vfc, &och, 1.0, ppr).unwrap();
+        let a = gigawalk_replay::Accuracy::compare(&vfc, &och, 1.0, ppr(pose)).unwrap();
         let exceeding = a.bound_exceeding_pixels as f64 / a.pixels as f64;
         println!("page och against vfc, pose {pose}: {a:?}");
         assert!(exceeding <= 5e-4, "pose {pose}: {a:?}");
@@ -286,13 +290,10 @@ fn the_page_walks_a_plant_and_draws_what_native_traversal_draws() {
     // so exact depth comparisons mean nothing here; the page must cover the
     // same pixels and keep replay's pixel-window bound (its 1e-3 depth
     // match) nearly everywhere: measured at most 0.71% of pixels off.
-    let poses = [0, 5, 11];
     if let Some(native) = native_vfc_frames(&gwk, &path, &poses) {
         for (pose, native) in poses.into_iter().zip(native) {
             let page = page_frame(&frames, "vfc", pose);
-            let fovy = camera_path.poses[pose].fovy;
-            let ppr = 360.0 / (2.0 * (fovy / 2.0).tan());
-            let a = gigawalk_replay::Accuracy::compare(&native, &page, 0.0, ppr).unwrap();
+            let a = gigawalk_replay::Accuracy::compare(&native, &page, 0.0, ppr(pose)).unwrap();
             println!("page vfc against native vfc, pose {pose}: {a:?}");
             let empty = |f: &gigawalk_gpu::FrameImage| {
                 f.depth.depth.iter().filter(|&&z| z == 0.0).count() as f64

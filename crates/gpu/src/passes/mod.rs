@@ -74,6 +74,18 @@ impl ClipPlanes {
         })
     }
 
+    /// What `section` keeps, its half-spaces relative to `eye` (the
+    /// passes draw camera-relative); nothing cut without one, or where it
+    /// has more than [`MAX_CLIP_PLANES`].
+    pub fn of_section(
+        section: Option<&gigawalk_scene::section::Section>,
+        eye: glam::DVec3,
+    ) -> ClipPlanes {
+        section
+            .and_then(|s| ClipPlanes::new(&s.relative_to(eye)))
+            .unwrap_or(ClipPlanes::NONE)
+    }
+
     pub fn count(&self) -> usize {
         self.count as usize
     }

@@ -69,6 +69,12 @@ impl Review {
         self.message = Some((text, now_ms()));
     }
 
+    /// Says what an action came to, done or refused.
+    pub fn say_either(&mut self, r: Result<String, String>) {
+        let (Ok(m) | Err(m)) = r;
+        self.say(m);
+    }
+
     /// The message while it is fresh.
     pub fn message(&self) -> Option<&str> {
         self.message
@@ -155,31 +161,27 @@ pub(super) fn ask_for_table(app: &Rc<RefCell<App>>) {
                 "object identity unreadable ({e}): pick, find and hide are off"
             )),
         };
-        let objects = table.as_ref().map_or(0, |t| t.objects().len());
+        let objects = table.as_ref().ok().map(|t| t.objects().len());
         if let Err(why) = &table {
             web_sys::console::warn_1(&why.into());
         }
         a.review.objects = Objects::new(table, None);
-        set_stats(|s| s.objects = Some(objects));
+        set_stats(|s| s.objects = objects);
         if let Some(view) = a.review.pending.take() {
             let m = a.review.objects.restore(&view);
             a.review.say(m);
         }
-        a.refresh_visibility();
     });
 }
 
 impl App {
     /// Builds the visibility again if the hidden set or the selection
-    /// changed.
+    /// changed (each frame does, and a pick before it casts).
     pub(super) fn refresh_visibility(&mut self) {
         if self.review.objects.take_changed() {
             self.review.visibility = self.review.objects.visibility(self.reader.skeleton());
-            let (hidden, of) = self.review.objects.hidden_count();
-            set_stats(|s| {
-                s.hidden = hidden;
-                s.objects = Some(of).filter(|_| self.review.objects.table().is_ok());
-            });
+            let (hidden, _) = self.review.objects.hidden_count();
+            set_stats(|s| s.hidden = hidden);
         }
     }
 
@@ -236,18 +238,23 @@ impl App {
 
     /// The review keys; whether `code` was one.
     pub(super) fn review_key(&mut self, code: &str, app: &Rc<RefCell<App>>) -> bool {
-        let r = match code {
-            "KeyH" => Some(self.review.objects.hide()),
-            "KeyI" => Some(self.review.objects.isolate()),
-            "KeyU" => Some(self.review.objects.show_all()),
-            "KeyF" => {
-                self.frame_selection();
-                None
+        match code {
+            "KeyH" => {
+                let r = self.review.objects.hide();
+                self.review.say_either(r);
             }
+            "KeyI" => {
+                let r = self.review.objects.isolate();
+                self.review.say_either(r);
+            }
+            "KeyU" => {
+                let r = self.review.objects.show_all();
+                self.review.say_either(r);
+            }
+            "KeyF" => self.frame_selection(),
             "Enter" | "NumpadEnter" => {
                 let found = self.review.objects.next_match();
                 self.after_find(found);
-                None
             }
             "Slash" | "NumpadDivide" => {
                 let text = web_sys::window()
@@ -260,13 +267,8 @@ impl App {
                     let found = self.review.objects.find(t.trim());
                     self.after_find(found);
                 }
-                None
             }
-            "KeyX" => {
-                let at = self.review.cursor;
-                spawn_local(section_plane_at(app.clone(), at));
-                None
-            }
+            "KeyX" => spawn_local(section_plane_at(app.clone(), self.review.cursor)),
             "BracketRight" | "BracketLeft" => {
                 let steps = if code == "BracketRight" { 1.0 } else { -1.0 };
                 let eye = self.camera().position;
@@ -274,31 +276,27 @@ impl App {
                 if !self.review.sections.move_active(steps, eye, diagonal) {
                     self.review.say(NO_PLANE.into());
                 }
-                None
             }
             "Backslash" => {
                 if !self.review.sections.flip_active() {
                     self.review.say(NO_PLANE.into());
                 }
-                None
             }
-            "KeyJ" => {
-                spawn_local(section_box(app.clone()));
-                None
+            "KeyJ" => spawn_local(section_box(app.clone())),
+            "Digit0" => {
+                let m = self.review.sections.toggle();
+                self.review.say(m);
             }
-            "Digit0" => Some(Ok(self.review.sections.toggle())),
-            "Delete" => Some(Ok(self.review.sections.clear())),
+            "Delete" => {
+                let m = self.review.sections.clear();
+                self.review.say(m);
+            }
             "KeyV" => {
-                let m = self.share_link();
-                Some(m)
+                let r = self.share_link();
+                self.review.say_either(r);
             }
             _ => return false,
-        };
-        match r {
-            Some(Ok(m)) | Some(Err(m)) => self.review.say(m),
-            None => {}
         }
-        self.refresh_visibility();
         true
     }
 
@@ -312,7 +310,6 @@ impl App {
             }
             Err(why) => self.review.say(why),
         }
-        self.refresh_visibility();
     }
 
     /// `V`: the view into the address bar (`#view=`), to copy and share.
@@ -408,7 +405,6 @@ pub(super) async fn click(app: Rc<RefCell<App>>, at: (f64, f64)) {
             }
         }
     }
-    a.refresh_visibility();
 }
 
 /// `X`: a section plane through the surface under `at`, facing the eye.
@@ -416,14 +412,12 @@ async fn section_plane_at(app: Rc<RefCell<App>>, at: (f64, f64)) {
     let hit = pick_at(&app, at).await;
     let mut a = app.borrow_mut();
     let forward = a.camera().forward();
-    let m = match hit {
-        Ok(Some(h)) => match a.review.sections.place_plane(h.point, forward) {
-            Ok(m) | Err(m) => m,
-        },
-        Ok(None) => "section plane: no surface under the cursor to cut at".into(),
-        Err(e) => e,
+    let r = match hit {
+        Ok(Some(h)) => a.review.sections.place_plane(h.point, forward),
+        Ok(None) => Err("section plane: no surface under the cursor to cut at".into()),
+        Err(e) => Err(e),
     };
-    a.review.say(m);
+    a.review.say_either(r);
 }
 
 /// `J`: a section box around the selection, or around what is in view.
@@ -459,8 +453,6 @@ async fn section_box(app: Rc<RefCell<App>>) {
         }
     };
     let mut a = app.borrow_mut();
-    let m = match around.and_then(|b| a.review.sections.box_around(&b, diagonal)) {
-        Ok(m) | Err(m) => m,
-    };
-    a.review.say(m);
+    let r = around.and_then(|b| a.review.sections.box_around(&b, diagonal));
+    a.review.say_either(r);
 }

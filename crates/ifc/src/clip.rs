@@ -108,15 +108,19 @@ pub fn clip(tris: Vec<Tri>, plane: &Plane, scale: f64) -> Vec<Tri> {
     front
 }
 
-/// `tris` minus the convex solid `c`.
+/// `tris` minus the convex solid `c`. Each triangle is cut as a convex
+/// polygon: what lies in front of a plane is done (fanned into
+/// triangles), what lies behind goes on to the next plane, and what is
+/// behind all of them is inside the solid and dropped.
 pub fn subtract(tris: Vec<Tri>, c: &Convex, scale: f64) -> Vec<Tri> {
     if c.planes.is_empty() {
         return tris;
     }
+    let eps = EPS.max(scale * 1e-9);
     let mut out = Vec::with_capacity(tris.len());
-    let mut inside = Vec::new();
-    let mut next = Vec::new();
-    for t in tris {
+    let mut front = Vec::new();
+    let mut back = Vec::new();
+    'tris: for t in tris {
         if let Some((lo, hi)) = c.bounds {
             let (tlo, thi) = (
                 t.p[0].min(t.p[1]).min(t.p[2]),
@@ -127,26 +131,63 @@ pub fn subtract(tris: Vec<Tri>, c: &Convex, scale: f64) -> Vec<Tri> {
                 continue;
             }
         }
-        inside.clear();
-        inside.push(t);
-        for (i, plane) in c.planes.iter().enumerate() {
-            next.clear();
-            for s in &inside {
-                // A piece wholly in front of a plane still to come is
-                // outside the solid: kept whole, not cut further.
-                if c.planes[i..].iter().any(|p| in_front(s, p, scale)) {
-                    out.push(*s);
-                } else {
-                    split(s, plane, scale, &mut out, &mut next);
+        // A triangle wholly in front of any plane is outside: kept whole.
+        if c.planes.iter().any(|p| in_front(&t, p, scale)) {
+            out.push(t);
+            continue;
+        }
+        let normal = t.cross();
+        let mut inside: Vec<DVec3> = t.p.to_vec();
+        for plane in &c.planes {
+            let d: Vec<f64> = inside.iter().map(|&q| plane.distance(q)).collect();
+            let pos = d.iter().any(|&x| x > eps);
+            let neg = d.iter().any(|&x| x < -eps);
+            match (pos, neg) {
+                // In the plane: behind when it faces as the plane does (a
+                // face the solid shares goes with it).
+                (false, false) if normal.dot(plane.n) <= 0.0 => {
+                    fan(&inside, t.c, &mut out);
+                    continue 'tris;
+                }
+                (false, _) => continue,
+                (true, false) => {
+                    fan(&inside, t.c, &mut out);
+                    continue 'tris;
+                }
+                (true, true) => {}
+            }
+            front.clear();
+            back.clear();
+            for i in 0..inside.len() {
+                let j = (i + 1) % inside.len();
+                let (p, q, dp, dq) = (inside[i], inside[j], d[i], d[j]);
+                if dp >= -eps {
+                    front.push(p);
+                }
+                if dp <= eps {
+                    back.push(p);
+                }
+                if (dp > eps && dq < -eps) || (dp < -eps && dq > eps) {
+                    let x = p + (q - p) * (dp / (dp - dq));
+                    front.push(x);
+                    back.push(x);
                 }
             }
-            std::mem::swap(&mut inside, &mut next);
-            if inside.is_empty() {
-                break;
-            }
+            fan(&front, t.c, &mut out);
+            std::mem::swap(&mut inside, &mut back);
         }
     }
     out
+}
+
+/// A convex polygon's triangles, fanned from its first corner.
+fn fan(poly: &[DVec3], c: [f32; 4], out: &mut Vec<Tri>) {
+    for i in 1..poly.len().saturating_sub(1) {
+        out.push(Tri {
+            p: [poly[0], poly[i], poly[i + 1]],
+            c,
+        });
+    }
 }
 
 /// Whether all of `t` is in front of `plane` (touching it counts).

@@ -93,144 +93,244 @@ struct Streams {
     normal_bits: u8,
 }
 
-/// `lod` as a .glb: `origin` is the scene origin the tileset's root sits
-/// at; `objects` the scene's object table when identity is known.
+/// One stored level of a content and what is known of its objects.
+pub(crate) struct Level<'a> {
+    pub stored: StoredLod,
+    pub identity: Identity<'a>,
+}
+
+/// A level's vertices as they join its group's streams.
+struct Placed {
+    /// Its group (see [`Key`]).
+    key: Key,
+    /// The node that places it: translation from the scene origin, and
+    /// the grid's step (1 for f32 positions).
+    translation: DVec3,
+    scale: [f32; 3],
+    /// Indices, rebased to the group's vertices.
+    indices: Vec<u32>,
+    /// The distinct features its vertices carry (0: none).
+    features: usize,
+    material: usize,
+}
+
+/// Levels whose vertices can share streams: positions on a 16-bit grid or
+/// f32, wide normals, per-vertex colours, feature IDs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Key {
+    grid: bool,
+    wide_normals: bool,
+    colours: bool,
+    features: bool,
+}
+
+/// One group's streams: every vertex of its levels, level after level.
+#[derive(Default)]
+struct Group {
+    q: Vec<[u16; 4]>,
+    p: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    colours: Vec<[u8; 4]>,
+    features: Vec<u32>,
+}
+
+impl Group {
+    fn len(&self) -> usize {
+        self.normals.len()
+    }
+}
+
+/// `levels` as one .glb: one node and mesh per level (each level keeps
+/// its own grid, so the node's scale and translation place it exactly),
+/// the levels' vertices in one set of streams per [`Key`], their indices
+/// in one stream per index width, and one property table of every object
+/// the content's feature IDs name. `origin` is the scene origin the
+/// tileset's root sits at; `objects` the scene's object table when
+/// identity is known.
 pub(crate) fn content(
-    stored: StoredLod,
-    identity: Identity,
+    levels: Vec<Level>,
     objects: Option<&[ObjectRecord]>,
     origin: DVec3,
     encoding: Encoding,
 ) -> Result<Content, String> {
-    let mut s = streams(stored, origin, encoding);
-    let triangles = s.indices.len() as u64 / 3;
-    if triangles == 0 {
-        return Err("the level has no triangles".into());
-    }
-    // Per-triangle object ids, then the content's objects in id order and
-    // each triangle's index among them (its feature ID).
-    let per_triangle: Option<Vec<u32>> = match (identity, objects) {
-        (Identity::None, _) | (_, None) => None,
-        (Identity::One(o), Some(_)) => Some(vec![o; triangles as usize]),
-        (Identity::Runs(runs), Some(_)) => {
-            let mut t = Vec::with_capacity(triangles as usize);
-            for r in runs {
-                t.extend(std::iter::repeat_n(r.object, r.triangles as usize));
-            }
-            (t.len() as u64 == triangles).then_some(t)
+    // Per level: its streams and its triangles' objects.
+    let mut prepared = Vec::with_capacity(levels.len());
+    let mut triangles = 0u64;
+    for level in levels {
+        let s = streams(level.stored, origin, encoding);
+        let n = s.indices.len() / 3;
+        if n == 0 {
+            continue;
         }
-    };
-    let features = per_triangle.map(|t| {
-        let mut ids = t.clone();
-        ids.sort_unstable();
-        ids.dedup();
-        let local: Vec<u32> = t
-            .iter()
-            .map(|o| ids.binary_search(o).unwrap_or(0) as u32)
-            .collect();
-        (ids, local)
-    });
-    let feature_of_vertex = features
-        .as_ref()
-        .map(|(_, local)| split_by_feature(&mut s, local));
-    let bounds = bounds_of(&s.positions, origin);
-    let mut b = Builder::new(encoding == Encoding::Meshopt);
-    let mut attributes = Map::new();
-    let nv = match &s.positions {
-        Positions::Grid { q, .. } => q.len(),
-        Positions::Float { p, .. } => p.len(),
-    };
+        triangles += n as u64;
+        let per_triangle: Option<Vec<u32>> = match (level.identity, objects) {
+            (Identity::None, _) | (_, None) => None,
+            (Identity::One(o), Some(_)) => Some(vec![o; n]),
+            (Identity::Runs(runs), Some(_)) => {
+                let mut t = Vec::with_capacity(n);
+                for r in runs {
+                    t.extend(std::iter::repeat_n(r.object, r.triangles as usize));
+                }
+                (t.len() == n).then_some(t)
+            }
+        };
+        prepared.push((s, per_triangle));
+    }
+    if triangles == 0 {
+        return Err("the levels have no triangles".into());
+    }
+    // The content's objects in id order: row i of its property table is
+    // feature ID i.
+    let mut ids: Vec<u32> = prepared
+        .iter()
+        .filter_map(|(_, t)| t.as_ref())
+        .flatten()
+        .copied()
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
 
-    // Positions and the node that places them.
-    let mut node = Map::new();
-    node.insert("mesh".into(), json!(0));
-    let scale = match &s.positions {
-        Positions::Grid {
-            q,
+    let mut groups: std::collections::BTreeMap<Key, Group> = Default::default();
+    let mut placed = Vec::with_capacity(prepared.len());
+    let mut materials: Vec<[f32; 4]> = Vec::new();
+    let mut bounds = Aabb::EMPTY;
+    for (mut s, per_triangle) in prepared {
+        let feature_of_vertex = per_triangle.map(|t| {
+            let local: Vec<u32> = t
+                .iter()
+                .map(|o| ids.binary_search(o).unwrap_or(0) as u32)
+                .collect();
+            split_by_feature(&mut s, &local)
+        });
+        bounds = bounds.union(&bounds_of(&s.positions, origin));
+        let (translation, scale) = match &s.positions {
+            Positions::Grid {
+                translation, scale, ..
+            } => (*translation, *scale),
+            Positions::Float { translation, .. } => (*translation, [1.0; 3]),
+        };
+        let anisotropy = {
+            let (lo, hi) = scale
+                .iter()
+                .fold((f32::MAX, 0f32), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+            hi / lo.max(f32::MIN_POSITIVE)
+        };
+        // 8 bits where the scene stores 8 and the scale's anisotropy (which
+        // multiplies a stored normal's angular error by at most itself) is
+        // at most 4: within 1.6 degrees, about what the scene's 8 bits give
+        // (0.4); else 16.
+        let key = Key {
+            grid: matches!(s.positions, Positions::Grid { .. }),
+            wide_normals: encoding != Encoding::Plain && (s.normal_bits > 8 || anisotropy > 4.0),
+            colours: s.colours.is_some(),
+            features: feature_of_vertex.is_some(),
+        };
+        let g = groups.entry(key).or_default();
+        let base = g.len();
+        match s.positions {
+            Positions::Grid { q, .. } => g.q.extend(q),
+            Positions::Float { p, .. } => g.p.extend(p),
+        }
+        // Under a non-uniform node scale a client transforms normals by
+        // the inverse transpose, diag(1 / scale), so each is stored
+        // multiplied by the scale and renormalized, which that undoes.
+        g.normals.extend(s.normals.iter().map(|n| {
+            let v = glam::Vec3::from(*n) * glam::Vec3::from(scale);
+            v.try_normalize().unwrap_or(glam::Vec3::Y).to_array()
+        }));
+        let mut colour = [1.0f32; 4];
+        match &s.colours {
+            Some(c) => g.colours.extend_from_slice(c),
+            None => {
+                for (b, c) in colour.iter_mut().zip(s.uniform).take(3) {
+                    *b = srgb_to_linear(c);
+                }
+            }
+        }
+        let mut features = 0;
+        if let Some(fv) = feature_of_vertex {
+            let mut used = fv.clone();
+            used.sort_unstable();
+            used.dedup();
+            features = used.len();
+            g.features.extend(fv);
+        }
+        let material = match materials.iter().position(|m| *m == colour) {
+            Some(m) => m,
+            None => {
+                materials.push(colour);
+                materials.len() - 1
+            }
+        };
+        placed.push(Placed {
+            key,
             translation,
             scale,
-        } => {
-            let (lo, hi) = extent_u16(q);
-            let v = b.vertex_view(q, None)?;
+            indices: s.indices.iter().map(|&i| i + base as u32).collect(),
+            features,
+            material,
+        });
+    }
+
+    let mut b = Builder::new(encoding == Encoding::Meshopt);
+    // Vertex streams, group by group.
+    let wide_ids = ids.len() > u16::MAX as usize;
+    let mut group_attributes: std::collections::BTreeMap<Key, (Map<String, Value>, usize)> =
+        Default::default();
+    for (key, g) in &groups {
+        let nv = g.len();
+        let mut attributes = Map::new();
+        if key.grid {
+            let (lo, hi) = extent_u16(&g.q);
+            let v = b.vertex_view(&g.q, None)?;
             attributes.insert(
                 "POSITION".into(),
                 json!(b.accessor(v, U16, false, nv, "VEC3", Some((json!(lo), json!(hi))))),
             );
-            node.insert("translation".into(), json!(translation.to_array()));
-            node.insert("scale".into(), json!(scale));
-            *scale
-        }
-        Positions::Float { p, translation } => {
-            let (lo, hi) = extent_f32(p);
-            let v = b.vertex_view(p, None)?;
+        } else {
+            let (lo, hi) = extent_f32(&g.p);
+            let v = b.vertex_view(&g.p, None)?;
             attributes.insert(
                 "POSITION".into(),
                 json!(b.accessor(v, F32, false, nv, "VEC3", Some((json!(lo), json!(hi))))),
             );
-            node.insert("translation".into(), json!(translation.to_array()));
-            [1.0; 3]
         }
-    };
-
-    // Normals: under a non-uniform node scale a client transforms them by
-    // the inverse transpose, diag(1 / scale), so each is stored multiplied
-    // by the scale and renormalized, which that undoes.
-    let normals: Vec<[f32; 3]> = s
-        .normals
-        .iter()
-        .map(|n| {
-            let v = glam::Vec3::from(*n) * glam::Vec3::from(scale);
-            v.try_normalize().unwrap_or(glam::Vec3::Y).to_array()
-        })
-        .collect();
-    let anisotropy = {
-        let (lo, hi) = scale
-            .iter()
-            .fold((f32::MAX, 0f32), |(lo, hi), &x| (lo.min(x), hi.max(x)));
-        hi / lo.max(f32::MIN_POSITIVE)
-    };
-    // 8 bits where the scene stores 8 and the scale's anisotropy (which
-    // multiplies a stored normal's angular error by at most itself) is
-    // at most 4: within 1.6 degrees, about what the scene's 8 bits give
-    // (0.4); else 16.
-    let wide_normals = s.normal_bits > 8 || anisotropy > 4.0;
-    let normal_accessor = match encoding {
-        Encoding::Plain => {
-            let v = b.vertex_view(&normals, None)?;
-            b.accessor(v, F32, false, nv, "VEC3", None)
-        }
-        Encoding::Quantized => {
-            if wide_normals {
-                let q: Vec<[i16; 4]> = normals.iter().map(|n| snorm16(*n)).collect();
-                let v = b.vertex_view(&q, None)?;
-                b.accessor(v, I16, true, nv, "VEC3", None)
-            } else {
-                let q: Vec<[i8; 4]> = normals.iter().map(|n| snorm8(*n)).collect();
-                let v = b.vertex_view(&q, None)?;
-                b.accessor(v, I8, true, nv, "VEC3", None)
+        let normals = &g.normals;
+        let normal_accessor = match encoding {
+            Encoding::Plain => {
+                let v = b.vertex_view(normals, None)?;
+                b.accessor(v, F32, false, nv, "VEC3", None)
             }
-        }
-        Encoding::Meshopt => {
-            let n4: Vec<[f32; 4]> = normals.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect();
-            if wide_normals {
-                let q = meshopt::encode_filter_oct::<i16>(&n4, 16);
-                let v = b.vertex_view(&q, Some("OCTAHEDRAL"))?;
-                b.accessor(v, I16, true, nv, "VEC3", None)
-            } else {
-                let q = meshopt::encode_filter_oct::<i8>(&n4, 8);
-                let v = b.vertex_view(&q, Some("OCTAHEDRAL"))?;
-                b.accessor(v, I8, true, nv, "VEC3", None)
+            Encoding::Quantized => {
+                if key.wide_normals {
+                    let q: Vec<[i16; 4]> = normals.iter().map(|n| snorm16(*n)).collect();
+                    let v = b.vertex_view(&q, None)?;
+                    b.accessor(v, I16, true, nv, "VEC3", None)
+                } else {
+                    let q: Vec<[i8; 4]> = normals.iter().map(|n| snorm8(*n)).collect();
+                    let v = b.vertex_view(&q, None)?;
+                    b.accessor(v, I8, true, nv, "VEC3", None)
+                }
             }
-        }
-    };
-    attributes.insert("NORMAL".into(), json!(normal_accessor));
-
-    // Colours: sRGB bytes in the scene, linear in glTF; 16 bits keep the
-    // dark shades 8 linear bits would band.
-    let mut base = [1.0f32; 4];
-    match &s.colours {
-        Some(c) => {
-            let lin: Vec<[u16; 4]> = c
+            Encoding::Meshopt => {
+                let n4: Vec<[f32; 4]> = normals.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect();
+                if key.wide_normals {
+                    let q = meshopt::encode_filter_oct::<i16>(&n4, 16);
+                    let v = b.vertex_view(&q, Some("OCTAHEDRAL"))?;
+                    b.accessor(v, I16, true, nv, "VEC3", None)
+                } else {
+                    let q = meshopt::encode_filter_oct::<i8>(&n4, 8);
+                    let v = b.vertex_view(&q, Some("OCTAHEDRAL"))?;
+                    b.accessor(v, I8, true, nv, "VEC3", None)
+                }
+            }
+        };
+        attributes.insert("NORMAL".into(), json!(normal_accessor));
+        if key.colours {
+            // sRGB bytes in the scene, linear in glTF; 16 bits keep the
+            // dark shades 8 linear bits would band.
+            let lin: Vec<[u16; 4]> = g
+                .colours
                 .iter()
                 .map(|c| {
                     [
@@ -247,55 +347,89 @@ pub(crate) fn content(
                 json!(b.accessor(v, U16, true, nv, "VEC4", None)),
             );
         }
-        None => {
-            for (b, c) in base.iter_mut().zip(s.uniform).take(3) {
-                *b = srgb_to_linear(c);
+        if key.features {
+            // A u16 padded to 4 bytes, as vertex data must be.
+            let acc = if !wide_ids {
+                let d: Vec<[u16; 2]> = g.features.iter().map(|&f| [f as u16, 0]).collect();
+                let v = b.vertex_view(&d, None)?;
+                b.accessor(v, U16, false, nv, "SCALAR", None)
+            } else {
+                let d: Vec<f32> = g.features.iter().map(|&f| f as f32).collect();
+                let v = b.vertex_view(&d, None)?;
+                b.accessor(v, F32, false, nv, "SCALAR", None)
+            };
+            attributes.insert("_FEATURE_ID_0".into(), json!(acc));
+        }
+        group_attributes.insert(*key, (attributes, nv));
+    }
+
+    // Indices: one stream of 16-bit ones (levels whose group has at most
+    // 65,536 vertices) and one of 32-bit, an accessor per level into it.
+    let narrow_of = |p: &Placed| group_attributes[&p.key].1 <= u16::MAX as usize + 1;
+    let mut index_accessors = vec![0usize; placed.len()];
+    for narrow in [true, false] {
+        let levels: Vec<usize> = (0..placed.len())
+            .filter(|&i| narrow_of(&placed[i]) == narrow)
+            .collect();
+        if levels.is_empty() {
+            continue;
+        }
+        let stream: Vec<u32> = levels
+            .iter()
+            .flat_map(|&i| placed[i].indices.iter().copied())
+            .collect();
+        let vertices = levels
+            .iter()
+            .map(|&i| group_attributes[&placed[i].key].1)
+            .max()
+            .unwrap_or(0);
+        let (size, ty) = if narrow { (2, U16) } else { (4, U32) };
+        let v = b.index_view(&stream, vertices, narrow)?;
+        let mut at = 0usize;
+        for &i in &levels {
+            let n = placed[i].indices.len();
+            index_accessors[i] = b.accessor(v, ty, false, n, "SCALAR", None);
+            if at > 0 {
+                b.accessors[index_accessors[i]]["byteOffset"] = json!(at * size);
             }
+            at += n;
         }
     }
 
-    // Feature IDs (a u16 padded to 4 bytes, as vertex data must be).
-    let mut primitive_ext = Map::new();
-    let mut root_ext = Map::new();
-    let mut feature_count = 0;
-    if let (Some((ids, _)), Some(fv), Some(records)) = (&features, &feature_of_vertex, objects) {
-        feature_count = ids.len();
-        let acc = if ids.len() <= u16::MAX as usize {
-            let d: Vec<[u16; 2]> = fv.iter().map(|&f| [f as u16, 0]).collect();
-            let v = b.vertex_view(&d, None)?;
-            b.accessor(v, U16, false, nv, "SCALAR", None)
-        } else {
-            let d: Vec<f32> = fv.iter().map(|&f| f as f32).collect();
-            let v = b.vertex_view(&d, None)?;
-            b.accessor(v, F32, false, nv, "SCALAR", None)
-        };
-        attributes.insert("_FEATURE_ID_0".into(), json!(acc));
-        primitive_ext.insert(
-            "EXT_mesh_features".into(),
-            json!({"featureIds": [{
-                "featureCount": ids.len(),
+    let mut nodes = Vec::with_capacity(placed.len());
+    let mut meshes = Vec::with_capacity(placed.len());
+    for (i, p) in placed.iter().enumerate() {
+        let mut primitive = json!({
+            "attributes": group_attributes[&p.key].0,
+            "indices": index_accessors[i],
+            "material": p.material,
+        });
+        if p.features > 0 {
+            primitive["extensions"] = json!({"EXT_mesh_features": {"featureIds": [{
+                "featureCount": p.features,
                 "attribute": 0,
                 "propertyTable": 0,
                 "label": "object",
-            }]}),
-        );
+            }]}});
+        }
+        meshes.push(json!({"primitives": [primitive]}));
+        let mut node = json!({"mesh": i, "translation": p.translation.to_array()});
+        if p.scale != [1.0; 3] {
+            node["scale"] = json!(p.scale);
+        }
+        nodes.push(node);
+    }
+    let feature_count = if placed.iter().any(|p| p.features > 0) {
+        ids.len()
+    } else {
+        0
+    };
+    let mut root_ext = Map::new();
+    if let (true, Some(records)) = (feature_count > 0, objects) {
         root_ext.insert(
             "EXT_structural_metadata".into(),
-            property_table(&mut b, ids, records),
+            property_table(&mut b, &ids, records),
         );
-    }
-
-    // Indices: 16 bits when every vertex fits.
-    let index_accessor = b.index_accessor(&s.indices, nv)?;
-    std::mem::take(&mut s.indices);
-
-    let mut primitive = json!({
-        "attributes": attributes,
-        "indices": index_accessor,
-        "material": 0,
-    });
-    if !primitive_ext.is_empty() {
-        primitive["extensions"] = Value::Object(primitive_ext);
     }
     let mut used = Vec::new();
     let mut required = Vec::new();
@@ -307,22 +441,28 @@ pub(crate) fn content(
         used.push("EXT_meshopt_compression");
         required.push("EXT_meshopt_compression");
     }
-    if feature_count > 0 {
+    if !root_ext.is_empty() {
         used.push("EXT_mesh_features");
         used.push("EXT_structural_metadata");
     }
+    let materials: Vec<Value> = materials
+        .iter()
+        .map(|&c| {
+            json!({
+                "pbrMetallicRoughness": material_factors(c),
+                // Models' windings are not consistent enough to cull back
+                // faces (gigawalk draws both sides too).
+                "doubleSided": true,
+            })
+        })
+        .collect();
     let mut doc = json!({
         "asset": {"version": "2.0"},
         "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [node],
-        "meshes": [{"primitives": [primitive]}],
-        "materials": [{
-            "pbrMetallicRoughness": material_factors(base),
-            // Models' windings are not consistent enough to cull back faces
-            // (gigawalk draws both sides too).
-            "doubleSided": true,
-        }],
+        "scenes": [{"nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
         "accessors": b.accessors,
         "bufferViews": b.views,
     });
@@ -699,14 +839,19 @@ impl Builder {
         self.views.len() - 1
     }
 
-    /// The triangle list, 16-bit indices when every vertex fits.
-    fn index_accessor(&mut self, indices: &[u32], vertices: usize) -> Result<usize, String> {
-        let narrow = vertices <= u16::MAX as usize + 1;
-        let (size, ty) = if narrow { (2, U16) } else { (4, U32) };
-        let v = if self.meshopt {
+    /// A stream of triangle lists, stored as 16-bit indices when
+    /// `narrow` (every index below 65,536), else 32-bit.
+    fn index_view(
+        &mut self,
+        indices: &[u32],
+        vertices: usize,
+        narrow: bool,
+    ) -> Result<usize, String> {
+        let size = if narrow { 2 } else { 4 };
+        if self.meshopt {
             let enc = meshopt::encode_index_buffer(indices, vertices)
                 .map_err(|e| format!("meshopt cannot encode the indices: {e:?}"))?;
-            self.compressed_view(
+            return Ok(self.compressed_view(
                 &enc,
                 size * indices.len(),
                 indices.len(),
@@ -714,17 +859,14 @@ impl Builder {
                 "TRIANGLES",
                 None,
                 None,
-            )
+            ));
+        }
+        Ok(if narrow {
+            let i: Vec<u16> = indices.iter().map(|&i| i as u16).collect();
+            self.plain_view(bytemuck::cast_slice(&i))
         } else {
-            let v = if narrow {
-                let i: Vec<u16> = indices.iter().map(|&i| i as u16).collect();
-                self.plain_view(bytemuck::cast_slice(&i))
-            } else {
-                self.plain_view(bytemuck::cast_slice(indices))
-            };
-            v
-        };
-        Ok(self.accessor(v, ty, false, indices.len(), "SCALAR", None))
+            self.plain_view(bytemuck::cast_slice(indices))
+        })
     }
 
     fn accessor(
@@ -834,8 +976,10 @@ mod tests {
         let r = records(4);
         for enc in [Encoding::Plain, Encoding::Quantized, Encoding::Meshopt] {
             let c = content(
-                StoredLod::Mesh(quad()),
-                Identity::Runs(&runs),
+                vec![Level {
+                    stored: StoredLod::Mesh(quad()),
+                    identity: Identity::Runs(&runs),
+                }],
                 Some(&r),
                 DVec3::ZERO,
                 enc,
@@ -859,12 +1003,99 @@ mod tests {
         let mut m = quad();
         m.indices.clear();
         let e = content(
-            StoredLod::Mesh(m),
-            Identity::None,
+            vec![Level {
+                stored: StoredLod::Mesh(m),
+                identity: Identity::None,
+            }],
             None,
             DVec3::ZERO,
             Encoding::Plain,
         );
         assert!(e.is_err());
+    }
+
+    /// The positions of node `n`'s primitive as a client places them.
+    fn placed(c: &Content, n: usize) -> Vec<DVec3> {
+        let g = gltf::Gltf::from_slice_without_validation(&c.bytes).unwrap();
+        let bin = g.blob.as_deref().unwrap();
+        let node = g.nodes().nth(n).unwrap();
+        let (t, _, s) = node.transform().decomposed();
+        let p = node.mesh().unwrap().primitives().next().unwrap();
+        let read = |a: gltf::Accessor, i: usize| -> usize {
+            let v = a.view().unwrap();
+            let at = v.offset() + a.offset() + i * a.size();
+            match a.data_type() {
+                gltf::accessor::DataType::U16 => {
+                    u16::from_le_bytes([bin[at], bin[at + 1]]) as usize
+                }
+                _ => u32::from_le_bytes(bin[at..at + 4].try_into().unwrap()) as usize,
+            }
+        };
+        let pos = p.get(&gltf::Semantic::Positions).unwrap();
+        let idx = p.indices().unwrap();
+        (0..idx.count())
+            .map(|i| {
+                let v = read(idx.clone(), i);
+                let view = pos.view().unwrap();
+                let at = view.offset() + pos.offset() + v * view.stride().unwrap_or(12);
+                let f = |k: usize| {
+                    f32::from_le_bytes(bin[at + 4 * k..at + 4 * k + 4].try_into().unwrap())
+                };
+                DVec3::new(
+                    t[0] as f64 + s[0] as f64 * f(0) as f64,
+                    t[1] as f64 + s[1] as f64 * f(1) as f64,
+                    t[2] as f64 + s[2] as f64 * f(2) as f64,
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn levels_share_streams_and_keep_their_places() {
+        let mut far = quad();
+        far.origin = DVec3::new(-5.0, 2.0, 0.0);
+        far.colours = Colours::Uniform([0, 0, 255, 255]);
+        let runs = [ObjectRun {
+            object: 2,
+            triangles: 2,
+        }];
+        let r = records(3);
+        let c = content(
+            vec![
+                Level {
+                    stored: StoredLod::Mesh(quad()),
+                    identity: Identity::One(0),
+                },
+                Level {
+                    stored: StoredLod::Mesh(far.clone()),
+                    identity: Identity::Runs(&runs),
+                },
+            ],
+            Some(&r),
+            DVec3::new(1.0, 0.0, 0.0),
+            Encoding::Plain,
+        )
+        .unwrap();
+        assert_eq!(c.triangles, 4);
+        assert_eq!(c.features, 2);
+        assert_eq!(c.bounds.min, DVec3::new(-5.0, 0.0, 0.0));
+        assert_eq!(c.bounds.max, DVec3::new(1001.0, 3.0, 0.0));
+        let g = gltf::Gltf::from_slice_without_validation(&c.bytes).unwrap();
+        // One stream set (both levels f32, no per-vertex colours, with
+        // features: 3 views), one index stream, the property table's 5
+        // views (ids, names and paths with their offsets); two materials.
+        assert_eq!(g.nodes().count(), 2);
+        assert_eq!(g.materials().count(), 2);
+        assert_eq!(g.views().count(), 3 + 1 + 5);
+        // Each level's triangles where its origin puts them, relative to
+        // the tileset's origin.
+        for (n, m) in [(0, quad()), (1, far)] {
+            let want: Vec<DVec3> = m
+                .indices
+                .iter()
+                .map(|&i| m.origin + DVec3::from(m.positions[i as usize].map(f64::from)) - DVec3::X)
+                .collect();
+            assert_eq!(placed(&c, n), want);
+        }
     }
 }

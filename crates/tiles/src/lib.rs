@@ -9,7 +9,7 @@
 //! stored; [`Georef`] where the tileset sits on the Earth.
 //!
 //! The export streams: it holds the scene's skeleton and object table,
-//! and one level's geometry per worker thread, never the geometry of the
+//! and one tile's levels per worker thread, never the geometry of the
 //! whole scene. `tileset.json` is written last, after every content and
 //! external tileset, so a failed export (a full disk) never leaves a
 //! tileset that looks complete.
@@ -48,6 +48,9 @@ pub struct ExportOptions {
     pub tiles_per_file: usize,
     /// At most this many tiles from a file's root to its deepest tile.
     pub depth_per_file: usize,
+    /// The triangles a content is cut to, about: a tile unites the levels
+    /// of as many hierarchy nodes as fit (docs/tiles.md).
+    pub content_triangles: u64,
     /// For tests: fail as a full disk would once this many contents are
     /// written. `None` in every real export.
     pub fail_after_contents: Option<usize>,
@@ -61,6 +64,7 @@ impl Default for ExportOptions {
             force: false,
             tiles_per_file: DEFAULT_TILES_PER_FILE,
             depth_per_file: DEFAULT_DEPTH_PER_FILE,
+            content_triangles: plan::DEFAULT_CONTENT_TRIANGLES,
             fail_after_contents: None,
         }
     }
@@ -85,11 +89,15 @@ pub struct ExportSummary {
     pub largest_json_bytes: u64,
     /// Triangles over every content.
     pub triangles: u64,
+    /// The median content's triangles.
+    pub median_content_triangles: u64,
+    /// Stored levels over every content (a level may be in several).
+    pub parts: usize,
     /// Contents with feature IDs (object identity).
     pub contents_with_features: usize,
     /// Whether the scene holds object identity at all.
     pub identity: bool,
-    /// Levels that are no tile (coarser than the tile above them).
+    /// Stored levels no content draws (bands pass over them).
     pub levels_left_out: usize,
     /// The deepest tile, counting the root as 1.
     pub depth: usize,
@@ -111,8 +119,12 @@ pub enum ExportError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("LOD {lod}: cannot make its content: {detail}")]
-    Content { lod: u32, detail: String },
+    #[error("tile {tile} (first level LOD {first_lod}): cannot make its content: {detail}")]
+    Content {
+        tile: u32,
+        first_lod: u32,
+        detail: String,
+    },
 }
 
 /// What an export reports as it goes.
@@ -218,20 +230,19 @@ fn write_all(
     progress: &dyn Progress,
 ) -> Result<ExportSummary, ExportError> {
     let skeleton = reader.skeleton();
-    let plan = plan::plan(skeleton);
+    let plan = plan::plan(skeleton, options.content_triangles);
     let node_objects = objects.map(|t| t.node_objects(skeleton));
 
-    // Contents, on rayon's pool, one level in memory per worker.
+    // Contents, on rayon's pool, one tile's levels in memory per worker.
     let with_content: Vec<u32> = (0..plan.tiles.len() as u32)
-        .filter(|&t| match plan.tiles[t as usize].lod {
-            Some(l) => skeleton.lods()[l as usize].triangles > 0,
-            None => false,
+        .filter(|&t| {
+            plan.tiles[t as usize]
+                .parts
+                .iter()
+                .any(|q| skeleton.lods()[q.lod as usize].triangles > 0)
         })
         .collect();
-    let mut dirs: Vec<u32> = with_content
-        .iter()
-        .filter_map(|&t| plan.tiles[t as usize].lod.map(|l| l / 1000))
-        .collect();
+    let mut dirs: Vec<u32> = with_content.iter().map(|&t| t / 1000).collect();
     dirs.dedup();
     for d in dirs {
         let d = out.join(format!("content/{d}"));
@@ -245,32 +256,38 @@ fn write_all(
         .par_iter()
         .map(|&t| {
             let tile = &plan.tiles[t as usize];
-            let lod = tile.lod.expect("tiles with content have a level");
-            let node = skeleton.node(tile.node);
-            let identity = match (objects, &node_objects) {
-                (Some(table), Some(per_node)) => {
-                    match table
-                        .runs(lod)
-                        .filter(|_| node.is_leaf() && lod == node.first_lod)
-                    {
-                        Some(runs) => glb::Identity::Runs(runs),
-                        None => match per_node[tile.node as usize].as_slice() {
-                            [one] => glb::Identity::One(*one),
-                            _ => glb::Identity::None,
-                        },
+            let mut levels = Vec::with_capacity(tile.parts.len());
+            for q in &tile.parts {
+                let node = skeleton.node(q.node);
+                // Known per triangle: a leaf's full detail (its runs), or
+                // any level of a node that holds one object.
+                let identity = match (objects, &node_objects) {
+                    (Some(table), Some(per_node)) => {
+                        match table
+                            .runs(q.lod)
+                            .filter(|_| node.is_leaf() && q.lod == node.first_lod)
+                        {
+                            Some(runs) => glb::Identity::Runs(runs),
+                            None => match per_node[q.node as usize].as_slice() {
+                                [one] => glb::Identity::One(*one),
+                                _ => glb::Identity::None,
+                            },
+                        }
                     }
-                }
-                _ => glb::Identity::None,
-            };
-            let stored = reader.read_lod_stored(lod)?;
-            let c = glb::content(
-                stored,
-                identity,
-                records,
-                skeleton.origin(),
-                options.encoding,
-            )
-            .map_err(|detail| ExportError::Content { lod, detail })?;
+                    _ => glb::Identity::None,
+                };
+                levels.push(glb::Level {
+                    stored: reader.read_lod_stored(q.lod)?,
+                    identity,
+                });
+            }
+            let c = glb::content(levels, records, skeleton.origin(), options.encoding).map_err(
+                |detail| ExportError::Content {
+                    tile: t,
+                    first_lod: tile.parts[0].lod,
+                    detail,
+                },
+            )?;
             if let Some(n) = options.fail_after_contents {
                 if written.load(Ordering::Relaxed) >= n {
                     return Err(write_err(out)(std::io::Error::new(
@@ -279,7 +296,7 @@ fn write_all(
                     )));
                 }
             }
-            write_file(&out.join(tileset::content_path(lod)), &c.bytes)?;
+            write_file(&out.join(tileset::content_path(t)), &c.bytes)?;
             written.fetch_add(1, Ordering::Relaxed);
             progress.advance(1);
             Ok((
@@ -301,12 +318,17 @@ fn write_all(
         levels_left_out: plan.levels_left_out,
         ..ExportSummary::default()
     };
+    let mut sizes = Vec::with_capacity(results.len());
     for (t, info, bytes, triangles, features) in results {
+        sizes.push(triangles);
         contents[t as usize] = Some(info);
         summary.content_bytes += bytes;
         summary.triangles += triangles;
         summary.contents_with_features += features as usize;
     }
+    sizes.sort_unstable();
+    summary.median_content_triangles = sizes.get(sizes.len() / 2).copied().unwrap_or(0);
+    summary.parts = plan.tiles.iter().map(|t| t.parts.len()).sum();
     summary.depth = depth(&plan);
 
     // Tileset files: the external ones, then the main one, last.

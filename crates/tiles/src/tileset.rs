@@ -15,9 +15,9 @@ pub(crate) struct ContentInfo {
     pub bounds: Aabb,
 }
 
-/// Where a tile's content is, relative to the output directory.
-pub(crate) fn content_path(lod: u32) -> String {
-    format!("content/{}/{lod}.glb", lod / 1000)
+/// Where tile `t`'s content is, relative to the output directory.
+pub(crate) fn content_path(t: u32) -> String {
+    format!("content/{}/{t}.glb", t / 1000)
 }
 
 /// Where the external tileset rooted at tile `t` is, relative to the
@@ -148,13 +148,14 @@ impl Writer<'_> {
         })
     }
 
+    /// Tile `t`'s box: its nodes' boxes (each holds its levels and its
+    /// children's boxes, so a tile's box holds its children's).
     fn bounds(&self, t: u32) -> Value {
-        let node = self.plan.tiles[t as usize].node;
-        box_json(
-            &self.skeleton.node(node).bounds,
-            self.skeleton.origin(),
-            self.quantum,
-        )
+        let b = self.plan.tiles[t as usize]
+            .nodes
+            .iter()
+            .fold(Aabb::EMPTY, |b, &n| b.union(&self.skeleton.node(n).bounds));
+        box_json(&b, self.skeleton.origin(), self.quantum)
     }
 
     /// Tile `t` and the tiles of its file below it; `main` when the file is
@@ -166,13 +167,11 @@ impl Writer<'_> {
             "boundingVolume": {"box": self.bounds(t)},
             "geometricError": error_json(tile.error),
         });
-        if let Some(lod) = tile.lod {
-            if let Some(c) = &self.contents[t as usize] {
-                v["content"] = json!({
-                    "uri": format!("{up}{}", content_path(lod)),
-                    "boundingVolume": {"box": box_json(&c.bounds, self.skeleton.origin(), self.quantum)},
-                });
-            }
+        if let Some(c) = &self.contents[t as usize] {
+            v["content"] = json!({
+                "uri": format!("{up}{}", content_path(t)),
+                "boundingVolume": {"box": box_json(&c.bounds, self.skeleton.origin(), self.quantum)},
+            });
         }
         let children: Vec<Value> = tile
             .children

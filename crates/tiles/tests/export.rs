@@ -38,12 +38,15 @@ fn a_scene_without_levels_or_identity_far_from_its_origin() {
     let (dir, gwk, boxes) = far_boxes();
     for encoding in [Encoding::Meshopt, Encoding::Quantized, Encoding::Plain] {
         let out = dir.path().join(encoding.name());
+        // A content a box (12 triangles each).
         let options = ExportOptions {
             encoding,
+            content_triangles: 12,
             ..ExportOptions::default()
         };
         let s = export(&gwk, &out, &options, &Quiet).unwrap();
         assert_eq!((s.tiles, s.contents, s.triangles), (4, 3, 36));
+        assert_eq!(s.median_content_triangles, 12);
         assert!(!s.identity && s.contents_with_features == 0);
         let t = json(&out.join("tileset.json"));
         let root = &t["root"];
@@ -87,6 +90,7 @@ fn a_failed_write_leaves_no_tileset() {
     let out = dir.path().join("tiles");
     let options = ExportOptions {
         fail_after_contents: Some(1),
+        content_triangles: 12,
         ..ExportOptions::default()
     };
     let e = export(&gwk, &out, &options, &Quiet).unwrap_err();
@@ -98,6 +102,35 @@ fn a_failed_write_leaves_no_tileset() {
     std::fs::create_dir(&out).unwrap();
     export(&gwk, &out, &options, &Quiet).unwrap_err();
     assert!(out.exists() && std::fs::read_dir(&out).unwrap().next().is_none());
+}
+
+#[test]
+fn small_levels_share_one_content() {
+    let (dir, gwk, boxes) = far_boxes();
+    let out = dir.path().join("tiles");
+    let s = export(&gwk, &out, &ExportOptions::default(), &Quiet).unwrap();
+    // The empty root over one content of the three boxes.
+    assert_eq!((s.tiles, s.contents, s.triangles, s.parts), (2, 1, 36, 3));
+    let t = json(&out.join("tileset.json"));
+    let child = &t["root"]["children"][0];
+    let glb = std::fs::read(out.join(child["content"]["uri"].as_str().unwrap())).unwrap();
+    let g = gltf::Gltf::from_slice_without_validation(&glb).unwrap();
+    // A node a box, each at its box's corner (the grid's origin).
+    let origin = {
+        let m = t["root"]["transform"].as_array().unwrap();
+        // The transform holds the origin turned z up: x, -z, y.
+        DVec3::new(
+            m[12].as_f64().unwrap(),
+            m[14].as_f64().unwrap(),
+            -m[13].as_f64().unwrap(),
+        )
+    };
+    assert_eq!(g.nodes().count(), 3);
+    for (node, b) in g.nodes().zip(&boxes) {
+        let (tr, _, _) = node.transform().decomposed();
+        let at = origin + DVec3::new(tr[0] as f64, tr[1] as f64, tr[2] as f64);
+        assert!((at - b.min).abs().max_element() < 1e-3, "{at:?} for {b:?}");
+    }
 }
 
 #[test]

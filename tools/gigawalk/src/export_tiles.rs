@@ -12,7 +12,7 @@ pub struct Args {
     /// The scene file (.gwk) to export
     scene: PathBuf,
     /// The output directory: tileset.json, tilesets/ (external tilesets of
-    /// a large tree) and content/ (one .glb per tile); refused when it
+    /// a large tree) and content/ (one .glb per tile with content); refused when it
     /// exists and is not empty, unless --force
     #[arg(short, long, value_name = "DIR")]
     out: PathBuf,
@@ -50,6 +50,11 @@ pub struct Args {
     /// tree goes into external tilesets (about 300 bytes of JSON a tile)
     #[arg(long, value_name = "N", default_value_t = gigawalk_tiles::DEFAULT_TILES_PER_FILE)]
     tiles_per_file: usize,
+    /// About this many triangles a content: a tile unites the stored
+    /// levels of as many hierarchy nodes as fit (fewer, larger contents
+    /// are fewer requests and draws for a client)
+    #[arg(long, value_name = "N", default_value_t = gigawalk_tiles::plan::DEFAULT_CONTENT_TRIANGLES)]
+    content_triangles: u64,
     /// Print what was written as JSON
     #[arg(long)]
     json: bool,
@@ -73,7 +78,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.tiles_per_file < 2 {
         anyhow::bail!("--tiles-per-file {}: at least 2", args.tiles_per_file);
     }
+    if args.content_triangles == 0 {
+        anyhow::bail!("--content-triangles 0: at least 1");
+    }
     let options = ExportOptions {
+        content_triangles: args.content_triangles,
         encoding,
         georef,
         force: args.force,
@@ -99,6 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "json_bytes": s.json_bytes,
             "largest_json_bytes": s.largest_json_bytes,
             "triangles": s.triangles,
+            "median_content_triangles": s.median_content_triangles,
+            "parts": s.parts,
             "contents_with_features": s.contents_with_features,
             "identity": s.identity,
             "levels_left_out": s.levels_left_out,
@@ -110,10 +121,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     out!("tileset     {}", args.out.join("tileset.json").display())?;
     out!(
-        "tiles       {} ({} with content, {} deep; {} levels coarser than the tile above left out)",
+        "tiles       {} ({} with content, {} deep), {} stored levels in them, {} levels no band draws",
         s.tiles,
         s.contents,
         s.depth,
+        s.parts,
         s.levels_left_out
     )?;
     out!(
@@ -124,7 +136,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         s.tileset_files,
         mib(s.largest_json_bytes)
     )?;
-    out!("triangles   {} over every content", s.triangles)?;
+    out!(
+        "triangles   {} over every content, {} in the median one",
+        s.triangles,
+        s.median_content_triangles
+    )?;
     if s.identity {
         out!(
             "objects     feature IDs and a property table in {} of {} contents",

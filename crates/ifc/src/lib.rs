@@ -116,10 +116,17 @@ impl IfcStats {
             .join("; ")
     }
 
-    fn note(&mut self, kind: String, class: &str) {
-        let u = self.unsupported.entry(kind).or_default();
-        u.items += 1;
-        *u.products.entry(class.to_string()).or_default() += 1;
+    /// Counts one product's `kinds` not read (one entry per item).
+    fn note(&mut self, kinds: Vec<String>, class: &str) {
+        let mut per_kind: BTreeMap<String, u64> = BTreeMap::new();
+        for k in kinds {
+            *per_kind.entry(k).or_default() += 1;
+        }
+        for (k, n) in per_kind {
+            let u = self.unsupported.entry(k).or_default();
+            u.items += n;
+            *u.products.entry(class.to_string()).or_default() += 1;
+        }
     }
 }
 
@@ -233,21 +240,20 @@ impl IfcFile {
             };
             stats.products += 1;
             let class = classes::camel(e.ty);
-            let tris = match product_triangles(&ctx, &rel, &e, &body, &mut stats, &class) {
+            let tris = match product_triangles(&ctx, &rel, &e, &body, &mut stats) {
                 Ok(t) => t,
                 Err(GeomError::Unsupported(k)) => {
-                    stats.note(k, &class);
+                    ctx.notes.borrow_mut().push(k);
                     Vec::new()
                 }
                 Err(GeomError::Bad(err)) => {
-                    stats.note(format!("malformed {class}"), &class);
+                    ctx.notes.borrow_mut().push(format!("malformed {class}"));
                     stats.warnings.push(err.to_string());
                     Vec::new()
                 }
             };
-            for k in ctx.notes.borrow_mut().drain(..) {
-                stats.note(k, &class);
-            }
+            let notes = std::mem::take(&mut *ctx.notes.borrow_mut());
+            stats.note(notes, &class);
             stats.warnings.append(&mut ctx.warnings.borrow_mut());
             if tris.is_empty() {
                 continue;
@@ -327,7 +333,6 @@ fn product_triangles(
     e: &step::Entity,
     body: &[u32],
     stats: &mut IfcStats,
-    class: &str,
 ) -> Result<Vec<Tri>, GeomError> {
     let placement = match e.opt_ref(5) {
         Some(p) => placement::local_placement(ctx, p)?,
@@ -344,17 +349,15 @@ fn product_triangles(
     for &o in rel.voids.get(&e.id).into_iter().flatten() {
         match opening_pieces(ctx, o) {
             Ok(pieces) => {
-                let scale = (tris.len() as f64).max(1.0);
-                let _ = scale;
                 let size = extent(&tris);
                 for c in &pieces {
                     tris = clip::subtract(tris, c, size);
                 }
                 stats.openings_subtracted += 1;
             }
-            Err(GeomError::Unsupported(k)) => stats.note(format!("opening: {k}"), class),
+            Err(GeomError::Unsupported(k)) => ctx.notes.borrow_mut().push(format!("opening: {k}")),
             Err(GeomError::Bad(err)) => {
-                stats.note("opening: malformed".into(), class);
+                ctx.notes.borrow_mut().push("opening: malformed".into());
                 stats.warnings.push(err.to_string());
             }
         }

@@ -16,7 +16,7 @@ pub enum ImportError {
     /// the model to disk as it is read, say).
     #[error("cannot write the model's objects to {dir}: {source}")]
     Spill { dir: String, source: std::io::Error },
-    #[error("{file}: unsupported file type (expected .gltf, .glb or .obj)")]
+    #[error("{file}: unsupported file type (expected .gltf, .glb, .obj or .ifc)")]
     UnsupportedFormat { file: String },
     #[error("{file}: malformed glTF: {message}")]
     MalformedGltf { file: String, message: String },
@@ -103,6 +103,10 @@ pub enum ImportError {
     MalformedObj { file: String, message: String },
     #[error("{file}: no triangles to import")]
     NoGeometry { file: String },
-    #[error("{dir}: no .gltf, .glb or .obj files in this directory")]
+    #[error("{dir}: no .gltf, .glb, .obj or .ifc files in this directory")]
     NoModelFiles { dir: String },
+    /// An IFC file that does not parse, or has no geometry (the error
+    /// names the file, and the line and entity where it applies).
+    #[error(transparent)]
+    Ifc(#[from] gigawalk_ifc::IfcError),
 }

@@ -1,4 +1,5 @@
-//! Model import: glTF 2.0 and Wavefront OBJ into a flat [`Model`] of
+//! Model import: glTF 2.0, Wavefront OBJ and IFC (through gigawalk-ifc:
+//! one object per product, docs/ifc.md) into a flat [`Model`] of
 //! [`Object`]s in f64 world coordinates.
 //!
 //! glTF files may be compressed as gltfpack writes them: integer positions
@@ -22,6 +23,7 @@ mod gltf_accessors;
 mod gltf_buffers;
 mod gltf_extensions;
 mod gltf_import;
+mod ifc_import;
 mod meshopt_views;
 mod model;
 mod obj_import;
@@ -32,10 +34,10 @@ use std::path::{Path, PathBuf};
 
 pub use error::ImportError;
 pub use gltf_import::{import_glb_bytes, import_gltf_bytes};
-pub use model::{Identity, ImportStats, Model, Object};
+pub use model::{Identity, ImportStats, Model, Object, Unsupported};
 pub use obj_import::import_obj_str;
 
-/// Imports a `.gltf`, `.glb` or `.obj` file, chosen by extension
+/// Imports a `.gltf`, `.glb`, `.obj` or `.ifc` file, chosen by extension
 /// (case-insensitive). External glTF buffers and OBJ material libraries are
 /// resolved relative to the file's directory.
 pub fn import(path: &Path) -> Result<Model, ImportError> {
@@ -81,6 +83,7 @@ pub fn import_each(
             let text = String::from_utf8_lossy(&bytes);
             obj_import::import_obj_each(&text, &file, Some(base_dir), sink)
         }
+        Some("ifc") => ifc_import::import_ifc_each(path, &file, sink),
         _ => Err(ImportError::UnsupportedFormat { file }),
     }
 }
@@ -89,12 +92,12 @@ pub fn import_each(
 pub fn is_model_file(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| ["gltf", "glb", "obj"].contains(&e.to_ascii_lowercase().as_str()))
+        .is_some_and(|e| ["gltf", "glb", "obj", "ifc"].contains(&e.to_ascii_lowercase().as_str()))
 }
 
 /// The model files `inputs` name, in order: each file as given (whatever
 /// its extension: [`import`] says what is wrong with it), and for each
-/// directory the `.gltf`, `.glb` and `.obj` files below it, recursively,
+/// directory the `.gltf`, `.glb`, `.obj` and `.ifc` files below it, recursively,
 /// sorted by path so the order never depends on the file system. Hidden
 /// entries (names starting with '.') are skipped, and a file reached
 /// twice (named and inside a named directory, or through a link) is

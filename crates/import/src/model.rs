@@ -1,6 +1,8 @@
 //! The imported model: a flat list of triangle-mesh objects in f64 world
 //! coordinates, keeping only what rendering needs.
 
+use std::collections::BTreeMap;
+
 use glam::{DVec3, Vec3};
 
 /// One object: a mesh-primitive instance (glTF) or a group/object (OBJ),
@@ -39,10 +41,12 @@ pub struct Identity {
     /// The file it came from, as named on the command line (empty when
     /// imported from memory).
     pub file: String,
-    /// The glTF node's `extras`, compact JSON, when it has any.
+    /// The glTF node's `extras`, compact JSON, when it has any; an IFC
+    /// product's class, GlobalId, storey, property sets and quantities.
     pub extras: Option<String>,
     /// The glTF node's index (`None` for OBJ): siblings may share a name,
-    /// so this, not the path, tells two nodes apart.
+    /// so this, not the path, tells two nodes apart. An IFC product's
+    /// entity id (`#id`).
     pub node: Option<usize>,
 }
 
@@ -67,6 +71,18 @@ pub struct ImportStats {
     /// Point and line primitives skipped (glTF modes POINTS, LINES, ...).
     pub skipped_primitives: u64,
     pub warnings: Vec<String>,
+    /// Geometry not read, by kind (an IFC item class such as
+    /// `IfcRevolvedAreaSolid`): how many items, in how many products of
+    /// each class.
+    pub unsupported: BTreeMap<String, Unsupported>,
+}
+
+/// Items of one kind an import could not read.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Unsupported {
+    pub items: u64,
+    /// Products (IFC class -> how many) that had such items.
+    pub products: BTreeMap<String, u64>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -111,6 +127,13 @@ impl ImportStats {
         self.degenerate_triangles_dropped += o.degenerate_triangles_dropped;
         self.skipped_primitives += o.skipped_primitives;
         self.warnings.extend(o.warnings);
+        for (kind, u) in o.unsupported {
+            let mine = self.unsupported.entry(kind).or_default();
+            mine.items += u.items;
+            for (class, n) in u.products {
+                *mine.products.entry(class).or_default() += n;
+            }
+        }
     }
 
     /// The one line users see after an import.
@@ -130,6 +153,18 @@ impl ImportStats {
         }
         if !self.warnings.is_empty() {
             s += &format!(", {} warnings", self.warnings.len());
+        }
+        if !self.unsupported.is_empty() {
+            let kinds: Vec<String> = self
+                .unsupported
+                .iter()
+                .map(|(kind, u)| {
+                    let products: Vec<String> =
+                        u.products.iter().map(|(c, n)| format!("{n} {c}")).collect();
+                    format!("{kind}: {} items in {}", u.items, products.join(", "))
+                })
+                .collect();
+            s += &format!("; not read: {}", kinds.join("; "));
         }
         s
     }

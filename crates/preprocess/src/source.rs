@@ -533,6 +533,7 @@ impl Table {
                 degenerate_triangles_dropped: d,
                 skipped_primitives: s,
                 warnings,
+                ..Default::default()
             },
         })
     }

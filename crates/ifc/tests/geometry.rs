@@ -1,0 +1,306 @@
+//! Geometry on tiny hand-built files, checked against what the solids
+//! are: boxes, volumes, holes, clipped halves, mapped copies, units,
+//! colours; and the small buildingSMART cases.
+
+use gigawalk_ifc::{IfcFile, IfcObject, IfcStats};
+use glam::DVec3;
+
+const HEADER: &str = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('t','',(''),(''),'','','');\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n";
+
+/// A project in metres (or `unit`) with the given entities; #100.. are
+/// free for the caller, who places products with #90 (the origin).
+fn ifc(unit: &str, data: &str) -> String {
+    format!(
+        "{HEADER}#1=IFCPROJECT('0YvctVUKr0kugbFTf53O9L',$,'P',$,$,$,$,$,#2);\n#2=IFCUNITASSIGNMENT((#3,#4));\n{unit}\n#4=IFCSIUNIT(*,.PLANEANGLEUNIT.,$,.RADIAN.);\n#90=IFCLOCALPLACEMENT($,#91);\n#91=IFCAXIS2PLACEMENT3D(#92,$,$);\n#92=IFCCARTESIANPOINT((0.,0.,0.));\n#93=IFCDIRECTION((0.,0.,1.));\n{data}ENDSEC;\nEND-ISO-10303-21;\n"
+    )
+}
+
+const METRES: &str = "#3=IFCSIUNIT(*,.LENGTHUNIT.,$,.METRE.);";
+
+fn read(text: &str) -> (Vec<IfcObject>, IfcStats) {
+    let f = IfcFile::parse(text.as_bytes().to_vec(), "t.ifc").unwrap();
+    let mut objects = Vec::new();
+    let stats = f
+        .read(&mut |o| {
+            objects.push(o);
+            true
+        })
+        .unwrap();
+    (objects, stats)
+}
+
+fn bounds(o: &IfcObject) -> (DVec3, DVec3) {
+    o.positions.iter().fold(
+        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
+/// The enclosed volume (divergence theorem): right only when the mesh is
+/// closed and faces outward.
+fn volume(o: &IfcObject) -> f64 {
+    o.indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|i| o.positions[t[i] as usize]);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
+fn area(o: &IfcObject) -> f64 {
+    o.indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|i| o.positions[t[i] as usize]);
+            (b - a).cross(c - a).length() / 2.0
+        })
+        .sum()
+}
+
+fn close(a: DVec3, b: DVec3) -> bool {
+    (a - b).length() < 1e-9
+}
+
+/// A product #10 with body items `items` (a list like `#20,#21`).
+fn product(class: &str, items: &str) -> String {
+    format!("#10={class}('1YvctVUKr0kugbFTf53O9L',$,'thing',$,$,#90,#11,$,$);\n#11=IFCPRODUCTDEFINITIONSHAPE($,$,(#12));\n#12=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',({items}));\n")
+}
+
+/// A rectangle `x` by `y` centred on (cx, cy), extruded by `depth` along
+/// `dir` (#id, #id+1.. used).
+fn extrusion(id: u32, cx: f64, cy: f64, x: f64, y: f64, depth: f64, dir: &str) -> String {
+    format!(
+        "#{id}=IFCEXTRUDEDAREASOLID(#{a},$,#{d},{depth:?});\n#{a}=IFCRECTANGLEPROFILEDEF(.AREA.,$,#{p},{x:?},{y:?});\n#{p}=IFCAXIS2PLACEMENT2D(#{c},$);\n#{c}=IFCCARTESIANPOINT(({cx:?},{cy:?}));\n#{d}=IFCDIRECTION(({dir}));\n",
+        a = id + 1,
+        p = id + 2,
+        c = id + 3,
+        d = id + 4
+    )
+}
+
+#[test]
+fn an_extruded_rectangle_is_a_closed_box() {
+    let text = ifc(
+        METRES,
+        &(product("IFCWALL", "#20") + &extrusion(20, 1.0, 2.0, 2.0, 4.0, 3.0, "0.,0.,1.")),
+    );
+    let (objects, stats) = read(&text);
+    assert_eq!(objects.len(), 1);
+    let o = &objects[0];
+    assert_eq!(o.indices.len() / 3, 12);
+    let (lo, hi) = bounds(o);
+    assert!(close(lo, DVec3::new(0.0, 0.0, 0.0)), "{lo}");
+    assert!(close(hi, DVec3::new(2.0, 4.0, 3.0)), "{hi}");
+    assert!((volume(o) - 24.0).abs() < 1e-9, "{}", volume(o));
+    assert_eq!(stats.objects, 1);
+    assert!(stats.unsupported.is_empty());
+    for n in &o.normals {
+        assert!((n.length() - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn an_oblique_downward_extrusion_stays_outward() {
+    let text = ifc(
+        METRES,
+        &(product("IFCCOLUMN", "#20") + &extrusion(20, 0.0, 0.0, 1.0, 1.0, 2.0, "0.6,0.,-0.8")),
+    );
+    let (objects, _) = read(&text);
+    let o = &objects[0];
+    let (lo, hi) = bounds(o);
+    assert!(close(lo, DVec3::new(-0.5, -0.5, -1.6)), "{lo}");
+    assert!(close(hi, DVec3::new(1.7, 0.5, 0.0)), "{hi}");
+    // A sheared box keeps its volume: base 1 x height 1.6.
+    assert!((volume(o) - 1.6).abs() < 1e-9, "{}", volume(o));
+}
+
+#[test]
+fn feet_convert_to_metres() {
+    let feet = "#3=IFCCONVERSIONBASEDUNIT(#5,.LENGTHUNIT.,'FOOT',#6);\n#5=IFCDIMENSIONALEXPONENTS(1,0,0,0,0,0,0);\n#6=IFCMEASUREWITHUNIT(IFCLENGTHMEASURE(0.3048),#7);\n#7=IFCSIUNIT(*,.LENGTHUNIT.,$,.METRE.);";
+    let text = ifc(
+        feet,
+        &(product("IFCSLAB", "#20") + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")),
+    );
+    let (objects, _) = read(&text);
+    let (_, hi) = bounds(&objects[0]);
+    assert!(close(hi, DVec3::splat(0.3048)), "{hi}");
+}
+
+#[test]
+fn an_opening_cuts_a_hole_through_a_wall() {
+    // A 4 x 0.2 x 3 wall with a 1 x 1 window hole through it.
+    let data = product("IFCWALL", "#20")
+        + &extrusion(20, 2.0, 0.1, 4.0, 0.2, 3.0, "0.,0.,1.")
+        + "#30=IFCOPENINGELEMENT('2YvctVUKr0kugbFTf53O9L',$,$,$,$,#90,#31,$,$);\n#31=IFCPRODUCTDEFINITIONSHAPE($,$,(#32));\n#32=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',(#40));\n"
+        + &extrusion(40, 2.0, 0.1, 1.0, 1.0, 1.0, "0.,0.,1.")
+            .replace("#40=IFCEXTRUDEDAREASOLID(#41,$,", "#40=IFCEXTRUDEDAREASOLID(#41,#49,")
+        + "#49=IFCAXIS2PLACEMENT3D(#48,$,$);\n#48=IFCCARTESIANPOINT((0.,0.,1.));\n"
+        + "#35=IFCRELVOIDSELEMENT('3YvctVUKr0kugbFTf53O9L',$,$,$,#10,#30);\n";
+    let (objects, stats) = read(&ifc(METRES, &data));
+    assert_eq!(objects.len(), 1, "the opening is not drawn");
+    assert_eq!(stats.openings_subtracted, 1);
+    let o = &objects[0];
+    // Two 1 m² faces gone.
+    let full = 2.0 * (4.0 * 0.2 + 4.0 * 3.0 + 0.2 * 3.0);
+    assert!((area(o) - (full - 2.0 * 1.0)).abs() < 1e-9, "{}", area(o));
+    // No triangle inside the hole.
+    for t in o.indices.chunks_exact(3) {
+        let c = t.iter().map(|&i| o.positions[i as usize]).sum::<DVec3>() / 3.0;
+        let inside = c.x > 1.5 + 1e-9 && c.x < 2.5 - 1e-9 && c.z > 1.0 + 1e-9 && c.z < 2.0 - 1e-9;
+        assert!(!inside, "triangle at {c} is in the hole");
+    }
+}
+
+#[test]
+fn a_half_space_clips_a_box_in_two() {
+    // A unit cube minus the half space above z = 0.25 (AgreementFlag
+    // false: the material is on the side the normal points to).
+    let data = product("IFCBEAM", "#30")
+        + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
+        + "#30=IFCBOOLEANCLIPPINGRESULT(.DIFFERENCE.,#20,#31);\n#31=IFCHALFSPACESOLID(#32,.F.);\n#32=IFCPLANE(#33);\n#33=IFCAXIS2PLACEMENT3D(#34,#93,$);\n#34=IFCCARTESIANPOINT((0.,0.,0.25));\n";
+    let (objects, _) = read(&ifc(METRES, &data));
+    let (lo, hi) = bounds(&objects[0]);
+    assert!(close(lo, DVec3::ZERO), "{lo}");
+    assert!(close(hi, DVec3::new(1.0, 1.0, 0.25)), "{hi}");
+}
+
+#[test]
+fn a_mapped_item_is_placed_and_scaled_non_uniformly() {
+    let data = product("IFCFURNITURE", "#30")
+        + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
+        + "#30=IFCMAPPEDITEM(#31,#34);\n#31=IFCREPRESENTATIONMAP(#91,#32);\n#32=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',(#20));\n#34=IFCCARTESIANTRANSFORMATIONOPERATOR3DNONUNIFORM($,$,#35,2.,$,3.,4.);\n#35=IFCCARTESIANPOINT((10.,0.,0.));\n";
+    let (objects, _) = read(&ifc(METRES, &data));
+    let (lo, hi) = bounds(&objects[0]);
+    assert!(close(lo, DVec3::new(10.0, 0.0, 0.0)), "{lo}");
+    assert!(close(hi, DVec3::new(12.0, 3.0, 4.0)), "{hi}");
+    assert!((volume(&objects[0]) - 24.0).abs() < 1e-9);
+}
+
+#[test]
+fn a_styled_item_colours_the_product_in_linear_rgb() {
+    let data = product("IFCSLAB", "#20")
+        + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
+        + "#50=IFCSTYLEDITEM(#20,(#51),$);\n#51=IFCSURFACESTYLE($,.BOTH.,(#52));\n#52=IFCSURFACESTYLERENDERING(#53,0.25,$,$,$,$,$,$,.NOTDEFINED.);\n#53=IFCCOLOURRGB($,1.,0.5,0.);\n";
+    let (objects, _) = read(&ifc(METRES, &data));
+    let c = objects[0].colour;
+    assert_eq!(c[0], 1.0);
+    assert!((c[1] - 0.214).abs() < 1e-3, "{c:?}");
+    assert_eq!(c[2], 0.0);
+    assert_eq!(c[3], 0.75);
+    assert!(objects[0].vertex_colours.is_none());
+}
+
+#[test]
+fn unsupported_items_are_counted_by_kind_and_product() {
+    let data = product("IFCFLOWFITTING", "#20,#60")
+        + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
+        + "#60=IFCREVOLVEDAREASOLID(#21,$,#61,1.);\n#61=IFCAXIS1PLACEMENT(#92,$);\n";
+    let (objects, stats) = read(&ifc(METRES, &data));
+    assert_eq!(objects.len(), 1);
+    let u = &stats.unsupported["IfcRevolvedAreaSolid"];
+    assert_eq!(u.items, 1);
+    assert_eq!(u.products["IfcFlowFitting"], 1);
+    assert_eq!(
+        stats.unsupported_summary(),
+        "IfcRevolvedAreaSolid: 1 items in 1 IfcFlowFitting"
+    );
+}
+
+fn models() -> Option<std::path::PathBuf> {
+    let dir = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/models/ifc"
+    ));
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("GIGAWALK_REQUIRE_MODELS").is_none(),
+        "GIGAWALK_REQUIRE_MODELS is set but {} is missing",
+        dir.display()
+    );
+    println!("SKIP: no models at {}", dir.display());
+    None
+}
+
+fn read_model(name: &str) -> Result<(Vec<IfcObject>, IfcStats), gigawalk_ifc::IfcError> {
+    let dir = models().expect("checked by the caller");
+    let f = IfcFile::open(&dir.join(name))?;
+    let mut objects = Vec::new();
+    let stats = f.read(&mut |o| {
+        objects.push(o);
+        true
+    })?;
+    Ok((objects, stats))
+}
+
+#[test]
+fn cube_advanced_brep_counts_its_b_spline_faces() {
+    if models().is_none() {
+        return;
+    }
+    let (objects, stats) = read_model("Ifc4_CubeAdvancedBrep.ifc").unwrap();
+    // Two planar faces are read; four B-spline faces are not.
+    assert_eq!(objects.len(), 1);
+    assert_eq!(
+        stats.unsupported["IfcAdvancedFace on IfcBSplineSurfaceWithKnots"].items,
+        4
+    );
+}
+
+#[test]
+fn basin_advanced_brep_has_nothing_read_and_says_why() {
+    if models().is_none() {
+        return;
+    }
+    let e = read_model("basin-advanced-brep.ifc")
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("basin-advanced-brep.ifc: no product with geometry"),
+        "{e}"
+    );
+    assert!(e.contains("IfcBSplineCurveWithKnots"), "{e}");
+}
+
+#[test]
+fn slab_standard_case_reads_its_indexed_poly_curve() {
+    if models().is_none() {
+        return;
+    }
+    let (objects, stats) = read_model("slab-standard-case.ifc").unwrap();
+    assert_eq!(objects.len(), 1);
+    assert_eq!(objects[0].class, "IfcSlab");
+    assert!(stats.unsupported.is_empty());
+    assert!(volume(&objects[0]) > 0.0);
+}
+
+#[test]
+fn tessellation_with_individual_colours_keeps_per_face_colours() {
+    if models().is_none() {
+        return;
+    }
+    let (objects, _) = read_model("tessellation-with-individual-colors.ifc").unwrap();
+    let o = &objects[0];
+    assert_eq!(o.indices.len() / 3, 12);
+    let colours = o.vertex_colours.as_ref().expect("per-face colours");
+    let mut distinct: Vec<[u32; 4]> = colours.iter().map(|c| c.map(f32::to_bits)).collect();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert!(distinct.len() >= 3, "{distinct:?}");
+}
+
+#[test]
+fn wall_standard_case_reads_every_wall() {
+    if models().is_none() {
+        return;
+    }
+    let (objects, stats) = read_model("WallStandardCase-01A.ifc").unwrap();
+    assert_eq!(objects.len(), 18);
+    assert!(stats.unsupported.is_empty());
+    for o in &objects {
+        assert!(volume(o) > 0.0, "{} faces inward", o.name);
+    }
+}

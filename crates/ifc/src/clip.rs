@@ -38,6 +38,9 @@ pub struct Convex {
     pub planes: Vec<Plane>,
     /// Its box (None: unbounded, e.g. a bounded half space).
     pub bounds: Option<(DVec3, DVec3)>,
+    /// Its faces wound outward, when bounded: what an opening's reveals
+    /// are made of.
+    pub faces: Vec<Vec<DVec3>>,
 }
 
 /// Distances this close to a plane count as on it (file units; IFC
@@ -212,6 +215,7 @@ pub fn convex_of_faces(faces: &[Vec<DVec3>]) -> Option<Convex> {
     );
     let size = (hi - lo).length();
     let mut planes: Vec<Plane> = Vec::new();
+    let mut outward = Vec::with_capacity(faces.len());
     for f in faces {
         let Some(n) = crate::triangulate::newell(f).try_normalize() else {
             continue;
@@ -219,6 +223,9 @@ pub fn convex_of_faces(faces: &[Vec<DVec3>]) -> Option<Convex> {
         let mut p = Plane::new(n, f[0]);
         if p.distance(centre) > 0.0 {
             p = p.flipped();
+            outward.push(f.iter().rev().copied().collect());
+        } else {
+            outward.push(f.clone());
         }
         if all.iter().any(|&q| p.distance(q) > size * 1e-6) {
             return None;
@@ -230,8 +237,33 @@ pub fn convex_of_faces(faces: &[Vec<DVec3>]) -> Option<Convex> {
             planes.push(p);
         }
     }
-    (planes.len() >= 4).then_some(Convex {
+    (planes.len() >= 4).then(|| Convex {
         planes,
         bounds: Some((lo, hi)),
+        faces: outward,
     })
+}
+
+/// The sides of the hole convex `opening` cuts in convex `element`: the
+/// opening's faces clipped to inside the element, facing into the hole.
+pub fn reveals(opening: &Convex, element: &Convex, scale: f64) -> Vec<Tri> {
+    let mut out = Vec::new();
+    for f in &opening.faces {
+        let mut tris: Vec<Tri> = (1..f.len().saturating_sub(1))
+            .map(|i| Tri::new(f[0], f[i + 1], f[i]))
+            .collect();
+        for p in &element.planes {
+            tris = clip(tris, &p.flipped(), scale);
+        }
+        // What lies on the element's own faces is its surface, not a
+        // reveal.
+        tris.retain(|t| {
+            element
+                .planes
+                .iter()
+                .all(|p| t.p.iter().any(|&q| p.distance(q) < -EPS.max(scale * 1e-9)))
+        });
+        out.extend(tris);
+    }
+    out
 }

@@ -219,6 +219,7 @@ fn prisms(boundary: &[DVec3], m: &DMat4) -> Vec<Convex> {
         Convex {
             planes,
             bounds: None,
+            faces: Vec::new(),
         }
     };
     if is_convex(&poly) {

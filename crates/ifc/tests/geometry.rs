@@ -141,9 +141,11 @@ fn an_opening_cuts_a_hole_through_a_wall() {
     assert_eq!(objects.len(), 1, "the opening is not drawn");
     assert_eq!(stats.openings_subtracted, 1);
     let o = &objects[0];
-    // Two 1 m² faces gone.
+    // Two 1 m² faces gone, four 1 x 0.2 m reveals come.
     let full = 2.0 * (4.0 * 0.2 + 4.0 * 3.0 + 0.2 * 3.0);
-    assert!((area(o) - (full - 2.0 * 1.0)).abs() < 1e-9, "{}", area(o));
+    assert!((area(o) - (full - 2.0 + 0.8)).abs() < 1e-9, "{}", area(o));
+    // Closed and facing outward: the wall's volume less the hole's.
+    assert!((volume(o) - (2.4 - 0.2)).abs() < 1e-9, "{}", volume(o));
     // No triangle inside the hole.
     for t in o.indices.chunks_exact(3) {
         let c = t.iter().map(|&i| o.positions[i as usize]).sum::<DVec3>() / 3.0;

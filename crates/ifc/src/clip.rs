@@ -237,7 +237,7 @@ pub fn convex_of_faces(faces: &[Vec<DVec3>]) -> Option<Convex> {
             planes.push(p);
         }
     }
-    (planes.len() >= 4).then(|| Convex {
+    (planes.len() >= 4).then_some(Convex {
         planes,
         bounds: Some((lo, hi)),
         faces: outward,

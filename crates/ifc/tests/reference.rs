@@ -70,8 +70,8 @@ fn bounds(o: &IfcObject) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
-/// Reads `stem`.ifc and checks it against its reference; returns
-/// (products matched, reference products, box outliers) for the report.
+/// Reads `stem`.ifc and checks it against its reference, printing the
+/// figures and the products outside the triangle ratio.
 fn check(stem: &str) {
     let Some(dir) = models() else { return };
     let file = IfcFile::open(&dir.join(format!("{stem}.ifc"))).unwrap();
@@ -101,6 +101,7 @@ fn check(stem: &str) {
     };
     let mut missing: BTreeMap<&str, u64> = BTreeMap::new();
     let mut outliers = Vec::new();
+    let mut worst = 0.0f64;
     let mut ours = 0u64;
     let mut theirs = 0u64;
     for (gid, r) in &reference {
@@ -115,6 +116,7 @@ fn check(stem: &str) {
         let off = (0..3)
             .map(|i| (olo[i] - r.min[i]).abs().max((ohi[i] - r.max[i]).abs()))
             .fold(0.0, f64::max);
+        worst = worst.max(off);
         let ratio = (o.indices.len() / 3) as f64 / r.triangles as f64;
         if off > tolerance || !(0.5..=2.0).contains(&ratio) {
             outliers.push(format!(
@@ -141,7 +143,7 @@ fn check(stem: &str) {
         );
     }
     println!(
-        "{stem}: {} of {} products, {ours} triangles against IfcOpenShell's {theirs}; unsupported: {}",
+        "{stem}: {} of {} products, boxes within {worst:.2e} m (diagonal {diagonal:.1} m), {ours} triangles against IfcOpenShell's {theirs}; unsupported: {}",
         reference.len() - missing.values().sum::<u64>() as usize,
         reference.len(),
         stats.unsupported_summary()

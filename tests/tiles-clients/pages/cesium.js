@@ -15,6 +15,8 @@ async function main() {
     contextOptions: { webgl: { preserveDrawingBuffer: true } },
   });
   const scene = widget.scene;
+  // Settling is timed from the tileset's first request.
+  const t0 = performance.now();
   const tileset = await Cesium3DTileset.fromUrl('/tiles/tileset.json', {
     maximumScreenSpaceError: sse,
     dynamicScreenSpaceError: false,
@@ -40,14 +42,17 @@ async function main() {
   camera.direction = Cartesian3.normalize(new Cartesian3(...pose.direction), new Cartesian3());
   camera.up = Cartesian3.normalize(new Cartesian3(...pose.up), new Cartesian3());
   camera.right = Cartesian3.cross(camera.direction, camera.up, new Cartesian3());
+  // Settled: no tile pending for 5 frames running; the time is that of
+  // the first of them.
   let stable = 0;
-  const t0 = performance.now();
+  let settled = 0;
   while (stable < 5) {
     widget.resize();
     widget.render();
     await new Promise((r) => setTimeout(r, 20));
     stable = tileset.tilesLoaded ? stable + 1 : 0;
-    if (performance.now() - t0 > 220000) throw new Error('tiles did not load in 220 s');
+    if (stable === 1) settled = performance.now() - t0;
+    if (performance.now() - t0 > 280000) throw new Error('tiles did not load in 280 s');
   }
   widget.render();
   // Statistics are counted again by every pass, picks included: read
@@ -68,6 +73,7 @@ async function main() {
   report({
     tiles: st.selected, triangles: st.numberOfTrianglesSelected, loaded: st.numberOfTilesWithContentReady,
     features: st.numberOfFeaturesSelected, selected, picks, webgl2: scene.context.webgl2,
+    settleMs: settled,
   });
 }
 main().catch(fail);

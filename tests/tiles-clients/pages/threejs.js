@@ -19,6 +19,8 @@ async function main() {
   const [x, y, z] = pose.position, [dx, dy, dz] = pose.direction;
   camera.lookAt(x + dx, y + dy, z + dz);
   camera.updateMatrixWorld();
+  // Settling is timed from the tileset's first request.
+  const t0 = performance.now();
   const tiles = new TilesRenderer('/tiles/tileset.json');
   tiles.registerPlugin(new GLTFExtensionsPlugin({ meshoptDecoder: MeshoptDecoder, metadata: true }));
   tiles.errorTarget = sse;
@@ -27,8 +29,10 @@ async function main() {
   tiles.setCamera(camera);
   tiles.setResolutionFromRenderer(camera, renderer);
   scene.add(tiles.group);
+  // Settled: nothing queued, downloading or parsing for 10 frames
+  // running; the time is that of the first of them.
   let stable = 0;
-  const t0 = performance.now();
+  let settled = 0;
   while (stable < 10) {
     tiles.update();
     renderer.render(scene, camera);
@@ -36,7 +40,8 @@ async function main() {
     const s = tiles.stats;
     const busy = s.queued + s.downloading + s.parsing;
     stable = busy === 0 && tiles.root ? stable + 1 : 0;
-    if (performance.now() - t0 > 220000) throw new Error('tiles did not load in 220 s');
+    if (stable === 1) settled = performance.now() - t0;
+    if (performance.now() - t0 > 280000) throw new Error('tiles did not load in 280 s');
   }
   let triangles = 0;
   tiles.group.traverseVisible((o) => {
@@ -61,6 +66,9 @@ async function main() {
     const row = sm.getPropertyTableData(info.propertyTable, ids[0]);
     return { x, y, featureId: ids[0], name: row.name, objectId: row.objectId, path: row.path };
   });
-  report({ tiles: selected.length, triangles, selected, picks, webgl2: renderer.capabilities.isWebGL2 });
+  report({
+    tiles: selected.length, triangles, selected, picks, webgl2: renderer.capabilities.isWebGL2,
+    settleMs: settled,
+  });
 }
 main().catch(fail);

@@ -981,9 +981,10 @@ fn copy_dir(from: &Path, to: &Path) {
 /// clients also cull by each content's own box and keep tiles that are
 /// loading), and from the depth of the tree gigawalk's traversal draws
 /// from at the same pose and pixel error: a mean depth within 1.5 levels
-/// and triangles within 2x of gigawalk's. gigawalk refines sooner (its
-/// distance to a box is shortened off the view axis, docs/tiles.md), so
-/// a client draws from a little higher in the tree, never lower.
+/// and at least half of gigawalk's triangles (never much coarser). A
+/// client may draw several times gigawalk's triangles: a content unites
+/// a group of nodes, refined together where gigawalk refines each node on
+/// its own (docs/tiles.md has the figures).
 #[track_caller]
 fn assert_same_depth(drawn: &[Drawn]) {
     let (ours, rule) = (&drawn[0], &drawn[1]);
@@ -1002,8 +1003,10 @@ fn assert_same_depth(drawn: &[Drawn]) {
             (c.mean_depth - ours.mean_depth).abs() <= 1.5,
             "{c:?} against {ours:?}"
         );
-        let ratio = c.triangles as f64 / ours.triangles as f64;
-        assert!((0.5..=2.0).contains(&ratio), "{c:?} against {ours:?}");
+        assert!(
+            c.triangles as f64 >= 0.5 * ours.triangles as f64,
+            "{c:?} against {ours:?}"
+        );
     }
 }
 

@@ -69,6 +69,16 @@ fn face(ctx: &Ctx, id: u32, out: &mut Vec<Tri>) -> G<()> {
         "IFCFACE" | "IFCFACESURFACE" => {}
         "IFCADVANCEDFACE" => {
             let s = ctx.get(e.reference(1)?)?;
+            if matches!(
+                s.ty,
+                "IFCBSPLINESURFACEWITHKNOTS" | "IFCRATIONALBSPLINESURFACEWITHKNOTS"
+            ) {
+                // The whole patch: its bounds are taken to be its edges
+                // (trimmed B-spline faces are drawn untrimmed).
+                let flip = e.flag(2) == Some(false);
+                out.extend(crate::bspline::surface(ctx, &s, flip)?);
+                return Ok(());
+            }
             if s.ty != "IFCPLANE" {
                 return Err(GeomError::Unsupported(format!(
                     "IfcAdvancedFace on {}",
@@ -155,9 +165,12 @@ fn edge_points(ctx: &Ctx, id: u32) -> G<Vec<DVec3>> {
     let c = ctx.get(e.reference(2)?)?;
     let mut pts = match c.ty {
         "IFCLINE" => vec![a, b],
-        "IFCPOLYLINE" | "IFCINDEXEDPOLYCURVE" | "IFCTRIMMEDCURVE" | "IFCCOMPOSITECURVE" => {
-            curve::points(ctx, c.id)?
-        }
+        "IFCPOLYLINE"
+        | "IFCINDEXEDPOLYCURVE"
+        | "IFCTRIMMEDCURVE"
+        | "IFCCOMPOSITECURVE"
+        | "IFCBSPLINECURVEWITHKNOTS"
+        | "IFCRATIONALBSPLINECURVEWITHKNOTS" => curve::points(ctx, c.id)?,
         other => {
             return Err(GeomError::Unsupported(format!(
                 "IfcEdgeCurve on {}",

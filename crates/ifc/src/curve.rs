@@ -51,6 +51,9 @@ pub fn points(ctx: &Ctx, id: u32) -> G<Vec<DVec3>> {
             out
         }
         "IFCINDEXEDPOLYCURVE" => indexed(ctx, id)?,
+        "IFCBSPLINECURVEWITHKNOTS" | "IFCRATIONALBSPLINECURVEWITHKNOTS" => {
+            crate::bspline::curve(ctx, &e)?
+        }
         other => return Err(GeomError::Unsupported(camel(other))),
     };
     out.dedup_by(|a, b| a.distance_squared(*b) < 1e-18);

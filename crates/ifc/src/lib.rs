@@ -10,12 +10,13 @@
 //! units and the objects are scaled to metres at the end.
 //!
 //! Not read (counted in [`IfcStats::unsupported`] by kind, never dropped
-//! silently): revolved and other swept solids, B-spline surfaces,
-//! intersections, subtractions of non-convex solids.
+//! silently): revolved and other swept solids, intersections,
+//! subtractions of non-convex solids, among others (docs/ifc.md).
 
 #![forbid(unsafe_code)]
 
 mod brep;
+mod bspline;
 pub mod classes;
 mod clip;
 mod colour;

@@ -73,6 +73,14 @@ fn bounds(o: &IfcObject) -> ([f64; 3], [f64; 3]) {
 /// Reads `stem`.ifc and checks it against its reference, printing the
 /// figures and the products outside the triangle ratio.
 fn check(stem: &str) {
+    check_with(stem, true);
+}
+
+/// [`check`], the triangle total compared or (`compare_triangles`
+/// false) only printed: B-spline surfaces are tessellated to a chord
+/// deflection here, while IfcOpenShell's mesher also refines flat
+/// B-spline patches (the cube's four flat sides: 2900 triangles).
+fn check_with(stem: &str, compare_triangles: bool) {
     let Some(dir) = models() else { return };
     let file = IfcFile::open(&dir.join(format!("{stem}.ifc"))).unwrap();
     let mut objects: BTreeMap<String, IfcObject> = BTreeMap::new();
@@ -151,7 +159,7 @@ fn check(stem: &str) {
     for o in &outliers {
         println!("  outlier: {o}");
     }
-    if theirs > 0 {
+    if theirs > 0 && compare_triangles {
         let ratio = ours as f64 / theirs as f64;
         assert!(
             (0.5..=2.0).contains(&ratio),
@@ -198,4 +206,14 @@ fn slab_standard_case_matches_ifcopenshell() {
 #[test]
 fn tessellation_with_colours_matches_ifcopenshell() {
     check("tessellation-with-individual-colors");
+}
+
+#[test]
+fn cube_advanced_brep_matches_ifcopenshell() {
+    check_with("Ifc4_CubeAdvancedBrep", false);
+}
+
+#[test]
+fn basin_advanced_brep_matches_ifcopenshell() {
+    check_with("basin-advanced-brep", false);
 }

@@ -517,6 +517,9 @@ impl Scanner<'_> {
                             break;
                         }
                     }
+                    if self.pos == self.b.len() {
+                        return Err(self.truncated(&format!("inside {entity}")));
+                    }
                     if self.pos == start {
                         return Err(self.broken(entity.into(), "'#' without an id"));
                     }
@@ -640,6 +643,9 @@ impl Scanner<'_> {
                         self.expect(b';', "after ENDSEC")?;
                         return Ok(());
                     }
+                    if b"ENDSEC".starts_with(&self.b[self.pos..]) {
+                        return Err(self.truncated("no ENDSEC after the DATA section"));
+                    }
                     let at = self.b.len().min(self.pos + 20);
                     return Err(self.broken(
                         "record".into(),
@@ -652,6 +658,9 @@ impl Scanner<'_> {
             }
             self.pos += 1;
             let digits = self.keyword().to_vec();
+            if self.pos == self.b.len() {
+                return Err(self.truncated("in an entity id"));
+            }
             let id: u32 = std::str::from_utf8(&digits)
                 .ok()
                 .and_then(|d| d.parse().ok())

@@ -21,6 +21,7 @@ pub fn item(ctx: &Ctx, id: u32, depth: usize) -> G<Vec<Tri>> {
     let e = ctx.get(id)?;
     let mut tris = match e.ty {
         "IFCEXTRUDEDAREASOLID" => crate::extrude::extruded_area_solid(ctx, id)?,
+        "IFCREVOLVEDAREASOLID" => crate::revolve::revolved_area_solid(ctx, id)?,
         "IFCFACETEDBREP"
         | "IFCFACETEDBREPWITHVOIDS"
         | "IFCADVANCEDBREP"

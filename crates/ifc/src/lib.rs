@@ -10,7 +10,7 @@
 //! units and the objects are scaled to metres at the end.
 //!
 //! Not read (counted in [`IfcStats::unsupported`] by kind, never dropped
-//! silently): revolved and other swept solids, intersections,
+//! silently): swept solids along curves, CSG spheres, intersections,
 //! subtractions of non-convex solids, among others (docs/ifc.md).
 
 #![forbid(unsafe_code)]
@@ -29,6 +29,7 @@ mod identity;
 mod items;
 mod placement;
 mod profile;
+mod revolve;
 pub mod step;
 mod swept;
 mod triangulate;
@@ -94,7 +95,7 @@ pub struct IfcStats {
     pub objects: u64,
     pub triangles: u64,
     pub degenerate_triangles_dropped: u64,
-    /// Kind ("IfcRevolvedAreaSolid", "IfcAdvancedFace on
+    /// Kind ("IfcSphere", "IfcAdvancedFace on
     /// IfcBSplineSurfaceWithKnots", "opening: non-convex brep") -> counts.
     pub unsupported: BTreeMap<String, Unsupported>,
     /// Openings subtracted from their elements.
@@ -104,7 +105,7 @@ pub struct IfcStats {
 }
 
 impl IfcStats {
-    /// `IfcRevolvedAreaSolid: 3 items in 2 IfcFlowFitting; ...`, or empty.
+    /// `IfcSphere: 3 items in 2 IfcFlowFitting; ...`, or empty.
     pub fn unsupported_summary(&self) -> String {
         self.unsupported
             .iter()

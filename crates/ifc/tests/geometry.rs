@@ -197,16 +197,39 @@ fn a_styled_item_colours_the_product_in_linear_rgb() {
 fn unsupported_items_are_counted_by_kind_and_product() {
     let data = product("IFCFLOWFITTING", "#20,#60")
         + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
-        + "#60=IFCREVOLVEDAREASOLID(#21,$,#61,1.);\n#61=IFCAXIS1PLACEMENT(#92,$);\n";
+        + "#60=IFCSPHERE(#91,1.);\n";
     let (objects, stats) = read(&ifc(METRES, &data));
     assert_eq!(objects.len(), 1);
-    let u = &stats.unsupported["IfcRevolvedAreaSolid"];
+    let u = &stats.unsupported["IfcSphere"];
     assert_eq!(u.items, 1);
     assert_eq!(u.products["IfcFlowFitting"], 1);
     assert_eq!(
         stats.unsupported_summary(),
-        "IfcRevolvedAreaSolid: 1 items in 1 IfcFlowFitting"
+        "IfcSphere: 1 items in 1 IfcFlowFitting"
     );
+}
+
+#[test]
+fn a_revolved_rectangle_is_a_ring_of_the_right_volume() {
+    // A 1 x 2 rectangle from x = 2 to 3 turned a quarter about the Y
+    // axis: a quarter of a ring of radii 2 and 3, 2 high.
+    let data = product("IFCFLOWFITTING", "#60")
+        + &extrusion(20, 2.5, 1.0, 1.0, 2.0, 1.0, "0.,0.,1.")
+        + "#60=IFCREVOLVEDAREASOLID(#21,$,#61,1.5707963267948966);\n#61=IFCAXIS1PLACEMENT(#92,#62);\n#62=IFCDIRECTION((0.,1.,0.));\n";
+    let (objects, stats) = read(&ifc(METRES, &data));
+    assert!(
+        stats.unsupported.is_empty(),
+        "{}",
+        stats.unsupported_summary()
+    );
+    let o = &objects[0];
+    let exact = std::f64::consts::PI / 4.0 * (9.0 - 4.0) * 2.0;
+    // Chords cut inside the arcs: a little less than the exact volume.
+    let v = volume(o);
+    assert!(v < exact && v > 0.99 * exact, "{v} against {exact}");
+    let (lo, hi) = bounds(o);
+    assert!((hi.y - 2.0).abs() < 1e-9 && lo.y.abs() < 1e-9, "{lo} {hi}");
+    assert!((hi.x - 3.0).abs() < 1e-9, "{hi}");
 }
 
 fn models() -> Option<std::path::PathBuf> {

@@ -72,7 +72,7 @@ pub struct ImportStats {
     pub skipped_primitives: u64,
     pub warnings: Vec<String>,
     /// Geometry not read, by kind (an IFC item class such as
-    /// `IfcRevolvedAreaSolid`): how many items, in how many products of
+    /// `IfcSphere`): how many items, in how many products of
     /// each class.
     pub unsupported: BTreeMap<String, Unsupported>,
 }

@@ -148,22 +148,22 @@ fn revit_japanese_names_decode_and_every_product_is_its_own_object() {
 #[test]
 fn geometry_not_read_is_counted_in_the_stats_and_summary() {
     let t = tempfile::tempdir().unwrap();
-    let path = t.path().join("revolved.ifc");
+    let path = t.path().join("sphere.ifc");
     let text = BLOCK
         .replace("'SweptSolid',(#12));", "'SweptSolid',(#12,#17));")
         .replace(
             "ENDSEC;\nEND-ISO",
-            "#17=IFCREVOLVEDAREASOLID(#13,$,#18,1.);\n#18=IFCAXIS1PLACEMENT(#9,$);\nENDSEC;\nEND-ISO",
+            "#17=IFCSPHERE(#8,1.);\nENDSEC;\nEND-ISO",
         );
     std::fs::write(&path, text).unwrap();
     let model = import(&path).unwrap();
     assert_eq!(model.objects.len(), 1);
-    let u = &model.stats.unsupported["IfcRevolvedAreaSolid"];
+    let u = &model.stats.unsupported["IfcSphere"];
     assert_eq!(u.items, 1);
     assert_eq!(u.products["IfcWall"], 1);
     let summary = model.stats.summary(model.objects.len());
     assert_eq!(
         summary,
-        "12 triangles in 1 objects; not read: IfcRevolvedAreaSolid: 1 items in 1 IfcWall"
+        "12 triangles in 1 objects; not read: IfcSphere: 1 items in 1 IfcWall"
     );
 }

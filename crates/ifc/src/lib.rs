@@ -187,6 +187,10 @@ impl IfcFile {
             }
             for id in self.step.ids_of_type(ty) {
                 let Ok(e) = self.step.get(id) else { break };
+                // Fewer attributes: not an IfcProduct (points, properties).
+                if e.args.len() < 7 {
+                    break;
+                }
                 match e.arg(6) {
                     step::Value::Ref(r) => {
                         if self.step.type_of(*r) == Some("IFCPRODUCTDEFINITIONSHAPE")

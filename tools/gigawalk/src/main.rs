@@ -50,7 +50,7 @@ enum Command {
     Info(info::Args),
     /// Generate a procedural test scene (glTF binary) and optionally a camera path through it
     Generate(generate::Args),
-    /// Turn a glTF/OBJ model into a scene file: partition, cluster, AABB hierarchy, HLODs
+    /// Turn a glTF/OBJ/IFC model into a scene file: partition, cluster, AABB hierarchy, HLODs
     Preprocess(preprocess::Args),
     /// Replay a camera path in the Table 2 modes and write a frame-time and accuracy report
     Replay(Box<replay::Args>),

@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input model: glTF 2.0 (.gltf, .glb) or Wavefront OBJ (.obj) files, or directories of them (searched recursively, in path order), all made into one model; with several files each object's name starts with its file's path
+    /// Input model: glTF 2.0 (.gltf, .glb), Wavefront OBJ (.obj) or IFC (.ifc: one object per product) files, or directories of them (searched recursively, in path order), all made into one model; with several files each object's name starts with its file's path
     #[arg(num_args = 1.., value_name = "MODEL", required_unless_present_any = ["shard", "merge"], conflicts_with_all = ["shard", "merge"])]
     input: Vec<PathBuf>,
     /// Output scene file (.gwk), written atomically: nothing appears on failure

@@ -330,3 +330,79 @@ fn wall_standard_case_reads_every_wall() {
         assert!(volume(o) > 0.0, "{} faces inward", o.name);
     }
 }
+
+#[test]
+fn a_swept_disk_is_a_closed_tube_of_the_right_volume() {
+    // Radius 0.1 along an L of two 1 m legs, and a bore of 0.05.
+    let data = product("IFCPIPESEGMENT", "#60,#70")
+        + "#60=IFCSWEPTDISKSOLID(#61,0.1,$,$,$);\n#61=IFCPOLYLINE((#62,#63,#64));\n#62=IFCCARTESIANPOINT((0.,0.,0.));\n#63=IFCCARTESIANPOINT((1.,0.,0.));\n#64=IFCCARTESIANPOINT((1.,1.,0.));\n"
+        + "#70=IFCSWEPTDISKSOLID(#71,0.1,0.05,$,$);\n#71=IFCPOLYLINE((#72,#73));\n#72=IFCCARTESIANPOINT((0.,0.,5.));\n#73=IFCCARTESIANPOINT((0.,0.,6.));\n";
+    let (objects, stats) = read(&ifc(METRES, &data));
+    assert!(
+        stats.unsupported.is_empty(),
+        "{}",
+        stats.unsupported_summary()
+    );
+    let o = &objects[0];
+    // A polygon of n sides inscribed in the circle holds n/2 sin(2pi/n)
+    // r^2; the mitred bend keeps the L's volume that of 2 m of tube.
+    let n = (o.indices.len() / 3) as f64;
+    assert!(n > 0.0);
+    let v = volume(o);
+    let disk = std::f64::consts::PI * 0.01;
+    let (solid, bored) = (2.0 * disk, disk * 0.75);
+    assert!(v < solid + bored && v > 0.95 * (solid + bored), "{v}");
+    let (lo, hi) = bounds(o);
+    // The ring is a polygon: within its sag of the radius.
+    assert!(
+        (hi.z - 6.0).abs() < 1e-9 && (lo.z + 0.1).abs() < 1e-3,
+        "{lo} {hi}"
+    );
+}
+
+#[test]
+fn a_polygonal_face_set_with_a_void_is_triangulated_around_it() {
+    // A 2 x 2 square with a 1 x 1 hole: 3 m² of one face, no volume.
+    let data = product("IFCPLATE", "#60")
+        + "#60=IFCPOLYGONALFACESET(#61,$,(#62),$);\n#61=IFCCARTESIANPOINTLIST3D(((0.,0.,0.),(2.,0.,0.),(2.,2.,0.),(0.,2.,0.),(0.5,0.5,0.),(0.5,1.5,0.),(1.5,1.5,0.),(1.5,0.5,0.)));\n#62=IFCINDEXEDPOLYGONALFACEWITHVOIDS((1,2,3,4),((5,6,7,8)));\n";
+    let (objects, _) = read(&ifc(METRES, &data));
+    let o = &objects[0];
+    assert!((area(o) - 3.0).abs() < 1e-9, "{}", area(o));
+    for t in o.indices.chunks_exact(3) {
+        let c = t.iter().map(|&i| o.positions[i as usize]).sum::<DVec3>() / 3.0;
+        assert!(
+            !(c.x > 0.5 && c.x < 1.5 && c.y > 0.5 && c.y < 1.5),
+            "{c} in the void"
+        );
+    }
+    assert!(o.normals.iter().all(|n| n.z > 0.99));
+}
+
+#[test]
+fn a_faceted_brep_face_with_an_inner_bound_has_a_hole() {
+    let data = product("IFCBUILDINGELEMENTPROXY", "#60")
+        + "#60=IFCFACETEDBREP(#61);\n#61=IFCCLOSEDSHELL((#62));\n#62=IFCFACE((#63,#65));\n#63=IFCFACEOUTERBOUND(#64,.T.);\n#64=IFCPOLYLOOP((#70,#71,#72,#73));\n#65=IFCFACEBOUND(#66,.T.);\n#66=IFCPOLYLOOP((#74,#75,#76,#77));\n#70=IFCCARTESIANPOINT((0.,0.,0.));\n#71=IFCCARTESIANPOINT((0.,2.,0.));\n#72=IFCCARTESIANPOINT((0.,2.,2.));\n#73=IFCCARTESIANPOINT((0.,0.,2.));\n#74=IFCCARTESIANPOINT((0.,0.5,0.5));\n#75=IFCCARTESIANPOINT((0.,0.5,1.5));\n#76=IFCCARTESIANPOINT((0.,1.5,1.5));\n#77=IFCCARTESIANPOINT((0.,1.5,0.5));\n";
+    let (objects, _) = read(&ifc(METRES, &data));
+    let o = &objects[0];
+    assert!((area(o) - 3.0).abs() < 1e-9, "{}", area(o));
+    // The outer loop's winding (Y then Z) faces +X.
+    assert!(o.normals.iter().all(|n| n.x > 0.99));
+}
+
+#[test]
+fn an_ifc4x3_file_reads() {
+    let text = ifc(
+        METRES,
+        &(product("IFCWALL", "#20") + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")),
+    )
+    .replace("FILE_SCHEMA(('IFC4'))", "FILE_SCHEMA(('IFC4X3_ADD2'))");
+    let f = IfcFile::parse(text.into_bytes(), "t.ifc").unwrap();
+    assert_eq!(f.schema(), gigawalk_ifc::Schema::Ifc4x3);
+    let mut n = 0;
+    f.read(&mut |_| {
+        n += 1;
+        true
+    })
+    .unwrap();
+    assert_eq!(n, 1);
+}

@@ -1,8 +1,8 @@
-//! Cutting triangles by planes: half-space clipping (IfcHalfSpaceSolid,
-//! IfcPolygonalBoundedHalfSpace in IfcBooleanClippingResult) and the
-//! subtraction of convex solids (openings, boolean differences), exact for
-//! a convex solid: a triangle is split by each of its planes in turn and
-//! only what ends up behind all of them is dropped.
+//! Cutting closed meshes by convex solids: half spaces (IfcHalfSpaceSolid,
+//! IfcPolygonalBoundedHalfSpace in IfcBooleanClippingResult), openings and
+//! boolean differences. Exact for a convex solid: a triangle is split by
+//! each of its planes in turn and only what ends up behind all of them is
+//! dropped; the solid's faces inside the mesh close the cut.
 
 use glam::DVec3;
 
@@ -100,15 +100,19 @@ pub fn split(t: &Tri, plane: &Plane, scale: f64, front: &mut Vec<Tri>, back: &mu
     }
 }
 
-/// Keeps the parts of `tris` in front of `plane`.
-pub fn clip(tris: Vec<Tri>, plane: &Plane, scale: f64) -> Vec<Tri> {
-    let mut front = Vec::with_capacity(tris.len());
-    let mut back = Vec::new();
-    for t in &tris {
-        split(t, plane, scale, &mut front, &mut back);
-        back.clear();
+/// The closed mesh `solid` minus the convex solid `c`, closed again: its
+/// triangles outside `c` and `c`'s surface inside it (an opening's
+/// reveals, a clipping plane's cap), in the solid's first colour.
+pub fn cut(solid: Vec<Tri>, c: &Convex, scale: f64) -> Vec<Tri> {
+    let mut closing = surface_inside(c, &solid, scale);
+    if let Some(first) = solid.first() {
+        for t in &mut closing {
+            t.c = first.c;
+        }
     }
-    front
+    let mut out = subtract(solid, c, scale);
+    out.append(&mut closing);
+    out
 }
 
 /// `tris` minus the convex solid `c`. Each triangle is cut as a convex
@@ -244,26 +248,179 @@ pub fn convex_of_faces(faces: &[Vec<DVec3>]) -> Option<Convex> {
     })
 }
 
-/// The sides of the hole convex `opening` cuts in convex `element`: the
-/// opening's faces clipped to inside the element, facing into the hole.
-pub fn reveals(opening: &Convex, element: &Convex, scale: f64) -> Vec<Tri> {
+/// The surface subtracting convex `c` from the closed mesh `solid` makes:
+/// the parts of `c`'s faces inside `solid`, facing into `c` (an opening's
+/// reveals, a clipping plane's cap). Each face is cut by the planes of
+/// the solid's triangles near it, so every piece lies wholly inside or
+/// outside, and a piece is kept when rays from its centre cross the
+/// solid an odd number of times (two of three rays agreeing).
+pub fn surface_inside(c: &Convex, solid: &[Tri], scale: f64) -> Vec<Tri> {
+    let eps = EPS.max(scale * 1e-9);
+    let Some((lo, hi)) = bounds_of(solid) else {
+        return Vec::new();
+    };
+    let faces = if c.faces.is_empty() {
+        faces_within(c, lo, hi)
+    } else {
+        c.faces.clone()
+    };
     let mut out = Vec::new();
-    for f in &opening.faces {
-        let mut tris: Vec<Tri> = (1..f.len().saturating_sub(1))
+    for f in &faces {
+        // Facing into the solid `c`: the face's winding reversed.
+        let mut pieces: Vec<Tri> = (1..f.len().saturating_sub(1))
             .map(|i| Tri::new(f[0], f[i + 1], f[i]))
             .collect();
-        for p in &element.planes {
-            tris = clip(tris, &p.flipped(), scale);
-        }
-        // What lies on the element's own faces is its surface, not a
-        // reveal.
-        tris.retain(|t| {
-            element
-                .planes
+        let Some((flo, fhi)) = bounds_of(&pieces) else {
+            continue;
+        };
+        let near: Vec<&Tri> = solid
+            .iter()
+            .filter(|t| {
+                let (tlo, thi) = (
+                    t.p[0].min(t.p[1]).min(t.p[2]),
+                    t.p[0].max(t.p[1]).max(t.p[2]),
+                );
+                !(tlo.cmpgt(fhi + eps).any() || thi.cmplt(flo - eps).any())
+            })
+            .collect();
+        let mut planes: Vec<Plane> = Vec::new();
+        for t in &near {
+            let Some(n) = t.cross().try_normalize() else {
+                continue;
+            };
+            let p = Plane::new(n, t.p[0]);
+            if !planes
                 .iter()
-                .all(|p| t.p.iter().any(|&q| p.distance(q) < -EPS.max(scale * 1e-9)))
-        });
-        out.extend(tris);
+                .any(|o| (o.n.dot(p.n).abs() > 1.0 - 1e-12) && (o.distance(t.p[0])).abs() < eps)
+            {
+                planes.push(p);
+            }
+        }
+        for plane in &planes {
+            let mut front = Vec::with_capacity(pieces.len());
+            let mut back = Vec::new();
+            for t in &pieces {
+                split(t, plane, scale, &mut front, &mut back);
+            }
+            front.append(&mut back);
+            pieces = front;
+        }
+        for t in pieces {
+            let centre = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+            if near.iter().any(|s| on_triangle(s, centre, eps)) {
+                continue;
+            }
+            if inside(solid, centre) {
+                out.push(t);
+            }
+        }
     }
     out
+}
+
+/// The box around triangles, if any.
+fn bounds_of(tris: &[Tri]) -> Option<(DVec3, DVec3)> {
+    let first = tris.first()?.p[0];
+    Some(
+        tris.iter()
+            .flat_map(|t| t.p)
+            .fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))),
+    )
+}
+
+/// The faces of `c` cut to the box `lo`..`hi` grown by its diagonal: an
+/// unbounded solid's (a half space's) faces where a solid in the box
+/// can meet them.
+fn faces_within(c: &Convex, lo: DVec3, hi: DVec3) -> Vec<Vec<DVec3>> {
+    let centre = (lo + hi) / 2.0;
+    let h = (hi - lo).length().max(1e-6) * 2.0;
+    let mut out = Vec::new();
+    for (i, p) in c.planes.iter().enumerate() {
+        let o = centre - p.n * p.distance(centre);
+        let u = p.n.any_orthonormal_vector();
+        let v = p.n.cross(u);
+        let mut poly = vec![
+            o - u * h - v * h,
+            o + u * h - v * h,
+            o + u * h + v * h,
+            o - u * h + v * h,
+        ];
+        for (j, q) in c.planes.iter().enumerate() {
+            if i != j {
+                poly = keep_behind(&poly, q);
+            }
+        }
+        if poly.len() >= 3 {
+            out.push(poly);
+        }
+    }
+    out
+}
+
+/// The part of convex polygon `poly` behind `plane`.
+fn keep_behind(poly: &[DVec3], plane: &Plane) -> Vec<DVec3> {
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (dp, dq) = (plane.distance(p), plane.distance(q));
+        if dp <= 0.0 {
+            out.push(p);
+        }
+        if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+            out.push(p + (q - p) * (dp / (dp - dq)));
+        }
+    }
+    out
+}
+
+/// Whether `p` lies on triangle `t` (in its plane, within its edges).
+fn on_triangle(t: &Tri, p: DVec3, eps: f64) -> bool {
+    let n = t.cross();
+    let len = n.length();
+    if len < 1e-300 || (p - t.p[0]).dot(n / len).abs() > eps {
+        return false;
+    }
+    (0..3).all(|i| {
+        let (a, b) = (t.p[i], t.p[(i + 1) % 3]);
+        (b - a).cross(p - a).dot(n) >= -eps * len
+    })
+}
+
+/// Whether `p` is inside the closed mesh `solid`, by the parity of three
+/// skewed rays' crossings (the majority, so a ray through an edge does
+/// not decide alone).
+fn inside(solid: &[Tri], p: DVec3) -> bool {
+    const RAYS: [DVec3; 3] = [
+        DVec3::new(0.5773, 0.5774, 0.5771),
+        DVec3::new(-0.6123, 0.3217, 0.7222),
+        DVec3::new(0.2311, -0.8867, 0.4003),
+    ];
+    let odd = RAYS
+        .iter()
+        .filter(|d| solid.iter().filter(|t| crosses(t, p, **d)).count() % 2 == 1)
+        .count();
+    odd >= 2
+}
+
+/// Whether the ray from `o` along `d` crosses triangle `t`
+/// (Möller-Trumbore).
+fn crosses(t: &Tri, o: DVec3, d: DVec3) -> bool {
+    let (e1, e2) = (t.p[1] - t.p[0], t.p[2] - t.p[0]);
+    let h = d.cross(e2);
+    let a = e1.dot(h);
+    if a.abs() < 1e-300 {
+        return false;
+    }
+    let f = 1.0 / a;
+    let s = o - t.p[0];
+    let u = f * s.dot(h);
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = s.cross(e1);
+    let v = f * d.dot(q);
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    f * e2.dot(q) > 0.0
 }

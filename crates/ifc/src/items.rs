@@ -6,7 +6,7 @@
 use glam::{DMat4, DVec2, DVec3};
 
 use crate::classes::camel;
-use crate::clip::{clip, convex_of_faces, subtract, Convex, Plane};
+use crate::clip::{convex_of_faces, cut, Convex, Plane};
 use crate::geom::{transform, Ctx, GeomError, Tri, G};
 use crate::placement::{axis2, opt_axis2, transform_operator};
 use crate::profile::profile;
@@ -159,7 +159,12 @@ fn boolean(ctx: &Ctx, id: u32, depth: usize) -> G<Vec<Tri>> {
     match second.ty {
         "IFCHALFSPACESOLID" | "IFCBOXEDHALFSPACE" => {
             let plane = half_space_plane(ctx, &second)?;
-            Ok(clip(first, &plane, scale))
+            let half = Convex {
+                planes: vec![plane],
+                bounds: None,
+                faces: Vec::new(),
+            };
+            Ok(cut(first, &half, scale))
         }
         "IFCPOLYGONALBOUNDEDHALFSPACE" => {
             let plane = half_space_plane(ctx, &second)?;
@@ -170,7 +175,7 @@ fn boolean(ctx: &Ctx, id: u32, depth: usize) -> G<Vec<Tri>> {
             for piece in prisms(&boundary, &m) {
                 let mut c = piece;
                 c.planes.push(plane);
-                out = subtract(out, &c, scale);
+                out = cut(out, &c, scale);
             }
             Ok(out)
         }
@@ -178,7 +183,7 @@ fn boolean(ctx: &Ctx, id: u32, depth: usize) -> G<Vec<Tri>> {
             Ok(pieces) => {
                 let mut out = first;
                 for c in &pieces {
-                    out = subtract(out, c, scale);
+                    out = cut(out, c, scale);
                 }
                 Ok(out)
             }

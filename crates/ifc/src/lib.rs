@@ -353,27 +353,12 @@ fn product_triangles(
         return Ok(tris);
     }
     let openings = rel.voids.get(&e.id).map_or(&[][..], |v| v.as_slice());
-    // A convex element (most walls and slabs) gets its openings' sides
-    // (reveals): the parts of each opening's faces inside it.
-    let element = if openings.is_empty() {
-        None
-    } else {
-        let faces: Vec<Vec<DVec3>> = tris.iter().map(|t| t.p.to_vec()).collect();
-        clip::convex_of_faces(&faces)
-    };
-    let mut reveals = Vec::new();
     for &o in openings {
         match opening_pieces(ctx, o) {
             Ok(pieces) => {
                 let size = extent(&tris);
                 for c in &pieces {
-                    tris = clip::subtract(tris, c, size);
-                }
-                // Of an opening cut as several pieces, the faces between
-                // the pieces are no reveals: only a one-piece opening
-                // gets them.
-                if let (Some(el), [piece]) = (&element, pieces.as_slice()) {
-                    reveals.extend(clip::reveals(piece, el, size));
+                    tris = clip::cut(tris, c, size);
                 }
                 stats.openings_subtracted += 1;
             }
@@ -384,12 +369,6 @@ fn product_triangles(
             }
         }
     }
-    if let Some(c) = tris.first().map(|t| t.c) {
-        for r in &mut reveals {
-            r.c = c;
-        }
-    }
-    tris.extend(reveals);
     Ok(tris)
 }
 

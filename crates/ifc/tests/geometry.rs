@@ -165,6 +165,44 @@ fn a_half_space_clips_a_box_in_two() {
     let (lo, hi) = bounds(&objects[0]);
     assert!(close(lo, DVec3::ZERO), "{lo}");
     assert!(close(hi, DVec3::new(1.0, 1.0, 0.25)), "{hi}");
+    // Capped where it was cut: closed, a quarter of the cube.
+    assert!(
+        (volume(&objects[0]) - 0.25).abs() < 1e-9,
+        "{}",
+        volume(&objects[0])
+    );
+}
+
+#[test]
+fn a_polygonal_bounded_half_space_cuts_a_notch() {
+    // A unit cube minus what lies above z = 0.5 within x < 0.5 (the
+    // boundary, a rectangle larger than the cube in y).
+    let data = product("IFCWALL", "#30")
+        + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
+        + "#30=IFCBOOLEANCLIPPINGRESULT(.DIFFERENCE.,#20,#31);\n#31=IFCPOLYGONALBOUNDEDHALFSPACE(#32,.F.,#91,#35);\n#32=IFCPLANE(#33);\n#33=IFCAXIS2PLACEMENT3D(#34,#93,$);\n#34=IFCCARTESIANPOINT((0.,0.,0.5));\n#35=IFCPOLYLINE((#36,#37,#38,#39,#36));\n#36=IFCCARTESIANPOINT((-1.,-1.));\n#37=IFCCARTESIANPOINT((0.5,-1.));\n#38=IFCCARTESIANPOINT((0.5,2.));\n#39=IFCCARTESIANPOINT((-1.,2.));\n";
+    let (objects, _) = read(&ifc(METRES, &data));
+    let o = &objects[0];
+    assert!((volume(o) - 0.75).abs() < 1e-9, "{}", volume(o));
+    let (lo, hi) = bounds(o);
+    assert!(close(lo, DVec3::ZERO) && close(hi, DVec3::ONE), "{lo} {hi}");
+}
+
+#[test]
+fn an_opening_through_an_l_shaped_wall_gets_its_reveals() {
+    // An L of two 1 x 0.2 legs, 1 high; a 0.2 x 0.2 hole through the
+    // leg along x, at its middle.
+    let data = product("IFCWALL", "#20")
+        + "#20=IFCEXTRUDEDAREASOLID(#21,$,#93,1.);\n#21=IFCARBITRARYCLOSEDPROFILEDEF(.AREA.,$,#22);\n#22=IFCPOLYLINE((#23,#24,#25,#26,#27,#28,#23));\n#23=IFCCARTESIANPOINT((0.,0.));\n#24=IFCCARTESIANPOINT((1.,0.));\n#25=IFCCARTESIANPOINT((1.,0.2));\n#26=IFCCARTESIANPOINT((0.2,0.2));\n#27=IFCCARTESIANPOINT((0.2,1.));\n#28=IFCCARTESIANPOINT((0.,1.));\n"
+        + "#30=IFCOPENINGELEMENT('2YvctVUKr0kugbFTf53O9L',$,$,$,$,#90,#31,$,$);\n#31=IFCPRODUCTDEFINITIONSHAPE($,$,(#32));\n#32=IFCSHAPEREPRESENTATION($,'Body','SweptSolid',(#40));\n"
+        + &extrusion(40, 0.6, 0.1, 0.2, 1.0, 0.2, "0.,0.,1.")
+            .replace("#40=IFCEXTRUDEDAREASOLID(#41,$,", "#40=IFCEXTRUDEDAREASOLID(#41,#49,")
+        + "#49=IFCAXIS2PLACEMENT3D(#48,$,$);\n#48=IFCCARTESIANPOINT((0.,0.,0.4));\n"
+        + "#35=IFCRELVOIDSELEMENT('3YvctVUKr0kugbFTf53O9L',$,$,$,#10,#30);\n";
+    let (objects, stats) = read(&ifc(METRES, &data));
+    assert_eq!(stats.openings_subtracted, 1);
+    let o = &objects[0];
+    // 0.36 of L less the 0.2 x 0.2 x 0.2 hole, closed by its reveals.
+    assert!((volume(o) - (0.36 - 0.008)).abs() < 1e-9, "{}", volume(o));
 }
 
 #[test]

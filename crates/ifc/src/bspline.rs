@@ -216,6 +216,20 @@ pub fn surface(ctx: &Ctx, e: &Entity, flip: bool) -> G<Vec<Tri>> {
             sag_v = sag_v.max((mid - (eval(u, va) + eval(u, vb)) / 2.0).length());
         }
     }
+    // A twisted patch has straight isolines but bulges off the diagonal
+    // its cells are split along: the centre's distance from the
+    // diagonal's midpoint counts in both directions.
+    for i in 0..cu {
+        for j in 0..cv {
+            let u = |k: usize| u0 + (u1 - u0) * k as f64 / cu as f64;
+            let v = |k: usize| v0 + (v1 - v0) * k as f64 / cv as f64;
+            let corners = (eval(u(i), v(j)) + eval(u(i + 1), v(j + 1))) / 2.0;
+            let centre = eval((u(i) + u(i + 1)) / 2.0, (v(j) + v(j + 1)) / 2.0);
+            let twist = (centre - corners).length();
+            sag_u = sag_u.max(twist);
+            sag_v = sag_v.max(twist);
+        }
+    }
     let samples = |coarse: usize, spans: usize, sag: f64| -> usize {
         let n = (coarse as f64 * (sag / tolerance).sqrt()).ceil();
         (n as usize).clamp(spans.max(1), 128)

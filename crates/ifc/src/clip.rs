@@ -133,7 +133,8 @@ pub fn subtract(tris: Vec<Tri>, c: &Convex, scale: f64) -> Vec<Tri> {
                 t.p[0].min(t.p[1]).min(t.p[2]),
                 t.p[0].max(t.p[1]).max(t.p[2]),
             );
-            if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
+            // Touching counts: a face flush with the solid's may go with it.
+            if tlo.cmpgt(hi + eps).any() || thi.cmplt(lo - eps).any() {
                 out.push(t);
                 continue;
             }

@@ -1,7 +1,8 @@
 //! The real files against IfcOpenShell's figures (tests/reference/*.json,
 //! made by tests/reference/make_reference.py): every product with
 //! geometry is read (or counted as unsupported), each box within 1% of
-//! the model's diagonal, triangle counts within 0.5-2x per file.
+//! the model's diagonal, triangle counts within 0.5-2x and volumes
+//! within 2% per file.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -185,6 +186,16 @@ fn check_with(stem: &str, compare_triangles: bool) {
     );
     for o in &outliers {
         println!("  outlier: {o}");
+    }
+    // Volumes (closed solids, openings cut and closed): within 2% per
+    // file; a product's difference beyond 1% is printed above.
+    if compare_triangles {
+        assert!(
+            (volumes.0 - volumes.1).abs() <= 0.02 * volumes.1.abs().max(1e-6),
+            "{stem}: volume {} m³ against {}",
+            volumes.0,
+            volumes.1
+        );
     }
     if theirs > 0 && compare_triangles {
         let ratio = ours as f64 / theirs as f64;

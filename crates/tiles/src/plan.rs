@@ -16,8 +16,10 @@
 //!
 //! A tile's children draw the same subtrees at a finer band: half the
 //! largest error of the tile's levels that are not yet full detail, halved
-//! again until the band's triangles are at least twice the tile's (so
-//! each band is worth its request), and full detail at once when a band
+//! again until the band's triangles are at least twice the tile's and a
+//! quarter of the target (so each band is worth its request, and the few
+//! coarse levels at the top are one tile, not a chain of tiny ones), and
+//! full detail at once when a band
 //! would be more than half of full detail's triangles (so a level is not
 //! written again and again for a few triangles less). The subtrees are
 //! then split into groups of about the target triangles: a node whose
@@ -268,7 +270,7 @@ impl<'a> Planner<'a> {
             if 2 * t > full {
                 break;
             }
-            if t >= 2 * drawn {
+            if t >= 2 * drawn && 4 * t >= self.target {
                 return Some(e);
             }
             e /= 2.0;
@@ -456,12 +458,22 @@ mod tests {
             .iter()
             .map(|t| t.parts.iter().map(|q| q.lod).collect())
             .collect();
-        // The root's coarsest (2 triangles), its level of 10 (at least 2x),
-        // 40, then full detail (300: the 0.25 band, 160, is over half).
-        assert_eq!(parts, [vec![2], vec![1], vec![0], vec![3, 5]]);
+        // The root's coarsest (2 triangles), then full detail (300): the
+        // bands of 10 and 40 are under a quarter of the target, and the
+        // 0.25 band, 160, is over half of full detail.
+        assert_eq!(parts, [vec![2], vec![3, 5]]);
         let errors: Vec<f64> = p.tiles.iter().map(|t| t.error).collect();
-        assert_eq!(errors, [2.0, 1.0, 0.5, 0.0]);
-        assert_eq!(p.levels_left_out, 1);
+        assert_eq!(errors, [2.0, 0.0]);
+        assert_eq!(p.levels_left_out, 3);
+        // A smaller target keeps the bands.
+        let p = plan(&s, 40);
+        check(&s, &p);
+        let parts: Vec<Vec<u32>> = p
+            .tiles
+            .iter()
+            .map(|t| t.parts.iter().map(|q| q.lod).collect())
+            .collect();
+        assert_eq!(parts, [vec![2], vec![1], vec![0], vec![3], vec![5]]);
     }
 
     #[test]

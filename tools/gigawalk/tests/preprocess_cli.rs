@@ -109,7 +109,10 @@ fn files_and_a_directory_make_one_model_and_a_bad_file_stops_the_run_naming_itse
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
     let (ok, _, err) = gigawalk(&["preprocess", s(&empty), "-o", s(&d.join("e.gwk"))]);
-    assert!(!ok && err.contains("no .gltf, .glb, .obj or .ifc files"), "{err}");
+    assert!(
+        !ok && err.contains("no .gltf, .glb, .obj or .ifc files"),
+        "{err}"
+    );
     assert!(!d.join("e.gwk").exists());
     let (ok, _, err) = gigawalk(&["preprocess", "-o", s(&d.join("e.gwk"))]);
     assert!(!ok && err.contains("MODEL"), "{err}");

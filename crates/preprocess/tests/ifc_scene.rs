@@ -31,7 +31,7 @@ fn an_ifc_scene_finds_products_by_class_global_id_and_storey() {
     let t = tempfile::tempdir().unwrap();
     let out = t.path().join("haus.gwk");
     let (stats, files) = preprocess_files(
-        &[input.clone()],
+        std::slice::from_ref(&input),
         "AC11-FZK-Haus-IFC.ifc",
         &Params::default(),
         &out,

@@ -105,6 +105,11 @@ impl Value {
     }
 }
 
+/// Ids below this are tracked in a bitset while indexing (32 MiB at
+/// most), so backward references need no list; larger ids, rare, wait
+/// for the whole index.
+const DEFINED_IDS: usize = 1 << 28;
+
 /// Where one entity's record lies in the file.
 #[derive(Clone, Copy, Debug)]
 struct Record {
@@ -612,12 +617,15 @@ impl Scanner<'_> {
         }
     }
 
-    /// The DATA section's records, and every reference as (target, record).
+    /// The DATA section's records, and the references to ids not defined
+    /// before them as (target, record).
     fn data(
         &mut self,
         records: &mut Vec<Record>,
         refs: &mut Vec<(u32, u32)>,
     ) -> Result<(), IfcError> {
+        // Ids defined so far, a bit each, below DEFINED_IDS.
+        let mut defined: Vec<u64> = Vec::new();
         self.skip_ws()?;
         if !self.eat_keyword(b"DATA") {
             if self.pos == self.b.len() {
@@ -703,7 +711,17 @@ impl Scanner<'_> {
             }
             let args_start = self.pos;
             let index = records.len() as u32;
-            self.parens(&name, &mut |t| refs.push((t, index)))?;
+            // Writers define what a record refers to before it, mostly:
+            // a reference to an id already defined is settled here, and
+            // only the others wait for the whole index.
+            let seen = &defined;
+            self.parens(&name, &mut |t| {
+                let known =
+                    (t as usize) < seen.len() * 64 && seen[t as usize / 64] & (1 << (t % 64)) != 0;
+                if !known {
+                    refs.push((t, index));
+                }
+            })?;
             let args_len = self.pos - args_start;
             self.skip_ws()?;
             match self.b.get(self.pos) {
@@ -713,6 +731,13 @@ impl Scanner<'_> {
             }
             if args_len > u32::MAX as usize || args_start - start > u32::MAX as usize {
                 return Err(self.broken(name, "record longer than 4 GiB"));
+            }
+            if (id as usize) < DEFINED_IDS {
+                let word = id as usize / 64;
+                if word >= defined.len() {
+                    defined.resize(word + 1, 0);
+                }
+                defined[word] |= 1 << (id % 64);
             }
             records.push(Record {
                 id,

@@ -3,10 +3,11 @@
 //! the rest): the figure docs/web.md quotes.
 //!
 //! `cargo run --release -p gigawalk-serve --example serve_load -- [IDLE
-//! [REQUESTS [HOST:PORT]]]` (defaults 3000 and 200): without an address
-//! it serves a small site of its own on 127.0.0.1; with one it measures
-//! that server (say, a `gigawalk serve` started by hand), asking for
-//! `/config.json`.
+//! [REQUESTS [WORKERS [HOST:PORT]]]]` (defaults 3000, 200 and the
+//! server's default workers): without an address it serves a small site
+//! of its own on 127.0.0.1 with that many runtime workers; with one it
+//! measures that server (say, a `gigawalk serve` started by hand),
+//! asking for `/config.json`.
 
 use std::io::{BufRead as _, BufReader, Read as _, Write as _};
 use std::net::{SocketAddr, TcpStream};
@@ -21,7 +22,12 @@ fn main() {
 
     let dir = tempfile::tempdir().expect("a temporary directory");
     let mut own = None;
-    let addr: SocketAddr = match args.get(2) {
+    let workers: usize = args
+        .get(2)
+        .map_or(gigawalk_serve::Limits::default().workers, |a| {
+            a.parse().expect("WORKERS")
+        });
+    let addr: SocketAddr = match args.get(3) {
         Some(a) => a.parse().expect("HOST:PORT"),
         None => {
             let bundle = dir.path().join("bundle");
@@ -37,6 +43,7 @@ fn main() {
                 bundle: gigawalk_serve::Bundle::open(&bundle, "a bundle of this example").unwrap(),
                 limits: gigawalk_serve::Limits {
                     header_read_timeout: Duration::from_secs(600),
+                    workers,
                     ..gigawalk_serve::Limits::default()
                 },
             })
@@ -79,9 +86,15 @@ fn main() {
     times.sort_by(f64::total_cmp);
     let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
     println!(
-        "{requests} requests for /config.json, a new connection each, while {} are held: \
-         median {:.2} ms, 99th percentile {:.2} ms, slowest {:.2} ms; answers {statuses:?}",
+        "{requests} requests for /config.json, a new connection each, while {} are held \
+         ({}): median {:.2} ms, 99th percentile {:.2} ms, slowest {:.2} ms; answers \
+         {statuses:?}",
         held.len(),
+        if own.is_some() {
+            format!("{workers} runtime workers")
+        } else {
+            format!("by {addr}")
+        },
         at(0.5),
         at(0.99),
         at(1.0)

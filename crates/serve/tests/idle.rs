@@ -2,7 +2,9 @@
 //! one: a normal request is answered (within a 2 s deadline) while one
 //! client holds 3,000 connections that sent a request line and part of a
 //! header; the held connections stay usable; a server at its connection
-//! cap makes the next client wait, not fail; it keeps serving after.
+//! cap makes the next client wait, not fail; it keeps serving after; a
+//! head that does not arrive in time, and a connection left idle, are
+//! closed.
 //! Loopback only. `examples/serve_load.rs` measures the time.
 
 mod common;
@@ -136,4 +138,55 @@ fn at_its_connection_cap_the_server_makes_the_next_client_wait() {
         .recv_timeout(Duration::from_secs(60))
         .expect("answered once a connection closed");
     assert_eq!(r.status, 200, "waited, not refused");
+}
+
+/// Reads what the server sends on `c` until it closes the connection;
+/// fails when it has not closed it within a minute.
+#[track_caller]
+fn read_until_closed(c: &mut TcpStream) -> String {
+    c.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+    let mut got = Vec::new();
+    if let Err(e) = std::io::Read::read_to_end(c, &mut got) {
+        // A reset closes it too; a timeout does not.
+        assert!(
+            !matches!(
+                e.kind(),
+                std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+            ),
+            "the server kept the connection open: {e}"
+        );
+    }
+    String::from_utf8_lossy(&got).into_owned()
+}
+
+#[test]
+fn slow_heads_and_idle_connections_are_closed() {
+    let site = Site::new();
+    let server = site.serve(Limits {
+        header_read_timeout: Duration::from_millis(300),
+        idle_timeout: Duration::from_millis(500),
+        ..Limits::default()
+    });
+    // A head begun and never finished.
+    let mut slow = server.connect();
+    slow.write_all(b"GET / HTTP/1.1\r\nHost: x\r\nX-Slow: ")
+        .unwrap();
+    let got = read_until_closed(&mut slow);
+    assert!(
+        got.is_empty() || got.starts_with("HTTP/1.1 408"),
+        "a slow head got {got:?}"
+    );
+    // A connection that never sends a byte.
+    let mut silent = server.connect();
+    assert_eq!(read_until_closed(&mut silent), "");
+    // A kept-alive connection after its answer.
+    let mut kept = server.connect();
+    kept.write_all(b"GET /config.json HTTP/1.1\r\nHost: x\r\n\r\n")
+        .unwrap();
+    let got = read_until_closed(&mut kept);
+    assert!(got.starts_with("HTTP/1.1 200"), "{got:?}");
+    assert!(got.ends_with("{\"scene\":\"scene.gwk\"}\n"), "{got:?}");
+
+    let r = get_within_deadline(server.addr, "/index.html", "after closing them");
+    assert_eq!(r.status, 200);
 }

@@ -19,9 +19,9 @@
 //! again until the band's triangles are at least twice the tile's and a
 //! quarter of the target (so each band is worth its request, and the few
 //! coarse levels at the top are one tile, not a chain of tiny ones), and
-//! full detail at once when a band
-//! would be more than half of full detail's triangles (so a level is not
-//! written again and again for a few triangles less). The subtrees are
+//! full detail at once when a band would be more than half of full
+//! detail's triangles (so a level is not written again and again for a
+//! few triangles less). The subtrees are
 //! then split into groups of about the target triangles: a node whose
 //! band is larger is replaced by its children, and consecutive nodes (the
 //! hierarchy keeps neighbours together) are packed until the next would

@@ -6,7 +6,11 @@
 //!   its own (`std::thread` spawns, scopes and builders; rayon's pool
 //!   running data-parallel loops is not one), outside test modules;
 //! - only gigawalk-gpu depends on wgpu, and no source file outside it,
-//!   tests and benches included, names it.
+//!   tests and benches included, names it;
+//! - only gigawalk-serve depends on an HTTP stack (hyper, tokio,
+//!   tower-http, axum), in any kind of dependency, and no source file
+//!   outside it names one; the CLI's `serve.rs` holds no server of its
+//!   own (no socket, no thread).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -234,6 +238,72 @@ fn only_the_gpu_crate_names_wgpu() {
     assert!(
         naming.is_empty(),
         "wgpu named outside gigawalk-gpu: {naming:?}"
+    );
+}
+
+/// The crates an HTTP server is made of, and the paths code names them by.
+const HTTP_STACK: [(&str, &str); 4] = [
+    ("hyper", "hyper::"),
+    ("tokio", "tokio::"),
+    ("tower-http", "tower_http::"),
+    ("axum", "axum::"),
+];
+
+#[test]
+fn only_the_serve_crate_speaks_http() {
+    let with_http: Vec<String> = metadata()
+        .iter()
+        .filter(|p| {
+            p["dependencies"]
+                .as_array()
+                .expect("dependencies")
+                .iter()
+                .filter_map(|d| d["name"].as_str())
+                .any(|n| HTTP_STACK.iter().any(|(c, _)| *c == n))
+        })
+        .map(|p| p["name"].as_str().expect("name").to_string())
+        .collect();
+    assert_eq!(
+        with_http,
+        ["gigawalk-serve"],
+        "crates that depend on an HTTP stack"
+    );
+    let naming: Vec<String> = sources()
+        .into_iter()
+        // This file names them only in the patterns it looks for.
+        .filter(|(package, file, text)| {
+            package != "gigawalk-serve"
+                && file != file!()
+                && HTTP_STACK.iter().any(|(_, path)| text.contains(path))
+        })
+        .map(|(package, file, _)| format!("{package}: {file}"))
+        .collect();
+    assert!(
+        naming.is_empty(),
+        "an HTTP stack named outside gigawalk-serve: {naming:?}"
+    );
+
+    // `gigawalk serve` parses its flags and calls the crate.
+    let (_, _, cli) = sources()
+        .into_iter()
+        .find(|(package, file, _)| package == "gigawalk" && file == "src/serve.rs")
+        .expect("tools/gigawalk/src/serve.rs");
+    let server_words = [
+        "TcpListener",
+        "TcpStream",
+        "std::net",
+        "hyper",
+        "tokio",
+        "Content-Range",
+        "fn answer",
+    ];
+    let found: Vec<&str> = server_words
+        .into_iter()
+        .filter(|w| cli.contains(w))
+        .collect();
+    assert!(
+        found.is_empty() && !starts_threads(&cli),
+        "the CLI's serve.rs serves (it names {found:?}); that belongs in crates/serve"
     );
 }
 

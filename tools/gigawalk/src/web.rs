@@ -1,23 +1,12 @@
 //! `gigawalk web`: the browser viewer as a static site — the viewer's
 //! bundle (the page, its JavaScript and WebAssembly), the scene, and the
-//! `config.json` that tells the page where the scene is. Also what
-//! `gigawalk serve` shares with it: finding and listing the bundle.
+//! `config.json` that tells the page where the scene is. Finding and
+//! listing the bundle is `gigawalk_serve`'s, shared with `gigawalk serve`.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-
-/// The environment variable naming the bundle directory.
-pub const BUNDLE_ENV: &str = "GIGAWALK_WEB_BUNDLE";
-/// What builds the bundle, and where it puts it.
-const BUILD_HINT: &str = "build it with crates/web/build.sh (it writes target/web/bundle), \
-     or give --bundle DIR or set GIGAWALK_WEB_BUNDLE";
-/// The files a bundle cannot do without: the page and the viewer.
-const REQUIRED: [&str; 2] = ["index.html", "gigawalk_web_bg.wasm"];
-/// The name of the scene on the site, where config.json points by default.
-pub const SCENE_NAME: &str = "scene.gwk";
-/// The file the page reads to find the scene.
-pub const CONFIG_NAME: &str = "config.json";
+use gigawalk_serve::{check_scene, config_json, Bundle, CONFIG_NAME, SCENE_NAME};
 
 pub const LONG_ABOUT: &str = "\
 Write the browser viewer as a static site in a directory: the viewer's \
@@ -62,107 +51,6 @@ pub struct Args {
     /// the bundle's files are written over; nothing else in it is touched
     #[arg(long)]
     force: bool,
-}
-
-/// The viewer's bundle: its directory and the files served or copied from
-/// it.
-pub struct Bundle {
-    pub dir: PathBuf,
-    /// File names, sorted: every regular file directly in `dir` (a link
-    /// to one too) whose name is UTF-8, except hidden ones (starting with
-    /// `.`) and the two names the site's own files take (`config.json`,
-    /// `scene.gwk`: a site written before can be used as a bundle).
-    pub files: Vec<String>,
-}
-
-impl Bundle {
-    /// The bundle from `--bundle`, else [`BUNDLE_ENV`], else beside the
-    /// executable; an error says where it looked and how to build it.
-    pub fn find(given: Option<&Path>) -> anyhow::Result<Bundle> {
-        if let Some(dir) = given {
-            return Bundle::open(dir, "--bundle");
-        }
-        if let Some(dir) = std::env::var_os(BUNDLE_ENV).filter(|v| !v.is_empty()) {
-            return Bundle::open(Path::new(&dir), &format!("${BUNDLE_ENV}"));
-        }
-        // target/release/gigawalk -> target/web/bundle.
-        let beside = std::env::current_exe().ok().and_then(|exe| {
-            exe.parent()
-                .and_then(Path::parent)
-                .map(|d| d.join("web").join("bundle"))
-        });
-        let Some(dir) = beside else {
-            anyhow::bail!(
-                "the browser viewer's bundle is missing: where this executable is cannot be \
-                 told, so there is no default place; {BUILD_HINT}"
-            );
-        };
-        Bundle::open(
-            &dir,
-            &format!("the default beside this executable, ${BUNDLE_ENV} being unset"),
-        )
-    }
-
-    /// The bundle in `dir`, which must hold the [`REQUIRED`] files;
-    /// `origin` says where `dir` came from, for errors.
-    fn open(dir: &Path, origin: &str) -> anyhow::Result<Bundle> {
-        let entries = std::fs::read_dir(dir).map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => anyhow::anyhow!(
-                "the browser viewer's bundle is missing: {} ({origin}) does not exist; \
-                 {BUILD_HINT}",
-                dir.display()
-            ),
-            _ => anyhow::anyhow!(
-                "{} ({origin}): cannot list the browser viewer's bundle: {e}",
-                dir.display()
-            ),
-        })?;
-        let mut files = Vec::new();
-        for e in entries {
-            let e = e.with_context(|| format!("{}: cannot list", dir.display()))?;
-            let Ok(name) = e.file_name().into_string() else {
-                continue;
-            };
-            if name.starts_with('.') || name == CONFIG_NAME || name == SCENE_NAME {
-                continue;
-            }
-            // Follows links: a link to a regular file is one.
-            if std::fs::metadata(e.path()).is_ok_and(|m| m.is_file()) {
-                files.push(name);
-            }
-        }
-        files.sort();
-        let missing: Vec<&str> = REQUIRED
-            .into_iter()
-            .filter(|r| !files.iter().any(|f| f == r))
-            .collect();
-        if !missing.is_empty() {
-            anyhow::bail!(
-                "{} ({origin}): not the browser viewer's bundle: {} missing; {BUILD_HINT}",
-                dir.display(),
-                missing.join(" and ")
-            );
-        }
-        Ok(Bundle {
-            dir: dir.to_path_buf(),
-            files,
-        })
-    }
-}
-
-/// Checks that `scene` is a scene file (its header and skeleton read);
-/// returns its size in bytes.
-pub fn check_scene(scene: &Path) -> anyhow::Result<u64> {
-    gigawalk_scene::SceneReader::open(scene)?;
-    let len = std::fs::metadata(scene)
-        .with_context(|| format!("{}: cannot read", scene.display()))?
-        .len();
-    Ok(len)
-}
-
-/// config.json: where the page finds the scene.
-pub fn config_json(scene_url: &str) -> String {
-    format!("{}\n", serde_json::json!({ "scene": scene_url }))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

@@ -148,6 +148,7 @@ fn boolean(ctx: &Ctx, id: u32, depth: usize) -> G<Vec<Tri>> {
             }
             return Ok(all);
         }
+        "INTERSECTION" => return intersection(ctx, first, &second, depth),
         _ => {
             ctx.notes
                 .borrow_mut()
@@ -196,6 +197,43 @@ fn boolean(ctx: &Ctx, id: u32, depth: usize) -> G<Vec<Tri>> {
             Err(e) => Err(e),
         },
     }
+}
+
+/// `first` within a half space or a convex solid `second`: cut by each
+/// of its planes in turn, keeping what is behind (and closing each cut).
+/// Anything else (several convex pieces) keeps `first`, noted.
+fn intersection(
+    ctx: &Ctx,
+    first: Vec<Tri>,
+    second: &crate::step::Entity,
+    depth: usize,
+) -> G<Vec<Tri>> {
+    let planes = match second.ty {
+        "IFCHALFSPACESOLID" | "IFCBOXEDHALFSPACE" => vec![half_space_plane(ctx, second)?],
+        _ => match convex_pieces(ctx, second.id, &DMat4::IDENTITY, depth + 1) {
+            Ok(pieces) if pieces.len() == 1 => pieces[0].planes.clone(),
+            Ok(_) | Err(GeomError::Unsupported(_)) => {
+                ctx.notes.borrow_mut().push(format!(
+                    "IfcBooleanResult INTERSECTION with {} (first operand kept)",
+                    camel(second.ty)
+                ));
+                return Ok(first);
+            }
+            Err(e) => return Err(e),
+        },
+    };
+    let scale = extent(&first);
+    let mut out = first;
+    for p in planes {
+        // Removing what lies in front of the plane keeps what is behind.
+        let outside = Convex {
+            planes: vec![p.flipped()],
+            bounds: None,
+            faces: Vec::new(),
+        };
+        out = cut(out, &outside, scale);
+    }
+    Ok(out)
 }
 
 /// Infinite prisms over a 2D polygon (in `m`'s XY plane, along its Z):

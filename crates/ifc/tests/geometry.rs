@@ -174,6 +174,28 @@ fn a_half_space_clips_a_box_in_two() {
 }
 
 #[test]
+fn an_intersection_with_a_block_keeps_what_both_hold() {
+    // A unit cube and a block from (0.5, 0.5, -1) of 2 x 2 x 3: their
+    // common part is 0.5 x 0.5 x 1.
+    let data = product("IFCBEAM", "#30")
+        + &extrusion(20, 0.5, 0.5, 1.0, 1.0, 1.0, "0.,0.,1.")
+        + "#30=IFCBOOLEANRESULT(.INTERSECTION.,#20,#31);\n#31=IFCBLOCK(#32,2.,2.,3.);\n#32=IFCAXIS2PLACEMENT3D(#33,$,$);\n#33=IFCCARTESIANPOINT((0.5,0.5,-1.));\n";
+    let (objects, stats) = read(&ifc(METRES, &data));
+    assert!(
+        stats.unsupported.is_empty(),
+        "{}",
+        stats.unsupported_summary()
+    );
+    let o = &objects[0];
+    assert!((volume(o) - 0.25).abs() < 1e-9, "{}", volume(o));
+    let (lo, hi) = bounds(o);
+    assert!(
+        close(lo, DVec3::new(0.5, 0.5, 0.0)) && close(hi, DVec3::ONE),
+        "{lo} {hi}"
+    );
+}
+
+#[test]
 fn a_polygonal_bounded_half_space_cuts_a_notch() {
     // A unit cube minus what lies above z = 0.5 within x < 0.5 (the
     // boundary, a rectangle larger than the cube in y).

@@ -10,8 +10,8 @@
 //! units and the objects are scaled to metres at the end.
 //!
 //! Not read (counted in [`IfcStats::unsupported`] by kind, never dropped
-//! silently): swept solids along curves, CSG spheres, intersections,
-//! subtractions of non-convex solids, among others (docs/ifc.md).
+//! silently): swept solids along curves, CSG spheres, intersections with
+//! and subtractions of non-convex solids, among others (docs/ifc.md).
 
 #![forbid(unsafe_code)]
 

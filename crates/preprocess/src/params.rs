@@ -137,6 +137,11 @@ pub struct Params {
     /// ([`crate::hlod::leaf_lods`]).
     #[serde(default, skip_serializing_if = "LeafChains::is_default")]
     pub leaf_chains: LeafChains,
+    /// Whether every level of every chain meets a pair contraction across
+    /// gaps (GAPS, [`crate::hlod`]) as a rival, the better kept: it joins
+    /// disjoint parts and closes holes that edge collapse keeps.
+    #[serde(default)]
+    pub gaps: bool,
     /// Whether merged proxies (watertight shells at the scale of an
     /// error, [`crate::hlod`]) are made and measured beside every chain's
     /// levels, and kept where they draw fewer triangles at a lower error.
@@ -257,6 +262,7 @@ impl Default for Params {
             normal_bits: 8,
             compress: true,
             leaf_chains: LeafChains::Kept,
+            gaps: false,
             proxies: false,
             proxy_cells: default_proxy_cells(),
         }
@@ -471,6 +477,9 @@ impl Params {
                 }
                 if !self.leaf_chains.is_default() {
                     m.insert("leaf_chains".into(), json!(self.leaf_chains.to_string()));
+                }
+                if self.gaps {
+                    m.insert("gaps".into(), json!(true));
                 }
                 if self.proxies {
                     m.insert("proxies".into(), json!(true));

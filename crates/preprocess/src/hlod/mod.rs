@@ -42,6 +42,7 @@ use crate::parts::Part;
 use crate::source::{Source, SpillError};
 
 mod chain;
+mod gaps;
 mod proxy;
 mod simplify;
 
@@ -107,6 +108,9 @@ pub struct ChainParams {
     /// Whether a leaf's covering chain is made beside its kept-pieces
     /// chain, and the one that draws less kept ([`leaf_lods`]).
     pub leaf_best: bool,
+    /// Whether every level of a chain meets a pair contraction across
+    /// gaps ([`gaps`]) as a rival, the better kept.
+    pub gaps: bool,
     /// Whether merged proxies are made and measured beside the chain's
     /// levels, and kept where they draw less ([`with_proxies`]).
     pub proxies: bool,
@@ -131,6 +135,7 @@ impl ChainParams {
             ratio: params.lod_ratio,
             floor: params.lod_floor as usize,
             leaf_best: params.leaf_chains == crate::LeafChains::Best,
+            gaps: params.gaps,
             proxies: params.proxies,
             proxy_cells: params.proxy_cells,
             collapse_levels: params.collapse_levels as usize,
@@ -632,6 +637,7 @@ mod tests {
         floor: 64,
         collapse_levels: 1,
         leaf_best: false,
+        gaps: false,
         proxies: false,
         proxy_cells: 128,
         node_budget: 256,

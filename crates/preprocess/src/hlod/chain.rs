@@ -242,9 +242,19 @@ pub(super) fn extend_chain(
         // Pair contraction across gaps (the paper's GAPS) joins parts and
         // closes holes at the error a level allows, where collapse keeps
         // every piece and hole and clustering needs cells far above the
-        // error: a rival to whichever level won above, every level.
-        if p.gaps {
-            if let Some((alt, e_alt)) = find(Step::Gaps) {
+        // error: a rival to whichever level won above where collapse
+        // stalls: every level of an inner node's chain (and a leaf's
+        // covering one), a leaf's first coarser level, and any level
+        // measured far off its limit.
+        let first_coarser = lods.len() == 1;
+        if p.gaps && (!r.keep_pieces || first_coarser || !plausible) {
+            // A contraction's cost is about how far it moved surfaces: a
+            // level whose limit is above the error measured of the level
+            // it would replace would lose, and is not measured.
+            let hopeful = |&(_, e_alt): &(WorkMesh, f32)| {
+                !measured.is_finite() || e_alt <= measured || undershoots(&mesh)
+            };
+            if let Some((alt, e_alt)) = find(Step::Gaps).filter(hopeful) {
                 Tally::add(&tally.gaps, 1);
                 if let Some(alt_measured) =
                     rival(&mut r, (&mesh, measured), &alt, (lower, known), tally)

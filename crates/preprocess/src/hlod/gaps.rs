@@ -55,6 +55,9 @@ pub(super) struct Contracted {
 /// contraction run and a replay each.
 pub(super) struct History {
     steps: Vec<Contraction>,
+    /// Contraction stopped once this many triangles were left: levels
+    /// of fewer are not in the history.
+    floor: usize,
 }
 
 /// One contraction: `b` into `a`, which moved to `to`, at a cost of
@@ -70,25 +73,31 @@ struct Contraction {
 
 impl History {
     /// Contracts `indices` (triangles over `positions`, welded: one index
-    /// per position) in order of cost until no pair is left. Pairs are
-    /// the edges and virtual pairs: vertex pairs closer than a threshold
-    /// that share no edge, each vertex's [`VIRTUAL_PER_VERTEX`] nearest.
-    /// The threshold adapts as GAPS's does: from a ten-thousandth of the
-    /// mesh's extent, doubled whenever the cheapest pair left costs more
+    /// per position) in order of cost until no pair is left or at most
+    /// `floor` triangles are. Pairs are the edges and virtual pairs:
+    /// vertex pairs closer than a threshold that share no edge, each
+    /// vertex's [`VIRTUAL_PER_VERTEX`] nearest. The threshold adapts as
+    /// GAPS's does: from a thousandth of the mesh's extent, grown
+    /// [`GAP_GROWTH`]-fold whenever the cheapest pair left costs more
     /// than half of it (a pair that far apart meets halfway), up to
     /// [`MAX_GAP_OF_EXTENT`] of the extent; so small gaps and holes close
     /// first, larger ones only as the error grows. Degenerate and
     /// repeated triangles (the same three vertices in any order) are
     /// dropped as they appear.
-    pub(super) fn new(positions: &[[f32; 3]], indices: &[u32]) -> History {
+    pub(super) fn new(positions: &[[f32; 3]], indices: &[u32], floor: usize) -> History {
         let mut g = Gaps::new(positions, indices);
         let extent = g.extent();
         let max_gap = MAX_GAP_OF_EXTENT * extent;
-        let mut gap = (extent * 1e-4).max(f64::MIN_POSITIVE);
+        let mut gap = (extent * 1e-3).max(f64::MIN_POSITIVE);
         g.add_virtual_pairs(gap);
         g.seed_heap();
-        let steps = g.run(&mut gap, max_gap);
-        History { steps }
+        let steps = g.run(&mut gap, max_gap, floor);
+        History { steps, floor }
+    }
+
+    /// Whether levels of `target` triangles are in the history.
+    pub(super) fn reaches(&self, target: usize) -> bool {
+        target >= self.floor
     }
 
     /// The level of at most `target` triangles, or as near as contractions
@@ -122,7 +131,11 @@ impl History {
         let mut seen: rustc_hash::FxHashSet<[u32; 3]> = rustc_hash::FxHashSet::default();
         let mut out = Vec::with_capacity(3 * live);
         for t in indices.chunks_exact(3) {
-            let m = [into[t[0] as usize], into[t[1] as usize], into[t[2] as usize]];
+            let m = [
+                into[t[0] as usize],
+                into[t[1] as usize],
+                into[t[2] as usize],
+            ];
             if m[0] == m[1] || m[1] == m[2] || m[0] == m[2] {
                 continue;
             }
@@ -228,6 +241,9 @@ type Entry = Reverse<(u64, u32, u32, u32, u32)>;
 
 struct Gaps {
     pos: Vec<DVec3>,
+    /// The box of the vertices in use at the start: no vertex leaves it
+    /// (a node's box must hold its levels).
+    bounds: (DVec3, DVec3),
     quadric: Vec<Quadric>,
     /// Per vertex: the triangles using it (some dead, skipped).
     vtris: Vec<Vec<u32>>,
@@ -316,7 +332,15 @@ impl Gaps {
             }
         }
         let live_tris = tris.len();
+        let mut bounds = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for t in &tris {
+            for &v in t {
+                bounds.0 = bounds.0.min(pos[v as usize]);
+                bounds.1 = bounds.1.max(pos[v as usize]);
+            }
+        }
         Gaps {
+            bounds,
             pos,
             quadric,
             vtris,
@@ -333,15 +357,7 @@ impl Gaps {
 
     /// The longest side of the used vertices' box.
     fn extent(&self) -> f64 {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for (p, t) in self.pos.iter().zip(&self.vtris) {
-            if !t.is_empty() {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-        }
-        let e = (hi - lo).max_element();
+        let e = (self.bounds.1 - self.bounds.0).max_element();
         if e.is_finite() {
             e
         } else {
@@ -437,7 +453,11 @@ impl Gaps {
             }
         }
         for (v, list) in self.virtual_pairs.iter().enumerate() {
-            pairs.extend(list.iter().filter(|&&u| (v as u32) < u).map(|&u| (v as u32, u)));
+            pairs.extend(
+                list.iter()
+                    .filter(|&&u| (v as u32) < u)
+                    .map(|&u| (v as u32, u)),
+            );
         }
         pairs.sort_unstable();
         pairs.dedup();
@@ -462,7 +482,10 @@ impl Gaps {
         }
         let mut sum = *qa;
         sum.add(qb);
-        if let Some(p) = sum.minimizer() {
+        if let Some(p) = sum
+            .minimizer()
+            .map(|p| p.clamp(self.bounds.0, self.bounds.1))
+        {
             // Only near the pair: a nearly flat neighbourhood's minimizer
             // may be anywhere on its plane.
             let mid = 0.5 * (pa + pb);
@@ -487,13 +510,14 @@ impl Gaps {
         ))
     }
 
-    /// Contracts pairs in order of cost until none is left, doubling the
-    /// virtual pairs' threshold `gap` (up to `max_gap`) whenever the
-    /// cheapest pair costs more than half of it; returns the contractions.
-    fn run(&mut self, gap: &mut f64, max_gap: f64) -> Vec<Contraction> {
+    /// Contracts pairs in order of cost until none is left or at most
+    /// `floor` triangles are, growing the virtual pairs' threshold `gap`
+    /// (up to `max_gap`) whenever the cheapest pair costs more than half
+    /// of it; returns the contractions.
+    fn run(&mut self, gap: &mut f64, max_gap: f64, floor: usize) -> Vec<Contraction> {
         let mut steps = Vec::new();
         let mut ring: Vec<u32> = Vec::new();
-        while self.live_tris > 0 {
+        while self.live_tris > floor {
             // The cheapest pair left is farther than half the gap: pairs
             // across wider gaps may be cheaper now.
             while *gap < max_gap {
@@ -501,7 +525,7 @@ impl Gaps {
                 if cheapest.is_some_and(|c| c <= 0.25 * *gap * *gap) {
                     break;
                 }
-                *gap = (*gap * 2.0).min(max_gap);
+                *gap = (*gap * GAP_GROWTH).min(max_gap);
                 let added = self.add_virtual_pairs(*gap);
                 for (a, b) in added {
                     let e = self.entry(a, b);
@@ -673,8 +697,14 @@ const BOUNDARY_WEIGHT: f64 = 4.0;
 /// make the heap quadratic.
 const VIRTUAL_PER_VERTEX: usize = 3;
 
+/// How much the virtual pairs' threshold grows at a time: each growth
+/// searches every vertex's neighbourhood again, so a few large steps
+/// cost less than many small ones, and the heap still takes the
+/// cheapest pairs first within each.
+const GAP_GROWTH: f64 = 4.0;
+
 /// Vertices of one grid cell examined per neighbour search.
-const MAX_SCANNED_PER_CELL: usize = 64;
+const MAX_SCANNED_PER_CELL: usize = 16;
 
 /// The largest gap closed, as a fraction of the mesh's extent: beyond a
 /// quarter of it, contraction is joining the mesh's far ends.
@@ -691,7 +721,7 @@ mod tests {
     /// The level of `target` triangles within `max_error`, from a fresh
     /// history.
     fn contract(p: &[[f32; 3]], i: &[u32], target: usize, max_error: f32) -> Contracted {
-        History::new(p, i).level(p, i, target, max_error)
+        History::new(p, i, target).level(p, i, target, max_error)
     }
 
     /// An axis-aligned box's 8 corners and 12 triangles, outward.
@@ -786,9 +816,9 @@ mod tests {
         let joined = (0..8).any(|a| {
             c.indices.contains(&a) && c.positions[a as usize][0] > 0.999 && {
                 // a corner of the left cube now used by a triangle of the right
-                c.indices.chunks_exact(3).any(|t| {
-                    t.contains(&a) && t.iter().any(|&v| v >= 8)
-                })
+                c.indices
+                    .chunks_exact(3)
+                    .any(|t| t.contains(&a) && t.iter().any(|&v| v >= 8))
             }
         });
         assert!(joined, "no triangle spans the two cubes");

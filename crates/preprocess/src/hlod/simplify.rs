@@ -37,7 +37,9 @@ pub(super) struct Simplifier<'a> {
     /// Pair contraction's every step on the welded mesh, made on the
     /// first [`Step::Gaps`] step asked for: each limit tried after it is
     /// a replay.
-    gaps: std::cell::OnceCell<super::gaps::History>,
+    /// (Made again should a later step ask for fewer triangles than it
+    /// reached.)
+    gaps: std::cell::RefCell<Option<super::gaps::History>>,
     /// A leaf's few pieces each keep a triangle ([`Simplifier::keep_every_piece`]);
     /// an inner node's thousands are covered ([`Simplifier::cover_vanished`]).
     keep_pieces: bool,
@@ -73,7 +75,7 @@ impl<'a> Simplifier<'a> {
             mesh,
             welded,
             piece,
-            gaps: std::cell::OnceCell::new(),
+            gaps: std::cell::RefCell::new(None),
             keep_pieces,
         }
     }
@@ -108,10 +110,20 @@ impl<'a> Simplifier<'a> {
         // indices refer to.
         let mut moved: Option<(Vec<[f32; 3]>, Vec<u32>)> = None;
         let indices = if how == Step::Gaps {
-            let history = self
-                .gaps
-                .get_or_init(|| super::gaps::History::new(&self.mesh.positions, welded));
-            let c = history.level(&self.mesh.positions, welded, target, max_error);
+            let mut history = self.gaps.borrow_mut();
+            if !history.as_ref().is_some_and(|h| h.reaches(target)) {
+                *history = Some(super::gaps::History::new(
+                    &self.mesh.positions,
+                    welded,
+                    target,
+                ));
+            }
+            let c = history.as_ref().expect("made above").level(
+                &self.mesh.positions,
+                welded,
+                target,
+                max_error,
+            );
             result_error = c.error;
             moved = Some((c.positions, c.into));
             c.indices

@@ -384,20 +384,15 @@ impl Gaps {
         // Cell coordinates saturate (`as` from f64), so a far vertex
         // cannot overflow its neighbours' keys.
         let cell = |p: DVec3| [p.x, p.y, p.z].map(|c| (c * inv).floor() as i64);
-        let used: Vec<bool> = (0..self.pos.len()).map(|v| self.in_use(v)).collect();
+        let used: Vec<usize> = (0..self.pos.len()).filter(|&v| self.in_use(v)).collect();
         let mut grid: FxHashMap<[i64; 3], Vec<u32>> = FxHashMap::default();
-        for v in 0..self.pos.len() {
-            if used[v] {
-                grid.entry(cell(self.pos[v])).or_default().push(v as u32);
-            }
+        for &v in &used {
+            grid.entry(cell(self.pos[v])).or_default().push(v as u32);
         }
         let gap2 = gap * gap;
         let mut near: Vec<(f64, u32)> = Vec::new();
         let mut neighbours: Vec<u32> = Vec::new();
-        for v in 0..self.pos.len() {
-            if !used[v] {
-                continue;
-            }
+        for v in used {
             let p = self.pos[v];
             let c = cell(p);
             neighbours.clear();

@@ -137,6 +137,13 @@ pub struct Params {
     /// ([`crate::hlod::leaf_lods`]).
     #[serde(default, skip_serializing_if = "LeafChains::is_default")]
     pub leaf_chains: LeafChains,
+    /// Whether chains' levels meet a pair contraction across gaps (GAPS,
+    /// [`crate::hlod`]) as a rival, the better kept: it joins disjoint
+    /// parts and closes holes that edge collapse keeps. On by default:
+    /// on floors of real CAD 0.81-0.88x the triangles drawn (frustum and
+    /// HLODs, 1 px) for about 1.6-1.7x the preprocess time.
+    #[serde(default = "default_gaps")]
+    pub gaps: bool,
     /// Whether merged proxies (watertight shells at the scale of an
     /// error, [`crate::hlod`]) are made and measured beside every chain's
     /// levels, and kept where they draw fewer triangles at a lower error.
@@ -151,6 +158,10 @@ pub struct Params {
     /// held-out real-CAD floor bought the most of the gain.
     #[serde(default = "default_proxy_cells")]
     pub proxy_cells: u32,
+}
+
+fn default_gaps() -> bool {
+    true
 }
 
 fn default_proxy_cells() -> u32 {
@@ -257,6 +268,7 @@ impl Default for Params {
             normal_bits: 8,
             compress: true,
             leaf_chains: LeafChains::Kept,
+            gaps: true,
             proxies: false,
             proxy_cells: default_proxy_cells(),
         }
@@ -471,6 +483,9 @@ impl Params {
                 }
                 if !self.leaf_chains.is_default() {
                     m.insert("leaf_chains".into(), json!(self.leaf_chains.to_string()));
+                }
+                if !self.gaps {
+                    m.insert("gaps".into(), json!(false));
                 }
                 if self.proxies {
                     m.insert("proxies".into(), json!(true));

@@ -109,6 +109,11 @@ pub struct Certification {
     /// Leaves whose chain covers vanished pieces (as an inner node's
     /// does) rather than keeping a triangle of each: it draws less.
     pub leaf_cover_chosen: u64,
+    /// Pair-contraction (GAPS) levels made and compared with the level
+    /// edge collapse or clustering made.
+    pub gaps: u64,
+    /// GAPS levels kept instead.
+    pub gaps_won: u64,
     /// Merged proxies made and measured beside the chains' levels.
     pub proxies: u64,
     /// Proxies kept: each beat every level of at most its triangles.

@@ -555,3 +555,62 @@ fn switch_factors_are_bounded_on_generated_scenes() {
         assert!(max <= 8.0, "{}: largest switch {max}", kind.name());
     }
 }
+
+/// A `cells` x `cells` open sheet at height `y` with every other cell of
+/// every other row left out: a perforated plate, whose holes pair
+/// contraction may close.
+fn perforated_sheet(origin: DVec3, size: f64, cells: u32) -> Object {
+    let mut o = grid_object(origin, size, cells, 0.0);
+    let kept: Vec<u32> = o
+        .indices
+        .chunks_exact(6)
+        .enumerate()
+        .filter(|(c, _)| {
+            let (i, j) = (*c as u32 / cells, *c as u32 % cells);
+            !(i % 3 == 1 && j % 3 == 1)
+        })
+        .flat_map(|(_, q)| q.iter().copied())
+        .collect();
+    o.indices = kept;
+    o
+}
+
+#[test]
+fn gaps_levels_are_bounds_on_open_sheets_closing_holes_and_merging_parts() {
+    // Open sheets a little apart, a perforated plate, rows of cubes a
+    // hair apart and thin pipes: what pair contraction joins, closes and
+    // folds. Every stored error must bound brute-force samples.
+    let mut objects = vec![
+        grid_object(DVec3::ZERO, 10.0, 40, 0.0),
+        grid_object(DVec3::new(0.0, 0.05, 0.0), 10.0, 40, 0.0),
+        perforated_sheet(DVec3::new(0.0, 1.0, 0.0), 10.0, 36),
+    ];
+    for i in 0..6 {
+        objects.push(pipe_object(
+            DVec3::new(0.0, 2.0, 1.5 * i as f64),
+            10.0,
+            0.02,
+            40,
+            6,
+        ));
+    }
+    for i in 0..300 {
+        let min = DVec3::new(0.21 * (i % 30) as f64, 3.0, 0.21 * (i / 30) as f64);
+        objects.push(box_object(min, min + DVec3::splat(0.2)));
+    }
+    let on = Params {
+        gaps: true,
+        ..small_params()
+    };
+    let (check, built) = bounds_hold_built(objects.clone(), &on);
+    assert!(check.worst_ratio <= 1.0, "{check:?}");
+    let c = built.stats.certification;
+    assert!(c.gaps_won > 0 && c.gaps >= c.gaps_won, "{c:?}");
+    // Off, none is made.
+    let off = Params {
+        gaps: false,
+        ..small_params()
+    };
+    let (_, without) = bounds_hold_built(objects, &off);
+    assert_eq!(without.stats.certification.gaps, 0);
+}

@@ -94,6 +94,9 @@ pub struct Args {
     /// LODs (4.3): kept: a leaf's chain keeps a triangle of every piece a level makes vanish. best: a second chain covers vanished pieces per error-sized cell as an inner node's does, and the one that draws fewer triangles over the distances the leaf may be seen from is kept (real-CAD floor: 0.90x the triangles drawn at 1 px for 1.55x the preprocess time; generated plant: 0.97x for 1.27x)
     #[arg(long, value_enum, default_value_t = LeafChainsArg::Kept)]
     leaf_chains: LeafChainsArg,
+    /// LODs and HLODs (4.3): on: every level of every chain also meets a pair contraction across gaps (GAPS: edges and vertex pairs closer than twice the level's error limit contracted by quadric error, which joins disjoint parts and closes holes), measured as every level is, and the better kept (docs/preprocess.md, "Pair contraction across gaps"). off: edge collapse and clustering alone
+    #[arg(long, value_enum, default_value_t = if Params::default().gaps { OnOff::On } else { OnOff::Off })]
+    gaps: OnOff,
     /// LODs and HLODs (4.3): on: beside every chain, merged proxies (watertight shells of the geometry's distance field at an offset of a cell, on cells of 1/8 to 1/128 of the node, simplified) are measured as every level is, and kept where they draw fewer triangles at a lower error; they merge the small, thin, disjoint parts that edge collapse cannot (docs/preprocess.md, "Merged proxies"; on two floors of real CAD 0.97x and 0.94x the triangles drawn at 1 px for 1.6x and 4.5x the preprocess time, so not the default). off: the chains alone
     #[arg(long, value_enum, default_value_t = OnOff::Off)]
     proxies: OnOff,
@@ -178,6 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             LeafChainsArg::Kept => LeafChains::Kept,
             LeafChainsArg::Best => LeafChains::Best,
         },
+        gaps: args.gaps == OnOff::On,
         proxies: args.proxies == OnOff::On,
         proxy_cells: args.proxy_cells,
     };

@@ -9,7 +9,7 @@
 use crate::hausdorff::{self, Nearest, Sampling};
 use crate::params::MIN_SHRINK;
 
-use super::simplify::Simplifier;
+use super::simplify::{Simplifier, Step};
 use super::{ChainParams, Lod, WorkMesh};
 
 /// What a chain's levels are measured against.
@@ -114,10 +114,10 @@ pub(super) fn extend_chain(
         let lower = (target as f64 * MAX_UNDERSHOOT).ceil() as usize;
         // The first shrinking simplification at doubling limits from
         // `limit_error`, and the limit that made it.
-        let find = |sloppy: bool| -> Option<(WorkMesh, f32)> {
+        let find = |how: Step| -> Option<(WorkMesh, f32)> {
             let mut e = limit_error;
             while e <= cap {
-                if let Some(m) = s.step(target, e, sloppy).filter(shrunk) {
+                if let Some(m) = s.step(target, e, how).filter(shrunk) {
                     if m.triangles() >= lower {
                         return Some((m, e));
                     }
@@ -130,7 +130,7 @@ pub(super) fn extend_chain(
                     let mut best = (m, e);
                     for _ in 0..BISECTIONS {
                         let mid = 0.5 * (lo + hi);
-                        match s.step(target, mid, sloppy).filter(shrunk) {
+                        match s.step(target, mid, how).filter(shrunk) {
                             Some(m) => {
                                 hi = mid;
                                 let enough = m.triangles() >= lower;
@@ -147,7 +147,7 @@ pub(super) fn extend_chain(
                 e *= 2.0;
             }
             // Stalled within the diagonal: any error it takes.
-            s.step(target, f32::MAX, sloppy)
+            s.step(target, f32::MAX, how)
                 .filter(shrunk)
                 .map(|m| (m, cap))
         };
@@ -166,9 +166,9 @@ pub(super) fn extend_chain(
                 _ => f32::NAN,
             }
         };
-        let collapsed = if collapse { find(false) } else { None };
+        let collapsed = if collapse { find(Step::Collapse) } else { None };
         let was_collapse = collapsed.is_some();
-        let Some((mut mesh, mut e)) = collapsed.or_else(|| find(true)) else {
+        let Some((mut mesh, mut e)) = collapsed.or_else(|| find(Step::Sloppy)) else {
             break;
         };
         let mut measured = measure(&mut r, &mesh);
@@ -187,7 +187,7 @@ pub(super) fn extend_chain(
             let gentle = (MIN_SHRINK * n as f64) as usize;
             let mut limit = limit_error;
             while limit <= cap {
-                if let Some(m) = s.step(gentle, limit, false).filter(shrunk) {
+                if let Some(m) = s.step(gentle, limit, Step::Collapse).filter(shrunk) {
                     Tally::add(&tally.gentler, 1);
                     // Measured only as far as it takes to know it loses
                     // (a `Yes` carries the full measurement's figure).
@@ -229,12 +229,37 @@ pub(super) fn extend_chain(
         // way to one within it.
         let undershoots = |m: &WorkMesh| m.triangles() < lower;
         if was_collapse && (!plausible || !r.keep_pieces || undershoots(&mesh)) {
-            if let Some((alt, e_alt)) = find(true) {
+            if let Some((alt, e_alt)) = find(Step::Sloppy) {
                 Tally::add(&tally.rivals, 1);
                 if let Some(alt_measured) =
                     rival(&mut r, (&mesh, measured), &alt, (lower, known), tally)
                 {
                     Tally::add(&tally.rivals_won, 1);
+                    (mesh, e, measured) = (alt, e_alt, alt_measured);
+                }
+            }
+        }
+        // Pair contraction across gaps (the paper's GAPS) joins parts and
+        // closes holes at the error a level allows, where collapse keeps
+        // every piece and hole and clustering needs cells far above the
+        // error: a rival to whichever level won above where collapse
+        // stalls: every level of an inner node's chain (and a leaf's
+        // covering one), a leaf's first coarser level, and any level
+        // measured far off its limit.
+        let first_coarser = lods.len() == 1;
+        if p.gaps && (!r.keep_pieces || first_coarser || !plausible) {
+            // A contraction's cost is about how far it moved surfaces: a
+            // level whose limit is above the error measured of the level
+            // it would replace would lose, and is not measured.
+            let hopeful = |&(_, e_alt): &(WorkMesh, f32)| {
+                !measured.is_finite() || e_alt <= measured || undershoots(&mesh)
+            };
+            if let Some((alt, e_alt)) = find(Step::Gaps).filter(hopeful) {
+                Tally::add(&tally.gaps, 1);
+                if let Some(alt_measured) =
+                    rival(&mut r, (&mesh, measured), &alt, (lower, known), tally)
+                {
+                    Tally::add(&tally.gaps_won, 1);
                     (mesh, e, measured) = (alt, e_alt, alt_measured);
                 }
             }
@@ -326,6 +351,10 @@ pub struct Tally {
     pub gentler_won: std::sync::atomic::AtomicU64,
     /// Leaves whose covering chain was kept (it draws less).
     pub cover_chosen: std::sync::atomic::AtomicU64,
+    /// Pair-contraction levels (GAPS) made and compared.
+    pub gaps: std::sync::atomic::AtomicU64,
+    /// Pair-contraction levels that won.
+    pub gaps_won: std::sync::atomic::AtomicU64,
     /// Merged proxies made and measured.
     pub proxies: std::sync::atomic::AtomicU64,
     /// Proxies that beat every level of at most their triangles.
@@ -360,6 +389,8 @@ impl Tally {
             gentler: get(&self.gentler),
             gentler_won: get(&self.gentler_won),
             leaf_cover_chosen: get(&self.cover_chosen),
+            gaps: get(&self.gaps),
+            gaps_won: get(&self.gaps_won),
             proxies: get(&self.proxies),
             proxies_kept: get(&self.proxies_kept),
         }

@@ -10,9 +10,11 @@
 //! level is the first simplification of the previous one, at doubling
 //! error limits, that keeps at most 65% of its triangles, and never far
 //! below the level's target. Edge collapse (which prunes small pieces)
-//! and vertex clustering (which joins disjoint pieces, as the paper's
-//! GAPS does) are both tried where the pieces are many, and the lower
-//! error per triangle kept; pieces that vanished where nothing is left
+//! and vertex clustering (which joins disjoint pieces at coarse cells)
+//! are both tried where the pieces are many, and pair contraction across
+//! gaps (the paper's GAPS, [`gaps`]: joins parts and closes holes at the
+//! error a level allows) wherever collapse stalls; the lower error per
+//! triangle is kept. Pieces that vanished where nothing is left
 //! near them are stood for by about a triangle per cell of the error.
 //! So a machine's thousands of bolts, covers and hoses aggregate into
 //! blobs, a node's finest HLOD stands for its children near the error
@@ -29,7 +31,8 @@
 //! inequality), which compounds with every level of the tree.
 //!
 //! In parts: `chain` makes a chain's levels one after another and
-//! certifies each, `simplify` makes one simplification step; this file
+//! certifies each, `simplify` makes one simplification step, `gaps` is
+//! the pair-contraction simplifier; this file
 //! holds the meshes, a leaf's and an inner node's chains, and which
 //! levels an inner node stores.
 
@@ -42,6 +45,7 @@ use crate::parts::Part;
 use crate::source::{Source, SpillError};
 
 mod chain;
+mod gaps;
 mod proxy;
 mod simplify;
 
@@ -107,6 +111,9 @@ pub struct ChainParams {
     /// Whether a leaf's covering chain is made beside its kept-pieces
     /// chain, and the one that draws less kept ([`leaf_lods`]).
     pub leaf_best: bool,
+    /// Whether every level of a chain meets a pair contraction across
+    /// gaps ([`gaps`]) as a rival, the better kept.
+    pub gaps: bool,
     /// Whether merged proxies are made and measured beside the chain's
     /// levels, and kept where they draw less ([`with_proxies`]).
     pub proxies: bool,
@@ -131,6 +138,7 @@ impl ChainParams {
             ratio: params.lod_ratio,
             floor: params.lod_floor as usize,
             leaf_best: params.leaf_chains == crate::LeafChains::Best,
+            gaps: params.gaps,
             proxies: params.proxies,
             proxy_cells: params.proxy_cells,
             collapse_levels: params.collapse_levels as usize,
@@ -632,6 +640,7 @@ mod tests {
         floor: 64,
         collapse_levels: 1,
         leaf_best: false,
+        gaps: false,
         proxies: false,
         proxy_cells: 128,
         node_budget: 256,

@@ -1,13 +1,29 @@
-//! One simplification step with meshoptimizer (edge collapse, or sloppy
-//! vertex clustering as the paper's GAPS joins pieces) on a mesh welded
-//! and split into connected pieces once for every step tried, and what
-//! becomes of the pieces a step made vanish: a leaf keeps a triangle of
-//! each, an inner node covers those with nothing left near them.
+//! One simplification step (meshoptimizer's edge collapse or sloppy
+//! vertex clustering, or pair contraction across gaps, [`super::gaps`],
+//! the paper's GAPS) on a mesh welded and split into connected pieces
+//! once for every step tried, and what becomes of the pieces a step made
+//! vanish: a leaf keeps a triangle of each, an inner node covers those
+//! with nothing left near them.
 
 use meshopt::{SimplifyOptions, VertexDataAdapter};
 use rustc_hash::FxHashMap;
 
 use super::WorkMesh;
+
+/// How a step simplifies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Step {
+    /// meshoptimizer's edge collapse: keeps topology, prunes pieces
+    /// smaller than the error.
+    Collapse,
+    /// meshoptimizer's sloppy vertex clustering: joins whatever shares a
+    /// cell, at a cell size well above the error it measures.
+    Sloppy,
+    /// Pair contraction across gaps ([`super::gaps`]): edges and close
+    /// vertex pairs contracted by quadric error, joining parts and
+    /// closing holes as the error allows.
+    Gaps,
+}
 
 /// One mesh prepared for simplification steps: vertices that share a
 /// position are welded (normal or colour seams would otherwise block the
@@ -18,6 +34,12 @@ pub(super) struct Simplifier<'a> {
     welded: Vec<u32>,
     /// Per vertex, the root of its connected piece (over `welded`).
     piece: Vec<u32>,
+    /// Pair contraction's every step on the welded mesh, made on the
+    /// first [`Step::Gaps`] step asked for: each limit tried after it is
+    /// a replay.
+    /// (Made again should a later step ask for fewer triangles than it
+    /// reached.)
+    gaps: std::cell::RefCell<Option<super::gaps::History>>,
     /// A leaf's few pieces each keep a triangle ([`Simplifier::keep_every_piece`]);
     /// an inner node's thousands are covered ([`Simplifier::cover_vanished`]).
     keep_pieces: bool,
@@ -53,6 +75,7 @@ impl<'a> Simplifier<'a> {
             mesh,
             welded,
             piece,
+            gaps: std::cell::RefCell::new(None),
             keep_pieces,
         }
     }
@@ -70,20 +93,41 @@ impl<'a> Simplifier<'a> {
     /// than the error. Vanished pieces are kept or covered (`keep_pieces`).
     /// The simplifier's own error estimate only guides: errors are
     /// measured.
-    pub(super) fn step(&self, target: usize, max_error: f32, sloppy: bool) -> Option<WorkMesh> {
+    pub(super) fn step(&self, target: usize, max_error: f32, how: Step) -> Option<WorkMesh> {
         crate::spent::timed(crate::spent::Kind::Simplify, || {
-            self.simplified(target, max_error, sloppy)
+            self.simplified(target, max_error, how)
         })
     }
 
-    fn simplified(&self, target: usize, max_error: f32, sloppy: bool) -> Option<WorkMesh> {
+    fn simplified(&self, target: usize, max_error: f32, how: Step) -> Option<WorkMesh> {
         if self.welded.is_empty() {
             return None;
         }
         let adapter = Self::adapter(self.mesh)?;
         let welded = &self.welded;
         let mut result_error = 0.0f32;
-        let indices = if sloppy {
+        // Pair contraction moves vertices: the positions the result's
+        // indices refer to.
+        let mut moved: Option<(Vec<[f32; 3]>, Vec<u32>)> = None;
+        let indices = if how == Step::Gaps {
+            let mut history = self.gaps.borrow_mut();
+            if !history.as_ref().is_some_and(|h| h.reaches(target)) {
+                *history = Some(super::gaps::History::new(
+                    &self.mesh.positions,
+                    welded,
+                    target,
+                ));
+            }
+            let c = history.as_ref().expect("made above").level(
+                &self.mesh.positions,
+                welded,
+                target,
+                max_error,
+            );
+            result_error = c.error;
+            moved = Some((c.positions, c.into));
+            c.indices
+        } else if how == Step::Sloppy {
             // Sloppy takes its error relative to the mesh's extent.
             let scale = meshopt::simplify_scale(&adapter);
             let relative = if max_error == f32::MAX || scale.is_nan() || scale <= 0.0 {
@@ -110,8 +154,12 @@ impl<'a> Simplifier<'a> {
                 Some(&mut result_error),
             )
         };
+        let at = Moved {
+            positions: moved.as_ref().map_or(&self.mesh.positions, |m| &m.0),
+            into: moved.as_ref().map(|m| m.1.as_slice()),
+        };
         let indices = if self.keep_pieces {
-            self.keep_every_piece(indices)
+            self.keep_every_piece(indices, &at)
         } else {
             // The cell size is the limit: what the level may move
             // surfaces by. Vanished pieces are stood for by about a
@@ -126,21 +174,37 @@ impl<'a> Simplifier<'a> {
             } else {
                 f32::MIN_POSITIVE.sqrt()
             };
-            self.cover_vanished(indices, cell)
+            self.cover_vanished(indices, cell, &at)
         };
         if indices.is_empty() {
             return None;
         }
-        Some(compact(self.mesh, &indices))
+        Some(compact(self.mesh, at.positions, &indices))
     }
 
     /// Per triangle of the welded mesh: its piece when no triangle of
-    /// `simplified` uses any vertex of that piece, `None` when the piece
-    /// survives.
-    fn vanished_pieces(&self, simplified: &[u32]) -> Vec<Option<u32>> {
+    /// `simplified` uses any vertex of that piece (nor, after a
+    /// contraction, the vertex any of them became), `None` when the piece
+    /// survives: a bolt contracted into its flange has not vanished.
+    fn vanished_pieces(&self, simplified: &[u32], at: &Moved<'_>) -> Vec<Option<u32>> {
         let mut survives = vec![false; self.piece.len()];
-        for &v in simplified {
-            survives[self.piece[v as usize] as usize] = true;
+        match at.into {
+            None => {
+                for &v in simplified {
+                    survives[self.piece[v as usize] as usize] = true;
+                }
+            }
+            Some(into) => {
+                let mut used = vec![false; into.len()];
+                for &v in simplified {
+                    used[v as usize] = true;
+                }
+                for (v, &w) in into.iter().enumerate() {
+                    if used[w as usize] {
+                        survives[self.piece[v] as usize] = true;
+                    }
+                }
+            }
         }
         self.welded
             .chunks_exact(3)
@@ -159,13 +223,13 @@ impl<'a> Simplifier<'a> {
     /// nothing and a far one (a pipe across an aisle) keeps about one
     /// triangle per cell it spans: about what it covers on screen at the
     /// error the cell stands for.
-    fn cover_vanished(&self, mut simplified: Vec<u32>, cell: f32) -> Vec<u32> {
-        let vanished = self.vanished_pieces(&simplified);
+    fn cover_vanished(&self, mut simplified: Vec<u32>, cell: f32, at: &Moved<'_>) -> Vec<u32> {
+        let vanished = self.vanished_pieces(&simplified, at);
         let inv = 1.0 / cell;
         // Cell coordinates saturate (`as` from f64), and so do their
         // neighbours, so a tiny cell or a far vertex cannot overflow.
         let key = |i: u32| {
-            let p = self.mesh.positions[i as usize];
+            let p = at.positions[i as usize];
             [0, 1, 2].map(|k| (p[k] as f64 * inv as f64).floor() as i64)
         };
         let mut occupied: rustc_hash::FxHashSet<[i64; 3]> =
@@ -198,13 +262,13 @@ impl<'a> Simplifier<'a> {
     /// sloppy clustering drops thin ones; a vanished piece would cost its
     /// distance to what remains (which may be far), a kept triangle of it
     /// at most its own diameter.
-    fn keep_every_piece(&self, mut simplified: Vec<u32>) -> Vec<u32> {
-        let vanished = self.vanished_pieces(&simplified);
+    fn keep_every_piece(&self, mut simplified: Vec<u32>, at: &Moved<'_>) -> Vec<u32> {
+        let vanished = self.vanished_pieces(&simplified, at);
         // Per vanished piece (by root): its largest triangle so far.
         let mut best: FxHashMap<u32, (f32, usize)> = FxHashMap::default();
         for (k, (t, gone)) in self.welded.chunks_exact(3).zip(&vanished).enumerate() {
             let Some(root) = *gone else { continue };
-            let p = |i: u32| glam::Vec3::from_array(self.mesh.positions[i as usize]);
+            let p = |i: u32| glam::Vec3::from_array(at.positions[i as usize]);
             let area = (p(t[1]) - p(t[0]))
                 .cross(p(t[2]) - p(t[0]))
                 .length_squared();
@@ -222,8 +286,18 @@ impl<'a> Simplifier<'a> {
     }
 }
 
-/// The vertices `indices` use, in first-use order.
-fn compact(mesh: &WorkMesh, indices: &[u32]) -> WorkMesh {
+/// Where a step's result has its vertices: the mesh's own positions, or
+/// after a contraction where it moved them and, per vertex, the vertex
+/// it became.
+struct Moved<'p> {
+    positions: &'p [[f32; 3]],
+    into: Option<&'p [u32]>,
+}
+
+/// The vertices `indices` use, in first-use order, at `positions` (the
+/// mesh's own, or where a contraction moved them) with the mesh's
+/// attributes.
+fn compact(mesh: &WorkMesh, positions: &[[f32; 3]], indices: &[u32]) -> WorkMesh {
     let mut remap = vec![u32::MAX; mesh.positions.len()];
     let mut out = WorkMesh {
         origin: mesh.origin,
@@ -234,7 +308,7 @@ fn compact(mesh: &WorkMesh, indices: &[u32]) -> WorkMesh {
         let slot = &mut remap[i as usize];
         if *slot == u32::MAX {
             *slot = out.positions.len() as u32;
-            out.positions.push(mesh.positions[i as usize]);
+            out.positions.push(positions[i as usize]);
             out.normals.push(mesh.normals[i as usize]);
             out.colours.push(mesh.colours[i as usize]);
         }
@@ -280,7 +354,11 @@ pub(super) mod tests {
         let mesh = mesh_of(all);
         let s = Simplifier::new(&mesh, false);
         let kept: Vec<u32> = s.welded[..plate].to_vec();
-        let out = s.cover_vanished(kept.clone(), 0.5);
+        let at = Moved {
+            positions: &mesh.positions,
+            into: None,
+        };
+        let out = s.cover_vanished(kept.clone(), 0.5, &at);
         let added = &out[kept.len()..];
         let pos = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
         let origin = mesh.origin.as_vec3();

@@ -52,11 +52,23 @@ pub fn import_ifc_each(
     })
 }
 
+/// IFC's Z-up world as glTF's Y-up, which gigawalk's cameras, walk mode
+/// and generated scenes share: (x, y, z) to (x, z, -y), a rotation about
+/// x (windings and handedness kept), so a building stands upright and
+/// its north (IFC's +y) looks along -z.
+fn y_up(p: glam::DVec3) -> glam::DVec3 {
+    glam::DVec3::new(p.x, p.z, -p.y)
+}
+
 fn object(o: gigawalk_ifc::IfcObject, file: &str) -> Object {
     Object {
         name: o.name.clone(),
-        positions: o.positions,
-        normals: o.normals,
+        positions: o.positions.into_iter().map(y_up).collect(),
+        normals: o
+            .normals
+            .into_iter()
+            .map(|n| glam::Vec3::new(n.x, n.z, -n.y))
+            .collect(),
         indices: o.indices,
         colour: o.colour,
         vertex_colours: o.vertex_colours,

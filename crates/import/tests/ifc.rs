@@ -66,13 +66,14 @@ fn a_block_in_millimetres_is_one_object_in_metres_with_its_identity() {
         (glam::DVec3::splat(f64::MAX), glam::DVec3::splat(f64::MIN)),
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
     );
-    // The profile's centre is at x = 1000 mm, and the wall placed 1 m on.
+    // The profile's centre is at x = 1000 mm, and the wall placed 1 m on;
+    // IFC's z (the 3 m extrusion) is the scene's y, its y the scene's -z.
     assert!(
-        (lo - glam::DVec3::new(1.0, -0.5, 0.0)).length() < 1e-9,
+        (lo - glam::DVec3::new(1.0, 0.0, -0.5)).length() < 1e-9,
         "{lo}"
     );
     assert!(
-        (hi - glam::DVec3::new(3.0, 0.5, 3.0)).length() < 1e-9,
+        (hi - glam::DVec3::new(3.0, 3.0, 0.5)).length() < 1e-9,
         "{hi}"
     );
     let id = &o.identity;

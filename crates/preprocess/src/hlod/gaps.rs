@@ -17,11 +17,12 @@
 //! plus a plane through each open edge at right angles to its triangle
 //! (boundary quadrics), so open sheets keep their outline. A pair's cost
 //! is the larger of its two vertices' mean squared distances to their own
-//! planes at the contracted position: a distance in model units, so the
-//! caller's error limit stops contraction. The gap threshold follows the
-//! limit (twice it: a pair that far apart meets halfway), so small gaps
+//! planes at the end the pair keeps (pairs meet at an end, as in edge
+//! collapse, so vertices keep their positions and normals): a distance
+//! in model units, so the caller's error limit stops contraction. The gap
+//! threshold grows with the cost of the cheapest pair left, so small gaps
 //! and holes close at the fine levels of a chain and larger ones only at
-//! the coarse ones, as GAPS's adaptive threshold does.
+//! the coarse ones, as GAPS's adaptive threshold does ([`History::new`]).
 //!
 //! GAPS's surface-area term, which keeps thin parts from vanishing or
 //! ballooning, is here a guard on each contraction: one that would shrink
@@ -79,7 +80,7 @@ impl History {
     /// vertex's [`VIRTUAL_PER_VERTEX`] nearest. The threshold adapts as
     /// GAPS's does: from a thousandth of the mesh's extent, grown
     /// [`GAP_GROWTH`]-fold whenever the cheapest pair left costs more
-    /// than half of it (a pair that far apart meets halfway), up to
+    /// than half of it (about what a pair that far apart costs), up to
     /// [`MAX_GAP_OF_EXTENT`] of the extent; so small gaps and holes close
     /// first, larger ones only as the error grows. Degenerate and
     /// repeated triangles (the same three vertices in any order) are
@@ -785,7 +786,7 @@ mod tests {
         assert!(joined, "no triangle spans the two cubes");
         // At a tenth of the gap no pair across costs little enough (each
         // corner's cost is its mean squared distance to its three faces,
-        // so meeting halfway costs at least 0.01 / sqrt(5)).
+        // so meeting at either end costs at least 0.02 / sqrt(5)).
         let c = contract(&p, &i, 0, 0.002);
         for t in c.indices.chunks_exact(3) {
             assert!(t.iter().all(|&v| v < 8) || t.iter().all(|&v| v >= 8));

@@ -140,8 +140,8 @@ pub struct Params {
     /// Whether chains' levels meet a pair contraction across gaps (GAPS,
     /// [`crate::hlod`]) as a rival, the better kept: it joins disjoint
     /// parts and closes holes that edge collapse keeps. On by default:
-    /// on floors of real CAD 0.81-0.88x the triangles drawn (frustum and
-    /// HLODs, 1 px) for about 1.6-1.7x the preprocess time.
+    /// on floors of real CAD 0.85-0.91x the triangles drawn (frustum and
+    /// HLODs, 1 px) for 1.5-1.63x the preprocess CPU time.
     #[serde(default = "default_gaps")]
     pub gaps: bool,
     /// Whether merged proxies (watertight shells at the scale of an

@@ -24,7 +24,16 @@ fn plant(dir: &Path, frames: usize) -> (std::path::PathBuf, Vec<Pose>) {
     let g = generate(Kind::Plant, 60_000, 2, frames);
     let model = import_glb_bytes(&g.glb_bytes(), "plant").unwrap();
     let file = dir.join("plant.gwk");
-    preprocess(&model, &Params::default(), &file, "plant", &NoProgress).unwrap();
+    // The levels edge collapse and clustering make alone (`gaps` off):
+    // at half their bytes this walk needs stand-ins in every schedule,
+    // which the test is about. (With pair contraction's smaller levels
+    // the pipelined runs had every chosen level in time and substituted
+    // nothing.)
+    let params = Params {
+        gaps: false,
+        ..Params::default()
+    };
+    preprocess(&model, &params, &file, "plant", &NoProgress).unwrap();
     (file, g.path.poses)
 }
 

@@ -332,24 +332,8 @@ fn merged_proxies_are_bounds_on_thin_open_shells_and_small_parts() {
     // error, proxies' included, must bound brute-force samples, and the
     // shells must not vanish (a sample on a sheet far from its level is
     // what the check would find).
-    let mut objects = vec![
-        grid_object(DVec3::ZERO, 10.0, 40, 0.0),
-        grid_object(DVec3::new(0.0, 0.05, 0.0), 10.0, 40, 0.0),
-        grid_object(DVec3::new(0.0, 1.0, 0.0), 10.0, 24, 0.1),
-    ];
-    for i in 0..6 {
-        objects.push(pipe_object(
-            DVec3::new(0.0, 2.0, 1.5 * i as f64),
-            10.0,
-            0.02,
-            40,
-            6,
-        ));
-    }
-    for i in 0..300 {
-        let min = DVec3::new(0.3 * (i % 30) as f64, 3.0, 0.3 * (i / 30) as f64);
-        objects.push(box_object(min, min + DVec3::splat(0.2)));
-    }
+    let objects =
+        sheets_pipes_and_boxes(grid_object(DVec3::new(0.0, 1.0, 0.0), 10.0, 24, 0.1), 0.3);
     let on = Params {
         proxies: true,
         ..small_params()
@@ -556,7 +540,32 @@ fn switch_factors_are_bounded_on_generated_scenes() {
     }
 }
 
-/// A `cells` x `cells` open sheet at height `y` with every other cell of
+/// Two single-sided 10 x 10 sheets 0.05 apart, `third` above them, six
+/// thin pipes and 300 boxes of 0.2 on a grid of `pitch`: small, thin,
+/// disjoint parts that simplifiers merge.
+fn sheets_pipes_and_boxes(third: Object, pitch: f64) -> Vec<Object> {
+    let mut objects = vec![
+        grid_object(DVec3::ZERO, 10.0, 40, 0.0),
+        grid_object(DVec3::new(0.0, 0.05, 0.0), 10.0, 40, 0.0),
+        third,
+    ];
+    for i in 0..6 {
+        objects.push(pipe_object(
+            DVec3::new(0.0, 2.0, 1.5 * i as f64),
+            10.0,
+            0.02,
+            40,
+            6,
+        ));
+    }
+    for i in 0..300 {
+        let min = DVec3::new(pitch * (i % 30) as f64, 3.0, pitch * (i / 30) as f64);
+        objects.push(box_object(min, min + DVec3::splat(0.2)));
+    }
+    objects
+}
+
+/// A `cells` x `cells` open sheet with every other cell of
 /// every other row left out: a perforated plate, whose holes pair
 /// contraction may close.
 fn perforated_sheet(origin: DVec3, size: f64, cells: u32) -> Object {
@@ -580,24 +589,8 @@ fn gaps_levels_are_bounds_on_open_sheets_closing_holes_and_merging_parts() {
     // Open sheets a little apart, a perforated plate, rows of cubes a
     // hair apart and thin pipes: what pair contraction joins, closes and
     // folds. Every stored error must bound brute-force samples.
-    let mut objects = vec![
-        grid_object(DVec3::ZERO, 10.0, 40, 0.0),
-        grid_object(DVec3::new(0.0, 0.05, 0.0), 10.0, 40, 0.0),
-        perforated_sheet(DVec3::new(0.0, 1.0, 0.0), 10.0, 36),
-    ];
-    for i in 0..6 {
-        objects.push(pipe_object(
-            DVec3::new(0.0, 2.0, 1.5 * i as f64),
-            10.0,
-            0.02,
-            40,
-            6,
-        ));
-    }
-    for i in 0..300 {
-        let min = DVec3::new(0.21 * (i % 30) as f64, 3.0, 0.21 * (i / 30) as f64);
-        objects.push(box_object(min, min + DVec3::splat(0.2)));
-    }
+    let objects =
+        sheets_pipes_and_boxes(perforated_sheet(DVec3::new(0.0, 1.0, 0.0), 10.0, 36), 0.21);
     let on = Params {
         gaps: true,
         ..small_params()

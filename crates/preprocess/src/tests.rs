@@ -565,8 +565,8 @@ fn sheets_pipes_and_boxes(third: Object, pitch: f64) -> Vec<Object> {
     objects
 }
 
-/// A `cells` x `cells` open sheet with every other cell of
-/// every other row left out: a perforated plate, whose holes pair
+/// A `cells` x `cells` open sheet at `origin` with the middle cell of
+/// every three by three left out: a perforated plate, whose holes pair
 /// contraction may close.
 fn perforated_sheet(origin: DVec3, size: f64, cells: u32) -> Object {
     let mut o = grid_object(origin, size, cells, 0.0);

@@ -39,11 +39,9 @@ use glam::DVec3;
 use rustc_hash::FxHashMap;
 
 /// A mesh simplified to a level: triangles over the input's vertex
-/// indices and every vertex's position (a contracted pair's survivor
-/// where the pair met; the others where they were).
+/// indices (at the input's positions: pairs meet at an end).
 pub(super) struct Contracted {
     pub(super) indices: Vec<u32>,
-    pub(super) positions: Vec<[f32; 3]>,
     /// Per vertex, the vertex it became (itself when not contracted).
     pub(super) into: Vec<u32>,
     /// The largest cost of a contraction made (model units).
@@ -61,13 +59,12 @@ pub(super) struct History {
     floor: usize,
 }
 
-/// One contraction: `b` into `a`, which moved to `to`, at a cost of
+/// One contraction: `b` into `a`, which stays where it is, at a cost of
 /// `error` model units, leaving `live` triangles.
 #[derive(Clone, Copy, Debug)]
 struct Contraction {
     a: u32,
     b: u32,
-    to: [f32; 3],
     error: f32,
     live: u32,
 }
@@ -113,7 +110,6 @@ impl History {
         max_error: f32,
     ) -> Contracted {
         let mut into: Vec<u32> = (0..positions.len() as u32).collect();
-        let mut moved = positions.to_vec();
         let mut error = 0.0f32;
         let mut live = indices.len() / 3;
         for c in &self.steps {
@@ -121,7 +117,6 @@ impl History {
                 break;
             }
             into[c.b as usize] = c.a;
-            moved[c.a as usize] = c.to;
             error = error.max(c.error);
             live = c.live as usize;
         }
@@ -148,7 +143,6 @@ impl History {
         }
         Contracted {
             indices: out,
-            positions: moved,
             into,
             error,
         }
@@ -509,15 +503,13 @@ impl Gaps {
             let (keep_b, _) = self.price(a, b);
             let (a, b) = if keep_b { (b, a) } else { (a, b) };
             let ai = a as usize;
-            let p = self.pos[ai];
-            if !self.acceptable(a, b, p) {
+            if !self.acceptable(a, b) {
                 continue;
             }
-            self.collapse(a, b, p);
+            self.collapse(a, b);
             steps.push(Contraction {
                 a,
                 b,
-                to: p.as_vec3().to_array(),
                 error: f64::from_bits(bits).sqrt() as f32,
                 live: self.live_tris as u32,
             });
@@ -544,11 +536,11 @@ impl Gaps {
         steps
     }
 
-    /// Whether moving `a` and `b` to `p` flips none of their other
-    /// triangles and keeps at least [`MIN_AREA_KEPT`] of their area
-    /// (GAPS's area term: a thin part must not fold flat or vanish in
-    /// one step).
-    fn acceptable(&self, a: u32, b: u32, p: DVec3) -> bool {
+    /// Whether moving `b` onto `a` flips none of their other triangles
+    /// and keeps at least [`MIN_AREA_KEPT`] of their area (GAPS's area
+    /// term: a thin part must not fold flat or vanish in one step).
+    fn acceptable(&self, a: u32, b: u32) -> bool {
+        let p = self.pos[a as usize];
         let mut before = 0.0;
         let mut after = 0.0;
         for &v in &[a, b] {
@@ -586,11 +578,10 @@ impl Gaps {
         after >= MIN_AREA_KEPT * before
     }
 
-    /// Moves `a` to `p`, gives it `b`'s triangles, quadric and virtual
-    /// partners, and drops the triangles that degenerate or repeat.
-    fn collapse(&mut self, a: u32, b: u32, p: DVec3) {
+    /// Gives `a` `b`'s triangles, quadric and virtual partners, and drops
+    /// the triangles that degenerate or repeat.
+    fn collapse(&mut self, a: u32, b: u32) {
         let (ai, bi) = (a as usize, b as usize);
-        self.pos[ai] = p;
         let qb = self.quadric[bi];
         self.quadric[ai].add(&qb);
         self.alive[bi] = false;
@@ -732,7 +723,6 @@ mod tests {
         cube([0.0; 3], [1.0; 3], &mut p, &mut i);
         let c = contract(&p, &i, 0, 0.0);
         assert_eq!(live(&c), 12);
-        assert_eq!(c.positions, p);
     }
 
     #[test]
@@ -759,7 +749,7 @@ mod tests {
         assert!(c.error <= 0.01);
         let mut area = 0.0;
         for t in c.indices.chunks_exact(3) {
-            let v = |k: usize| glam::Vec3::from_array(c.positions[t[k] as usize]);
+            let v = |k: usize| glam::Vec3::from_array(p[t[k] as usize]);
             for k in 0..3 {
                 assert!(v(k).y.abs() < 1e-4);
                 assert!((-1e-3..=n as f32 + 1e-3).contains(&v(k).x));
@@ -804,7 +794,7 @@ mod tests {
         assert!(live(&c) < 12, "{} triangles left", live(&c));
         for t in c.indices.chunks_exact(3) {
             for &v in t {
-                let y = c.positions[v as usize][1];
+                let y = p[v as usize][1];
                 assert!((-1e-4..=0.0101).contains(&y), "y {y}");
             }
         }

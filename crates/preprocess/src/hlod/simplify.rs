@@ -106,9 +106,8 @@ impl<'a> Simplifier<'a> {
         let adapter = Self::adapter(self.mesh)?;
         let welded = &self.welded;
         let mut result_error = 0.0f32;
-        // Pair contraction moves vertices: the positions the result's
-        // indices refer to.
-        let mut moved: Option<(Vec<[f32; 3]>, Vec<u32>)> = None;
+        // After pair contraction, per vertex the vertex it became.
+        let mut into: Option<Vec<u32>> = None;
         let indices = if how == Step::Gaps {
             let mut history = self.gaps.borrow_mut();
             if !history.as_ref().is_some_and(|h| h.reaches(target)) {
@@ -125,7 +124,7 @@ impl<'a> Simplifier<'a> {
                 max_error,
             );
             result_error = c.error;
-            moved = Some((c.positions, c.into));
+            into = Some(c.into);
             c.indices
         } else if how == Step::Sloppy {
             // Sloppy takes its error relative to the mesh's extent.
@@ -154,12 +153,9 @@ impl<'a> Simplifier<'a> {
                 Some(&mut result_error),
             )
         };
-        let at = Moved {
-            positions: moved.as_ref().map_or(&self.mesh.positions, |m| &m.0),
-            into: moved.as_ref().map(|m| m.1.as_slice()),
-        };
+        let into = into.as_deref();
         let indices = if self.keep_pieces {
-            self.keep_every_piece(indices, &at)
+            self.keep_every_piece(indices, into)
         } else {
             // The cell size is the limit: what the level may move
             // surfaces by. Vanished pieces are stood for by about a
@@ -174,21 +170,21 @@ impl<'a> Simplifier<'a> {
             } else {
                 f32::MIN_POSITIVE.sqrt()
             };
-            self.cover_vanished(indices, cell, &at)
+            self.cover_vanished(indices, cell, into)
         };
         if indices.is_empty() {
             return None;
         }
-        Some(compact(self.mesh, at.positions, &indices))
+        Some(compact(self.mesh, &indices))
     }
 
     /// Per triangle of the welded mesh: its piece when no triangle of
     /// `simplified` uses any vertex of that piece (nor, after a
     /// contraction, the vertex any of them became), `None` when the piece
     /// survives: a bolt contracted into its flange has not vanished.
-    fn vanished_pieces(&self, simplified: &[u32], at: &Moved<'_>) -> Vec<Option<u32>> {
+    fn vanished_pieces(&self, simplified: &[u32], into: Option<&[u32]>) -> Vec<Option<u32>> {
         let mut survives = vec![false; self.piece.len()];
-        match at.into {
+        match into {
             None => {
                 for &v in simplified {
                     survives[self.piece[v as usize] as usize] = true;
@@ -223,13 +219,18 @@ impl<'a> Simplifier<'a> {
     /// nothing and a far one (a pipe across an aisle) keeps about one
     /// triangle per cell it spans: about what it covers on screen at the
     /// error the cell stands for.
-    fn cover_vanished(&self, mut simplified: Vec<u32>, cell: f32, at: &Moved<'_>) -> Vec<u32> {
-        let vanished = self.vanished_pieces(&simplified, at);
+    fn cover_vanished(
+        &self,
+        mut simplified: Vec<u32>,
+        cell: f32,
+        into: Option<&[u32]>,
+    ) -> Vec<u32> {
+        let vanished = self.vanished_pieces(&simplified, into);
         let inv = 1.0 / cell;
         // Cell coordinates saturate (`as` from f64), and so do their
         // neighbours, so a tiny cell or a far vertex cannot overflow.
         let key = |i: u32| {
-            let p = at.positions[i as usize];
+            let p = self.mesh.positions[i as usize];
             [0, 1, 2].map(|k| (p[k] as f64 * inv as f64).floor() as i64)
         };
         let mut occupied: rustc_hash::FxHashSet<[i64; 3]> =
@@ -262,13 +263,13 @@ impl<'a> Simplifier<'a> {
     /// sloppy clustering drops thin ones; a vanished piece would cost its
     /// distance to what remains (which may be far), a kept triangle of it
     /// at most its own diameter.
-    fn keep_every_piece(&self, mut simplified: Vec<u32>, at: &Moved<'_>) -> Vec<u32> {
-        let vanished = self.vanished_pieces(&simplified, at);
+    fn keep_every_piece(&self, mut simplified: Vec<u32>, into: Option<&[u32]>) -> Vec<u32> {
+        let vanished = self.vanished_pieces(&simplified, into);
         // Per vanished piece (by root): its largest triangle so far.
         let mut best: FxHashMap<u32, (f32, usize)> = FxHashMap::default();
         for (k, (t, gone)) in self.welded.chunks_exact(3).zip(&vanished).enumerate() {
             let Some(root) = *gone else { continue };
-            let p = |i: u32| glam::Vec3::from_array(at.positions[i as usize]);
+            let p = |i: u32| glam::Vec3::from_array(self.mesh.positions[i as usize]);
             let area = (p(t[1]) - p(t[0]))
                 .cross(p(t[2]) - p(t[0]))
                 .length_squared();
@@ -286,18 +287,8 @@ impl<'a> Simplifier<'a> {
     }
 }
 
-/// Where a step's result has its vertices: the mesh's own positions, or
-/// after a contraction where it moved them and, per vertex, the vertex
-/// it became.
-struct Moved<'p> {
-    positions: &'p [[f32; 3]],
-    into: Option<&'p [u32]>,
-}
-
-/// The vertices `indices` use, in first-use order, at `positions` (the
-/// mesh's own, or where a contraction moved them) with the mesh's
-/// attributes.
-fn compact(mesh: &WorkMesh, positions: &[[f32; 3]], indices: &[u32]) -> WorkMesh {
+/// The vertices `indices` use, in first-use order.
+fn compact(mesh: &WorkMesh, indices: &[u32]) -> WorkMesh {
     let mut remap = vec![u32::MAX; mesh.positions.len()];
     let mut out = WorkMesh {
         origin: mesh.origin,
@@ -308,7 +299,7 @@ fn compact(mesh: &WorkMesh, positions: &[[f32; 3]], indices: &[u32]) -> WorkMesh
         let slot = &mut remap[i as usize];
         if *slot == u32::MAX {
             *slot = out.positions.len() as u32;
-            out.positions.push(positions[i as usize]);
+            out.positions.push(mesh.positions[i as usize]);
             out.normals.push(mesh.normals[i as usize]);
             out.colours.push(mesh.colours[i as usize]);
         }
@@ -354,11 +345,7 @@ pub(super) mod tests {
         let mesh = mesh_of(all);
         let s = Simplifier::new(&mesh, false);
         let kept: Vec<u32> = s.welded[..plate].to_vec();
-        let at = Moved {
-            positions: &mesh.positions,
-            into: None,
-        };
-        let out = s.cover_vanished(kept.clone(), 0.5, &at);
+        let out = s.cover_vanished(kept.clone(), 0.5, None);
         let added = &out[kept.len()..];
         let pos = |i: u32| glam::Vec3::from_array(mesh.positions[i as usize]);
         let origin = mesh.origin.as_vec3();

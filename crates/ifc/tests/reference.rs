@@ -5,25 +5,11 @@
 //! within 2% per file.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use gigawalk_ifc::{IfcFile, IfcObject};
 
-fn models() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models/ifc"
-    ));
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("GIGAWALK_REQUIRE_MODELS").is_none(),
-        "GIGAWALK_REQUIRE_MODELS is set but {} is missing",
-        dir.display()
-    );
-    println!("SKIP: no models at {}", dir.display());
-    None
+fn models() -> Option<std::path::PathBuf> {
+    gigawalk_testkit::models::shared_ifc_models()
 }
 
 struct Reference {

@@ -4,20 +4,7 @@
 use gigawalk_ifc::IfcFile;
 
 fn models() -> Option<std::path::PathBuf> {
-    let dir = std::path::PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models/ifc"
-    ));
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("GIGAWALK_REQUIRE_MODELS").is_none(),
-        "GIGAWALK_REQUIRE_MODELS is set but {} is missing",
-        dir.display()
-    );
-    println!("SKIP: no models at {}", dir.display());
-    None
+    gigawalk_testkit::models::shared_ifc_models()
 }
 
 /// Parses and reads `bytes`; true when it read objects.

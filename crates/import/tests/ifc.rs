@@ -2,25 +2,10 @@
 //! identity, mixed with other formats, unsupported geometry counted in the
 //! stats and their summary, errors naming the file.
 
-use std::path::PathBuf;
-
 use gigawalk_import::{import, import_all, is_model_file, ImportError};
 
-fn models() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models/ifc"
-    ));
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("GIGAWALK_REQUIRE_MODELS").is_none(),
-        "GIGAWALK_REQUIRE_MODELS is set but {} is missing",
-        dir.display()
-    );
-    println!("SKIP: no models at {}", dir.display());
-    None
+fn models() -> Option<std::path::PathBuf> {
+    gigawalk_testkit::models::shared_ifc_models()
 }
 
 /// The smallest IFC4 file with one product: a 2 x 1 x 3 m block

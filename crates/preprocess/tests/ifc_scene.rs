@@ -1,27 +1,12 @@
 //! An IFC file through preprocess to a scene: its object table finds the
 //! products by class, by GlobalId and by storey name.
 
-use std::path::PathBuf;
-
 use gigawalk_preprocess::{preprocess_files, NoProgress, Params};
 use gigawalk_scene::objects::Pattern;
 use gigawalk_scene::SceneReader;
 
-fn models() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/models/ifc"
-    ));
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("GIGAWALK_REQUIRE_MODELS").is_none(),
-        "GIGAWALK_REQUIRE_MODELS is set but {} is missing",
-        dir.display()
-    );
-    println!("SKIP: no models at {}", dir.display());
-    None
+fn models() -> Option<std::path::PathBuf> {
+    gigawalk_testkit::models::shared_ifc_models()
 }
 
 #[test]

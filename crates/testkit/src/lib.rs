@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod cli;
+pub mod models;
 pub mod rng;
 pub mod scenes;
 

@@ -124,12 +124,6 @@ pub enum BadOption {
     Near(f64),
     #[error("frames must be at least 1")]
     NoFrames,
-    #[error(
-        "hiding objects needs the scene resident: it does not fit the memory budget, and a \
-         streamed frame's stand-ins (coarser levels, ancestors' HLODs) may hold hidden objects; \
-         raise --memory-budget"
-    )]
-    HiddenWhileStreaming,
 }
 
 /// Why a replay could not run.
@@ -473,9 +467,6 @@ pub fn replay_on(
     let n = opts.frames.unwrap_or(poses.len()).min(poses.len());
     if n == 0 {
         return Err(ReplayError::EmptyPath);
-    }
-    if opts.visibility.is_some() && rt.is_streaming() {
-        return Err(ReplayError::Options(BadOption::HiddenWhileStreaming));
     }
     let (w, h) = (opts.runtime.width, opts.runtime.height);
     // The null adapter draws nothing: there is no image to compare.

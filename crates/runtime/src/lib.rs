@@ -27,7 +27,7 @@ pub mod target;
 mod triangles;
 
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use web_time::Instant;
 
 pub use gigawalk_cull::tiles::{TileGrid, TileMethod};
 pub use gigawalk_cull::{

@@ -303,11 +303,9 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             Err(why)
         }
     };
-    let no_hiding = runtime.is_streaming().then(|| {
-        "hiding needs the scene resident: run without --memory-budget \
-         (streamed stand-ins could show hidden objects)"
-            .to_string()
-    });
+    // Streamed or resident, hiding works: no stand-in holds a hidden
+    // object (gigawalk-runtime's streaming stand-in rule).
+    let no_hiding = None;
 
     let scripted = args.frames.map(|n| Script {
         frames: n.max(1),

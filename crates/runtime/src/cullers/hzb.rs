@@ -4,7 +4,7 @@
 //! there up (or, with `HzbBuild::Cpu`, here from the whole image). Needs
 //! OR's depth, so it culls nothing in the startup bypass.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use gigawalk_cull::{BoxTest, Hzb, HzbOcclusion, TraversalStats};
 use gigawalk_gpu::DepthLevel;

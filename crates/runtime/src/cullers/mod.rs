@@ -338,7 +338,7 @@ impl<K: Culler + ?Sized> Culler for Timed<'_, K> {
         if !self.tests.is_multiple_of(TIMED_EVERY) {
             return self.culler.test(view, node, b, ctx);
         }
-        let t = std::time::Instant::now();
+        let t = web_time::Instant::now();
         let out = self.culler.test(view, node, b, ctx);
         self.time += t.elapsed() * TIMED_EVERY;
         out

@@ -9,7 +9,7 @@
 //! for the rest of the frame.
 
 use std::collections::HashSet;
-use std::time::Instant;
+use web_time::Instant;
 
 use gigawalk_cull::{
     BoxProjection, Containment, CullView, Culler, DrawItem, RelBox, Verdict, ALL_PLANES,

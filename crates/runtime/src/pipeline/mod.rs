@@ -13,7 +13,7 @@ pub(crate) use sequential::run_sequential;
 
 use std::collections::VecDeque;
 use std::sync::Arc;
-use std::time::Instant;
+use web_time::Instant;
 
 use crossbeam_channel::{bounded, Receiver, Sender};
 use gigawalk_cull::{CullView, DrawItem, Viewport};

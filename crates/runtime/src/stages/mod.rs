@@ -227,7 +227,11 @@ impl<'a> Target<'a> {
             Devices::Gpu(rt) => {
                 let device = DeviceGeometry::new(rt, device, link);
                 let pass = VisiblePass::new(device.ctx, opts.width, opts.height);
-                Box::new(GpuVisible { device, pass })
+                Box::new(GpuVisible {
+                    device,
+                    pass,
+                    shown: Default::default(),
+                })
             }
             #[cfg(feature = "testing")]
             Devices::Cpu => Box::new(cpu::CpuRaster::new(self.source, opts.width, opts.height)),

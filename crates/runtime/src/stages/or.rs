@@ -2,7 +2,7 @@
 //! this camera and cut to the occluder budget, drawn depth only (GigaWalk
 //! Section 5.1).
 
-use std::time::Instant;
+use web_time::Instant;
 
 use gigawalk_cull::{reselect_lods, select_occluders, CullView, DrawItem, TraversalOptions};
 use gigawalk_gpu::{DepthLevel, DepthPass, PassFigures};

@@ -1,6 +1,6 @@
 //! RVG: the frame's visible items drawn as STC sends them, in chunks.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use gigawalk_cull::CullView;
 use gigawalk_gpu::{DrawStyle, FrameImage, Look, PassFigures, VisiblePass};
@@ -51,10 +51,42 @@ pub(super) trait VisibleTarget {
 pub(super) struct GpuVisible<'a> {
     pub device: DeviceGeometry<'a>,
     pub pass: VisiblePass,
+    /// The frame's hidden objects and ghosts, so that no stand-in shows
+    /// a hidden object (nor a ghost one that is shown).
+    pub shown: Shown,
+}
+
+/// What the frame being drawn shows: its visibility and its ghosts'.
+#[derive(Default)]
+pub(super) struct Shown {
+    visible: Option<std::sync::Arc<gigawalk_cull::Visibility>>,
+    ghosts: Option<std::sync::Arc<gigawalk_cull::Visibility>>,
+}
+
+impl Shown {
+    fn of(view: &CullView) -> Shown {
+        Shown {
+            visible: view.visibility().cloned(),
+            ghosts: view.ghosts().cloned(),
+        }
+    }
+
+    fn visible(&self) -> Use<'_> {
+        Use::Visible {
+            shown: self.visible.as_deref(),
+        }
+    }
+
+    fn ghosts(&self) -> Use<'_> {
+        Use::Visible {
+            shown: self.ghosts.as_deref(),
+        }
+    }
 }
 
 impl VisibleTarget for GpuVisible<'_> {
     fn begin(&mut self, view: &CullView, style: FrameStyle) {
+        self.shown = Shown::of(view);
         self.pass
             .set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
         self.pass
@@ -71,7 +103,7 @@ impl VisibleTarget for GpuVisible<'_> {
     fn draw(&mut self, frame: u64, lods: &[u32]) -> Result<(), RuntimeError> {
         let (ctx, pass) = (self.device.ctx, &mut self.pass);
         self.device
-            .with(frame, lods, Use::Visible, |residency, lods| {
+            .with(frame, lods, self.shown.visible(), |residency, lods| {
                 pass.draw(ctx, residency, lods)
             })
     }
@@ -79,7 +111,7 @@ impl VisibleTarget for GpuVisible<'_> {
     fn ghosts(&mut self, frame: u64, lods: &[u32]) -> Result<(), RuntimeError> {
         let (ctx, pass) = (self.device.ctx, &mut self.pass);
         self.device
-            .with(frame, lods, Use::Visible, |residency, lods| {
+            .with(frame, lods, self.shown.ghosts(), |residency, lods| {
                 pass.draw_ghosts(ctx, residency, lods)
             })
     }

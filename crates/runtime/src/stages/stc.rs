@@ -3,7 +3,7 @@
 //! loader's prefetch requests (`streaming::Prefetch`).
 
 use std::sync::Arc;
-use std::time::Instant;
+use web_time::Instant;
 
 use gigawalk_cull::{
     BoxTest, CullReason, CullView, DrawItem, NoOcclusion, TraversalOptions, TraversalStats,

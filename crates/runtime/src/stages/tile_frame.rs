@@ -1,7 +1,7 @@
 //! A tiled display's frame (Nirnimesh, Harish and Narayanan): which
 //! tile draws which of the frame's visible items.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use gigawalk_cull::tiles::{self, TileFrustums, TileGrid, TileMethod};
 use gigawalk_cull::{CullView, DrawItem};

@@ -180,12 +180,26 @@ pub(crate) enum Geometry {
 }
 
 /// How a stage uses the LODs it draws.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Use {
+#[derive(Clone, Copy)]
+pub(crate) enum Use<'v> {
     /// OR: resident LODs only, no requests, no stand-ins.
     Occluders,
-    /// RVG: stand-ins for what is missing, requests for it.
-    Visible,
+    /// RVG: stand-ins for what is missing, requests for it. With hidden
+    /// or highlighted objects (`shown`), no stand-in comes from a node
+    /// that is not whole (see [`stand_ins`]).
+    Visible {
+        shown: Option<&'v gigawalk_cull::Visibility>,
+    },
+}
+
+impl Use<'_> {
+    /// RVG with every object shown whole.
+    #[cfg(test)]
+    pub const VISIBLE: Use<'static> = Use::Visible { shown: None };
+
+    pub fn is_visible(&self) -> bool {
+        matches!(self, Use::Visible { .. })
+    }
 }
 
 /// A stage's end of one run's streaming queues.

@@ -247,7 +247,7 @@ impl DeviceStream {
     ) -> Option<Vec<u32>> {
         let frame = plan.frame(frame);
         self.newest = self.newest.max(frame);
-        if usage == Use::Visible && frame != self.frame {
+        if usage.is_visible() && frame != self.frame {
             self.frame = frame;
             self.standins.clear();
         }
@@ -271,7 +271,7 @@ impl DeviceStream {
         let mut out = Vec::with_capacity(lods.len());
         for &lod in lods {
             let l = lod as usize;
-            let keep = usage == Use::Visible || plan.pinned.get(l).copied().unwrap_or(false) || {
+            let keep = usage.is_visible() || plan.pinned.get(l).copied().unwrap_or(false) || {
                 let bytes = match self.pool.bytes_of(lod) {
                     0 => skeleton.lods().get(l).map_or(0, lod_bytes),
                     b => b,
@@ -297,7 +297,7 @@ impl DeviceStream {
                         lod,
                         frame,
                         // OR's: served when no stand-in waits for a load.
-                        prefetch: usage == Use::Occluders,
+                        prefetch: !usage.is_visible(),
                     }) {
                         Ok(()) => {
                             self.requested[l] = frame + 1;
@@ -307,10 +307,10 @@ impl DeviceStream {
                     }
                 }
             }
-            if usage == Use::Occluders {
+            let Use::Visible { shown } = usage else {
                 continue;
-            }
-            match self.stand_in(skeleton, lod) {
+            };
+            match self.stand_in(skeleton, lod, shown) {
                 StandIn::Draw(s) => {
                     self.stats.substituted += 1;
                     self.touch(plan, s, frame, false);
@@ -393,7 +393,7 @@ mod tests {
         budget: u64,
         script: &[(&[u32], &[u32])],
     ) -> (Vec<Vec<u32>>, Vec<StreamStats>, Vec<u32>) {
-        let (drawn, stats, resident, _) = walk(ctx, budget, Use::Visible, script);
+        let (drawn, stats, resident, _) = walk(ctx, budget, Use::VISIBLE, script);
         (drawn, stats, resident)
     }
 
@@ -522,5 +522,63 @@ mod tests {
         assert_eq!(drawn[4], [1, 3, 0]);
         assert_eq!(resident, [0, 1, 3]);
         assert_eq!(stats[4].displaced_stand_ins, 1);
+    }
+
+    #[test]
+    fn no_stand_in_holds_a_hidden_object() {
+        let Some(d) = gigawalk_gpu::devices_or_skip(1, "stand-ins with hidden objects") else {
+            return;
+        };
+        use gigawalk_scene::objects::{ObjectRecord, ObjectRun, ObjectTable};
+        let (skeleton, _, _) = three_leaves();
+        // Leaf 1's full detail (LOD 1) is two objects of 20 triangles;
+        // hiding the second makes leaf 1 and the root partial: leaf 1's
+        // coarse LOD 2 and the root's LOD 0 merge it with the first.
+        let record = |name: &str| ObjectRecord {
+            name: name.into(),
+            path: name.into(),
+            file: String::new(),
+            metadata: None,
+            bounds: skeleton.bounds(),
+            triangles: 20,
+        };
+        let table = ObjectTable::new(
+            vec![record("kept"), record("hidden")],
+            vec![(
+                1,
+                vec![
+                    ObjectRun {
+                        object: 0,
+                        triangles: 20,
+                    },
+                    ObjectRun {
+                        object: 1,
+                        triangles: 20,
+                    },
+                ],
+            )],
+        );
+        let shown = gigawalk_cull::Visibility::new(&skeleton, &table, &|o| o == 1, &|_| false);
+        // LOD 2 arrives; then leaf 1 wants its full detail (1) and leaf 2
+        // its only LOD (3), neither resident.
+        let script: [(&[u32], &[u32]); 2] = [(&[2], &[2]), (&[], &[1, 3])];
+        let (drawn, stats, _, _) = walk(&d[0], 100, Use::VISIBLE, &script);
+        assert_eq!(
+            drawn[1],
+            [2, 0],
+            "every object shown: LOD 2 and the root stand in"
+        );
+        let hiding = Use::Visible {
+            shown: Some(&shown),
+        };
+        let (drawn, stats_hiding, _, asked) = walk(&d[0], 100, hiding, &script);
+        assert!(
+            drawn[1].is_empty(),
+            "a stand-in holds the hidden object: {:?}",
+            drawn[1]
+        );
+        assert_eq!((stats[1].substituted, stats_hiding[1].missing), (2, 2));
+        // Both are still asked for.
+        assert!(asked.iter().any(|r| r.lod == 1) && asked.iter().any(|r| r.lod == 3));
     }
 }

@@ -71,8 +71,8 @@ pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, MAX_S
 pub use pick::{pick, PickHit, PickStats, Ray};
 pub use raster::{PixelRect, SoftDepth, DEPTH_REL_SLACK, DEPTH_SLOPE_PX, INNER_MARGIN_PX};
 pub use traverse::{
-    reselect_lods, select_occluders, traverse, CullReason, DrawItem, DrawSink, TraversalOptions,
-    TraversalStats, Traverser,
+    reselect_lods, select_occluders, step_pixel_error, traverse, CullReason, DrawItem, DrawSink,
+    TraversalOptions, TraversalStats, Traverser, PIXEL_ERROR_STEPS,
 };
 pub use view::{BoxProjection, CullView, RelBox};
 pub use visibility::{NodeShow, Piece, Visibility};

@@ -28,6 +28,39 @@ pub struct TraversalOptions {
     pub pixel_error: f64,
 }
 
+impl TraversalOptions {
+    /// The traversal of a mode (the paper's Table 2 rows, the viewer's
+    /// and the page's toggles): frustum culling always, occlusion culling
+    /// when `occlusion`, levels of detail at `pixel_error` when `hlod`.
+    /// HLOD off is full detail everywhere: no inner node's HLOD and every
+    /// leaf at its finest level (pixel error 0), the reference the
+    /// approximate modes are measured against.
+    pub fn mode(occlusion: bool, hlod: bool, pixel_error: f64) -> TraversalOptions {
+        TraversalOptions {
+            occlusion,
+            hlod,
+            pixel_error: if hlod { pixel_error } else { 0.0 },
+        }
+    }
+}
+
+/// The pixel errors `-` and `+` step through: 0 is full detail; then
+/// doubling from half a pixel (the paper's Table 2 uses 1 to 20 pixels;
+/// 64 is far past visible).
+pub const PIXEL_ERROR_STEPS: &[f64] = &[0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
+
+/// The next step of [`PIXEL_ERROR_STEPS`] above (`up`) or below
+/// `current`; `current` at either end.
+pub fn step_pixel_error(current: f64, up: bool) -> f64 {
+    let mut steps = PIXEL_ERROR_STEPS.iter().copied();
+    let next = if up {
+        steps.find(|&s| s > current)
+    } else {
+        steps.rev().find(|&s| s < current)
+    };
+    next.unwrap_or(current)
+}
+
 impl Default for TraversalOptions {
     fn default() -> Self {
         TraversalOptions {
@@ -612,6 +645,18 @@ mod tests {
             ),
             n([0.5, -1.0, -12.0], [2.0, 1.0, -10.0], 0..0, &[0.0, 0.0625]),
         ])
+    }
+
+    #[test]
+    fn hlod_off_is_full_detail_and_pixel_error_steps_clamp() {
+        let t = TraversalOptions::mode(true, false, 4.0);
+        assert!(t.occlusion && !t.hlod && t.pixel_error == 0.0);
+        assert_eq!(TraversalOptions::mode(false, true, 4.0).pixel_error, 4.0);
+        assert_eq!(step_pixel_error(0.0, false), 0.0);
+        assert_eq!(step_pixel_error(0.0, true), 0.5);
+        assert_eq!(step_pixel_error(3.0, true), 4.0);
+        assert_eq!(step_pixel_error(3.0, false), 2.0);
+        assert_eq!(step_pixel_error(64.0, true), 64.0);
     }
 
     #[test]

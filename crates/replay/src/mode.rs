@@ -38,16 +38,11 @@ impl Mode {
 
     /// The traversal this mode runs with at `pixel_error`.
     pub fn traversal(self, pixel_error: f64) -> TraversalOptions {
-        let tol = if self.uses_pixel_error() {
-            pixel_error
-        } else {
-            0.0
-        };
-        TraversalOptions {
-            occlusion: matches!(self, Mode::Occ | Mode::Och),
-            hlod: self.uses_pixel_error(),
-            pixel_error: tol,
-        }
+        TraversalOptions::mode(
+            matches!(self, Mode::Occ | Mode::Och),
+            self.uses_pixel_error(),
+            pixel_error,
+        )
     }
 }
 

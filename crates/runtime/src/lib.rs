@@ -51,6 +51,7 @@ pub use cullers::ct::*;
 pub use cullers::grid::*;
 pub use cullers::oq::*;
 pub use cullers::*;
+pub use pipeline::{Stepped, SteppedOptions, OR_IN_FLIGHT};
 pub use stages::TileFrame;
 pub use streaming::{scene_device_bytes, LodSource, StreamStats, PINNED_MAX, PINNED_SHARE};
 
@@ -72,6 +73,13 @@ pub(crate) fn gpu_view(v: &gigawalk_cull::CullView) -> gigawalk_gpu::View {
         forward: v.camera.forward().as_vec3(),
         clip: gigawalk_gpu::ClipPlanes::of_section(v.section().map(|s| &**s), v.camera.position),
     }
+}
+
+/// The LODs [`Runtime::streamed`] loads before the first frame for a
+/// budget of `budget` bytes a device and a pinned set of at most
+/// `pinned_max` bytes: the coarsest LOD of the nodes nearest the root.
+pub fn pinned_set(skeleton: &Skeleton, budget: u64, pinned_max: u64) -> Vec<u32> {
+    Plan::new(skeleton, budget, pinned_max).pinned().collect()
 }
 
 /// Why the runtime could not start, or why a run stopped early (more
@@ -422,10 +430,36 @@ impl<'s> Runtime<'s> {
         Self::streaming_reporting(scene, devices, budget, &mut |_, _| {})
     }
 
+    /// Like [`Runtime::streaming`], streaming even a scene that fits the
+    /// budget, with a pinned set of at most `pinned_max` bytes
+    /// ([`pinned_set`] names it): the first frame needs only that. For a
+    /// page, which fetches what the walk needs rather than the file.
+    pub fn streamed<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+        budget: u64,
+        pinned_max: u64,
+    ) -> Result<Self, RuntimeError> {
+        Self::stream(scene, devices, budget, pinned_max, &mut |_, _| {})
+    }
+
     fn streaming_reporting<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,
         budget: u64,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Self, RuntimeError> {
+        if budget >= MIN_MEMORY_BUDGET && scene_device_bytes(scene.skeleton()) <= budget {
+            return Self::resident_reporting(scene, devices, progress);
+        }
+        Self::stream(scene, devices, budget, PINNED_MAX, progress)
+    }
+
+    fn stream<R: ReadAt + Sync>(
+        scene: &'s SceneReader<R>,
+        devices: Vec<GpuContext>,
+        budget: u64,
+        pinned_max: u64,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Self, RuntimeError> {
         check_device_count(devices.len())?;
@@ -437,11 +471,8 @@ impl<'s> Runtime<'s> {
             });
         }
         let skeleton = scene.skeleton();
-        if scene_device_bytes(skeleton) <= budget {
-            return Self::resident_reporting(scene, devices, progress);
-        }
         let limit = buffer_limit(&devices);
-        let plan = Plan::new(skeleton, budget);
+        let plan = Plan::new(skeleton, budget, pinned_max);
         let mut streams = devices
             .iter()
             .enumerate()
@@ -741,6 +772,26 @@ fn check_index_range(skeleton: &Skeleton, devices: &[GpuContext]) -> Result<(), 
     Ok(())
 }
 
+/// Whether every device of `devices` draws a `width` x `height` viewport.
+pub(crate) fn check_viewport(
+    devices: &[GpuContext],
+    width: u32,
+    height: u32,
+) -> Result<(), RuntimeError> {
+    for d in devices {
+        let max = d.max_texture_side();
+        if width > max || height > max {
+            return Err(RuntimeError::Viewport {
+                width,
+                height,
+                device: d.name().to_string(),
+                max,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Opens the `count` (1 or 2) devices a run would use (on an adapter whose
 /// name contains `adapter`, if given), checks that they take a `width` x
 /// `height` viewport, and closes them again; returns their names. For
@@ -753,17 +804,7 @@ pub fn probe_devices(
     height: u32,
 ) -> Result<Vec<String>, RuntimeError> {
     let devices = open_devices(count, adapter)?;
-    for d in &devices {
-        let max = d.max_texture_side();
-        if width > max || height > max {
-            return Err(RuntimeError::Viewport {
-                width,
-                height,
-                device: d.name().to_string(),
-                max,
-            });
-        }
-    }
+    check_viewport(&devices, width, height)?;
     Ok(devices.iter().map(|d| d.name().to_string()).collect())
 }
 

@@ -445,8 +445,13 @@ impl RuntimeOptions {
     /// on the CPU (`cpu_device`: `auto` budgets resolve for them).
     pub(crate) fn resolve(&self, cpu_device: bool) -> Result<ResolvedOptions, OptionsError> {
         self.validate()?;
+        let t = self.traversal;
         Ok(ResolvedOptions {
-            opts: self.clone(),
+            opts: RuntimeOptions {
+                // HLOD off is full detail, whatever the pixel error.
+                traversal: TraversalOptions::mode(t.occlusion, t.hlod, t.pixel_error),
+                ..self.clone()
+            },
             occluders: self.occluder_budget.resolve(cpu_device),
         })
     }
@@ -507,6 +512,14 @@ impl RuntimeOptions {
     }
 
     /// Whether OR renders occluder depth at all (the culler reads it).
+    /// The traversal of a frame whose request sets `pixel_error` (`None`:
+    /// the options'): HLOD off stays full detail whatever the request
+    /// (`TraversalOptions::mode`).
+    pub fn traversal_at(&self, pixel_error: Option<f64>) -> TraversalOptions {
+        let t = self.traversal;
+        TraversalOptions::mode(t.occlusion, t.hlod, pixel_error.unwrap_or(t.pixel_error))
+    }
+
     pub fn wants_occluder_depth(&self) -> bool {
         self.traversal.occlusion && self.culler.needs_occluder_depth()
     }

@@ -2,13 +2,10 @@
 //! wireframe, the look, x-ray, boxes, freeze, HUD, help), and which of them need the
 //! pipeline restarted: the runtime fixes its options per run.
 
-use gigawalk_cull::TraversalOptions;
+pub use gigawalk_cull::PIXEL_ERROR_STEPS;
+use gigawalk_cull::{step_pixel_error, TraversalOptions};
 use gigawalk_gpu::{Antialias, Look};
 use gigawalk_runtime::CullMethod;
-
-/// Pixel-error steps for +/-: 0 is full detail; then doubling from half a
-/// pixel (the paper's Table 2 uses 1 to 20 pixels; 64 is far past visible).
-pub const PIXEL_ERROR_STEPS: &[f64] = &[0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
@@ -61,31 +58,15 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// The traversal of the toggles: HLOD off is full detail
+    /// (`TraversalOptions::mode`), whatever the pixel error.
     pub fn traversal(&self) -> TraversalOptions {
-        TraversalOptions {
-            occlusion: self.occlusion,
-            hlod: self.hlod,
-            pixel_error: self.pixel_error,
-        }
+        TraversalOptions::mode(self.occlusion, self.hlod, self.pixel_error)
     }
 
     /// The next pixel-error step up (`up`) or down from the current value.
     pub fn step_pixel_error(&mut self, up: bool) {
-        let cur = self.pixel_error;
-        self.pixel_error = if up {
-            PIXEL_ERROR_STEPS
-                .iter()
-                .copied()
-                .find(|&s| s > cur)
-                .unwrap_or(cur)
-        } else {
-            PIXEL_ERROR_STEPS
-                .iter()
-                .rev()
-                .copied()
-                .find(|&s| s < cur)
-                .unwrap_or(cur)
-        };
+        self.pixel_error = step_pixel_error(self.pixel_error, up);
     }
 
     /// Anti-aliasing on (FXAA) or off.
@@ -112,7 +93,7 @@ impl Settings {
 
     /// The mode as the HUD names it (Table 2's modes).
     pub fn mode(&self) -> String {
-        let detail = if self.pixel_error == 0.0 {
+        let detail = if self.traversal().pixel_error == 0.0 {
             "full detail".to_string()
         } else {
             format!("{} px", self.pixel_error)

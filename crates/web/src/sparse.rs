@@ -11,11 +11,10 @@
 //! Nothing here trusts what it holds: the reader checks every section's
 //! and every LOD's checksum as it does for a file on disk.
 
-use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::io;
 use std::ops::Range;
-use std::rc::Rc;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use gigawalk_scene::{ReadAt, ReadError, SceneReader};
 
@@ -32,25 +31,32 @@ pub struct Chunks {
     chunks: BTreeMap<u64, Vec<u8>>,
     /// The first range a read wanted and did not find, since the last
     /// [`Sparse::take_missing`].
-    missing: Cell<Option<(u64, u64)>>,
+    missing: Option<(u64, u64)>,
 }
 
 /// A shared handle on a file's chunks: the reader owns one, the page
-/// another (it inserts what arrives).
+/// another (it inserts what arrives). Shared as the runtime's LOD source
+/// must be (`Sync`), though a page has one thread.
 #[derive(Clone, Debug)]
-pub struct Sparse(Rc<RefCell<Chunks>>);
+pub struct Sparse(Arc<Mutex<Chunks>>);
 
 impl Sparse {
     /// An empty view of a file of `len` bytes.
     pub fn new(len: u64) -> Sparse {
-        Sparse(Rc::new(RefCell::new(Chunks {
+        Sparse(Arc::new(Mutex::new(Chunks {
             len,
             ..Chunks::default()
         })))
     }
 
+    /// The chunks (a panic elsewhere while holding them leaves them
+    /// whole: every change is made in one step).
+    fn chunks(&self) -> MutexGuard<'_, Chunks> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
     pub fn len(&self) -> u64 {
-        self.0.borrow().len
+        self.chunks().len
     }
 
     pub fn is_empty(&self) -> bool {
@@ -61,7 +67,7 @@ impl Sparse {
     /// touch. Bytes beyond the file's end are an error (a server that
     /// answered another file).
     pub fn insert(&self, at: u64, bytes: Vec<u8>) -> Result<(), String> {
-        let mut c = self.0.borrow_mut();
+        let mut c = self.chunks();
         let end = at + bytes.len() as u64;
         if end > c.len {
             return Err(format!(
@@ -100,7 +106,7 @@ impl Sparse {
     /// keep (a LOD's blob once decoded): the page holds what it opened the
     /// scene with, and LOD blobs only while they are read.
     pub fn forget(&self, range: Range<u64>) {
-        let mut c = self.0.borrow_mut();
+        let mut c = self.chunks();
         let starts: Vec<u64> = c
             .chunks
             .range(..range.end)
@@ -122,17 +128,12 @@ impl Sparse {
 
     /// Bytes held now.
     pub fn held_bytes(&self) -> u64 {
-        self.0
-            .borrow()
-            .chunks
-            .values()
-            .map(|b| b.len() as u64)
-            .sum()
+        self.chunks().chunks.values().map(|b| b.len() as u64).sum()
     }
 
     /// Whether every byte of `range` is held.
     pub fn holds(&self, range: &Range<u64>) -> bool {
-        let c = self.0.borrow();
+        let c = self.chunks();
         c.chunks
             .range(..=range.start)
             .next_back()
@@ -142,7 +143,7 @@ impl Sparse {
     /// The range the last failed read wanted, if a read failed for want
     /// of bytes since the last call.
     pub fn take_missing(&self) -> Option<Range<u64>> {
-        self.0.borrow().missing.take().map(|(s, e)| s..e)
+        self.chunks().missing.take().map(|(s, e)| s..e)
     }
 }
 
@@ -155,7 +156,7 @@ fn not_fetched() -> io::Error {
 
 impl ReadAt for Sparse {
     fn read_exact_at(&self, buf: &mut [u8], offset: u64) -> io::Result<()> {
-        let c = self.0.borrow();
+        let mut c = self.chunks();
         let end = offset
             .checked_add(buf.len() as u64)
             .ok_or(io::ErrorKind::UnexpectedEof)?;
@@ -169,8 +170,8 @@ impl ReadAt for Sparse {
                 return Ok(());
             }
         }
-        if c.missing.get().is_none() {
-            c.missing.set(Some((offset, end)));
+        if c.missing.is_none() {
+            c.missing = Some((offset, end));
         }
         Err(not_fetched())
     }

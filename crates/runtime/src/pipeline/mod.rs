@@ -6,10 +6,12 @@
 mod asynchronous;
 mod pipelined;
 mod sequential;
+mod stepped;
 
 pub(crate) use asynchronous::run_async;
 pub(crate) use pipelined::run_pipelined;
 pub(crate) use sequential::run_sequential;
+pub use stepped::{Stepped, SteppedOptions, OR_IN_FLIGHT};
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -27,7 +29,10 @@ use crate::streaming::{
     self, Link, LodSource, Request, StreamStats, INBOX, PREFETCH_QUEUE, REQUEST_QUEUE,
 };
 use crate::ResolvedOptions;
-use crate::{CameraError, CameraSource, FrameReport, Presenter, RuntimeError, Stage};
+use crate::{
+    CameraError, CameraSource, FrameReport, OccluderSelection, Presenter, RuntimeError,
+    RuntimeOptions, Stage,
+};
 
 /// A frame's visible set as OR gets it back for a later frame's occluders:
 /// shared with the frame's report, never copied.
@@ -140,9 +145,19 @@ pub(super) fn next_sample(
     frame: u64,
     opts: &ResolvedOptions,
 ) -> Result<Option<Sample>, RuntimeError> {
-    let Some(req) = source.next_camera(frame)? else {
-        return Ok(None);
-    };
+    match source.next_camera(frame)? {
+        Some(req) => sample_of(req, frame, opts).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// Camera request `req` as frame `frame`'s sample: its camera checked and
+/// fitted to the options' viewport.
+pub(super) fn sample_of(
+    req: crate::CameraRequest,
+    frame: u64,
+    opts: &ResolvedOptions,
+) -> Result<Sample, RuntimeError> {
     let viewport = Viewport::new(opts.width, opts.height);
     let camera = gigawalk_cull::Camera {
         aspect: viewport.aspect(),
@@ -154,7 +169,7 @@ pub(super) fn next_sample(
     if let Some(value) = req.pixel_error.filter(|p| !(p.is_finite() && *p >= 0.0)) {
         return Err(CameraError::PixelError { frame, value }.into());
     }
-    Ok(Some(Sample {
+    Ok(Sample {
         frame,
         view: CullView::new(camera, viewport)
             .with_visibility(req.visibility)
@@ -168,7 +183,7 @@ pub(super) fn next_sample(
         },
         sampled_at: Instant::now(),
         pixel_error: req.pixel_error,
-    }))
+    })
 }
 
 pub(super) fn report(

@@ -9,7 +9,7 @@ mod stc;
 mod tile_frame;
 
 use or::{GpuOccluders, OccluderTarget};
-pub(crate) use or::{OrFigures, OrStage};
+pub(crate) use or::{OrFigures, OrOutput, OrStage, OrSubmitted};
 pub(crate) use rvg::{FrameStyle, RvgStage};
 use rvg::{GpuVisible, VisibleTarget};
 pub(crate) use stc::{StcOutput, StcStage};

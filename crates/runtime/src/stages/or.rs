@@ -4,8 +4,8 @@
 
 use web_time::Instant;
 
-use gigawalk_cull::{reselect_lods, select_occluders, CullView, DrawItem, TraversalOptions};
-use gigawalk_gpu::{DepthLevel, DepthPass, PassFigures};
+use gigawalk_cull::{reselect_lods, select_occluders, CullView, DrawItem};
+use gigawalk_gpu::{DepthLevel, DepthPass, PassFigures, PendingLevel};
 use gigawalk_scene::Skeleton;
 
 use super::*;
@@ -31,6 +31,45 @@ pub(super) trait OccluderTarget {
         lods: &[u32],
         level: u32,
     ) -> Result<DepthLevel, RuntimeError>;
+
+    /// As [`OccluderTarget::depth`], without waiting where the target can
+    /// (a device): [`OccluderTarget::try_take`] takes the level once made.
+    fn submit(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        lods: &[u32],
+        level: u32,
+    ) -> Result<PendingDepth, RuntimeError> {
+        self.depth(frame, view, lods, level).map(PendingDepth::Made)
+    }
+
+    /// The level `pending` reads once it is made; `Err` gives it back
+    /// while it is not. Never blocks.
+    fn try_take(
+        &mut self,
+        pending: PendingDepth,
+    ) -> Result<Result<DepthLevel, PendingDepth>, RuntimeError> {
+        match pending {
+            PendingDepth::Made(d) => Ok(Ok(d)),
+            waiting => Ok(Err(waiting)),
+        }
+    }
+}
+
+/// Occluder depth submitted and not yet taken.
+pub(crate) enum PendingDepth {
+    /// Already made (a target that does not wait, the CPU's).
+    Made(DepthLevel),
+    /// On its way back from the device.
+    Device(PendingLevel),
+}
+
+fn or_error(source: gigawalk_gpu::GpuError) -> RuntimeError {
+    RuntimeError::Gpu {
+        stage: Stage::Or,
+        source,
+    }
 }
 
 /// OR's depth pass on its device.
@@ -59,10 +98,36 @@ impl OccluderTarget for GpuOccluders<'_> {
             .with(frame, lods, Use::Occluders, |residency, lods| {
                 pass.render_level(ctx, residency, &gpu_view(view), lods, level)
             })?
-            .map_err(|source| RuntimeError::Gpu {
-                stage: Stage::Or,
-                source,
+            .map_err(or_error)
+    }
+
+    fn submit(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        lods: &[u32],
+        level: u32,
+    ) -> Result<PendingDepth, RuntimeError> {
+        let (ctx, pass) = (self.device.ctx, &mut self.pass);
+        pass.set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
+        self.device
+            .with(frame, lods, Use::Occluders, |residency, lods| {
+                pass.submit_level(ctx, residency, &gpu_view(view), lods, level)
             })
+            .map(PendingDepth::Device)
+    }
+
+    fn try_take(
+        &mut self,
+        pending: PendingDepth,
+    ) -> Result<Result<DepthLevel, PendingDepth>, RuntimeError> {
+        match pending {
+            PendingDepth::Made(d) => Ok(Ok(d)),
+            PendingDepth::Device(p) => match self.pass.try_take_level(self.device.ctx, p) {
+                Err(p) => Ok(Err(PendingDepth::Device(p))),
+                Ok(level) => level.map(Ok).map_err(or_error),
+            },
+        }
     }
 }
 
@@ -108,23 +173,83 @@ impl<'a> OrStage<'a> {
     ) -> Result<OrOutput, RuntimeError> {
         let _span = tracing::info_span!("OR", frame).entered();
         let t = Instant::now();
-        self.opts.inject_failure.check(Stage::Or, frame)?;
-        let none = |t: Instant, figures: OrFigures| OrOutput {
-            depth: None,
-            figures: OrFigures {
-                ms: ms_since(t),
-                ..figures
-            },
+        let (lods, figures) = self.choose(frame, view, pixel_error, occluders)?;
+        if lods.is_empty() {
+            return Ok(OrOutput::none(t, figures));
+        }
+        let depth = self
+            .render
+            .depth(frame, view, &lods, self.opts.hzb_read_level())?;
+        Ok(OrOutput::made(t, figures, depth))
+    }
+
+    /// As [`OrStage::run`], without waiting for the device: the depth is
+    /// taken by [`OrStage::try_take`] once made (a schedule on a thread
+    /// that must not block, a page's).
+    pub fn submit(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        pixel_error: Option<f64>,
+        occluders: Option<&[DrawItem]>,
+    ) -> Result<OrSubmitted, RuntimeError> {
+        let _span = tracing::info_span!("OR submit", frame).entered();
+        let t = Instant::now();
+        let (lods, mut figures) = self.choose(frame, view, pixel_error, occluders)?;
+        let depth = match lods.is_empty() {
+            true => None,
+            false => Some(
+                self.render
+                    .submit(frame, view, &lods, self.opts.hzb_read_level())?,
+            ),
         };
+        figures.ms = ms_since(t);
+        Ok(OrSubmitted { figures, depth })
+    }
+
+    /// The output of `submitted` once its depth is made (at once when it
+    /// has none); `Err` gives it back while it is not. Never blocks.
+    pub fn try_take(
+        &mut self,
+        submitted: OrSubmitted,
+    ) -> Result<Result<OrOutput, OrSubmitted>, RuntimeError> {
+        let OrSubmitted { figures, depth } = submitted;
+        let Some(pending) = depth else {
+            return Ok(Ok(OrOutput {
+                depth: None,
+                figures,
+            }));
+        };
+        let t = Instant::now();
+        Ok(match self.render.try_take(pending)? {
+            Err(pending) => Err(OrSubmitted {
+                figures,
+                depth: Some(pending),
+            }),
+            Ok(depth) => {
+                let mut out = OrOutput::made(t, figures, depth);
+                out.figures.ms += figures.ms;
+                Ok(out)
+            }
+        })
+    }
+
+    /// The occluders' LODs for `view` (none: no depth this frame) and the
+    /// figures so far.
+    fn choose(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        pixel_error: Option<f64>,
+        occluders: Option<&[DrawItem]>,
+    ) -> Result<(Vec<u32>, OrFigures), RuntimeError> {
+        self.opts.inject_failure.check(Stage::Or, frame)?;
         let Some(occluders) = occluders else {
-            return Ok(none(t, OrFigures::default()));
+            return Ok((Vec::new(), OrFigures::default()));
         };
         // The same LOD choice STC makes for this camera (conservative mode).
         let mut items = Vec::with_capacity(occluders.len());
-        let traversal = TraversalOptions {
-            pixel_error: pixel_error.unwrap_or(self.opts.traversal.pixel_error),
-            ..self.opts.traversal
-        };
+        let traversal = self.opts.traversal_at(pixel_error);
         reselect_lods(self.skeleton, view, &traversal, occluders, &mut |i| {
             items.push(i)
         });
@@ -151,16 +276,35 @@ impl<'a> OrStage<'a> {
             level: 0,
             pass: PassFigures::default(),
         };
-        if items.is_empty() {
-            // No occluder (a budget of 0, or nothing in view): an all-far
-            // HZB would cull nothing, so STC skips occlusion for this frame.
-            return Ok(none(t, figures));
+        // No occluder (a budget of 0, or nothing in view): no LODs, so no
+        // depth; an all-far HZB would cull nothing, so STC skips
+        // occlusion for this frame.
+        Ok((lod_ids(self.skeleton, &items), figures))
+    }
+}
+
+/// OR's frame submitted ([`OrStage::submit`]): its figures, and its depth
+/// on its way (none: no occluders this frame).
+pub(crate) struct OrSubmitted {
+    figures: OrFigures,
+    depth: Option<PendingDepth>,
+}
+
+impl OrOutput {
+    /// No depth this frame: `figures` as chosen, timed from `t`.
+    fn none(t: Instant, figures: OrFigures) -> OrOutput {
+        OrOutput {
+            depth: None,
+            figures: OrFigures {
+                ms: ms_since(t),
+                ..figures
+            },
         }
-        let lods = lod_ids(self.skeleton, &items);
-        let depth = self
-            .render
-            .depth(frame, view, &lods, self.opts.hzb_read_level())?;
-        Ok(OrOutput {
+    }
+
+    /// `depth` made for `figures`, timed from `t`.
+    fn made(t: Instant, figures: OrFigures, depth: DepthLevel) -> OrOutput {
+        OrOutput {
             figures: OrFigures {
                 ms: ms_since(t),
                 level: depth.level,
@@ -168,7 +312,7 @@ impl<'a> OrStage<'a> {
                 ..figures
             },
             depth: Some(depth),
-        })
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 use web_time::Instant;
 
 use gigawalk_cull::CullView;
-use gigawalk_gpu::{DrawStyle, FrameImage, Look, PassFigures, VisiblePass};
+use gigawalk_gpu::{DrawStyle, FrameImage, Look, PassFigures, PendingFrame, VisiblePass};
 
 use super::*;
 use crate::streaming::{StreamStats, Use};
@@ -37,6 +37,19 @@ pub(super) trait VisibleTarget {
         Ok(())
     }
     fn read_back(&mut self) -> Result<FrameImage, RuntimeError>;
+    /// Starts reading back the last finished frame without waiting (none
+    /// where there is no device).
+    fn submit_read_back(&mut self) -> Option<PendingFrame> {
+        None
+    }
+    /// The frame `pending` reads once the device has copied it; `Err`
+    /// gives it back while it has not. Never blocks.
+    fn try_take_frame(
+        &mut self,
+        pending: PendingFrame,
+    ) -> Result<Result<FrameImage, RuntimeError>, PendingFrame> {
+        Err(pending)
+    }
     /// Ends the frame (at most two in flight).
     fn finish(&mut self) -> Result<(), RuntimeError> {
         Ok(())
@@ -134,6 +147,19 @@ impl VisibleTarget for GpuVisible<'_> {
         self.pass.read_back(self.device.ctx).map_err(rvg_error)
     }
 
+    fn submit_read_back(&mut self) -> Option<PendingFrame> {
+        Some(self.pass.submit_read_back(self.device.ctx))
+    }
+
+    fn try_take_frame(
+        &mut self,
+        pending: PendingFrame,
+    ) -> Result<Result<FrameImage, RuntimeError>, PendingFrame> {
+        self.pass
+            .try_take_frame(self.device.ctx, pending)
+            .map(|f| f.map_err(rvg_error))
+    }
+
     fn finish(&mut self) -> Result<(), RuntimeError> {
         self.pass.end(self.device.ctx).map_err(rvg_error)
     }
@@ -219,6 +245,19 @@ impl<'a> RvgStage<'a> {
     /// Reads back the finished frame's colour and depth.
     pub fn read_back(&mut self) -> Result<Option<FrameImage>, RuntimeError> {
         self.render.read_back().map(Some)
+    }
+
+    /// Starts reading back the last finished frame without waiting.
+    pub fn submit_read_back(&mut self) -> Option<PendingFrame> {
+        self.render.submit_read_back()
+    }
+
+    /// The frame `pending` reads, once copied; never blocks.
+    pub fn try_take_frame(
+        &mut self,
+        pending: PendingFrame,
+    ) -> Result<Result<FrameImage, RuntimeError>, PendingFrame> {
+        self.render.try_take_frame(pending)
     }
 
     /// Ends the frame (at most two in flight); returns the stage's ms.

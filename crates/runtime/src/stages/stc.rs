@@ -97,8 +97,7 @@ impl<'a> StcStage<'a> {
         };
         let options = TraversalOptions {
             occlusion,
-            pixel_error: pixel_error.unwrap_or(self.opts.traversal.pixel_error),
-            ..self.opts.traversal
+            ..self.opts.traversal_at(pixel_error)
         };
         let mut visible = Vec::new();
         let pixel_error = options.pixel_error;
@@ -254,7 +253,7 @@ mod tests {
     #[test]
     fn prefetch_asks_for_the_ring_just_outside_the_frustum_and_nothing_else() {
         let (skeleton, angles) = ring();
-        let plan = Plan::new(&skeleton, 1 << 30);
+        let plan = Plan::new(&skeleton, 1 << 30, PINNED_MAX);
         let opts = RuntimeOptions {
             prefetch: crate::Prefetching::Ring,
             ..Default::default()

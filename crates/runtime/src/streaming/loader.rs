@@ -27,55 +27,35 @@ pub(crate) fn loader(
     plan: &Plan,
     mask: u8,
 ) -> Result<(), RuntimeError> {
-    // The newest frame any request came from.
-    let mut newest = 0u64;
-    // Pending requests: LOD -> (demand, frame, arrival); one per LOD, its
-    // newest, a demand outranking a prefetch.
-    let mut pending: HashMap<u32, (bool, u64, u64)> = HashMap::new();
-    let mut arrivals = 0u64;
-    let mut add = |pending: &mut HashMap<u32, (bool, u64, u64)>, r: Request| {
-        let e = pending
-            .entry(r.lod)
-            .or_insert((!r.prefetch, r.frame, arrivals));
-        e.0 |= !r.prefetch;
-        e.1 = e.1.max(r.frame);
-        arrivals += 1;
-    };
+    let mut queue = Queue::default();
     let mut prefetching = true;
     loop {
-        if pending.is_empty() {
+        if queue.is_empty() {
             // Idle: wait for either queue (prefetches only while STC or OR runs).
             if prefetching {
                 crossbeam_channel::select! {
                     recv(requests) -> r => match r {
-                        Ok(r) => add(&mut pending, r),
+                        Ok(r) => queue.add(r),
                         Err(_) => return Ok(()),
                     },
                     recv(prefetches) -> r => match r {
-                        Ok(r) => add(&mut pending, r),
+                        Ok(r) => queue.add(r),
                         Err(_) => prefetching = false,
                     },
                 }
             } else {
                 match requests.recv() {
-                    Ok(r) => add(&mut pending, r),
+                    Ok(r) => queue.add(r),
                     Err(_) => return Ok(()),
                 }
             }
         }
         for r in requests.try_iter().chain(prefetches.try_iter()) {
-            add(&mut pending, r);
+            queue.add(r);
         }
-        newest = pending.values().map(|p| p.1).fold(newest, u64::max);
-        pending.retain(|&lod, p| p.1 + STALE_FRAMES >= newest && !plan.held_by(lod, mask));
-        // Demands first, then the newest frame's first request (STC's
-        // order: near before far).
-        let Some((&lod, _)) = pending.iter().max_by_key(|(_, &(demand, frame, arrival))| {
-            (demand, frame, std::cmp::Reverse(arrival))
-        }) else {
+        let Some(lod) = queue.next(plan, mask) else {
             continue;
         };
-        pending.remove(&lod);
         let stored = source
             .read_lod_stored(lod)
             .map_err(|source| RuntimeError::Load {
@@ -90,6 +70,59 @@ pub(crate) fn loader(
         }
     }
 }
+/// The LODs asked for and not yet read, in the order they are read: one
+/// entry per LOD, its newest request's frame, a demand outranking a
+/// prefetch. The loader thread and the stepped schedule's caller (a page
+/// fetching LODs) read in this one order.
+#[derive(Default)]
+pub(crate) struct Queue {
+    /// LOD -> (demand, frame, arrival).
+    pending: HashMap<u32, (bool, u64, u64)>,
+    /// The newest frame any request came from.
+    newest: u64,
+    arrivals: u64,
+}
+
+impl Queue {
+    pub fn add(&mut self, r: Request) {
+        let e = self
+            .pending
+            .entry(r.lod)
+            .or_insert((!r.prefetch, r.frame, self.arrivals));
+        e.0 |= !r.prefetch;
+        e.1 = e.1.max(r.frame);
+        self.arrivals += 1;
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.pending.is_empty()
+    }
+
+    /// The next LOD to read: demands first, then the newest frame's first
+    /// request (STC's order: near before far). Requests more than
+    /// [`STALE_FRAMES`] older than the newest are dropped (the camera has
+    /// moved on; they are asked again if still needed), and so are LODs
+    /// every device in `mask` holds.
+    pub fn next(&mut self, plan: &Plan, mask: u8) -> Option<u32> {
+        self.newest = self
+            .pending
+            .values()
+            .map(|p| p.1)
+            .fold(self.newest, u64::max);
+        let newest = self.newest;
+        self.pending
+            .retain(|&lod, p| p.1 + STALE_FRAMES >= newest && !plan.held_by(lod, mask));
+        let (&lod, _) = self
+            .pending
+            .iter()
+            .max_by_key(|(_, &(demand, frame, arrival))| {
+                (demand, frame, std::cmp::Reverse(arrival))
+            })?;
+        self.pending.remove(&lod);
+        Some(lod)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -34,7 +34,7 @@ mod pool;
 mod prefetch;
 mod stand_ins;
 
-pub(crate) use loader::loader;
+pub(crate) use loader::{loader, Queue};
 pub(crate) use plan::Plan;
 pub(crate) use pool::DeviceStream;
 pub(crate) use prefetch::Prefetch;

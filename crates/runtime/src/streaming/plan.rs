@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU64, AtomicU8, Ordering};
 
 use gigawalk_scene::Skeleton;
 
-use super::{lod_bytes, PINNED_MAX, PINNED_SHARE, STALE_FRAMES};
+use super::{lod_bytes, PINNED_SHARE, STALE_FRAMES};
 
 /// What streaming needs of the scene, shared by the devices.
 pub(crate) struct Plan {
@@ -24,11 +24,13 @@ pub(crate) struct Plan {
 }
 
 impl Plan {
-    pub fn new(skeleton: &Skeleton, budget: u64) -> Plan {
+    /// The plan for `budget` bytes a device, its pinned set at most
+    /// [`PINNED_SHARE`] of it and `pinned_max` bytes.
+    pub fn new(skeleton: &Skeleton, budget: u64, pinned_max: u64) -> Plan {
         // Breadth first from the root: each node's coarsest LOD, while the
         // pinned set stays within its share of the budget.
         let mut pinned = vec![false; skeleton.lods().len()];
-        let limit = ((budget as f64 * PINNED_SHARE) as u64).min(PINNED_MAX);
+        let limit = ((budget as f64 * PINNED_SHARE) as u64).min(pinned_max);
         let mut bytes = 0u64;
         let mut queue = VecDeque::from([0u32]);
         while let Some(n) = queue.pop_front() {

@@ -75,13 +75,6 @@ pub(crate) fn gpu_view(v: &gigawalk_cull::CullView) -> gigawalk_gpu::View {
     }
 }
 
-/// The LODs [`Runtime::streamed`] loads before the first frame for a
-/// budget of `budget` bytes a device and a pinned set of at most
-/// `pinned_max` bytes: the coarsest LOD of the nodes nearest the root.
-pub fn pinned_set(skeleton: &Skeleton, budget: u64, pinned_max: u64) -> Vec<u32> {
-    Plan::new(skeleton, budget, pinned_max).pinned().collect()
-}
-
 /// Why the runtime could not start, or why a run stopped early (more
 /// kinds may come: `testing` builds add one).
 #[derive(Debug, thiserror::Error)]
@@ -431,9 +424,9 @@ impl<'s> Runtime<'s> {
     }
 
     /// Like [`Runtime::streaming`], streaming even a scene that fits the
-    /// budget, with a pinned set of at most `pinned_max` bytes
-    /// ([`pinned_set`] names it): the first frame needs only that. For a
-    /// page, which fetches what the walk needs rather than the file.
+    /// budget, with a pinned set of at most `pinned_max` bytes (read here:
+    /// the first frame waits for it). For a page, which fetches what the
+    /// walk needs rather than the file.
     pub fn streamed<R: ReadAt + Sync>(
         scene: &'s SceneReader<R>,
         devices: Vec<GpuContext>,

@@ -3,17 +3,18 @@
 //! with WebGPU.
 //!
 //! A page has no threads to give the pipeline's stages: each animation
-//! frame runs traversal and LOD selection (gigawalk-cull, the same code as
-//! native STC), plans fetches and draws the visible set with the native
-//! RVG pass (gigawalk-gpu's `VisiblePass` on the page's one device), then
-//! yields to the browser, which brings fetched bytes back between frames.
+//! frame runs one step of gigawalk-runtime's stepped schedule (OR, STC
+//! and RVG, the native stages, on the page's one device, OR's read-back
+//! polled), then yields to the browser, which brings fetched bytes back
+//! between frames. The runtime streams as natively (its pool, stand-ins
+//! and order of requests); the page fetches what it asks for.
 //!
 //! - [`sparse`]: the scene file as the byte ranges fetched so far; the
 //!   scene reader opens and reads LODs from it, every checksum checked.
 //! - [`link`]: a saved view (camera, selection, hidden objects, section)
 //!   as the page URL's `#view=` fragment, to share.
-//! - [`stream`]: which LODs to fetch, keep and draw under a byte budget,
-//!   with stand-ins while one is on its way.
+//! - [`stream`]: the range requests that fetch the LODs the runtime asks
+//!   for, nearby blobs sharing one.
 //! - `page` (wasm32 only): the page's entry point, its loop, input and
 //!   HUD. `crates/web/build.sh` builds the bundle `gigawalk web` and
 //!   `gigawalk serve` put beside a scene.

@@ -3,43 +3,31 @@
 //! loop on `requestAnimationFrame`; [`stats`] is what the page and its
 //! tests read back.
 //!
-//! One animation frame: take what fetches brought (decode, admit under
-//! the budget, put on the device), move the camera, traverse (frustum
-//! culling, occlusion culling against the HZB and LOD selection,
-//! gigawalk-cull's `Traverser`), plan fetches and stand-ins
-//! ([`Streamer`]), draw with RVG's pass and present with the HUD.
-//! Fetches run as promises between frames; nothing blocks.
-//!
-//! GigaWalk's three stages (Section 5) run as an interleaved schedule on
-//! the page's one thread and one device. With occlusion on, a frame's
-//! camera is fixed when OR's occluders (the last drawn visible set, its
-//! LODs chosen again for this camera, resident ones only) are submitted
-//! with their pyramid level's read-back; a later animation frame, once the
-//! read-back has arrived, builds the HZB from it, traverses and draws that
-//! camera. Two submissions are in flight ([`OR_IN_FLIGHT`]). So occlusion
-//! costs latency and never a wait: an animation frame whose read-back has
-//! not arrived presents nothing new (`hzb_waits` counts them). The HZB is
-//! always the depth of the camera it culls for, so culling stays
-//! conservative.
+//! The frame is the runtime's: gigawalk-runtime's stepped schedule (OR,
+//! STC and RVG on the page's one thread and device, OR's read-back
+//! polled, nothing blocking) with the runtime's streaming (its pool,
+//! stand-ins and order of requests). What is the page's own: the camera
+//! from input, the canvas, the fetches that bring what the schedule asks
+//! for ([`Stepped::wanted`], loaded with [`Stepped::load`] once the bytes
+//! are in the [`Sparse`] view), and the HUD, drawn by the schedule's
+//! presenter. An animation frame whose occluder depth has not come back
+//! presents nothing new (`hzb_waits` counts them); the HZB is always the
+//! depth of the camera it culls for, so culling stays conservative.
 //!
 //! The review tools (pick, find, hide, sections, view links) are
 //! `review`'s.
 
 use std::cell::RefCell;
-use std::collections::{HashSet, VecDeque};
+use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 use std::rc::Rc;
-use std::sync::Arc;
 
 use gigawalk_cull::fly::{FlyController, Movement};
 use gigawalk_cull::review::sections::Sections;
-use gigawalk_cull::{
-    auto_hzb_level, default_near, reselect_lods, Camera, CullView, DrawItem, Hzb, HzbOcclusion,
-    NoOcclusion, OcclusionTest, Reduction, TraversalOptions, Traverser, Viewport, Visibility,
-};
-use gigawalk_gpu::{
-    ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, Look, OverlayFrame,
-    OverlayText, PendingLevel, VisiblePass, WindowSurface,
+use gigawalk_cull::{default_near, step_pixel_error, Camera, TraversalOptions, Viewport};
+use gigawalk_gpu::{GpuContext, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
+use gigawalk_runtime::{
+    CameraRequest, FrameReport, Presenter, Runtime, RuntimeOptions, Stepped, SteppedOptions,
 };
 use gigawalk_scene::SceneReader;
 use wasm_bindgen::prelude::*;
@@ -50,7 +38,7 @@ use web_sys::{
 };
 
 use crate::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
-use crate::stream::{batches, Admit, Batch, Streamer};
+use crate::stream::{batches, Batch};
 
 mod review;
 
@@ -60,19 +48,19 @@ const FOVY_DEGREES: f64 = 60.0;
 /// ([`batches`]); browsers run about six requests to one host at a time
 /// and queue the rest.
 const MAX_IN_FLIGHT: usize = 192;
-/// OR submissions awaiting their read-back at once: a frame is submitted
-/// while the one before it is still on its way, so the page draws on
-/// every animation frame whose read-back has arrived instead of every
-/// other one; the visible set that makes a submission's occluders is
-/// then two frames old, as in GigaWalk's pipeline (Section 5).
-const OR_IN_FLIGHT: usize = 2;
 /// Device bytes for geometry when the page's URL does not say
 /// (`?budget=MB`).
 const DEFAULT_BUDGET_MB: u64 = 256;
+/// The most the pinned set (the coarsest LODs of the nodes nearest the
+/// root, never evicted, a stand-in for everything below them) may take.
+/// None: it would be fetched before the first frame, which then waits
+/// for most of a small scene, and one corrupt LOD in it would stop the
+/// page; fetched as the walk asks, a LOD that fails is said and left out.
+const PINNED_BYTES: u64 = 0;
 
 /// What traversal culls and draws: frustum culling always, occlusion
 /// culling against the HZB, HLODs at the pixel error (replay's modes).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 struct Mode {
     occlusion: bool,
     hlod: bool,
@@ -100,18 +88,10 @@ impl Mode {
     fn parse(name: &str) -> Option<Mode> {
         Mode::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m)
     }
-}
 
-/// A camera whose occluders' depth is on its way back from the device.
-struct Awaited {
-    view: CullView,
-    level: PendingLevel,
-    /// Occluder LODs drawn, and their triangles.
-    occluders: usize,
-    occluder_triangles: u64,
-    /// When it was submitted (ms), and its number among submissions.
-    submitted_ms: f64,
-    submission: u64,
+    fn traversal(self, pixel_error: f64) -> TraversalOptions {
+        TraversalOptions::mode(self.occlusion, self.hlod, pixel_error)
+    }
 }
 
 /// What the page reports (as JSON, through [`stats`]).
@@ -158,17 +138,10 @@ struct Stats {
     /// had not arrived, in all; and the level read back.
     hzb_waits: u64,
     hzb_level: u32,
-    /// Animation frames run, and the last read-back's time from OR's
-    /// submission to the HZB built from it (ms).
+    /// Animation frames run, and the last drawn frame's time from OR
+    /// taking its camera to the frame drawn (ms).
     animation_frames: u64,
     hzb_latency_ms: f64,
-    /// How many submissions back the camera lies whose visible set made a
-    /// submission's occluders, on average (GigaWalk's lag, Section 5: 2),
-    /// its sum and the submissions so far.
-    occluder_lag: f64,
-    #[serde(skip)]
-    occluder_lag_sum: u64,
-    submissions: u64,
     /// The object table's size once read (`None` before, or without
     /// one), objects hidden, the selection's `file/path`, the section in
     /// effect and the last message the page showed.
@@ -334,31 +307,29 @@ type Arrivals = Rc<RefCell<Vec<(u32, Result<Vec<u8>, String>)>>>;
 
 struct App {
     url: String,
-    ctx: GpuContext,
-    surface: WindowSurface,
     canvas: HtmlCanvasElement,
-    pass: VisiblePass,
-    /// OR's depth pass (the canvas's size), the cameras waiting for their
-    /// read-backs (oldest first, at most [`OR_IN_FLIGHT`]), and the HZB
-    /// built from the last one.
-    depth: DepthPass,
-    awaited: VecDeque<Awaited>,
-    hzb: Hzb,
-    /// The read-back depth lowered by the device's depth error, kept
-    /// between frames.
-    lowered: Vec<f32>,
-    pool: GeometryPool,
-    reader: Box<SceneReader<Sparse>>,
+    /// The scene and its geometry on the page's device: both live as long
+    /// as the page.
+    reader: &'static SceneReader<Sparse>,
+    runtime: &'static Runtime<'static>,
     sparse: Sparse,
-    streamer: Streamer,
+    /// The schedule for the canvas's size and the mode, rebuilt when
+    /// either changes (streamed geometry stays with the runtime).
+    schedule: Option<(ScheduleKey, Stepped<'static>)>,
+    /// Options resolved per size and mode, kept for the page's life (the
+    /// schedule's stages borrow them).
+    options: HashMap<ScheduleKey, &'static SteppedOptions>,
+    presenter: PagePresenter,
+    /// LODs being fetched, and those whose fetch or read failed (never
+    /// asked for again).
+    fetching: HashSet<u32>,
+    failed: HashSet<u32>,
+    arrivals: Arrivals,
     fly: FlyController,
     held: HashSet<Movement>,
     /// Pointers down on the canvas: one looks around, two pinch to fly.
     pointers: Vec<Pointer>,
     review: review::Review,
-    arrivals: Arrivals,
-    traverser: Traverser,
-    items: Vec<DrawItem>,
     mode: Mode,
     pixel_error: f64,
     hud: bool,
@@ -368,15 +339,40 @@ struct App {
     /// moves the camera.
     path: Vec<gigawalk_scene::path::Pose>,
     shown: Option<gigawalk_scene::path::Pose>,
+    /// Frames drawn.
     frame: u64,
     last_ms: f64,
     /// When the last frame was drawn (the HUD's frame rate).
     last_drawn_ms: f64,
-    /// OR submissions so far, and the one whose camera was drawn last
-    /// (its visible set is the next submission's occluders).
-    submissions: u64,
-    drawn_submission: u64,
     started_ms: f64,
+}
+
+/// What a schedule is built for: the canvas's size and the mode.
+type ScheduleKey = (u32, u32, Mode);
+
+/// Shows the schedule's frames on the canvas with the HUD's lines.
+struct PagePresenter {
+    surface: WindowSurface,
+    text: Vec<OverlayText>,
+}
+
+impl Presenter for PagePresenter {
+    fn present(
+        &mut self,
+        ctx: &GpuContext,
+        pass: &VisiblePass,
+        report: &FrameReport,
+    ) -> Result<(), gigawalk_gpu::GpuError> {
+        let overlay = OverlayFrame {
+            view_proj: report.camera.view_projection_rel(),
+            boxes: Vec::new(),
+            lines: Vec::new(),
+            text: std::mem::take(&mut self.text),
+        };
+        self.surface
+            .present(ctx, pass, &overlay, pass.size(), false)
+            .map(|_| ())
+    }
 }
 
 impl App {
@@ -402,47 +398,75 @@ impl App {
         }
     }
 
-    /// Takes what fetches brought: decoded, admitted, put on the device.
-    fn take_arrivals(&mut self) {
+    /// The schedule for the canvas's size and the mode, built if either
+    /// changed.
+    fn schedule(&mut self) -> Result<&mut Stepped<'static>, String> {
+        let (w, h) = self.size();
+        let key = (w, h, self.mode);
+        if self.schedule.as_ref().is_none_or(|(k, _)| *k != key) {
+            let opts = match self.options.get(&key) {
+                Some(o) => *o,
+                None => {
+                    let o = RuntimeOptions {
+                        width: w,
+                        height: h,
+                        traversal: self.mode.traversal(self.pixel_error),
+                        ..RuntimeOptions::default()
+                    };
+                    let o = self
+                        .runtime
+                        .stepped_options(&o)
+                        .map_err(|e| e.to_string())?;
+                    let o: &'static SteppedOptions = Box::leak(Box::new(o));
+                    self.options.insert(key, o);
+                    o
+                }
+            };
+            self.schedule = None;
+            let stepped = self.runtime.stepped(opts).map_err(|e| e.to_string())?;
+            self.schedule = Some((key, stepped));
+        }
+        Ok(&mut self.schedule.as_mut().expect("built above").1)
+    }
+
+    /// Takes what fetches brought: each LOD's blob put in the sparse view
+    /// while the schedule reads it (checksum checked) for the device.
+    fn take_arrivals(&mut self) -> Result<(), String> {
         let arrived: Vec<_> = self.arrivals.borrow_mut().drain(..).collect();
         for (lod, result) in arrived {
+            self.fetching.remove(&lod);
             let info = self.reader.skeleton().lods()[lod as usize];
             let range = info.offset..info.offset + info.len;
-            let decoded = result.and_then(|bytes| {
-                self.sparse.insert(range.start, bytes)?;
-                let r = self.reader.read_lod_stored(lod).map_err(|e| e.to_string());
-                self.sparse.forget(range.clone());
-                r.map(DecodedLod::from_stored)
-            });
-            match decoded {
-                Ok(d) => match self.streamer.arrived(lod, d.bytes()) {
-                    Admit::Insert { evict } => {
-                        for e in evict {
-                            self.pool.remove(e);
-                        }
-                        if !self.pool.insert(&self.ctx, lod, &d) {
-                            self.streamer.not_inserted(lod);
-                        }
+            let sparse = self.sparse.clone();
+            let loaded = match result {
+                Err(e) => Err(e),
+                Ok(bytes) => match sparse.insert(range.start, bytes) {
+                    Err(e) => Err(e),
+                    Ok(()) => {
+                        let r = self.schedule()?.load(lod).map_err(|e| e.to_string());
+                        sparse.forget(range);
+                        r
                     }
-                    Admit::Refused => {}
                 },
-                Err(e) => {
-                    web_sys::console::warn_1(&format!("LOD {lod}: {e}").into());
-                    self.streamer.failed(lod);
-                    set_stats(|s| {
-                        s.failed_lods += 1;
-                        s.lod_error = Some(format!("LOD {lod}: {e}"));
-                    });
-                }
+            };
+            if let Err(e) = loaded {
+                web_sys::console::warn_1(&format!("LOD {lod}: {e}").into());
+                self.failed.insert(lod);
+                set_stats(|s| {
+                    s.failed_lods += 1;
+                    s.lod_error = Some(format!("LOD {lod}: {e}"));
+                });
             }
         }
+        Ok(())
     }
 
     /// Fetches `lods` in as few range requests as [`batches`] makes.
-    fn fetch(&self, lods: &[u32]) {
+    fn fetch(&mut self, lods: &[u32]) {
         let all = self.reader.skeleton().lods();
         let wanted: Vec<(u32, Range<u64>)> = lods
             .iter()
+            .filter(|l| !self.failed.contains(l) && self.fetching.insert(**l))
             .map(|&l| {
                 let i = all[l as usize];
                 (l, i.offset..i.offset + i.len)
@@ -485,185 +509,50 @@ impl App {
         }
     }
 
+    /// One animation frame: arrivals in, the camera moved, one step of
+    /// the schedule, fetches out, the stats.
     fn frame(&mut self, now: f64) -> Result<(), String> {
         let t0 = now_ms();
         set_stats(|s| s.animation_frames += 1);
-        self.take_arrivals();
+        self.take_arrivals()?;
         let dt = ((now - self.last_ms) / 1e3).clamp(0.0, 0.25);
         self.last_ms = now;
         self.fly.update(dt, &self.held);
-        let (w, h) = self.size();
-        if self.pass.size() != (w, h) {
-            self.pass = VisiblePass::new(&self.ctx, w, h);
-            self.depth = DepthPass::new(&self.ctx, w, h);
-            self.awaited.clear();
-        }
         self.refresh_visibility();
-        let view = CullView::new(self.camera(), Viewport::new(w, h))
-            .with_section(self.review.sections.current())
-            .with_visibility(self.review.visibility.clone());
-        if !self.mode.occlusion {
-            self.awaited.clear();
-            return self.draw(&view, None, t0, now);
-        }
-        match self.awaited.pop_front() {
-            // The startup frame (or the first after a resize, a change of
-            // mode or a frame with no occluder resident): drawn unculled;
-            // its visible set is the next submissions' occluders.
-            None => {
-                self.drawn_submission = self.submissions + 1;
-                self.draw(&view, None, t0, now)?
-            }
-            Some(a) => match self.depth.try_take_level(&self.ctx, a.level) {
-                Err(level) => {
-                    self.awaited.push_front(Awaited { level, ..a });
-                    set_stats(|s| s.hzb_waits += 1);
-                }
-                Ok(level) => {
-                    let level = level.map_err(|e| format!("occluder depth: {e}"))?;
-                    // The device's depth may lie this far off the exact
-                    // surface (0 on WebGPU's float depth): lowered by it,
-                    // the HZB is never nearer.
-                    self.hzb
-                        .rebuild_from_device(
-                            level.width,
-                            level.height,
-                            level.level,
-                            &level.image.depth,
-                            self.ctx.depth_error(),
-                            Reduction::Farthest,
-                            &mut self.lowered,
-                        )
-                        .map_err(|e| format!("the HZB: {e}"))?;
-                    let latency = now_ms() - a.submitted_ms;
-                    set_stats(|s| {
-                        s.occluders = a.occluders;
-                        s.occluder_triangles = a.occluder_triangles;
-                        s.hzb_level = level.level;
-                        s.hzb_latency_ms = latency;
-                    });
-                    self.drawn_submission = a.submission;
-                    let hzb = std::mem::take(&mut self.hzb);
-                    let drawn = self.draw(&a.view, Some(&HzbOcclusion::new(&hzb)), t0, now);
-                    self.hzb = hzb;
-                    drawn?;
-                }
-            },
-        }
-        if self.awaited.len() < OR_IN_FLIGHT {
-            self.submit_occluders(view);
+        let request = CameraRequest {
+            pixel_error: Some(self.pixel_error),
+            visibility: self.review.visibility.clone(),
+            section: self.review.sections.current(),
+            ..CameraRequest::new(self.camera(), false)
+        };
+        let (w, _) = self.size();
+        self.presenter.text = if self.hud {
+            self.hud_text(w)
+        } else {
+            Vec::new()
+        };
+        self.schedule()?;
+        let (_, stepped) = self.schedule.as_mut().expect("built above");
+        let report = stepped
+            .step(request, &mut self.presenter)
+            .map_err(|e| e.to_string())?;
+        let room = MAX_IN_FLIGHT.saturating_sub(self.fetching.len());
+        let wanted = match room {
+            0 => Vec::new(),
+            n => self.schedule()?.wanted(n),
+        };
+        self.fetch(&wanted);
+        match report {
+            None => set_stats(|s| s.hzb_waits += 1),
+            Some(r) => self.drawn(&r, now),
         }
         let cpu_ms = now_ms() - t0;
         set_stats(|s| s.cpu_ms = cpu_ms);
         Ok(())
     }
 
-    /// What traversal takes for this frame's mode.
-    fn traversal_options(&self, occlusion: bool) -> TraversalOptions {
-        TraversalOptions {
-            occlusion,
-            hlod: self.mode.hlod,
-            pixel_error: if self.mode.hlod {
-                self.pixel_error
-            } else {
-                0.0
-            },
-        }
-    }
-
-    /// OR for `view`: the last frame's visible set with its LODs chosen
-    /// again for `view`, those resident drawn depth-only; the level read
-    /// back is awaited by a later frame. With no occluder resident the
-    /// next frame draws unculled.
-    fn submit_occluders(&mut self, view: CullView) {
-        let skeleton = self.reader.skeleton();
-        let options = self.traversal_options(true);
-        let mut lods = Vec::with_capacity(self.items.len());
-        reselect_lods(
-            skeleton,
-            &view,
-            &options,
-            &self.items,
-            &mut |i: DrawItem| lods.push(skeleton.node(i.node).first_lod + i.lod),
-        );
-        lods.retain(|&l| self.pool.contains(l));
-        lods.sort_unstable();
-        lods.dedup();
-        if lods.is_empty() {
-            return;
-        }
-        let occluder_triangles = lods
-            .iter()
-            .map(|&l| skeleton.lods()[l as usize].triangles as u64)
-            .sum();
-        let (w, h) = self.depth.size();
-        self.depth.set_pieces(pieces(&view));
-        let level = self.depth.submit_level(
-            &self.ctx,
-            &self.pool,
-            &gpu_view(&view),
-            &lods,
-            auto_hzb_level(w, h),
-        );
-        self.submissions += 1;
-        let lag = self.submissions.saturating_sub(self.drawn_submission);
-        let n = self.submissions;
-        set_stats(|s| {
-            s.occluder_lag_sum += lag;
-            s.submissions = n;
-            s.occluder_lag = s.occluder_lag_sum as f64 / n as f64;
-        });
-        self.awaited.push_back(Awaited {
-            submission: n,
-            submitted_ms: now_ms(),
-            view,
-            level,
-            occluders: lods.len(),
-            occluder_triangles,
-        });
-    }
-
-    /// Traverses `view` (culled by `occlusion` where given), plans
-    /// fetches, draws what is resident and presents it with the HUD.
-    fn draw(
-        &mut self,
-        view: &CullView,
-        occlusion: Option<&dyn OcclusionTest>,
-        t0: f64,
-        now: f64,
-    ) -> Result<(), String> {
-        let (w, h) = (view.viewport.width, view.viewport.height);
-        let options = self.traversal_options(occlusion.is_some());
-        let t_traverse = now_ms();
-        self.items.clear();
-        let items = &mut self.items;
-        let traversal = self.traverser.traverse(
-            self.reader.skeleton(),
-            view,
-            occlusion.unwrap_or(&NoOcclusion),
-            &options,
-            &mut |i| items.push(i),
-        );
-        let traversal_ms = now_ms() - t_traverse;
-        let review = &self.review;
-        let plan = self
-            .streamer
-            .frame(self.frame, &self.items, self.reader.skeleton(), &|n| {
-                review.partial(n)
-            });
-        self.fetch(&plan.fetch);
-        let gpu_view = gpu_view(view);
-        self.pass.set_pieces(pieces(view));
-        self.pass
-            .begin(&self.ctx, &gpu_view, DrawStyle::Shaded, Look::PLAIN);
-        self.pass.draw(&self.ctx, &self.pool, &plan.draw);
-        self.pass.end(&self.ctx).map_err(|e| e.to_string())?;
-        let lods = self.reader.skeleton().lods();
-        let triangles: u64 = plan
-            .draw
-            .iter()
-            .map(|&l| lods[l as usize].triangles as u64)
-            .sum();
+    /// A frame drawn: its figures in the stats.
+    fn drawn(&mut self, r: &FrameReport, now: f64) {
         self.frame += 1;
         let first = self.frame == 1;
         let selected = self.review.objects.selection().and_then(|sel| {
@@ -674,6 +563,9 @@ impl App {
         let since_start = now - self.started_ms;
         let drawn_dt = (now - self.last_drawn_ms) / 1e3;
         self.last_drawn_ms = now;
+        let in_flight = self.fetching.len();
+        let mode = self.mode;
+        let pixel_error = self.pixel_error;
         set_stats(|s| {
             s.state = "running".into();
             s.frames = self.frame;
@@ -685,26 +577,28 @@ impl App {
             } else {
                 0.9 * s.fps + 0.1 * fps
             };
-            s.triangles = triangles;
-            s.draws = plan.draw.len();
-            s.stand_ins = plan.stand_ins;
-            s.missing = plan.missing;
-            s.visited = traversal.visited;
-            s.occlusion_culled = traversal.occlusion_culled;
-            s.occlusion_used = occlusion.is_some();
-            if !s.occlusion_used {
-                s.occluders = 0;
-                s.occluder_triangles = 0;
-            }
-            s.resident_bytes = self.streamer.resident_bytes();
-            s.in_flight = self.streamer.in_flight();
+            let st = &r.streaming;
+            s.triangles = r.stats.drawn_triangles;
+            s.draws = r.stats.drawn_nodes as usize;
+            s.stand_ins = st.substituted as usize;
+            s.missing = st.missing as usize;
+            s.visited = r.stats.visited;
+            s.occlusion_culled = r.stats.occlusion_culled;
+            s.occlusion_used = r.occlusion_used;
+            s.occluders = r.occluder_items;
+            s.occluder_triangles = r.occluder_triangles;
+            s.hzb_level = r.hzb_level;
+            s.hzb_latency_ms = r.latency_ms();
+            s.resident_bytes = st.resident_bytes;
+            s.in_flight = in_flight;
+            s.traversal_ms = r.traversal_ms;
             // An occlusion mode has settled only on a culled frame.
-            s.settled = plan.missing == 0
-                && plan.stand_ins == 0
-                && s.in_flight == 0
-                && (s.occlusion_used || !self.mode.occlusion);
-            s.mode = self.mode.name().into();
-            s.pixel_error = self.pixel_error;
+            s.settled = st.missing == 0
+                && st.substituted == 0
+                && in_flight == 0
+                && (r.occlusion_used || !mode.occlusion);
+            s.mode = mode.name().into();
+            s.pixel_error = pixel_error;
             s.selected = selected;
             s.section = section;
             if first {
@@ -712,25 +606,6 @@ impl App {
                 s.first_frame_fetched = s.fetched_bytes;
             }
         });
-        let overlay = OverlayFrame {
-            view_proj: gpu_view.view_proj,
-            boxes: Vec::new(),
-            lines: Vec::new(),
-            text: if self.hud {
-                self.hud_text(w)
-            } else {
-                Vec::new()
-            },
-        };
-        self.surface
-            .present(&self.ctx, &self.pass, &overlay, (w, h), false)
-            .map_err(|e| e.to_string())?;
-        let cpu_ms = now_ms() - t0;
-        set_stats(|s| {
-            s.cpu_ms = cpu_ms;
-            s.traversal_ms = traversal_ms;
-        });
-        Ok(())
     }
 
     fn hud_text(&self, width: u32) -> Vec<OverlayText> {
@@ -817,10 +692,10 @@ impl App {
             "KeyO" => self.mode.occlusion = !self.mode.occlusion,
             "KeyL" => self.mode.hlod = !self.mode.hlod,
             "Minus" | "NumpadSubtract" | "PageDown" => {
-                self.pixel_error = (self.pixel_error / 2.0).max(0.25)
+                self.pixel_error = step_pixel_error(self.pixel_error, false)
             }
             "Equal" | "NumpadAdd" | "PageUp" => {
-                self.pixel_error = (self.pixel_error * 2.0).min(64.0)
+                self.pixel_error = step_pixel_error(self.pixel_error, true)
             }
             "Tab" => self.hud = !self.hud,
             "KeyG" => self.fly.toggle_walk(),
@@ -895,22 +770,6 @@ pub fn set_pixel_error(pixel_error: f64) -> Result<(), JsValue> {
     })
 }
 
-/// The GPU passes' view of `view`'s camera and section.
-fn gpu_view(view: &CullView) -> gigawalk_gpu::View {
-    gigawalk_gpu::View {
-        eye: view.camera.position,
-        view_proj: view.camera.view_projection_rel(),
-        forward: view.camera.forward().as_vec3(),
-        clip: ClipPlanes::of_section(view.section().map(|s| &**s), view.camera.position),
-    }
-}
-
-/// The LODs `view`'s visibility draws in pieces (`None`: all whole).
-fn pieces(view: &CullView) -> Option<Arc<gigawalk_scene::objects::LodPieces>> {
-    view.visibility()
-        .and_then(|v: &Arc<Visibility>| v.lod_pieces())
-}
-
 /// Shows or hides the HUD (tests compare images without it).
 #[wasm_bindgen]
 pub fn set_hud(on: bool) -> Result<(), JsValue> {
@@ -957,13 +816,18 @@ pub async fn read_frame() -> Result<js_sys::Object, JsValue> {
     let app = running_app()?;
     let mut pending = {
         let a = &mut *app.borrow_mut();
-        a.pass.submit_read_back(&a.ctx)
+        a.schedule()
+            .map_err(|e| JsValue::from_str(&e))?
+            .submit_read_back()
+            .ok_or_else(|| JsValue::from_str("no frame to read back"))?
     };
     let frame = loop {
         next_task().await;
         let taken = {
             let a = &mut *app.borrow_mut();
-            a.pass.try_take_frame(&a.ctx, pending)
+            a.schedule()
+                .map_err(|e| JsValue::from_str(&e))?
+                .try_take_frame(pending)
         };
         match taken {
             Ok(frame) => break frame.map_err(|e| JsValue::from_str(&e.to_string()))?,
@@ -1065,9 +929,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
             ))
         })?;
     let (reader, sparse, fetched, requests) = open_scene(&scene_url).await.map_err(fail)?;
-    let skeleton = reader.skeleton();
-    let lods = skeleton.lods().len();
-    let bounds = skeleton.bounds();
+    let bounds = reader.skeleton().bounds();
     let budget_mb = match query("budget") {
         None => DEFAULT_BUDGET_MB as f64,
         Some(v) => v
@@ -1085,9 +947,6 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
             .filter(|p| p.is_finite() && *p > 0.0)
             .ok_or_else(|| fail(format!("?pixel_error={v}: pixels, a positive number")))?,
     };
-    let max_buffer = ctx.max_buffer_size().min(128 << 20);
-    let pool = GeometryPool::new(&ctx, lods, budget, max_buffer)
-        .map_err(|e| fail(format!("no room for the geometry budget: {e}")))?;
     set_stats(|s| {
         let api = if ctx.is_gl() { "WebGL2" } else { "WebGPU" };
         s.backend = match ctx.adapter_name() {
@@ -1098,25 +957,30 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         s.fetched_bytes = fetched;
         s.requests = requests;
     });
-    let (w, h) = (canvas.width().max(1), canvas.height().max(1));
+    // The scene lives as long as the page; so does its runtime.
+    let reader: &'static SceneReader<Sparse> = Box::leak(reader);
+    let runtime = Runtime::streamed(reader, vec![ctx], budget, PINNED_BYTES)
+        .map_err(|e| fail(format!("the scene's geometry: {e}")))?;
+    let runtime: &'static Runtime<'static> = Box::leak(Box::new(runtime));
     let app = App {
         url: scene_url,
-        pass: VisiblePass::new(&ctx, w, h),
-        depth: DepthPass::new(&ctx, w, h),
-        awaited: VecDeque::new(),
-        hzb: Hzb::new(),
-        lowered: Vec::new(),
-        pool,
-        surface,
         canvas: canvas.clone(),
-        streamer: Streamer::new(lods, budget, MAX_IN_FLIGHT),
+        reader,
+        runtime,
+        sparse,
+        schedule: None,
+        options: HashMap::new(),
+        presenter: PagePresenter {
+            surface,
+            text: Vec::new(),
+        },
+        fetching: HashSet::new(),
+        failed: HashSet::new(),
+        arrivals: Rc::new(RefCell::new(Vec::new())),
         fly: FlyController::overview(&bounds, FOVY_DEGREES.to_radians()),
         held: HashSet::new(),
         pointers: Vec::new(),
         review: review::Review::new(),
-        arrivals: Rc::new(RefCell::new(Vec::new())),
-        traverser: Traverser::new(),
-        items: Vec::new(),
         mode: Mode::new(true, true),
         pixel_error,
         hud: true,
@@ -1126,12 +990,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         frame: 0,
         last_ms: now_ms(),
         last_drawn_ms: now_ms(),
-        submissions: 0,
-        drawn_submission: 0,
         started_ms,
-        ctx,
-        reader,
-        sparse,
     };
     let app = Rc::new(RefCell::new(app));
     APP.with(|a| *a.borrow_mut() = Some(app.clone()));

@@ -253,7 +253,7 @@ mod tests {
     #[test]
     fn prefetch_asks_for_the_ring_just_outside_the_frustum_and_nothing_else() {
         let (skeleton, angles) = ring();
-        let plan = Plan::new(&skeleton, 1 << 30, PINNED_MAX);
+        let plan = Plan::new(&skeleton, 1 << 30, crate::PINNED_MAX);
         let opts = RuntimeOptions {
             prefetch: crate::Prefetching::Ring,
             ..Default::default()

@@ -407,7 +407,11 @@ mod tests {
         script: &[(&[u32], &[u32])],
     ) -> (Vec<Vec<u32>>, Vec<StreamStats>, Vec<u32>, Vec<Request>) {
         let (skeleton, meshes, triangle) = three_leaves();
-        let plan = Plan::new(&skeleton, budget * triangle + triangle / 2, PINNED_MAX);
+        let plan = Plan::new(
+            &skeleton,
+            budget * triangle + triangle / 2,
+            crate::PINNED_MAX,
+        );
         assert_eq!(plan.pinned().collect::<Vec<_>>(), [0]);
         let mut s = DeviceStream::new(ctx, 0, &skeleton, &plan, 1 << 28).unwrap();
         s.pin(ctx, &plan, 0, &DecodedLod::new(&meshes[0]));

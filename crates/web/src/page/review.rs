@@ -18,7 +18,7 @@ use std::sync::Arc;
 
 use gigawalk_cull::review::objects::{frame_box, Objects, NO_IDENTITY};
 use gigawalk_cull::review::sections::{view_box, VIEW_BOX_DEPTH};
-use gigawalk_cull::{NodeShow, PickHit};
+use gigawalk_cull::{NodeShow, PickHit, Visibility};
 use gigawalk_scene::views::SavedView;
 
 use super::*;
@@ -81,14 +81,6 @@ impl Review {
             .as_ref()
             .filter(|(_, at)| now_ms() - at < MESSAGE_MS)
             .map(|(m, _)| m.as_str())
-    }
-
-    /// Nodes with hidden or highlighted objects below them: drawn only at
-    /// full detail, in pieces, so never by a stand-in.
-    pub fn partial(&self, node: u32) -> bool {
-        self.visibility
-            .as_ref()
-            .is_some_and(|v| v.node(node) == NodeShow::Partial)
     }
 }
 

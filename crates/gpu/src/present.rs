@@ -119,11 +119,17 @@ pub async fn open_device_for_canvas(
             })
             .await
         {
+            // The WebGPU adapter must pass what every device's adapter
+            // passes (capabilities.rs); else WebGL2 is tried.
             Ok(adapter) => {
-                let surface = instance
-                    .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
-                    .map_err(WindowError::Surface)?;
-                return canvas_device(adapter, surface).await;
+                let report = crate::AdapterReport::of(&adapter);
+                if report.qualifies() {
+                    let surface = instance
+                        .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
+                        .map_err(WindowError::Surface)?;
+                    return canvas_device(adapter, surface).await;
+                }
+                tried.push(format!("WebGPU's {}", report.line()));
             }
             Err(e) => tried.push(format!("the browser offers no WebGPU adapter ({e})")),
         }

@@ -115,3 +115,51 @@ impl Identities {
         self.records.len()
     }
 }
+
+/// The object table's body is compressed (zstd level 19) in jobs of this
+/// many bytes on worker threads, each job seeing the data before it as
+/// zstd's multithreaded mode gives it (the ratio is that of one thread),
+/// into one frame whose bytes do not depend on the number of workers.
+pub(crate) const COMPRESSION_JOB_BYTES: usize = 2 << 20;
+
+/// `body` as one zstd frame compressed on `workers` (at least one) worker
+/// threads; `None` if zstd fails (the table is then stored plain).
+pub(crate) fn compress(body: &[u8], workers: usize) -> Option<Vec<u8>> {
+    use zstd::stream::raw::CParameter;
+    let mut z = zstd::bulk::Compressor::new(19).ok()?;
+    // One worker or more, never the single-threaded mode, whose bytes
+    // differ from the multithreaded mode's.
+    z.set_parameter(CParameter::NbWorkers(workers.clamp(1, 64) as u32))
+        .ok()?;
+    z.set_parameter(CParameter::JobSize(COMPRESSION_JOB_BYTES as u32))
+        .ok()?;
+    z.compress(body).ok()
+}
+
+#[cfg(test)]
+mod compression_tests {
+    use super::*;
+
+    /// A body of several compression jobs: one frame, the same bytes on
+    /// one worker thread or several, decoded whole.
+    #[test]
+    fn a_big_table_compresses_in_jobs_the_same_on_any_number_of_threads() {
+        let objects: Vec<ObjectRecord> = (0..60_000)
+            .map(|i| ObjectRecord {
+                name: format!("Part.{i:05}"),
+                path: format!("Plant/Unit{}/Bay{}/Part.{i:05}", i % 7, i % 113),
+                file: "plant.glb".into(),
+                metadata: Some(r#"{"tag":"P-101"}"#.into()),
+                bounds: Aabb::new(glam::DVec3::ZERO, glam::DVec3::ONE),
+                triangles: (i * 7919 % 5000) as u64,
+            })
+            .collect();
+        let t = ObjectTable::new(objects, Vec::new());
+        let plain = t.encode();
+        assert!(plain.len().div_ceil(COMPRESSION_JOB_BYTES) > 2);
+        let one = t.encode_with(|b| compress(b, 1));
+        assert!(one.len() < plain.len() / 2);
+        assert_eq!(t.encode_with(|b| compress(b, 3)), one);
+        assert_eq!(ObjectTable::decode(&one).unwrap(), t);
+    }
+}

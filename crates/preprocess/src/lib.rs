@@ -290,7 +290,12 @@ pub(crate) fn write_scene(
     // make of it.
     let cpu = stats::process_cpu_seconds();
     let workers = rayon::current_num_threads().min(IDENTITY_WORKERS);
-    let (objects, jobs) = built.objects.encode_on(workers);
+    let jobs = std::cell::Cell::new(0);
+    let objects = built.objects.encode_with(|body| {
+        jobs.set(body.len().div_ceil(identity::COMPRESSION_JOB_BYTES));
+        identity::compress(body, workers)
+    });
+    let jobs = jobs.get();
     built.stats.identity_bytes = objects.len() as u64;
     if let (Some(before), Some(after)) = (cpu, stats::process_cpu_seconds()) {
         built.stats.identity_compression =

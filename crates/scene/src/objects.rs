@@ -169,16 +169,17 @@ impl ObjectTable {
             .collect()
     }
 
-    /// The section's bytes, compressed on one worker thread (the same
-    /// bytes as on any number: [`ObjectTable::encode_on`]).
+    /// The section's bytes, its body stored plain (a reader takes it
+    /// plain or compressed).
     pub fn encode(&self) -> Vec<u8> {
-        self.encode_on(1).0
+        self.encode_with(|_| None)
     }
 
-    /// The section's bytes, its body compressed on `workers` threads in
-    /// jobs of [`COMPRESSION_JOB_BYTES`], and the number of jobs. The bytes
-    /// do not depend on `workers`.
-    pub fn encode_on(&self, workers: usize) -> (Vec<u8>, usize) {
+    /// The section's bytes, its body as `compress` makes it (one zstd
+    /// frame; `None`, or one no smaller: stored plain). This crate starts
+    /// no threads: the writer compresses (gigawalk-preprocess, on its
+    /// workers).
+    pub fn encode_with(&self, compress: impl FnOnce(&[u8]) -> Option<Vec<u8>>) -> Vec<u8> {
         let mut files: Vec<&str> = Vec::new();
         let mut file_index: HashMap<&str, u32> = HashMap::new();
         for o in &self.objects {
@@ -212,13 +213,8 @@ impl ObjectTable {
                 b.u32(run.triangles);
             }
         }
-        let body = compress(&b.0, workers).unwrap_or_else(|| b.0.clone());
+        let body = compress(&b.0).unwrap_or_else(|| b.0.clone());
         let compressed = body.len() < b.0.len();
-        let jobs = if compressed {
-            b.0.len().div_ceil(COMPRESSION_JOB_BYTES)
-        } else {
-            0
-        };
         let mut p = Put::default();
         p.u32(OBJECTS_VERSION);
         p.u32(self.objects.len() as u32);
@@ -226,7 +222,7 @@ impl ObjectTable {
         p.u32(compressed as u32);
         p.u64(b.0.len() as u64);
         p.bytes(if compressed { &body } else { &b.0 });
-        (p.0, jobs)
+        p.0
     }
 
     /// Parses the section; the error says what is wrong and where (a byte
@@ -509,34 +505,6 @@ impl<R: ReadAt> SceneReader<R> {
     }
 }
 
-/// The object table's body is compressed (zstd level 19) in jobs of this
-/// many bytes on worker threads, each job seeing the data before it as
-/// zstd's multithreaded mode gives it (the ratio is that of one thread),
-/// into one frame whose bytes do not depend on the number of workers.
-pub const COMPRESSION_JOB_BYTES: usize = 2 << 20;
-
-/// `body` as one zstd frame compressed on `workers` (at least one) worker
-/// threads; `None` if zstd fails.
-#[cfg(not(target_arch = "wasm32"))]
-fn compress(body: &[u8], workers: usize) -> Option<Vec<u8>> {
-    use zstd::stream::raw::CParameter;
-    let mut z = zstd::bulk::Compressor::new(19).ok()?;
-    // One worker or more, never the single-threaded mode, whose bytes
-    // differ from the multithreaded mode's.
-    z.set_parameter(CParameter::NbWorkers(workers.clamp(1, 64) as u32))
-        .ok()?;
-    z.set_parameter(CParameter::JobSize(COMPRESSION_JOB_BYTES as u32))
-        .ok()?;
-    z.compress(body).ok()
-}
-
-/// The wasm32 build has no zstd compressor: a table it encodes is stored
-/// plain (a reader takes either).
-#[cfg(target_arch = "wasm32")]
-fn compress(_body: &[u8], _workers: usize) -> Option<Vec<u8>> {
-    None
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -590,7 +558,9 @@ mod tests {
     #[test]
     fn the_table_round_trips_and_every_truncation_is_an_error() {
         let t = table();
-        let bytes = t.encode();
+        // Compressed as the writer does (a zstd frame: a flipped byte
+        // fails its checksum).
+        let bytes = t.encode_with(|b| zstd::bulk::compress(b, 19).ok());
         assert_eq!(ObjectTable::decode(&bytes).unwrap(), t);
         for n in 0..bytes.len() {
             assert!(ObjectTable::decode(&bytes[..n]).is_err(), "{n} bytes");
@@ -631,29 +601,25 @@ mod tests {
         }
     }
 
-    /// A body of several compression jobs: one frame, the same bytes on
-    /// one worker thread or several, decoded whole, a cut refused.
+    /// A compressed body (one zstd frame, as the writer makes it) decodes
+    /// to the same table; a cut is refused.
     #[test]
-    fn a_big_table_compresses_in_jobs_the_same_on_any_number_of_threads() {
-        let objects: Vec<ObjectRecord> = (0..60_000)
+    fn a_compressed_table_decodes_whole_and_a_cut_is_refused() {
+        let objects: Vec<ObjectRecord> = (0..2000)
             .map(|i| {
-                let mut r = record(
+                record(
                     &format!("Part.{i:05}"),
-                    &format!("Plant/Unit{}/Bay{}/Part.{i:05}", i % 7, i % 113),
-                    "plant.glb",
-                );
-                r.triangles = (i * 7919 % 5000) as u64;
-                r
+                    &format!("Plant/Part.{i:05}"),
+                    "p.glb",
+                )
             })
             .collect();
         let t = ObjectTable::new(objects, Vec::new());
-        let (one, jobs) = t.encode_on(1);
-        assert!(jobs > 2, "{jobs} jobs");
-        assert_eq!(t.encode_on(3).0, one);
-        assert_eq!(t.encode(), one);
-        assert_eq!(ObjectTable::decode(&one).unwrap(), t);
-        for cut in [one.len() / 3, one.len() / 2, one.len() - 1] {
-            assert!(ObjectTable::decode(&one[..cut]).is_err(), "cut at {cut}");
+        let packed = t.encode_with(|b| zstd::bulk::compress(b, 3).ok());
+        assert!(packed.len() < t.encode().len() / 2);
+        assert_eq!(ObjectTable::decode(&packed).unwrap(), t);
+        for cut in [packed.len() / 3, packed.len() - 1] {
+            assert!(ObjectTable::decode(&packed[..cut]).is_err(), "cut at {cut}");
         }
     }
 

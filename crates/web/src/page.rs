@@ -31,8 +31,6 @@ use std::ops::Range;
 use std::rc::Rc;
 use std::sync::Arc;
 
-use gigawalk_cull::fly::{FlyController, Movement};
-use gigawalk_cull::review::sections::Sections;
 use gigawalk_cull::{
     auto_hzb_level, default_near, reselect_lods, Camera, CullView, DrawItem, Hzb, HzbOcclusion,
     NoOcclusion, OcclusionTest, Reduction, TraversalOptions, Traverser, Viewport, Visibility,
@@ -41,6 +39,8 @@ use gigawalk_gpu::{
     ClipPlanes, DecodedLod, DepthPass, DrawStyle, GeometryPool, GpuContext, Look, OverlayFrame,
     OverlayText, PendingLevel, VisiblePass, WindowSurface,
 };
+use gigawalk_review::fly::{FlyController, Movement};
+use gigawalk_review::sections::Sections;
 use gigawalk_scene::SceneReader;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -776,11 +776,7 @@ impl App {
             .into_iter()
             .chain(review.objects.hud_lines())
             .chain(review.sections.hud_line())
-            .chain(
-                review
-                    .message()
-                    .map(gigawalk_cull::review::objects::hud_text),
-            )
+            .chain(review.message().map(gigawalk_review::objects::hud_text))
             .collect();
         vec![OverlayText {
             x: 8.0,

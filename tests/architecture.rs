@@ -5,6 +5,9 @@
 //! - the threads block names every source file that starts a thread of
 //!   its own (`std::thread` spawns, scopes and builders; rayon's pool
 //!   running data-parallel loops is not one), outside test modules;
+//! - gigawalk-cull holds culling alone: the reviewer state (selection,
+//!   find, hide, saved views, sections, the fly controller) is
+//!   gigawalk-review's, which depends on it, never the reverse;
 //! - only gigawalk-gpu depends on wgpu, and no source file outside it,
 //!   tests and benches included, names it;
 //! - only gigawalk-serve depends on an HTTP stack (hyper, tokio,
@@ -215,6 +218,48 @@ fn only_the_files_architecture_md_names_start_threads() {
         found, drawn,
         "a thread started where ARCHITECTURE.md's threads block does not say (or no longer started where it does)"
     );
+}
+
+/// Whether `file` (a path within gigawalk-cull) is one of the reviewer
+/// state's modules, which live in gigawalk-review.
+fn is_reviewer_state(file: &str) -> bool {
+    let Some(module) = file.strip_prefix("src/") else {
+        return false;
+    };
+    ["review.rs", "select.rs", "fly.rs"].contains(&module) || module.starts_with("review/")
+}
+
+#[test]
+fn the_culling_core_holds_no_reviewer_state() {
+    let in_cull: Vec<String> = sources()
+        .into_iter()
+        .filter(|(package, file, _)| package == "gigawalk-cull" && is_reviewer_state(file))
+        .map(|(_, file, _)| file)
+        .collect();
+    assert!(
+        in_cull.is_empty(),
+        "reviewer state in gigawalk-cull (it belongs in gigawalk-review): {in_cull:?}"
+    );
+    let naming: Vec<String> = sources()
+        .into_iter()
+        .filter(|(package, _, text)| package == "gigawalk-cull" && text.contains("gigawalk_review"))
+        .map(|(_, file, _)| file)
+        .collect();
+    assert!(
+        naming.is_empty(),
+        "gigawalk-cull names gigawalk-review: {naming:?}"
+    );
+}
+
+#[test]
+fn is_reviewer_state_sees_the_modules_and_nothing_else() {
+    assert!(is_reviewer_state("src/review.rs"));
+    assert!(is_reviewer_state("src/review/objects.rs"));
+    assert!(is_reviewer_state("src/select.rs"));
+    assert!(is_reviewer_state("src/fly.rs"));
+    assert!(!is_reviewer_state("src/pick.rs"));
+    assert!(!is_reviewer_state("src/visibility.rs"));
+    assert!(!is_reviewer_state("examples/fly.rs"));
 }
 
 #[test]

@@ -35,7 +35,6 @@
 mod camera;
 mod ct;
 mod culler;
-pub mod fly;
 mod frustum;
 mod grid;
 mod hzb;
@@ -45,8 +44,6 @@ mod object_space;
 mod occlusion;
 pub mod pick;
 mod raster;
-pub mod review;
-pub mod select;
 #[cfg(test)]
 mod test_rng;
 pub mod tiles;

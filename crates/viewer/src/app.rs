@@ -49,7 +49,7 @@ use crate::sections::Sections;
 use crate::settings::Settings;
 use camera_source::LiveSource;
 use frame_loop::LoopState;
-use gigawalk_cull::fly::FlyController;
+use gigawalk_review::fly::FlyController;
 use presenter::ViewerPresenter;
 use window::App;
 

@@ -55,7 +55,7 @@ pub enum Action {
 }
 
 /// Held movement keys (the controller's).
-pub use gigawalk_cull::fly::Movement;
+pub use gigawalk_review::fly::Movement;
 
 /// One line of the bindings table.
 pub struct Binding {

@@ -4,8 +4,8 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-pub use gigawalk_cull::review::group;
 use gigawalk_cull::TraversalStats;
+pub use gigawalk_review::group;
 
 use crate::settings::Settings;
 

@@ -25,11 +25,11 @@ mod measure;
 mod recorder;
 mod settings;
 
-use gigawalk_cull::review::{objects, sections};
+use gigawalk_review::{objects, sections};
 
 pub use app::{run, DisplayError, ViewArgs, ViewError};
 pub use boxes::{overlay_boxes, CullSets};
-pub use gigawalk_cull::fly::{FlyController, EYE_HEIGHT};
+pub use gigawalk_review::fly::{FlyController, EYE_HEIGHT};
 pub use hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
 pub use image::{image_stats, read_png, write_png, ImageStats, ScreenshotError};
 pub use measure::{screen_segment, Measure};

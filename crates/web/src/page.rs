@@ -22,10 +22,10 @@ use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 use std::rc::Rc;
 
-use gigawalk_cull::fly::{FlyController, Movement};
-use gigawalk_cull::review::sections::Sections;
 use gigawalk_cull::{default_near, step_pixel_error, Camera, TraversalOptions, Viewport};
 use gigawalk_gpu::{GpuContext, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
+use gigawalk_review::fly::{FlyController, Movement};
+use gigawalk_review::sections::Sections;
 use gigawalk_runtime::{
     CameraRequest, FrameReport, Presenter, Runtime, RuntimeOptions, Stepped, SteppedOptions,
 };
@@ -651,11 +651,7 @@ impl App {
             .into_iter()
             .chain(review.objects.hud_lines())
             .chain(review.sections.hud_line())
-            .chain(
-                review
-                    .message()
-                    .map(gigawalk_cull::review::objects::hud_text),
-            )
+            .chain(review.message().map(gigawalk_review::objects::hud_text))
             .collect();
         vec![OverlayText {
             x: 8.0,

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use gigawalk_cull::select::{self, PickRequest, Picked};
+use gigawalk_review::select::{self, PickRequest, Picked};
 use gigawalk_scene::objects::ObjectRecord;
 
 #[derive(clap::Args)]

@@ -256,10 +256,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let visibility = if args.hide.is_empty() && args.isolate.is_empty() && view.is_none() {
         None
     } else {
-        let h = gigawalk_cull::select::hidden(
+        let h = gigawalk_review::select::hidden(
             &scene,
             &args.scene,
-            &gigawalk_cull::select::HideRequest {
+            &gigawalk_review::select::HideRequest {
                 hide: args.hide.clone(),
                 isolate: args.isolate.clone(),
                 view: view.clone(),

@@ -721,7 +721,7 @@ fn interior_objects(
         pixels.push((x, y.saturating_sub(margin)));
         pixels.push((x, (y + margin).min(h - 1)));
     }
-    let picks = gigawalk_cull::select::pick(&gigawalk_cull::select::PickRequest {
+    let picks = gigawalk_review::select::pick(&gigawalk_review::select::PickRequest {
         scene: gwk.to_path_buf(),
         path: path.to_path_buf(),
         frame: pose,

@@ -8,7 +8,8 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use gigawalk_cull::{select, NodeShow, PickHit, Viewport, Visibility};
+use gigawalk_cull::{NodeShow, PickHit, Viewport, Visibility};
+use gigawalk_review::select;
 use gigawalk_runtime::target::{FrameRateController, MIN_PIXEL_ERROR};
 use gigawalk_runtime::{CullMethod, OccluderSelection};
 use gigawalk_scene::path::Pose;
@@ -28,7 +29,7 @@ use crate::objects::{frame_box, save_view, view_names, Objects};
 use crate::recorder::{next_free_name, PathRecorder};
 use crate::sections::{view_box, Sections, VIEW_BOX_DEPTH};
 use crate::settings::Settings;
-use gigawalk_cull::fly::FlyController;
+use gigawalk_review::fly::FlyController;
 
 /// Shown when wireframe is asked for on a device without line mode.
 const WIREFRAME_UNSUPPORTED: &str =

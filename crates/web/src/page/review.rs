@@ -1,5 +1,5 @@
 //! The page's review tools, the native viewer's keys and state
-//! (`gigawalk_cull::review`): click to pick an object (name, file, path,
+//! (`gigawalk_review`): click to pick an object (name, file, path,
 //! metadata), `/` to find objects by name or path, `H` hide, `I`
 //! isolate, `U` show all, `F` frame the selection, section planes at the
 //! cursor (`X`, moved with `]` and `[`, flipped with `\`), a section box
@@ -16,9 +16,9 @@
 
 use std::sync::Arc;
 
-use gigawalk_cull::review::objects::{frame_box, Objects, NO_IDENTITY};
-use gigawalk_cull::review::sections::{view_box, VIEW_BOX_DEPTH};
 use gigawalk_cull::{NodeShow, PickHit, Visibility};
+use gigawalk_review::objects::{frame_box, Objects, NO_IDENTITY};
+use gigawalk_review::sections::{view_box, VIEW_BOX_DEPTH};
 use gigawalk_scene::views::SavedView;
 
 use super::*;

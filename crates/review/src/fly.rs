@@ -5,10 +5,9 @@
 
 use std::collections::HashSet;
 
+use gigawalk_cull::Camera;
 use gigawalk_scene::Aabb;
 use glam::{DQuat, DVec3};
-
-use crate::Camera;
 
 /// Held movement keys.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

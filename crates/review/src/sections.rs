@@ -12,7 +12,7 @@
 
 use std::sync::Arc;
 
-use crate::{Camera, Section, SectionSpec};
+use gigawalk_cull::{Camera, Section, SectionSpec};
 use gigawalk_scene::Aabb;
 use glam::DVec3;
 
@@ -156,7 +156,7 @@ impl Sections {
             "section plane {} of {} through {} (] [ or Shift+wheel move it, \\ flips it)",
             self.planes.len(),
             Section::MAX_PLANES,
-            super::objects::point_text(point)
+            crate::objects::point_text(point)
         ))
     }
 
@@ -207,8 +207,8 @@ impl Sections {
         self.rebuild();
         Ok(format!(
             "section box {} .. {}",
-            super::objects::point_text(min),
-            super::objects::point_text(max)
+            crate::objects::point_text(min),
+            crate::objects::point_text(max)
         ))
     }
 

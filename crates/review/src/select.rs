@@ -14,13 +14,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use gigawalk_cull::{default_near, Camera, PickHit, PickStats, Section, Viewport, Visibility};
 use gigawalk_scene::objects::{ObjectRecord, ObjectTable, Pattern};
 use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::views::{self, SavedView};
 use gigawalk_scene::{SceneReader, Skeleton};
 use glam::DVec3;
-
-use crate::{default_near, Camera, PickHit, PickStats, Section, Viewport, Visibility};
 
 /// Why a pick, find or hide could not answer.
 #[derive(Debug, thiserror::Error)]
@@ -178,7 +177,7 @@ pub fn pick_pixel(
     else {
         return Ok((None, PickStats::default()));
     };
-    crate::pick(
+    gigawalk_cull::pick(
         reader.skeleton(),
         table,
         &ray,

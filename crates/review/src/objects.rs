@@ -10,7 +10,7 @@
 use std::sync::Arc;
 
 use crate::select::HiddenSet;
-use crate::Visibility;
+use gigawalk_cull::Visibility;
 use gigawalk_scene::objects::{ObjectTable, Pattern};
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::views::{self, ObjectRef, SavedView, Views};
@@ -358,7 +358,7 @@ impl Objects {
                 lines.push(format!(
                     "selected: {} ({} tris; F frames it)",
                     o.name,
-                    super::group(o.triangles)
+                    crate::group(o.triangles)
                 ));
                 lines.push(format!("  file {}  path {}", o.file, o.path));
                 if let Some(m) = &o.metadata {

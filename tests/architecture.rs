@@ -369,3 +369,76 @@ fn starts_threads_sees_spawns_and_scopes_but_not_test_modules() {
         "let n = std::thread::available_parallelism();"
     ));
 }
+
+/// What running the stages means in code: the culling and drawing parts
+/// only a schedule of the runtime puts together.
+const STAGE_PARTS: [&str; 7] = [
+    "Traverser",
+    "DepthPass",
+    "Hzb::",
+    "HzbOcclusion",
+    "GeometryPool",
+    "reselect_lods",
+    "fn gpu_view",
+];
+
+#[test]
+fn the_page_runs_the_runtimes_schedule_and_keeps_no_copy_of_it() {
+    let copies: Vec<String> = sources()
+        .into_iter()
+        .filter(|(package, _, _)| package == "gigawalk-web")
+        .flat_map(|(_, file, text)| {
+            STAGE_PARTS
+                .iter()
+                .filter(|p| text.contains(*p))
+                .map(|p| format!("{file}: {p}"))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    assert!(
+        copies.is_empty(),
+        "the page runs stages of its own (it steps gigawalk-runtime's schedule): {copies:?}"
+    );
+    let stepped = sources().into_iter().any(|(package, file, text)| {
+        package == "gigawalk-web" && file.starts_with("src/") && text.contains("Stepped")
+    });
+    assert!(stepped, "the page no longer steps the runtime's schedule");
+}
+
+#[test]
+fn the_scene_crate_knows_nothing_about_threads() {
+    let naming: Vec<String> = sources()
+        .into_iter()
+        .filter(|(package, file, text)| {
+            package == "gigawalk-scene"
+                && file.starts_with("src/")
+                && (starts_threads(text)
+                    || ["NbWorkers", "rayon::", "std::thread"]
+                        .iter()
+                        .any(|p| text.contains(p)))
+        })
+        .map(|(_, file, _)| file)
+        .collect();
+    assert!(
+        naming.is_empty(),
+        "gigawalk-scene starts or asks for threads: {naming:?}"
+    );
+}
+
+#[test]
+fn every_adapter_the_gpu_crate_asks_for_passes_the_capability_check() {
+    let unchecked: Vec<String> = sources()
+        .into_iter()
+        .filter(|(package, file, text)| {
+            package == "gigawalk-gpu"
+                && file.starts_with("src/")
+                && text.contains("request_adapter(")
+                && text.matches("request_adapter(").count() > text.matches(".qualifies()").count()
+        })
+        .map(|(_, file, _)| file)
+        .collect();
+    assert!(
+        unchecked.is_empty(),
+        "an adapter asked for without `AdapterReport::qualifies` (capabilities.rs): {unchecked:?}"
+    );
+}

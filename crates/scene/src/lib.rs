@@ -10,6 +10,10 @@
 //! [`SceneWriter::finish`] with the nodes and provenance. Reading:
 //! [`SceneReader::open`] loads and validates the skeleton only;
 //! [`SceneReader::read_lod`] reads one LOD's geometry on demand.
+//! [`sparse`] reads a scene through the byte ranges fetched so far (the
+//! browser page's range requests): a read of bytes not there yet names
+//! the range to fetch, and [`sparse::open_step`] opens a scene in a few
+//! such rounds.
 //!
 //! This crate knows nothing about GPUs or threads. Its wasm32 build (the
 //! browser viewer) reads scenes and writes none: see `unpack`.
@@ -32,6 +36,7 @@ pub mod path;
 mod read;
 pub mod section;
 mod skeleton;
+pub mod sparse;
 mod squeeze;
 mod stats;
 pub mod units;

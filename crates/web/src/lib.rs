@@ -9,8 +9,6 @@
 //! between frames. The runtime streams as natively (its pool, stand-ins
 //! and order of requests); the page fetches what it asks for.
 //!
-//! - [`sparse`]: the scene file as the byte ranges fetched so far; the
-//!   scene reader opens and reads LODs from it, every checksum checked.
 //! - [`link`]: a saved view (camera, selection, hidden objects, section)
 //!   as the page URL's `#view=` fragment, to share.
 //! - [`stream`]: the range requests that fetch the LODs the runtime asks
@@ -19,12 +17,14 @@
 //!   HUD. `crates/web/build.sh` builds the bundle `gigawalk web` and
 //!   `gigawalk serve` put beside a scene.
 //!
+//! The scene file as the byte ranges fetched so far is the scene
+//! crate's (`gigawalk_scene::sparse`): the page fetches what it names.
+//!
 //! The parts that do not touch the browser build and are tested natively.
 
 #![forbid(unsafe_code)]
 
 pub mod link;
-pub mod sparse;
 pub mod stream;
 
 #[cfg(target_arch = "wasm32")]

@@ -29,6 +29,7 @@ use gigawalk_review::sections::Sections;
 use gigawalk_runtime::{
     CameraRequest, FrameReport, Presenter, Runtime, RuntimeOptions, Stepped, SteppedOptions,
 };
+use gigawalk_scene::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
 use gigawalk_scene::SceneReader;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -37,7 +38,6 @@ use web_sys::{
     HtmlCanvasElement, KeyboardEvent, PointerEvent, Request, RequestInit, Response, WheelEvent,
 };
 
-use crate::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
 use crate::stream::{batches, Batch};
 
 mod review;

@@ -1,9 +1,10 @@
-//! A scene opened and read through fetched byte ranges alone, as the page
-//! does over HTTP, against the same file opened from disk.
+//! A scene opened and read through fetched byte ranges alone
+//! ([`gigawalk_scene::sparse`]), as the browser page does over HTTP,
+//! against the same file opened from disk.
 
+use gigawalk_scene::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
 use gigawalk_scene::{Aabb, SceneReader};
 use gigawalk_testkit::scenes::{box_mesh, write_leaf_scene};
-use gigawalk_web::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
 use glam::DVec3;
 
 /// A scene of `n` boxes in a row, and its bytes.

@@ -1,26 +1,29 @@
-//! A scene file seen through the byte ranges a page has fetched so far.
+//! A scene file seen through the byte ranges fetched so far.
 //!
-//! The scene reader reads with positioned reads ([`ReadAt`]); a page has
-//! only what HTTP range requests brought. [`Sparse`] answers a read from
+//! The scene reader reads with positioned reads ([`ReadAt`]); a reader
+//! that fetches a file in pieces (the browser page, with HTTP range
+//! requests) has only what those brought. [`Sparse`] answers a read from
 //! the fetched chunks, and when a read reaches bytes it does not have, it
-//! fails that read and remembers the range, so the page fetches it and
-//! tries again. Opening a scene takes a few such rounds (header, table of
-//! contents, skeleton), each a range request; a LOD's blob is fetched
-//! before it is read (its range is in the skeleton), then dropped.
+//! fails that read and remembers the range, so the caller fetches it and
+//! tries again. Opening a scene takes a few such rounds ([`open_step`]:
+//! header, table of contents, skeleton), each one fetch; a LOD's blob is
+//! fetched before it is read (its range is in the skeleton), then
+//! dropped.
 //!
 //! Nothing here trusts what it holds: the reader checks every section's
-//! and every LOD's checksum as it does for a file on disk.
+//! and every LOD's checksum as it does for a file on disk. Nothing here
+//! fetches either: how bytes arrive is the caller's.
 
 use std::collections::BTreeMap;
 use std::io;
 use std::ops::Range;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use gigawalk_scene::{ReadAt, ReadError, SceneReader};
+use crate::{ReadAt, ReadError, SceneReader};
 
-/// The least a page fetches at once while opening a scene: the first
-/// round brings the header, the second the table of contents at the end
-/// with the sections just before it.
+/// The least to fetch at once while opening a scene: the first round
+/// brings the header, the second the table of contents at the end with
+/// the sections just before it.
 pub const OPEN_CHUNK: u64 = 64 << 10;
 
 /// The fetched chunks of one file of `len` bytes.
@@ -34,9 +37,9 @@ pub struct Chunks {
     missing: Option<(u64, u64)>,
 }
 
-/// A shared handle on a file's chunks: the reader owns one, the page
+/// A shared handle on a file's chunks: the reader owns one, the fetcher
 /// another (it inserts what arrives). Shared as the runtime's LOD source
-/// must be (`Sync`), though a page has one thread.
+/// must be (`Sync`), though the browser page has one thread.
 #[derive(Clone, Debug)]
 pub struct Sparse(Arc<Mutex<Chunks>>);
 
@@ -103,8 +106,8 @@ impl Sparse {
     }
 
     /// Drops every fetched byte in `range` that no other read needs to
-    /// keep (a LOD's blob once decoded): the page holds what it opened the
-    /// scene with, and LOD blobs only while they are read.
+    /// keep (a LOD's blob once decoded): a fetcher holds what it opened
+    /// the scene with, and LOD blobs only while they are read.
     pub fn forget(&self, range: Range<u64>) {
         let mut c = self.chunks();
         let starts: Vec<u64> = c
@@ -191,9 +194,9 @@ pub enum OpenStep {
 }
 
 /// Tries to open the scene with what `sparse` holds. The rounds: the
-/// header (the page's first range), the table of contents at the end of
-/// the file (with [`OPEN_CHUNK`] before it), then every section opening
-/// reads, in one request when they lie together, as the writer puts
+/// header (the first [`OPEN_CHUNK`] of the file), the table of contents
+/// at the end of the file (with [`OPEN_CHUNK`] before it), then every
+/// section opening reads, in one request when they lie together, as the writer puts
 /// them: the skeleton and nothing of the geometry or the optional
 /// sections (object table, occluders), which are read when used.
 pub fn open_step(sparse: &Sparse, name: &str) -> OpenStep {
@@ -202,7 +205,7 @@ pub fn open_step(sparse: &Sparse, name: &str) -> OpenStep {
         None => OpenStep::Failed(e),
     };
     sparse.take_missing();
-    let reads = match gigawalk_scene::opening_reads(sparse, name) {
+    let reads = match crate::opening_reads(sparse, name) {
         Ok(r) => r,
         Err(e) => return missed(e),
     };

@@ -10,6 +10,8 @@
 //! - [`sections`]: the section planes and the section box;
 //! - [`select`]: object selection against a scene: the hidden set a
 //!   frame's `Visibility` is built from, find, and the pick under a pixel;
+//! - [`link`]: a saved view as the browser page URL's `#view=` fragment,
+//!   to share, checked on the way in;
 //! - [`fly`]: the fly / walk camera controller;
 //! - [`group`]: counts written in groups of thousands.
 //!
@@ -22,6 +24,7 @@
 #![forbid(unsafe_code)]
 
 pub mod fly;
+pub mod link;
 pub mod objects;
 pub mod sections;
 pub mod select;

@@ -9,8 +9,6 @@
 //! between frames. The runtime streams as natively (its pool, stand-ins
 //! and order of requests); the page fetches what it asks for.
 //!
-//! - [`link`]: a saved view (camera, selection, hidden objects, section)
-//!   as the page URL's `#view=` fragment, to share.
 //! - [`stream`]: the range requests that fetch the LODs the runtime asks
 //!   for, nearby blobs sharing one.
 //! - `page` (wasm32 only): the page's entry point, its loop, input and
@@ -19,12 +17,13 @@
 //!
 //! The scene file as the byte ranges fetched so far is the scene
 //! crate's (`gigawalk_scene::sparse`): the page fetches what it names.
+//! A view's link (`#view=`) is the reviewer state's
+//! (`gigawalk_review::link`).
 //!
 //! The parts that do not touch the browser build and are tested natively.
 
 #![forbid(unsafe_code)]
 
-pub mod link;
 pub mod stream;
 
 #[cfg(target_arch = "wasm32")]

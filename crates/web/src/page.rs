@@ -891,7 +891,7 @@ pub fn view_json() -> Result<String, JsValue> {
 /// its own address when it starts).
 #[wasm_bindgen]
 pub fn show_view(text: &str) -> Result<(), JsValue> {
-    let view = crate::link::decode(text).map_err(|e| JsValue::from_str(&e))?;
+    let view = gigawalk_review::link::decode(text).map_err(|e| JsValue::from_str(&e))?;
     with_app(|app| app.restore_view(view))
 }
 
@@ -995,7 +995,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     let fragment = web_sys::window()
         .and_then(|w| w.location().hash().ok())
         .unwrap_or_default();
-    if let Some(view) = crate::link::from_fragment(&fragment) {
+    if let Some(view) = gigawalk_review::link::from_fragment(&fragment) {
         let mut a = app.borrow_mut();
         if let Err(e) = view.and_then(|v| a.restore_view(v)) {
             a.review.say(format!("{e}; showing the overview"));

@@ -5,7 +5,7 @@
 //! cursor (`X`, moved with `]` and `[`, flipped with `\`), a section box
 //! (`J`), sections on and off (`0`) and cleared (`Delete`), and `V`: the
 //! view (camera, selection, hidden objects, section) as a link in the
-//! address bar ([`crate::link`]).
+//! address bar ([`gigawalk_review::link`]).
 //!
 //! What a pick or the object table needs from the scene is fetched on
 //! demand: the reader tries, a read of bytes not fetched yet names its
@@ -322,8 +322,8 @@ impl App {
         let base = href.split('#').next().unwrap_or(&href);
         Ok(format!(
             "{base}#{}={}",
-            crate::link::KEY,
-            crate::link::encode(&self.saved_view())
+            gigawalk_review::link::KEY,
+            gigawalk_review::link::encode(&self.saved_view())
         ))
     }
 }

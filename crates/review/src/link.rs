@@ -1,7 +1,8 @@
 //! A saved view as a link: the camera, the selection, the hidden and
 //! isolated objects and the section of a [`SavedView`]
-//! (docs/views-format.md) in the page URL's fragment, `#view=TEXT`, so a
-//! reviewer shares what they see by sharing the address. TEXT is the
+//! (docs/views-format.md) in the browser page's URL fragment,
+//! `#view=TEXT`, so a reviewer shares what they see by sharing the
+//! address. TEXT is the
 //! view's JSON (a views file's entry) in URL-safe base64 without
 //! padding: the fragment never reaches the server, and nothing in it
 //! needs escaping.

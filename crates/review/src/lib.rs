@@ -12,6 +12,9 @@
 //!   frame's `Visibility` is built from, find, and the pick under a pixel;
 //! - [`link`]: a saved view as the browser page URL's `#view=` fragment,
 //!   to share, checked on the way in;
+//! - [`keys`]: the key bindings, one table the viewer and the page look
+//!   keys up in (by their `KeyboardEvent.code` names) and the help text
+//!   comes from;
 //! - [`fly`]: the fly / walk camera controller;
 //! - [`group`]: counts written in groups of thousands.
 //!
@@ -24,6 +27,7 @@
 #![forbid(unsafe_code)]
 
 pub mod fly;
+pub mod keys;
 pub mod link;
 pub mod objects;
 pub mod sections;

@@ -1,258 +1,91 @@
-//! The viewer's key bindings: one table that input handling, the on-screen
-//! help, `gigawalk view --help` and the README all come from.
+//! The viewer's key bindings: the table shared with the browser page
+//! ([`gigawalk_review::keys`]), looked up by winit's `KeyCode`, whose
+//! variants are named as the table names keys (`KeyboardEvent.code`).
 
 use winit::keyboard::KeyCode;
 
-/// Something a key does once when pressed (movement keys are held instead,
-/// see [`Movement`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Action {
-    ToggleWalk,
-    ToggleOcclusion,
-    CycleCuller,
-    ToggleHlod,
-    PixelErrorUp,
-    PixelErrorDown,
-    ToggleAsync,
-    ToggleTarget,
-    ToggleWireframe,
-    ToggleEdges,
-    ToggleAmbientOcclusion,
-    ToggleAntialiasing,
-    ToggleXray,
-    ToggleBoxes,
-    ToggleFreeze,
-    /// Fly to see the selected object whole.
-    FrameSelection,
-    /// Open the search prompt.
-    Search,
-    /// The last search's next match.
-    NextMatch,
-    Hide,
-    Isolate,
-    ShowAll,
-    SaveView,
-    NextView,
-    /// A section plane through the point under the cursor, facing the
-    /// camera.
-    SectionPlane,
-    /// Move the active section plane along its normal (cutting more
-    /// away) or back.
-    SectionForward,
-    SectionBack,
-    FlipSection,
-    /// A section box around the selection, or around what is in view.
-    SectionBox,
-    ToggleSections,
-    ClearSections,
-    /// Start a measurement, or clear it.
-    Measure,
-    ToggleRecord,
-    Screenshot,
-    ToggleHud,
-    ToggleHelp,
-    Quit,
+pub use gigawalk_review::keys::{
+    help_lines, Action, Binding, Does, Movement, BINDINGS, MOUSE_HELP,
+};
+
+/// The `KeyboardEvent.code` name of `key`: its variant's name ("KeyW",
+/// "ArrowUp", "Digit0", ...).
+pub fn code_name(key: KeyCode) -> String {
+    format!("{key:?}")
 }
-
-/// Held movement keys (the controller's).
-pub use gigawalk_review::fly::Movement;
-
-/// One line of the bindings table.
-pub struct Binding {
-    pub keys: &'static [KeyCode],
-    /// How the keys are written in help text.
-    pub label: &'static str,
-    pub what: &'static str,
-    pub does: Does,
-}
-
-pub enum Does {
-    Move(Movement),
-    Act(Action),
-    /// Restore the saved view the key's digit numbers ([`view_number`]).
-    RestoreView,
-}
-
-use Does::{Act, Move};
-
-#[rustfmt::skip]
-pub const BINDINGS: &[Binding] = &[
-    Binding { keys: &[KeyCode::KeyW, KeyCode::ArrowUp], label: "W / Up", what: "fly forward", does: Move(Movement::Forward) },
-    Binding { keys: &[KeyCode::KeyS, KeyCode::ArrowDown], label: "S / Down", what: "fly back", does: Move(Movement::Back) },
-    Binding { keys: &[KeyCode::KeyA, KeyCode::ArrowLeft], label: "A / Left", what: "strafe left", does: Move(Movement::Left) },
-    Binding { keys: &[KeyCode::KeyD, KeyCode::ArrowRight], label: "D / Right", what: "strafe right", does: Move(Movement::Right) },
-    Binding { keys: &[KeyCode::KeyQ, KeyCode::ControlLeft], label: "Q / Ctrl", what: "down", does: Move(Movement::Down) },
-    Binding { keys: &[KeyCode::Space], label: "Space", what: "up", does: Move(Movement::Up) },
-    Binding { keys: &[KeyCode::ShiftLeft, KeyCode::ShiftRight], label: "Shift", what: "hold: 5x faster", does: Move(Movement::Fast) },
-    Binding { keys: &[KeyCode::KeyG], label: "G", what: "walk mode (eye height, level) on/off", does: Act(Action::ToggleWalk) },
-    Binding { keys: &[KeyCode::KeyO], label: "O", what: "occlusion culling on/off", does: Act(Action::ToggleOcclusion) },
-    Binding { keys: &[KeyCode::KeyK], label: "K", what: "keep the target frame rate (--target-fps, default 30): pixel error chosen each frame", does: Act(Action::ToggleTarget) },
-    Binding { keys: &[KeyCode::KeyC], label: "C", what: "next occlusion culler: hzb (GigaWalk), grid (lazy occlusion grid), oq (occlusion queries), ct (large occluders)", does: Act(Action::CycleCuller) },
-    Binding { keys: &[KeyCode::KeyL], label: "L", what: "HLOD on/off", does: Act(Action::ToggleHlod) },
-    Binding { keys: &[KeyCode::Equal, KeyCode::NumpadAdd, KeyCode::PageUp], label: "+ / PgUp", what: "pixel error up", does: Act(Action::PixelErrorUp) },
-    Binding { keys: &[KeyCode::Minus, KeyCode::NumpadSubtract, KeyCode::PageDown], label: "- / PgDn", what: "pixel error down", does: Act(Action::PixelErrorDown) },
-    Binding { keys: &[KeyCode::KeyY], label: "Y", what: "async rendering on/off", does: Act(Action::ToggleAsync) },
-    Binding { keys: &[KeyCode::KeyT], label: "T", what: "wireframe", does: Act(Action::ToggleWireframe) },
-    Binding { keys: &[KeyCode::KeyE], label: "E", what: "edges on/off: creases and silhouettes", does: Act(Action::ToggleEdges) },
-    Binding { keys: &[KeyCode::F2], label: "F2", what: "ambient occlusion on/off", does: Act(Action::ToggleAmbientOcclusion) },
-    Binding { keys: &[KeyCode::F3], label: "F3", what: "anti-aliasing (FXAA) on/off", does: Act(Action::ToggleAntialiasing) },
-    Binding { keys: &[KeyCode::F4], label: "F4", what: "x-ray: hidden and isolated-away objects as faint ghosts", does: Act(Action::ToggleXray) },
-    Binding { keys: &[KeyCode::KeyB], label: "B", what: "bounding boxes on/off", does: Act(Action::ToggleBoxes) },
-    Binding { keys: &[KeyCode::KeyZ], label: "Z", what: "freeze culling: keep this view's visible set, fly around it", does: Act(Action::ToggleFreeze) },
-    Binding { keys: &[KeyCode::KeyF], label: "F", what: "frame the selected object: fly back along the view until it fits", does: Act(Action::FrameSelection) },
-    Binding { keys: &[KeyCode::Slash, KeyCode::NumpadDivide], label: "/", what: "find objects by name or path (* ? wildcards): type, Enter flies to a match, Esc cancels", does: Act(Action::Search) },
-    Binding { keys: &[KeyCode::Enter, KeyCode::NumpadEnter], label: "Enter", what: "fly to the search's next match (k of n)", does: Act(Action::NextMatch) },
-    Binding { keys: &[KeyCode::KeyH], label: "H", what: "hide the selection (after a search: all its matches)", does: Act(Action::Hide) },
-    Binding { keys: &[KeyCode::KeyI], label: "I", what: "isolate the selection (after a search: its matches): hide all else", does: Act(Action::Isolate) },
-    Binding { keys: &[KeyCode::KeyU], label: "U", what: "show every object again", does: Act(Action::ShowAll) },
-    Binding { keys: &[KeyCode::KeyV], label: "V", what: "save the view: camera, selection, hidden objects (SCENE.views.json)", does: Act(Action::SaveView) },
-    Binding { keys: &[KeyCode::KeyN], label: "N", what: "restore the next saved view", does: Act(Action::NextView) },
-    Binding { keys: &[KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5, KeyCode::Digit6, KeyCode::Digit7, KeyCode::Digit8, KeyCode::Digit9], label: "1 - 9", what: "restore saved view 1 to 9", does: Does::RestoreView },
-    Binding { keys: &[KeyCode::KeyX], label: "X", what: "section plane at the cursor, facing you: cuts away what is in front (6 at most)", does: Act(Action::SectionPlane) },
-    Binding { keys: &[KeyCode::BracketRight], label: "]", what: "move the last section plane away along its normal (Shift+scroll up too)", does: Act(Action::SectionForward) },
-    Binding { keys: &[KeyCode::BracketLeft], label: "[", what: "move the last section plane back (Shift+scroll down too)", does: Act(Action::SectionBack) },
-    Binding { keys: &[KeyCode::Backslash], label: "\\", what: "flip the last section plane: keep the other side", does: Act(Action::FlipSection) },
-    Binding { keys: &[KeyCode::KeyJ], label: "J", what: "section box around the selection, or around what is in view", does: Act(Action::SectionBox) },
-    Binding { keys: &[KeyCode::Digit0], label: "0", what: "sections on/off", does: Act(Action::ToggleSections) },
-    Binding { keys: &[KeyCode::Delete], label: "Delete", what: "clear every section plane and the box", does: Act(Action::ClearSections) },
-    Binding { keys: &[KeyCode::KeyM], label: "M", what: "measure: click two points for their distance (M or Esc clears)", does: Act(Action::Measure) },
-    Binding { keys: &[KeyCode::KeyR], label: "R", what: "record camera path: start / stop and write", does: Act(Action::ToggleRecord) },
-    Binding { keys: &[KeyCode::KeyP, KeyCode::F12], label: "P / F12", what: "screenshot to PNG", does: Act(Action::Screenshot) },
-    Binding { keys: &[KeyCode::Tab], label: "Tab", what: "HUD on/off", does: Act(Action::ToggleHud) },
-    Binding { keys: &[KeyCode::F1], label: "F1", what: "this help", does: Act(Action::ToggleHelp) },
-    Binding { keys: &[KeyCode::Escape], label: "Esc", what: "clear the measurement; with none, quit", does: Act(Action::Quit) },
-];
-
-/// Mouse controls, not in the key table.
-pub const MOUSE_HELP: &[(&str, &str)] = &[
-    ("drag (any button)", "look around"),
-    (
-        "click",
-        "select the object under the cursor (on nothing: deselect)",
-    ),
-    ("double click", "select it and frame it"),
-    ("scroll", "move speed up / down"),
-    ("Shift+scroll", "move the last section plane away / back"),
-];
 
 /// What a key does, if anything.
 pub fn lookup(key: KeyCode) -> Option<&'static Does> {
-    BINDINGS
-        .iter()
-        .find(|b| b.keys.contains(&key))
-        .map(|b| &b.does)
+    gigawalk_review::keys::lookup(&code_name(key))
 }
 
 /// The saved view a digit key restores: 1 for `1`, ... 9 for `9`.
 pub fn view_number(key: KeyCode) -> Option<usize> {
-    const DIGITS: [KeyCode; 9] = [
-        KeyCode::Digit1,
-        KeyCode::Digit2,
-        KeyCode::Digit3,
-        KeyCode::Digit4,
-        KeyCode::Digit5,
-        KeyCode::Digit6,
-        KeyCode::Digit7,
-        KeyCode::Digit8,
-        KeyCode::Digit9,
-    ];
-    DIGITS.iter().position(|&k| k == key).map(|i| i + 1)
-}
-
-/// The controls as aligned text lines: on-screen help, `--help` and README.
-pub fn help_lines() -> Vec<String> {
-    let rows: Vec<(&str, &str)> = MOUSE_HELP
-        .iter()
-        .copied()
-        .chain(BINDINGS.iter().map(|b| (b.label, b.what)))
-        .collect();
-    let width = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
-    rows.iter()
-        .map(|(k, w)| format!("{k:<width$}  {w}"))
-        .collect()
+    gigawalk_review::keys::view_number(&code_name(key))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Every key the table names, as winit names it.
+    #[rustfmt::skip]
+    const TABLE_KEYS: &[KeyCode] = &[
+        KeyCode::KeyW, KeyCode::ArrowUp, KeyCode::KeyS, KeyCode::ArrowDown, KeyCode::KeyA,
+        KeyCode::ArrowLeft, KeyCode::KeyD, KeyCode::ArrowRight, KeyCode::KeyQ,
+        KeyCode::ControlLeft, KeyCode::Space, KeyCode::ShiftLeft, KeyCode::ShiftRight,
+        KeyCode::KeyG, KeyCode::KeyO, KeyCode::KeyK, KeyCode::KeyC, KeyCode::KeyL, KeyCode::Equal,
+        KeyCode::NumpadAdd, KeyCode::PageUp, KeyCode::Minus, KeyCode::NumpadSubtract,
+        KeyCode::PageDown, KeyCode::KeyY, KeyCode::KeyT, KeyCode::KeyE, KeyCode::F2, KeyCode::F3,
+        KeyCode::F4, KeyCode::KeyB, KeyCode::KeyZ, KeyCode::KeyF, KeyCode::Slash,
+        KeyCode::NumpadDivide, KeyCode::Enter, KeyCode::NumpadEnter, KeyCode::KeyH,
+        KeyCode::KeyI, KeyCode::KeyU, KeyCode::KeyV, KeyCode::KeyN, KeyCode::Digit1,
+        KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5, KeyCode::Digit6,
+        KeyCode::Digit7, KeyCode::Digit8, KeyCode::Digit9, KeyCode::KeyX, KeyCode::BracketRight,
+        KeyCode::BracketLeft, KeyCode::Backslash, KeyCode::KeyJ, KeyCode::Digit0,
+        KeyCode::Delete, KeyCode::KeyM, KeyCode::KeyR, KeyCode::KeyP, KeyCode::F12, KeyCode::Tab,
+        KeyCode::F1, KeyCode::Escape,
+    ];
+
     #[test]
-    fn no_key_is_bound_twice() {
-        let mut seen = std::collections::HashSet::new();
+    fn every_key_in_the_table_is_a_winit_key_code() {
+        let names: Vec<String> = TABLE_KEYS.iter().map(|&k| code_name(k)).collect();
         for b in BINDINGS {
             for k in b.keys {
-                assert!(seen.insert(*k), "{k:?} is bound twice");
+                assert!(
+                    names.iter().any(|n| n == k),
+                    "{k:?} ({}) is no winit KeyCode's name",
+                    b.label
+                );
             }
+        }
+        // And every one of those is a key the table binds.
+        for &k in TABLE_KEYS {
+            assert!(lookup(k).is_some(), "{k:?} is bound to nothing");
         }
     }
 
     #[test]
-    fn wasd_moves_z_freezes_f_frames_e_draws_edges_and_f1_helps() {
+    fn winit_keys_find_their_bindings() {
         assert!(matches!(
             lookup(KeyCode::KeyW),
             Some(Does::Move(Movement::Forward))
         ));
         assert!(matches!(
-            lookup(KeyCode::KeyZ),
-            Some(Does::Act(Action::ToggleFreeze))
+            lookup(KeyCode::BracketRight),
+            Some(Does::Act(Action::SectionForward))
         ));
         assert!(matches!(
-            lookup(KeyCode::KeyF),
-            Some(Does::Act(Action::FrameSelection))
-        ));
-        assert!(matches!(
-            lookup(KeyCode::KeyH),
-            Some(Does::Act(Action::Hide))
-        ));
-        assert!(matches!(
-            lookup(KeyCode::F1),
-            Some(Does::Act(Action::ToggleHelp))
-        ));
-        assert!(matches!(
-            lookup(KeyCode::KeyX),
-            Some(Does::Act(Action::SectionPlane))
-        ));
-        assert!(matches!(
-            lookup(KeyCode::KeyM),
-            Some(Does::Act(Action::Measure))
-        ));
-        assert!(matches!(
-            lookup(KeyCode::KeyE),
-            Some(Does::Act(Action::ToggleEdges))
+            lookup(KeyCode::NumpadAdd),
+            Some(Does::Act(Action::PixelErrorUp))
         ));
         assert!(matches!(
             lookup(KeyCode::F4),
             Some(Does::Act(Action::ToggleXray))
         ));
-        assert!(matches!(
-            lookup(KeyCode::Space),
-            Some(Does::Move(Movement::Up))
-        ));
         assert!(lookup(KeyCode::F5).is_none());
-    }
-
-    #[test]
-    fn digits_restore_views_one_to_nine() {
-        assert!(matches!(lookup(KeyCode::Digit5), Some(Does::RestoreView)));
         assert_eq!(view_number(KeyCode::Digit1), Some(1));
         assert_eq!(view_number(KeyCode::Digit9), Some(9));
         assert_eq!(view_number(KeyCode::Digit0), None);
-        assert_eq!(view_number(KeyCode::KeyV), None);
-        // Every key bound to RestoreView has a number.
-        for b in BINDINGS {
-            if matches!(b.does, Does::RestoreView) {
-                assert!(b.keys.iter().all(|&k| view_number(k).is_some()));
-            }
-        }
-    }
-
-    #[test]
-    fn help_lists_every_binding_and_the_mouse() {
-        let help = help_lines();
-        assert_eq!(help.len(), BINDINGS.len() + MOUSE_HELP.len());
-        assert!(help
-            .iter()
-            .any(|l| l.contains("scroll") && l.contains("speed")));
-        assert!(help.iter().all(|l| l.is_ascii()), "the HUD font is ASCII");
     }
 }

@@ -4,7 +4,8 @@
 //! Main types: [`FlyController`] (the camera: mouse look, WASD/QE, walk
 //! mode), [`Settings`] (the toggles, and which need the pipeline
 //! restarted), [`controls::BINDINGS`] (the key table that input, the
-//! on-screen help and `--help` share), [`PathRecorder`] (camera paths),
+//! on-screen help and `--help` share, the browser page's too:
+//! `gigawalk_review::keys`, looked up here by winit's key codes), [`PathRecorder`] (camera paths),
 //! [`hud_lines`] (the HUD text), [`overlay_boxes`] (node boxes coloured by
 //! what culling did), [`Objects`] (the selection, search, hidden objects
 //! and saved views), [`Sections`] (section planes and box), [`Measure`]

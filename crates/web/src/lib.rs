@@ -17,8 +17,9 @@
 //!
 //! The scene file as the byte ranges fetched so far is the scene
 //! crate's (`gigawalk_scene::sparse`): the page fetches what it names.
-//! A view's link (`#view=`) is the reviewer state's
-//! (`gigawalk_review::link`).
+//! A view's link (`#view=`) and the key table are the reviewer state's
+//! (`gigawalk_review::link`, `gigawalk_review::keys`), so the page and
+//! the native viewer answer the same keys the same way.
 //!
 //! The parts that do not touch the browser build and are tested natively.
 

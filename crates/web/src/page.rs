@@ -25,6 +25,7 @@ use std::rc::Rc;
 use gigawalk_cull::{default_near, step_pixel_error, Camera, TraversalOptions, Viewport};
 use gigawalk_gpu::{GpuContext, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
 use gigawalk_review::fly::{FlyController, Movement};
+use gigawalk_review::keys::{self, Action, Does};
 use gigawalk_review::sections::Sections;
 use gigawalk_runtime::{
     CameraRequest, FrameReport, Presenter, Runtime, RuntimeOptions, Stepped, SteppedOptions,
@@ -282,20 +283,6 @@ fn query(name: &str) -> Option<String> {
         .filter_map(|kv| kv.split_once('='))
         .find(|(k, _)| *k == name)
         .map(|(_, v)| v.to_string())
-}
-
-/// The page's movement keys (`KeyboardEvent.code`), as the native viewer's.
-fn movement(code: &str) -> Option<Movement> {
-    Some(match code {
-        "KeyW" | "ArrowUp" => Movement::Forward,
-        "KeyS" | "ArrowDown" => Movement::Back,
-        "KeyA" | "ArrowLeft" => Movement::Left,
-        "KeyD" | "ArrowRight" => Movement::Right,
-        "KeyQ" | "ControlLeft" => Movement::Down,
-        "Space" => Movement::Up,
-        "ShiftLeft" | "ShiftRight" => Movement::Fast,
-        _ => return None,
-    })
 }
 
 /// A pointer down on the canvas: its id, where it is now and where it
@@ -670,32 +657,30 @@ impl App {
         }
     }
 
-    /// A key went down or up; whether the page used it.
+    /// A key (`KeyboardEvent.code`) went down or up, looked up in the
+    /// viewer's table; whether the page used it.
     fn key(&mut self, code: &str, down: bool, app: &Rc<RefCell<App>>) -> bool {
-        if let Some(m) = movement(code) {
-            self.leave_pose();
-            if down {
-                self.held.insert(m);
-            } else {
-                self.held.remove(&m);
+        let action = match keys::lookup(code) {
+            Some(Does::Move(m)) => {
+                self.leave_pose();
+                if down {
+                    self.held.insert(*m);
+                } else {
+                    self.held.remove(m);
+                }
+                return true;
             }
-            return true;
-        }
-        if !down {
-            return false;
-        }
-        match code {
-            "KeyO" => self.mode.occlusion = !self.mode.occlusion,
-            "KeyL" => self.mode.hlod = !self.mode.hlod,
-            "Minus" | "NumpadSubtract" | "PageDown" => {
-                self.pixel_error = step_pixel_error(self.pixel_error, false)
-            }
-            "Equal" | "NumpadAdd" | "PageUp" => {
-                self.pixel_error = step_pixel_error(self.pixel_error, true)
-            }
-            "Tab" => self.hud = !self.hud,
-            "KeyG" => self.fly.toggle_walk(),
-            _ => return self.review_key(code, app),
+            Some(Does::Act(a)) if down => *a,
+            _ => return false,
+        };
+        match action {
+            Action::ToggleOcclusion => self.mode.occlusion = !self.mode.occlusion,
+            Action::ToggleHlod => self.mode.hlod = !self.mode.hlod,
+            Action::PixelErrorDown => self.pixel_error = step_pixel_error(self.pixel_error, false),
+            Action::PixelErrorUp => self.pixel_error = step_pixel_error(self.pixel_error, true),
+            Action::ToggleHud => self.hud = !self.hud,
+            Action::ToggleWalk => self.fly.toggle_walk(),
+            _ => return self.review_key(action, app),
         }
         true
     }

@@ -228,27 +228,27 @@ impl App {
         }
     }
 
-    /// The review keys; whether `code` was one.
-    pub(super) fn review_key(&mut self, code: &str, app: &Rc<RefCell<App>>) -> bool {
-        match code {
-            "KeyH" => {
+    /// The review keys' actions; whether `action` was one.
+    pub(super) fn review_key(&mut self, action: Action, app: &Rc<RefCell<App>>) -> bool {
+        match action {
+            Action::Hide => {
                 let r = self.review.objects.hide();
                 self.review.say_either(r);
             }
-            "KeyI" => {
+            Action::Isolate => {
                 let r = self.review.objects.isolate();
                 self.review.say_either(r);
             }
-            "KeyU" => {
+            Action::ShowAll => {
                 let r = self.review.objects.show_all();
                 self.review.say_either(r);
             }
-            "KeyF" => self.frame_selection(),
-            "Enter" | "NumpadEnter" => {
+            Action::FrameSelection => self.frame_selection(),
+            Action::NextMatch => {
                 let found = self.review.objects.next_match();
                 self.after_find(found);
             }
-            "Slash" | "NumpadDivide" => {
+            Action::Search => {
                 let text = web_sys::window()
                     .and_then(|w| {
                         w.prompt_with_message("find objects by name or path (* ? wildcards)")
@@ -260,30 +260,34 @@ impl App {
                     self.after_find(found);
                 }
             }
-            "KeyX" => spawn_local(section_plane_at(app.clone(), self.review.cursor)),
-            "BracketRight" | "BracketLeft" => {
-                let steps = if code == "BracketRight" { 1.0 } else { -1.0 };
+            Action::SectionPlane => spawn_local(section_plane_at(app.clone(), self.review.cursor)),
+            Action::SectionForward | Action::SectionBack => {
+                let steps = if action == Action::SectionForward {
+                    1.0
+                } else {
+                    -1.0
+                };
                 let eye = self.camera().position;
                 let diagonal = self.reader.skeleton().bounds().diagonal();
                 if !self.review.sections.move_active(steps, eye, diagonal) {
                     self.review.say(NO_PLANE.into());
                 }
             }
-            "Backslash" => {
+            Action::FlipSection => {
                 if !self.review.sections.flip_active() {
                     self.review.say(NO_PLANE.into());
                 }
             }
-            "KeyJ" => spawn_local(section_box(app.clone())),
-            "Digit0" => {
+            Action::SectionBox => spawn_local(section_box(app.clone())),
+            Action::ToggleSections => {
                 let m = self.review.sections.toggle();
                 self.review.say(m);
             }
-            "Delete" => {
+            Action::ClearSections => {
                 let m = self.review.sections.clear();
                 self.review.say(m);
             }
-            "KeyV" => {
+            Action::SaveView => {
                 let r = self.share_link();
                 self.review.say_either(r);
             }

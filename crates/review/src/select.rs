@@ -12,7 +12,6 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Instant;
 
 use gigawalk_cull::{default_near, Camera, PickHit, PickStats, Section, Viewport, Visibility};
 use gigawalk_scene::objects::{ObjectRecord, ObjectTable, Pattern};
@@ -20,6 +19,7 @@ use gigawalk_scene::path::CameraPath;
 use gigawalk_scene::views::{self, SavedView};
 use gigawalk_scene::{SceneReader, Skeleton};
 use glam::DVec3;
+use web_time::Instant;
 
 /// Why a pick, find or hide could not answer.
 #[derive(Debug, thiserror::Error)]

@@ -544,6 +544,131 @@ fn a_scene_ten_times_the_budget_walks_within_it() {
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
 }
 
+/// A streamed scene with objects hidden: the page draws at each pose what
+/// replay draws with the same objects hidden under a budget, settled (no
+/// stand-in left; none of a node with a hidden object is ever drawn, the
+/// runtime's one streaming rule, which both run).
+#[test]
+fn a_streamed_scene_with_objects_hidden_draws_what_replay_draws() {
+    if !can_run("a_streamed_scene_with_objects_hidden_draws_what_replay_draws") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk) = plant(dir.path(), "60k");
+    let file = std::fs::metadata(&gwk).unwrap().len() as f64;
+    // Half the file: streamed, with room for a pose whose partial leaves
+    // draw their full detail.
+    let budget_mb = file / 2.0 / (1u64 << 20) as f64;
+    let pipes = json(&gigawalk_ok(&["find", s(&gwk), "pipe", "--json"]).stdout);
+    let hidden: Vec<gigawalk_scene::views::ObjectRef> = pipes
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| gigawalk_scene::views::ObjectRef {
+            id: o["id"].as_u64().unwrap() as u32,
+            path: format!(
+                "{}/{}",
+                o["file"].as_str().unwrap(),
+                o["path"].as_str().unwrap()
+            ),
+        })
+        .collect();
+    assert!(hidden.len() >= 2, "{pipes}");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let pose = gigawalk_scene::path::CameraPath::parse(&text)
+        .unwrap()
+        .poses[0];
+    let view = gigawalk_scene::views::SavedView {
+        name: "pipes hidden".into(),
+        position: pose.position.to_array(),
+        orientation: pose.orientation.to_array(),
+        fovy_deg: pose.fovy.to_degrees(),
+        selected: Vec::new(),
+        hidden: hidden.clone(),
+        isolated: None,
+        section: None,
+        xray: false,
+    };
+    let fragment = format!(
+        "{}={}",
+        gigawalk_review::link::KEY,
+        gigawalk_review::link::encode(&view)
+    );
+    let served = serve(&gwk);
+    let report = drive(&[
+        "--url",
+        &served.url,
+        "--query",
+        &format!("budget={budget_mb:.4}"),
+        "--fragment",
+        &fragment,
+        "--path",
+        s(&path),
+        "--poses",
+        "5,11,0",
+        "--modes",
+        "hlod",
+        "--settle",
+        "8",
+    ]);
+    assert_eq!(report["first"]["state"], "running", "{report}");
+    let out = dir.path().join("replay");
+    gigawalk_ok(&[
+        "replay",
+        s(&gwk),
+        "--path",
+        s(&path),
+        "--out",
+        s(&out),
+        "--adapter",
+        "null",
+        "--modes",
+        "hlod",
+        "--hide",
+        "pipe",
+        "--memory-budget",
+        &format!("{}", (file / 2.0) as u64),
+        "--width",
+        "640",
+        "--height",
+        "360",
+    ]);
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name| head.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let loaded: f64 = rows
+        .iter()
+        .map(|f| f[col("loaded_bytes")].parse::<f64>().unwrap())
+        .sum();
+    assert!(loaded > 0.0, "replay did not stream: {csv}");
+    let native: Vec<(usize, f64)> = rows
+        .into_iter()
+        .map(|f| {
+            (
+                f[col("frame")].parse().unwrap(),
+                f[col("drawn_triangles")].parse().unwrap(),
+            )
+        })
+        .collect();
+    for p in report["poses"].as_array().unwrap() {
+        let pose = num(p, "pose") as usize;
+        assert_eq!(num(p, "hidden"), hidden.len() as f64, "{p}");
+        assert_eq!(
+            p["settled"], true,
+            "pose {pose} never drew all it wanted: {p}"
+        );
+        let want = native.iter().find(|(f, _)| *f == pose).unwrap().1;
+        assert_eq!(
+            num(p, "triangles"),
+            want,
+            "pose {pose}: page against replay"
+        );
+    }
+    assert_eq!(report["last"]["failed_lods"], 0, "{report}");
+}
+
 /// A site written by `gigawalk web` with its scene replaced by `bytes`
 /// (or removed), served by the driver (`--no-range`: a server that
 /// answers every request whole).

@@ -39,6 +39,7 @@ mod frustum;
 mod grid;
 mod hzb;
 pub mod lod;
+mod mode;
 mod nearest;
 mod object_space;
 mod occlusion;
@@ -63,6 +64,7 @@ pub use grid::{
 };
 pub use hzb::{auto_hzb_level, level_sizes, Hzb, HzbError, HzbLevel, Reduction, HZB_READ_TEXELS};
 pub use lod::select_lod;
+pub use mode::Mode;
 pub use object_space::{occlusion, pair_fully_occludes, ConvexOccluder, Occlusion, TangentPlanes};
 pub use occlusion::{HzbOcclusion, NoOcclusion, OcclusionTest, DEPTH_SLACK, MAX_SPLITS, SPLITS};
 pub use pick::{pick, PickHit, PickStats, Ray};

@@ -1,71 +1,7 @@
 //! The rendering modes a replay compares: the paper's Table 2 rows.
 
-use gigawalk_cull::TraversalOptions;
+pub use gigawalk_cull::Mode;
 use gigawalk_runtime::CullMethod;
-
-/// One row of the paper's Table 2 (Section 6.3.3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Mode {
-    /// View-frustum culling only, every leaf at full detail: the baseline
-    /// every speed-up is measured against, and the accuracy reference.
-    Vfc,
-    /// HLODs selected by pixel error, plus frustum culling.
-    Hlod,
-    /// HZB occlusion culling plus frustum culling, full detail.
-    Occ,
-    /// Occlusion culling plus HLODs: GigaWalk.
-    Och,
-}
-
-impl Mode {
-    pub const ALL: [Mode; 4] = [Mode::Vfc, Mode::Hlod, Mode::Occ, Mode::Och];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::Vfc => "vfc",
-            Mode::Hlod => "hlod",
-            Mode::Occ => "occ",
-            Mode::Och => "och",
-        }
-    }
-
-    /// Whether the mode's output depends on the pixel-error tolerance.
-    /// `vfc` and `occ` draw every leaf at full detail, so a pixel-error
-    /// sweep runs them once, at 0.
-    pub fn uses_pixel_error(self) -> bool {
-        matches!(self, Mode::Hlod | Mode::Och)
-    }
-
-    /// The traversal this mode runs with at `pixel_error`.
-    pub fn traversal(self, pixel_error: f64) -> TraversalOptions {
-        TraversalOptions::mode(
-            matches!(self, Mode::Occ | Mode::Och),
-            self.uses_pixel_error(),
-            pixel_error,
-        )
-    }
-}
-
-impl std::fmt::Display for Mode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Mode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s.trim() {
-            "vfc" => Ok(Mode::Vfc),
-            "hlod" => Ok(Mode::Hlod),
-            "occ" => Ok(Mode::Occ),
-            "och" => Ok(Mode::Och),
-            other => Err(format!(
-                "unknown mode {other:?} (expected vfc, hlod, occ or och)"
-            )),
-        }
-    }
-}
 
 /// One run of a replay: a mode, its pixel error, and the occlusion
 /// culler (`None` for the modes without occlusion).

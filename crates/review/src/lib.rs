@@ -15,7 +15,8 @@
 //! - [`keys`]: the key bindings, one table the viewer and the page look
 //!   keys up in (by their `KeyboardEvent.code` names) and the help text
 //!   comes from;
-//! - [`fly`]: the fly / walk camera controller;
+//! - [`fly`]: the fly / walk camera controller, and [`gestures`] what
+//!   pointers dragged and pinched on a touch screen ask of it;
 //! - [`group`]: counts written in groups of thousands.
 //!
 //! Pure state and text: the frame loops (the viewer's and the page's) read
@@ -27,6 +28,7 @@
 #![forbid(unsafe_code)]
 
 pub mod fly;
+pub mod gestures;
 pub mod keys;
 pub mod link;
 pub mod objects;

@@ -22,9 +22,10 @@ use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 use std::rc::Rc;
 
-use gigawalk_cull::{default_near, step_pixel_error, Camera, TraversalOptions, Viewport};
+use gigawalk_cull::{default_near, step_pixel_error, Camera, Mode, Viewport};
 use gigawalk_gpu::{GpuContext, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
 use gigawalk_review::fly::{FlyController, Movement};
+use gigawalk_review::gestures::{Gesture, Pointers};
 use gigawalk_review::keys::{self, Action, Does};
 use gigawalk_review::sections::Sections;
 use gigawalk_runtime::{
@@ -58,42 +59,6 @@ const DEFAULT_BUDGET_MB: u64 = 256;
 /// for most of a small scene, and one corrupt LOD in it would stop the
 /// page; fetched as the walk asks, a LOD that fails is said and left out.
 const PINNED_BYTES: u64 = 0;
-
-/// What traversal culls and draws: frustum culling always, occlusion
-/// culling against the HZB, HLODs at the pixel error (replay's modes).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct Mode {
-    occlusion: bool,
-    hlod: bool,
-}
-
-impl Mode {
-    const ALL: [(&'static str, Mode); 4] = [
-        ("vfc", Mode::new(false, false)),
-        ("hlod", Mode::new(false, true)),
-        ("occ", Mode::new(true, false)),
-        ("och", Mode::new(true, true)),
-    ];
-
-    const fn new(occlusion: bool, hlod: bool) -> Mode {
-        Mode { occlusion, hlod }
-    }
-
-    fn name(self) -> &'static str {
-        Mode::ALL
-            .iter()
-            .find(|(_, m)| *m == self)
-            .map_or("?", |(n, _)| n)
-    }
-
-    fn parse(name: &str) -> Option<Mode> {
-        Mode::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m)
-    }
-
-    fn traversal(self, pixel_error: f64) -> TraversalOptions {
-        TraversalOptions::mode(self.occlusion, self.hlod, pixel_error)
-    }
-}
 
 /// What the page reports (as JSON, through [`stats`]).
 #[derive(Default, serde::Serialize)]
@@ -285,10 +250,6 @@ fn query(name: &str) -> Option<String> {
         .map(|(_, v)| v.to_string())
 }
 
-/// A pointer down on the canvas: its id, where it is now and where it
-/// was pressed (CSS pixels).
-type Pointer = (i32, (f64, f64), (f64, f64));
-
 /// A LOD fetch's outcome, handed from its promise to the next frame.
 type Arrivals = Rc<RefCell<Vec<(u32, Result<Vec<u8>, String>)>>>;
 
@@ -315,7 +276,7 @@ struct App {
     fly: FlyController,
     held: HashSet<Movement>,
     /// Pointers down on the canvas: one looks around, two pinch to fly.
-    pointers: Vec<Pointer>,
+    pointers: Pointers,
     review: review::Review,
     mode: Mode,
     pixel_error: f64,
@@ -583,7 +544,7 @@ impl App {
             s.settled = st.missing == 0
                 && st.substituted == 0
                 && in_flight == 0
-                && (r.occlusion_used || !mode.occlusion);
+                && (r.occlusion_used || !mode.occlusion());
             s.mode = mode.name().into();
             s.pixel_error = pixel_error;
             s.selected = selected;
@@ -674,8 +635,10 @@ impl App {
             _ => return false,
         };
         match action {
-            Action::ToggleOcclusion => self.mode.occlusion = !self.mode.occlusion,
-            Action::ToggleHlod => self.mode.hlod = !self.mode.hlod,
+            Action::ToggleOcclusion => {
+                self.mode = Mode::of(!self.mode.occlusion(), self.mode.hlod())
+            }
+            Action::ToggleHlod => self.mode = Mode::of(self.mode.occlusion(), !self.mode.hlod()),
             Action::PixelErrorDown => self.pixel_error = step_pixel_error(self.pixel_error, false),
             Action::PixelErrorUp => self.pixel_error = step_pixel_error(self.pixel_error, true),
             Action::ToggleHud => self.hud = !self.hud,
@@ -733,8 +696,7 @@ pub fn show_pose(i: u32) -> Result<(), JsValue> {
 #[wasm_bindgen]
 pub fn set_mode(mode: &str) -> Result<(), JsValue> {
     with_app(|app| {
-        app.mode =
-            Mode::parse(mode).ok_or_else(|| format!("mode {mode:?}: vfc, hlod, occ or och"))?;
+        app.mode = mode.parse()?;
         Ok(())
     })
 }
@@ -960,9 +922,9 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         arrivals: Rc::new(RefCell::new(Vec::new())),
         fly: FlyController::overview(&bounds, FOVY_DEGREES.to_radians()),
         held: HashSet::new(),
-        pointers: Vec::new(),
+        pointers: Pointers::default(),
         review: review::Review::new(),
-        mode: Mode::new(true, true),
+        mode: Mode::Och,
         pixel_error,
         hud: true,
         near: default_near(&bounds),
@@ -990,13 +952,6 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     run_frames(app);
     Ok(())
 }
-
-/// Touch: spreading two fingers this many CSS pixels apart flies one
-/// second forward at the current speed (pinching in flies back).
-const PINCH_PIXELS_PER_SECOND: f64 = 100.0;
-/// A press and release closer than this (CSS pixels) is a click, not a
-/// drag.
-const CLICK_SLOP: f64 = 4.0;
 
 /// Where a pointer event is on the canvas, in CSS pixels.
 fn css_point(e: &PointerEvent) -> (f64, f64) {
@@ -1037,9 +992,7 @@ fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsVal
         let p = css_point(&e);
         let mut app = a.borrow_mut();
         app.review.cursor = app.canvas_point(p);
-        let id = e.pointer_id();
-        app.pointers.retain(|q| q.0 != id);
-        app.pointers.push((id, p, p));
+        app.pointers.press(e.pointer_id(), p);
     });
     canvas.add_event_listener_with_callback("pointerdown", f.as_ref().unchecked_ref())?;
     f.forget();
@@ -1048,28 +1001,19 @@ fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsVal
         let p = css_point(&e);
         let mut app = a.borrow_mut();
         app.review.cursor = app.canvas_point(p);
-        let id = e.pointer_id();
-        let Some(i) = app.pointers.iter().position(|q| q.0 == id) else {
-            return;
-        };
-        let before = app.pointers[i].1;
-        match app.pointers.len() {
-            1 => {
+        match app.pointers.moved(e.pointer_id(), p) {
+            Gesture::Look(dx, dy) => {
                 app.leave_pose();
-                app.fly.look(p.0 - before.0, p.1 - before.1);
+                app.fly.look(dx, dy);
             }
-            2 => {
-                let other = app.pointers[1 - i].1;
-                let gap = |q: (f64, f64)| (q.0 - other.0).hypot(q.1 - other.1);
-                let spread = gap(p) - gap(before);
+            Gesture::Fly(seconds) => {
                 app.leave_pose();
                 let forward = app.fly.orientation() * glam::DVec3::NEG_Z;
-                let step = app.fly.speed * spread / PINCH_PIXELS_PER_SECOND;
+                let step = app.fly.speed * seconds;
                 app.fly.position += forward * step;
             }
-            _ => {}
+            Gesture::None => {}
         }
-        app.pointers[i].1 = p;
     });
     canvas.add_event_listener_with_callback("pointermove", f.as_ref().unchecked_ref())?;
     f.forget();
@@ -1079,12 +1023,9 @@ fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsVal
             let id = e.pointer_id();
             let click = {
                 let mut app = a.borrow_mut();
-                let Some(i) = app.pointers.iter().position(|q| q.0 == id) else {
-                    return;
-                };
-                let (_, now, pressed) = app.pointers.remove(i);
-                let still = (now.0 - pressed.0).hypot(now.1 - pressed.1) < CLICK_SLOP;
-                (e.type_() == "pointerup" && still && app.pointers.is_empty() && e.button() == 0)
+                let released = e.type_() == "pointerup" && e.button() == 0;
+                app.pointers
+                    .release(id, released)
                     .then(|| app.canvas_point(css_point(&e)))
             };
             if let Some(at) = click {

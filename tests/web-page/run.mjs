@@ -25,8 +25,9 @@
 // --review POSE walks the review tools at that pose of --path (after
 // the modes), as a user does, in occ with the HUD off: pick at pixel
 // X,Y; click it (select); X with the pointer there (a section plane);
-// H (hide it); occ against vfc with both; the view's link opened in a
-// second tab; U and Delete (show all, no section); a finger dragged
+// H (hide it); occ against vfc with both; E (edges: the image shown
+// changes, the frame read back does not) and F4 (x-ray: the hidden object
+// as a ghost); the view's link opened in a second tab; U and Delete (show all, no section); a finger dragged
 // across the canvas (touch). Each step's stats, picks and image
 // comparisons are in the report's "review". Exit status 0 whenever a
 // report was written (tests judge it); 2 when Chromium or the page could
@@ -234,7 +235,26 @@ try {
     r.occ_vs_vfc = await diff(await shot('review-hidden-vfc'), hidden);
     await p.evaluate(() => window.gigawalk.setMode('occ'));
     await settle();
-    // The view's link in a second tab shows the same image.
+    // Edges (E) change the shown image and not the frame read back for
+    // accuracy; x-ray (F4) shows the hidden object as a ghost.
+    const frameSum = () => p.evaluate(async () => {
+      const f = await window.gigawalk.readFrame();
+      let h = 0;
+      for (const v of f.colour) h = (Math.imul(h, 31) + v) >>> 0;
+      for (const d of f.depth) h = (Math.imul(h, 31) + Math.round(d * 1e7)) >>> 0;
+      return h;
+    });
+    const drawnPlain = await frameSum();
+    await p.keyboard.press('KeyE');
+    await settle();
+    r.edges_vs_hidden = await diff(hidden, await shot('review-edges'));
+    r.edges_readback_same = (await frameSum()) === drawnPlain;
+    await p.keyboard.press('KeyE');
+    await p.keyboard.press('F4');
+    r.xray = await settle();
+    const xray = await shot('review-xray');
+    r.xray_vs_hidden = await diff(hidden, xray);
+    // The view's link (x-ray on) in a second tab shows the same image.
     r.link = await p.evaluate(() => window.gigawalk.viewLink());
     const tab = await browser.newPage();
     await tab.setViewport({ width: 640, height: 360 });
@@ -250,10 +270,11 @@ try {
     r.link_stats = await settle(tab);
     const linked = await tab.screenshot({ encoding: 'base64' });
     if (shots) fs.writeFileSync(path.join(shots, 'review-link.png'), Buffer.from(linked, 'base64'));
-    r.link_vs_hidden = await diff(hidden, linked);
+    r.link_vs_xray = await diff(xray, linked);
     await tab.close();
     // U shows all again; Delete clears the section: the first image.
     await p.bringToFront();
+    await p.keyboard.press('F4');
     await p.keyboard.press('KeyU');
     await p.keyboard.press('Delete');
     await until((x) => x.hidden === 0 && x.section === null);

@@ -23,7 +23,9 @@ use std::ops::Range;
 use std::rc::Rc;
 
 use gigawalk_cull::{default_near, step_pixel_error, Camera, Mode, Viewport};
-use gigawalk_gpu::{GpuContext, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
+use gigawalk_gpu::{
+    Antialias, GpuContext, Look, OverlayFrame, OverlayText, VisiblePass, WindowSurface,
+};
 use gigawalk_review::fly::{FlyController, Movement};
 use gigawalk_review::gestures::{Gesture, Pointers};
 use gigawalk_review::keys::{self, Action, Does};
@@ -281,6 +283,10 @@ struct App {
     mode: Mode,
     pixel_error: f64,
     hud: bool,
+    /// What the shown image adds (the viewer's E, F2 and F3), and x-ray:
+    /// hidden objects drawn as faint ghosts (F4).
+    look: Look,
+    xray: bool,
     near: f64,
     /// A camera path's poses (`load_path`), and the pose shown exactly
     /// (one of them, `show_pose`, or a link's) until the mouse or a key
@@ -468,6 +474,8 @@ impl App {
         self.fly.update(dt, &self.held);
         self.refresh_visibility();
         let request = CameraRequest {
+            look: self.look,
+            ghosts: self.review.ghosts.clone().filter(|_| self.xray),
             pixel_error: Some(self.pixel_error),
             visibility: self.review.visibility.clone(),
             section: self.review.sections.current(),
@@ -585,6 +593,11 @@ impl App {
                     "pixel error {}  (O: occlusion, L: HLOD, -/+: error, Tab: HUD)",
                     s.pixel_error
                 ),
+                format!(
+                    "look: {}  x-ray {}  (E edges, F2 AO, F3 FXAA, F4 x-ray)",
+                    self.look.describe(),
+                    if self.xray { "on" } else { "off" }
+                ),
             ]
             .into_iter()
             .chain(
@@ -643,6 +656,15 @@ impl App {
             Action::PixelErrorUp => self.pixel_error = step_pixel_error(self.pixel_error, true),
             Action::ToggleHud => self.hud = !self.hud,
             Action::ToggleWalk => self.fly.toggle_walk(),
+            Action::ToggleEdges => self.look.edges = !self.look.edges,
+            Action::ToggleAmbientOcclusion => self.look.ao = !self.look.ao,
+            Action::ToggleAntialiasing => {
+                self.look.aa = match self.look.aa {
+                    Antialias::Off => Antialias::Fxaa,
+                    Antialias::Fxaa => Antialias::Off,
+                }
+            }
+            Action::ToggleXray => self.xray = !self.xray,
             _ => return self.review_key(action, app),
         }
         true
@@ -925,6 +947,8 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         pointers: Pointers::default(),
         review: review::Review::new(),
         mode: Mode::Och,
+        look: Look::PLAIN,
+        xray: false,
         pixel_error,
         hud: true,
         near: default_near(&bounds),

@@ -476,11 +476,16 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
     // pixel against frustum culling alone.
     assert_eq!(num(&r["occ_vs_vfc"], "pixels"), 0.0, "{r}");
     assert!(num(&r["hidden_vfc"], "triangles") >= num(&r["hidden"], "triangles"));
+    // Edges change the image shown and leave the frame read back for
+    // accuracy as it was; x-ray draws the hidden object as a ghost.
+    assert!(num(&r["edges_vs_hidden"], "pixels") > 0.0, "{r}");
+    assert_eq!(r["edges_readback_same"], true, "{r}");
+    assert!(num(&r["xray_vs_hidden"], "pixels") > 0.0, "{r}");
     // The view's link, opened in a second tab, shows the same image:
-    // camera, hidden object and section.
+    // camera, hidden object, section and x-ray.
     assert!(r["link"].as_str().unwrap().contains("#view="), "{r}");
     assert_eq!(r["link_stats"]["hidden"], 1, "{}", r["link_stats"]);
-    assert_eq!(num(&r["link_vs_hidden"], "pixels"), 0.0, "{r}");
+    assert_eq!(num(&r["link_vs_xray"], "pixels"), 0.0, "{r}");
     // U and Delete: the first image again.
     assert_eq!(r["restored"]["hidden"], 0, "{}", r["restored"]);
     assert_eq!(num(&r["restored_vs_before"], "pixels"), 0.0, "{r}");

@@ -40,6 +40,8 @@ pub(super) struct Review {
     /// Hidden objects and the highlighted selection, as traversal and the
     /// passes see them; rebuilt when `objects` changes.
     pub visibility: Option<Arc<Visibility>>,
+    /// X-ray's ghosts of the hidden objects, rebuilt with `visibility`.
+    pub ghosts: Option<Arc<Visibility>>,
     /// Whether the object table has been asked for.
     pub table_asked: bool,
     /// A link's view whose objects wait for the table.
@@ -56,6 +58,7 @@ impl Review {
             objects: Objects::new(Err("the object table is still loading".into()), None),
             sections: Sections::default(),
             visibility: None,
+            ghosts: None,
             table_asked: false,
             pending: None,
             message: None,
@@ -172,6 +175,7 @@ impl App {
     pub(super) fn refresh_visibility(&mut self) {
         if self.review.objects.take_changed() {
             self.review.visibility = self.review.objects.visibility(self.reader.skeleton());
+            self.review.ghosts = self.review.objects.ghosts(self.reader.skeleton());
             let (hidden, _) = self.review.objects.hidden_count();
             set_stats(|s| s.hidden = hidden);
         }
@@ -188,6 +192,7 @@ impl App {
         };
         let mut v = self.review.objects.saved_view("link", &pose);
         v.section = self.review.sections.saved();
+        v.xray = self.xray;
         v
     }
 
@@ -196,6 +201,7 @@ impl App {
     pub(super) fn restore_view(&mut self, view: SavedView) -> Result<(), String> {
         // Shown exactly (roll included) until the mouse or a key moves it.
         self.shown = Some(view.pose()?);
+        self.xray = view.xray;
         let m = self.review.sections.restore(view.section.as_ref());
         if !m.is_empty() {
             web_sys::console::log_1(&m.into());

@@ -15,6 +15,9 @@
 //! - [`keys`]: the key bindings, one table the viewer and the page look
 //!   keys up in (by their `KeyboardEvent.code` names) and the help text
 //!   comes from;
+//! - [`measure`]: a distance measured between two picked points (M,
+//!   click, click), its label and its segment on screen;
+//! - [`recorder`]: the camera recorded as a path that replay reads back;
 //! - [`fly`]: the fly / walk camera controller, and [`gestures`] what
 //!   pointers dragged and pinched on a touch screen ask of it;
 //! - [`group`]: counts written in groups of thousands.
@@ -31,7 +34,9 @@ pub mod fly;
 pub mod gestures;
 pub mod keys;
 pub mod link;
+pub mod measure;
 pub mod objects;
+pub mod recorder;
 pub mod sections;
 pub mod select;
 

@@ -42,14 +42,14 @@ use winit::platform::pump_events::{EventLoopExtPumpEvents, PumpStatus};
 use crate::boxes::CullSets;
 use crate::hud::{FrameClock, ViewerState};
 use crate::image::ScreenshotError;
-use crate::measure::Measure;
 use crate::objects::{view_names, Objects, NO_IDENTITY};
-use crate::recorder::{next_free_name, PathRecorder};
 use crate::sections::Sections;
 use crate::settings::Settings;
 use camera_source::LiveSource;
 use frame_loop::LoopState;
 use gigawalk_review::fly::FlyController;
+use gigawalk_review::measure::Measure;
+use gigawalk_review::recorder::{next_free_name, PathRecorder};
 use presenter::ViewerPresenter;
 use window::App;
 

@@ -24,12 +24,12 @@ use super::window::{App, Input};
 use super::{aspect, Shared};
 use crate::controls::Action;
 use crate::hud::ViewerState;
-use crate::measure::Measure;
 use crate::objects::{frame_box, save_view, view_names, Objects};
-use crate::recorder::{next_free_name, PathRecorder};
 use crate::sections::{view_box, Sections, VIEW_BOX_DEPTH};
 use crate::settings::Settings;
 use gigawalk_review::fly::FlyController;
+use gigawalk_review::measure::Measure;
+use gigawalk_review::recorder::{next_free_name, PathRecorder};
 
 /// Shown when wireframe is asked for on a device without line mode.
 const WIREFRAME_UNSUPPORTED: &str =

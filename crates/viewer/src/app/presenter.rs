@@ -16,8 +16,8 @@ use crate::boxes::{overlay_boxes, CullSets};
 use crate::controls;
 use crate::hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
 use crate::image::write_png;
-use crate::measure::screen_segment;
 use crate::objects::hud_text;
+use gigawalk_review::measure::screen_segment;
 
 /// How many times its 8-pixel glyphs the HUD text is drawn on a window
 /// `height` pixels tall: 1x below 600, 2x to 1440 (1080p: 16-pixel

@@ -50,9 +50,6 @@ pub struct Search {
 pub struct Objects {
     /// The scene's object table, or why there is none (shown when asked).
     table: Result<ObjectTable, String>,
-    /// Why hiding is refused on this run (stand-ins could show hidden
-    /// objects while geometry streams), if it is.
-    no_hiding: Option<String>,
     selection: Option<Selection>,
     /// Objects hidden one by one (`H`) and the isolation (`I`).
     hidden: HiddenSet,
@@ -66,11 +63,10 @@ pub struct Objects {
 impl Objects {
     /// `table`: the scene's object table, or the message to show when
     /// identity is asked for (`NO_IDENTITY`, or why the table could not
-    /// be read). `no_hiding`: why hiding is refused on this run, if it is.
-    pub fn new(table: Result<ObjectTable, String>, no_hiding: Option<String>) -> Objects {
+    /// be read).
+    pub fn new(table: Result<ObjectTable, String>) -> Objects {
         Objects {
             table,
-            no_hiding,
             selection: None,
             hidden: HiddenSet::default(),
             search: None,
@@ -220,9 +216,6 @@ impl Objects {
     /// selection.
     fn targets(&self, key: &str) -> Result<Vec<u32>, String> {
         self.table()?;
-        if let Some(why) = &self.no_hiding {
-            return Err(why.clone());
-        }
         if let Some(s) = &self.search {
             return Ok(s.matches.clone());
         }
@@ -307,7 +300,6 @@ impl Objects {
     pub fn restore(&mut self, view: &SavedView) -> String {
         let names_objects =
             !view.selected.is_empty() || !view.hidden.is_empty() || view.isolated.is_some();
-        let hides = !view.hidden.is_empty() || view.isolated.is_some();
         let head = format!("restored {:?}", view.name);
         let table = match &self.table {
             Ok(t) => t,
@@ -315,13 +307,8 @@ impl Objects {
             Err(_) => return head,
         };
         let (selected, mut missing) = views::resolve(&view.selected, table);
-        let mut note = None;
         let mut hidden = HiddenSet::default();
-        if hides && self.no_hiding.is_some() {
-            note = self.no_hiding.clone();
-        } else {
-            missing.extend(hidden.add_view(view, table));
-        }
+        missing.extend(hidden.add_view(view, table));
         self.hidden = hidden;
         self.search = None;
         self.selection = selected.first().map(|&object| Selection {
@@ -339,9 +326,6 @@ impl Objects {
                 count(missing.len(), "object"),
                 if missing.len() == 1 { "is" } else { "are" }
             ));
-        }
-        if let Some(why) = note {
-            text.push_str(&format!("; its hidden objects show: {why}"));
         }
         text
     }
@@ -526,7 +510,7 @@ mod tests {
     }
 
     fn objects() -> Objects {
-        Objects::new(Ok(table()), None)
+        Objects::new(Ok(table()))
     }
 
     fn pose() -> Pose {
@@ -695,7 +679,7 @@ mod tests {
 
     #[test]
     fn without_identity_everything_says_preprocess_again() {
-        let mut o = Objects::new(Err(NO_IDENTITY.into()), None);
+        let mut o = Objects::new(Err(NO_IDENTITY.into()));
         for e in [
             o.find("pipe").unwrap_err(),
             o.hide().unwrap_err(),
@@ -717,16 +701,6 @@ mod tests {
             m.contains("the camera only") && m.contains("preprocess"),
             "{m}"
         );
-    }
-
-    #[test]
-    fn hiding_is_refused_while_streaming_but_selection_works() {
-        let mut o = Objects::new(Ok(table()), Some("no hiding while streaming".into()));
-        o.click(Some((0, DVec3::ZERO)));
-        assert_eq!(o.hide().unwrap_err(), "no hiding while streaming");
-        assert_eq!(o.isolate().unwrap_err(), "no hiding while streaming");
-        assert_eq!(o.hidden_count(), (0, 5));
-        assert!(o.selected_bounds().is_ok());
     }
 
     #[test]

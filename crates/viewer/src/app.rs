@@ -303,9 +303,6 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             Err(why)
         }
     };
-    // Streamed or resident, hiding works: no stand-in holds a hidden
-    // object (gigawalk-runtime's streaming stand-in rule).
-    let no_hiding = None;
 
     let scripted = args.frames.map(|n| Script {
         frames: n.max(1),
@@ -365,7 +362,7 @@ pub fn run(args: ViewArgs) -> Result<(), ViewError> {
             )
         }),
         last_finish: None,
-        objects: Objects::new(table, no_hiding),
+        objects: Objects::new(table),
         visibility: None,
         ghosts: None,
         flight: None,

@@ -55,7 +55,7 @@ pub(super) struct Review {
 impl Review {
     pub fn new() -> Review {
         Review {
-            objects: Objects::new(Err("the object table is still loading".into()), None),
+            objects: Objects::new(Err("the object table is still loading".into())),
             sections: Sections::default(),
             visibility: None,
             ghosts: None,
@@ -160,7 +160,7 @@ pub(super) fn ask_for_table(app: &Rc<RefCell<App>>) {
         if let Err(why) = &table {
             web_sys::console::warn_1(&why.into());
         }
-        a.review.objects = Objects::new(table, None);
+        a.review.objects = Objects::new(table);
         set_stats(|s| s.objects = objects);
         if let Some(view) = a.review.pending.take() {
             let m = a.review.objects.restore(&view);

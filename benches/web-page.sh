@@ -51,7 +51,7 @@ for m in ['vfc', 'hlod', 'occ', 'och']:
           f"traversal {statistics.median(p['traversal_ms'] for p in ps):.1f} ms, "
           f"{statistics.median(p['draws'] for p in ps):.0f} draws, "
           f"{statistics.median(p['waits_per_frame'] for p in ps):.2f} animation frames waiting for OR per frame drawn, "
-          f"occluders {ps[-1]['occluder_lag']:.2f} submissions old on average, OR's read-back "
+          f"camera to frame drawn "
           f"{statistics.median(p['hzb_latency_ms'] for p in ps):.0f} ms; settled after "
           f"{', '.join(str(p['settle_ms']) for p in ps)} ms")
 print("| mode | browser fps | browser triangles | native lavapipe fps | native triangles | browser / vfc | native / vfc |")

@@ -124,10 +124,17 @@ fn num(v: &Value, key: &str) -> f64 {
     v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"))
 }
 
-/// Triangles native traversal draws at each pose of `path`, per mode, at
-/// the page's viewport (`gigawalk replay` on the null adapter).
-fn native_triangles(gwk: &Path, path: &Path, out: &Path, modes: &str) -> Vec<(String, usize, f64)> {
-    gigawalk_ok(&[
+/// `gigawalk replay` of `path` in `modes` on the null adapter at the
+/// page's viewport (`more`: more flags): each frame's row of frames.csv
+/// as column name -> value.
+fn native_frames(
+    gwk: &Path,
+    path: &Path,
+    out: &Path,
+    modes: &str,
+    more: &[&str],
+) -> Vec<std::collections::HashMap<String, String>> {
+    let mut args = vec![
         "replay",
         s(gwk),
         "--path",
@@ -142,19 +149,32 @@ fn native_triangles(gwk: &Path, path: &Path, out: &Path, modes: &str) -> Vec<(St
         "640",
         "--height",
         "360",
-    ]);
+    ];
+    args.extend_from_slice(more);
+    gigawalk_ok(&args);
     let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
     let mut lines = csv.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name| head.iter().position(|h| *h == name).unwrap();
-    let (mode, frame, tris) = (col("mode"), col("frame"), col("drawn_triangles"));
     lines
         .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
+            head.iter()
+                .zip(l.split(','))
+                .map(|(h, v)| (h.to_string(), v.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+/// Triangles native traversal draws at each pose of `path`, per mode, at
+/// the page's viewport.
+fn native_triangles(gwk: &Path, path: &Path, out: &Path, modes: &str) -> Vec<(String, usize, f64)> {
+    native_frames(gwk, path, out, modes, &[])
+        .iter()
+        .map(|r| {
             (
-                f[mode].to_string(),
-                f[frame].parse().unwrap(),
-                f[tris].parse().unwrap(),
+                r["mode"].clone(),
+                r["frame"].parse().unwrap(),
+                r["drawn_triangles"].parse().unwrap(),
             )
         })
         .collect()
@@ -618,42 +638,20 @@ fn a_streamed_scene_with_objects_hidden_draws_what_replay_draws() {
     ]);
     assert_eq!(report["first"]["state"], "running", "{report}");
     let out = dir.path().join("replay");
-    gigawalk_ok(&[
-        "replay",
-        s(&gwk),
-        "--path",
-        s(&path),
-        "--out",
-        s(&out),
-        "--adapter",
-        "null",
-        "--modes",
-        "hlod",
-        "--hide",
-        "pipe",
-        "--memory-budget",
-        &format!("{}", (file / 2.0) as u64),
-        "--width",
-        "640",
-        "--height",
-        "360",
-    ]);
-    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
-    let mut lines = csv.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name| head.iter().position(|h| *h == name).unwrap();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let loaded: f64 = rows
+    let budget = format!("{}", (file / 2.0) as u64);
+    let more = ["--hide", "pipe", "--memory-budget", &budget];
+    let frames = native_frames(&gwk, &path, &out, "hlod", &more);
+    let loaded: f64 = frames
         .iter()
-        .map(|f| f[col("loaded_bytes")].parse::<f64>().unwrap())
+        .map(|r| r["loaded_bytes"].parse::<f64>().unwrap())
         .sum();
-    assert!(loaded > 0.0, "replay did not stream: {csv}");
-    let native: Vec<(usize, f64)> = rows
-        .into_iter()
-        .map(|f| {
+    assert!(loaded > 0.0, "replay did not stream: {frames:?}");
+    let native: Vec<(usize, f64)> = frames
+        .iter()
+        .map(|r| {
             (
-                f[col("frame")].parse().unwrap(),
-                f[col("drawn_triangles")].parse().unwrap(),
+                r["frame"].parse().unwrap(),
+                r["drawn_triangles"].parse().unwrap(),
             )
         })
         .collect();

@@ -78,6 +78,34 @@ pub(super) struct GpuOccluders<'a> {
     pub pass: DepthPass,
 }
 
+impl GpuOccluders<'_> {
+    /// Runs `f` on the depth pass with what to draw of `lods` seen from
+    /// `view`: leaves with hidden objects drawn as the runs of those
+    /// shown, and (streaming) resident occluders only, so culling stays
+    /// conservative.
+    fn with_pass<T>(
+        &mut self,
+        frame: u64,
+        view: &CullView,
+        lods: &[u32],
+        f: impl FnOnce(
+            &gigawalk_gpu::GpuContext,
+            &mut DepthPass,
+            &dyn gigawalk_gpu::Residency,
+            &gigawalk_gpu::View,
+            &[u32],
+        ) -> T,
+    ) -> Result<T, RuntimeError> {
+        let (ctx, pass) = (self.device.ctx, &mut self.pass);
+        pass.set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
+        let v = gpu_view(view);
+        self.device
+            .with(frame, lods, Use::Occluders, |residency, lods| {
+                f(ctx, pass, residency, &v, lods)
+            })
+    }
+}
+
 impl OccluderTarget for GpuOccluders<'_> {
     fn streaming(&self) -> bool {
         self.device.plan.is_some()
@@ -90,15 +118,10 @@ impl OccluderTarget for GpuOccluders<'_> {
         lods: &[u32],
         level: u32,
     ) -> Result<DepthLevel, RuntimeError> {
-        let (ctx, pass) = (self.device.ctx, &mut self.pass);
-        // Leaves with hidden objects: only the runs of those shown.
-        pass.set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
-        // Streaming: resident occluders only (culling stays conservative).
-        self.device
-            .with(frame, lods, Use::Occluders, |residency, lods| {
-                pass.render_level(ctx, residency, &gpu_view(view), lods, level)
-            })?
-            .map_err(or_error)
+        self.with_pass(frame, view, lods, |ctx, pass, residency, v, lods| {
+            pass.render_level(ctx, residency, v, lods, level)
+        })?
+        .map_err(or_error)
     }
 
     fn submit(
@@ -108,13 +131,10 @@ impl OccluderTarget for GpuOccluders<'_> {
         lods: &[u32],
         level: u32,
     ) -> Result<PendingDepth, RuntimeError> {
-        let (ctx, pass) = (self.device.ctx, &mut self.pass);
-        pass.set_pieces(view.visibility().and_then(|v| v.lod_pieces()));
-        self.device
-            .with(frame, lods, Use::Occluders, |residency, lods| {
-                pass.submit_level(ctx, residency, &gpu_view(view), lods, level)
-            })
-            .map(PendingDepth::Device)
+        self.with_pass(frame, view, lods, |ctx, pass, residency, v, lods| {
+            pass.submit_level(ctx, residency, v, lods, level)
+        })
+        .map(PendingDepth::Device)
     }
 
     fn try_take(

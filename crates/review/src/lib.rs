@@ -4,6 +4,8 @@
 //! the same way, and by the command line's `pick`, `find` and
 //! `replay --hide/--isolate/--view`.
 //!
+//! - [`actions`]: what the object and section keys do, for viewer and
+//!   page alike;
 //! - [`objects`]: the selection, the search (find), the hidden objects
 //!   (hide, isolate) and saved views over the scene's object table, and
 //!   the framing of an object's box;
@@ -30,6 +32,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod actions;
 pub mod fly;
 pub mod gestures;
 pub mod keys;

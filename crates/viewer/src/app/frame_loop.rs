@@ -37,7 +37,7 @@ const WIREFRAME_UNSUPPORTED: &str =
 /// How long HUD messages (screenshot written, path saved) stay up.
 const MESSAGE_TIME: Duration = Duration::from_secs(4);
 /// Said when a plane key finds no plane.
-const NO_PLANE: &str = "no section plane: X places one at the cursor";
+use gigawalk_review::actions::{act, NO_PLANE};
 /// How long framing an object takes to fly there: long enough to see
 /// where the camera went, short enough not to wait for it.
 const FLIGHT_TIME: Duration = Duration::from_millis(400);
@@ -168,6 +168,16 @@ impl LoopState {
                     continue;
                 }
             };
+            // Clearing the sections is also printed (below).
+            if a != Action::ClearSections {
+                let (eye, diagonal) = (self.controller.position, self.scene_bounds.diagonal());
+                if let Some(said) = act(a, &mut self.objects, &mut self.sections, eye, diagonal) {
+                    if let Some(m) = said {
+                        self.say(m, now);
+                    }
+                    continue;
+                }
+            }
             match a {
                 // Esc first clears a measurement, as in other viewers.
                 Action::Quit if self.measure.is_active() => {
@@ -231,36 +241,19 @@ impl LoopState {
                     let found = self.objects.next_match();
                     self.fly_to_match(found, render, now);
                 }
-                Action::Hide => {
-                    let r = self.objects.hide();
-                    self.say_result(r, now);
-                }
-                Action::Isolate => {
-                    let r = self.objects.isolate();
-                    self.say_result(r, now);
-                }
-                Action::ShowAll => {
-                    let r = self.objects.show_all();
-                    self.say_result(r, now);
-                }
                 Action::SaveView => self.save_view(now),
                 Action::NextView => self.restore_view(None, now),
                 // The window sends `Input::SectionPlane` with the cursor.
                 Action::SectionPlane => {}
-                Action::SectionForward => self.move_section(1.0, now),
-                Action::SectionBack => self.move_section(-1.0, now),
-                Action::FlipSection => {
-                    if self.sections.flip_active() {
-                        self.say("section plane flipped".into(), now);
-                    } else {
-                        self.say(NO_PLANE.into(), now);
-                    }
-                }
                 Action::SectionBox => self.section_box(scene, render, now),
-                Action::ToggleSections => {
-                    let m = self.sections.toggle();
-                    self.say(m, now);
-                }
+                // The rest of the object and section keys are `act`'s.
+                Action::Hide
+                | Action::Isolate
+                | Action::ShowAll
+                | Action::SectionForward
+                | Action::SectionBack
+                | Action::FlipSection
+                | Action::ToggleSections => {}
                 Action::ClearSections => {
                     let m = self.sections.clear();
                     self.announce(m, now);
@@ -350,12 +343,6 @@ impl LoopState {
     fn announce(&mut self, text: String, now: Instant) {
         eprintln!("{text}");
         self.say(text, now);
-    }
-
-    fn say_result(&mut self, r: Result<String, String>, now: Instant) {
-        match r {
-            Ok(m) | Err(m) => self.say(m, now),
-        }
     }
 
     /// A click at window pixel `at`: selects the object the full-detail

@@ -17,6 +17,7 @@
 use std::sync::Arc;
 
 use gigawalk_cull::{NodeShow, PickHit, Visibility};
+use gigawalk_review::actions::act;
 use gigawalk_review::objects::{frame_box, Objects, NO_IDENTITY};
 use gigawalk_review::sections::{view_box, VIEW_BOX_DEPTH};
 use gigawalk_scene::views::SavedView;
@@ -236,19 +237,22 @@ impl App {
 
     /// The review keys' actions; whether `action` was one.
     pub(super) fn review_key(&mut self, action: Action, app: &Rc<RefCell<App>>) -> bool {
+        let eye = self.camera().position;
+        let diagonal = self.reader.skeleton().bounds().diagonal();
+        let review = &mut self.review;
+        if let Some(said) = act(
+            action,
+            &mut review.objects,
+            &mut review.sections,
+            eye,
+            diagonal,
+        ) {
+            if let Some(m) = said {
+                review.say(m);
+            }
+            return true;
+        }
         match action {
-            Action::Hide => {
-                let r = self.review.objects.hide();
-                self.review.say_either(r);
-            }
-            Action::Isolate => {
-                let r = self.review.objects.isolate();
-                self.review.say_either(r);
-            }
-            Action::ShowAll => {
-                let r = self.review.objects.show_all();
-                self.review.say_either(r);
-            }
             Action::FrameSelection => self.frame_selection(),
             Action::NextMatch => {
                 let found = self.review.objects.next_match();
@@ -267,32 +271,7 @@ impl App {
                 }
             }
             Action::SectionPlane => spawn_local(section_plane_at(app.clone(), self.review.cursor)),
-            Action::SectionForward | Action::SectionBack => {
-                let steps = if action == Action::SectionForward {
-                    1.0
-                } else {
-                    -1.0
-                };
-                let eye = self.camera().position;
-                let diagonal = self.reader.skeleton().bounds().diagonal();
-                if !self.review.sections.move_active(steps, eye, diagonal) {
-                    self.review.say(NO_PLANE.into());
-                }
-            }
-            Action::FlipSection => {
-                if !self.review.sections.flip_active() {
-                    self.review.say(NO_PLANE.into());
-                }
-            }
             Action::SectionBox => spawn_local(section_box(app.clone())),
-            Action::ToggleSections => {
-                let m = self.review.sections.toggle();
-                self.review.say(m);
-            }
-            Action::ClearSections => {
-                let m = self.review.sections.clear();
-                self.review.say(m);
-            }
             Action::SaveView => {
                 let r = self.share_link();
                 self.review.say_either(r);
@@ -337,8 +316,6 @@ impl App {
         ))
     }
 }
-
-const NO_PLANE: &str = "no section plane yet: X places one at the cursor";
 
 /// What is under canvas point `(x, y)` of the camera shown now: the
 /// nearest full-detail surface of an object shown, within the section

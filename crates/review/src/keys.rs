@@ -162,7 +162,7 @@ pub fn view_number(code: &str) -> Option<usize> {
     DIGITS.iter().position(|&k| k == code).map(|i| i + 1)
 }
 
-/// The controls as aligned text lines: on-screen help, `--help` and README.
+/// The controls as aligned text lines: the on-screen help and `--help`.
 pub fn help_lines() -> Vec<String> {
     let rows: Vec<(&str, &str)> = MOUSE_HELP
         .iter()

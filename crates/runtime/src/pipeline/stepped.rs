@@ -49,8 +49,6 @@ pub struct Stepped<'s> {
     frame: u64,
     /// Streaming: the loader's ends of the queues, and their order.
     loads: Option<(LoaderQueues<'s>, Queue)>,
-    /// Steps that found the oldest submission's depth not made yet.
-    waits: u64,
 }
 
 impl<'s> Runtime<'s> {
@@ -87,7 +85,6 @@ impl<'s> Runtime<'s> {
             frozen: Frozen::default(),
             frame: 0,
             loads: links.loader.map(|l| (l, Queue::default())),
-            waits: 0,
         })
     }
 }
@@ -117,7 +114,6 @@ impl Stepped<'_> {
             Some((taken, submitted)) => match self.or.try_take(submitted)? {
                 Err(submitted) => {
                     self.awaited.push_front((taken, submitted));
-                    self.waits += 1;
                     None
                 }
                 Ok(or) => Some(self.cull_and_draw(taken, Some(or), presenter)?),
@@ -149,16 +145,6 @@ impl Stepped<'_> {
         pending: gigawalk_gpu::PendingFrame,
     ) -> Result<Result<gigawalk_gpu::FrameImage, RuntimeError>, gigawalk_gpu::PendingFrame> {
         self.rvg.try_take_frame(pending)
-    }
-
-    /// Steps so far that drew nothing, waiting for OR's depth.
-    pub fn waits(&self) -> u64 {
-        self.waits
-    }
-
-    /// OR submissions waiting for their depth now.
-    pub fn awaited(&self) -> usize {
-        self.awaited.len()
     }
 
     /// STC with OR's output (none: unculled) for `sample`, then RVG.

@@ -25,13 +25,16 @@ override SKY: bool = false;
 
 @group(0) @binding(0) var<uniform> look: LookUniforms;
 // Depth bound as unfilterable float (naga's GLSL output cannot textureLoad
-// a depth texture), as in depth_copy.wgsl.
+// a depth texture) and read through the nearest sampler at the texel's
+// centre, as in depth_copy.wgsl: a texel fetch takes the texture's own
+// filter, with which WebGL2 reads a float depth texture as 0.
 @group(0) @binding(1) var depth_tex: texture_2d<f32>;
 // The eye-facing unit normal, 0.5 n + 0.5, alpha 1 where a surface is.
 @group(0) @binding(2) var normal_tex: texture_2d<f32>;
 @group(0) @binding(3) var colour_tex: texture_2d<f32>;
 @group(0) @binding(4) var ao_tex: texture_2d<f32>;
 @group(0) @binding(5) var image_sampler: sampler;
+@group(0) @binding(6) var nearest: sampler;
 
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
@@ -47,7 +50,8 @@ fn inside(p: vec2<i32>) -> vec2<i32> {
 }
 
 fn depth_at(p: vec2<i32>) -> f32 {
-    return textureLoad(depth_tex, inside(p), 0).x;
+    let uv = (vec2<f32>(inside(p)) + 0.5) / look.size.xy;
+    return textureSampleLevel(depth_tex, nearest, uv, 0.0).x;
 }
 
 fn normal_at(p: vec2<i32>) -> vec4<f32> {

@@ -7,7 +7,8 @@
 //                [--modes vfc,hlod] [--shots DIR] [--timeout S]
 //                [--settle S] [--linger S] [--no-hud] [--compare M:REF,...]
 //                [--serve DIR [--no-range]] [--no-webgpu [--no-webgl]]
-//                [--review POSE --pick X,Y] [--frames DIR]
+//                [--review POSE --pick X,Y [--measure X,Y] [--downloads DIR]]
+//                [--look-walk POSE] [--look auto|plain] [--frames DIR]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
 // every request answered whole, as a server without range support
@@ -27,9 +28,18 @@
 // X,Y; click it (select); X with the pointer there (a section plane);
 // H (hide it); occ against vfc with both; E (edges: the image shown
 // changes, the frame read back does not) and F4 (x-ray: the hidden object
-// as a ghost); the view's link opened in a second tab; U and Delete (show all, no section); a finger dragged
-// across the canvas (touch). Each step's stats, picks and image
-// comparisons are in the report's "review". Exit status 0 whenever a
+// as a ghost); the view's link opened in a second tab; U and Delete (show all, no section);
+// with --measure, M and clicks at X,Y of --pick and of --measure (the
+// distance in the stats), then Esc; with --downloads, P (a screenshot)
+// and R, a second of W, R (a recorded path), both downloaded into DIR;
+// a finger dragged across the canvas (touch). Each step's stats, picks
+// and image comparisons are in the report's "review". --look-walk POSE
+// shows that pose with the HUD off and turns each look pass on alone (E
+// edges, F2 AO, F3 FXAA): the report's "look" has, per pass, the pixels
+// it changed among those the frame read back shows geometry at (its
+// depth), by region of the canvas (its left and right halves), and
+// whether the frame read back stayed the same. --look sets the page's
+// look (?look=, plain unless given). Exit status 0 whenever a
 // report was written (tests judge it); 2 when Chromium or the page could
 // not be driven at all.
 import fs from 'node:fs';
@@ -104,7 +114,7 @@ try {
   page.on('console', (m) => consoleLines.push(`${m.type()}: ${m.text()}`.slice(0, 500)));
   page.on('pageerror', (e) => consoleLines.push(`pageerror: ${e.message}`.slice(0, 500)));
   await page.setViewport({ width: 640, height: 360 });
-  const query = ['size=640x360', opt('query')].filter(Boolean).join('&');
+  const query = ['size=640x360', `look=${opt('look', 'plain')}`, opt('query')].filter(Boolean).join('&');
   const started = Date.now();
   await page.goto(`${url}?${query}${opt('fragment') ? `#${opt('fragment')}` : ''}`);
   const stats = () => page.evaluate(() => (window.gigawalkStats ? window.gigawalkStats() : { state: 'loading' }));
@@ -279,7 +289,57 @@ try {
     await p.keyboard.press('Delete');
     await until((x) => x.hidden === 0 && x.section === null);
     r.restored = await settle();
-    r.restored_vs_before = await diff(before, await shot('review-restored'));
+    const restored = await shot('review-restored');
+    r.restored_vs_before = await diff(before, restored);
+    if (opt('measure')) {
+      const [mx, my] = opt('measure').split(',').map(Number);
+      await p.keyboard.press('KeyM');
+      await p.mouse.click(px + 0.5, py + 0.5);
+      await until((x) => (x.message || '').includes('second point'));
+      await p.mouse.click(mx + 0.5, my + 0.5);
+      r.measure = await until((x) => x.measured !== null);
+      // The segment and its label are drawn over the frame.
+      r.measure_vs_restored = await diff(restored, await shot('review-measure'));
+      await p.keyboard.press('Escape');
+      r.measure_cleared = await until((x) => x.measured === null);
+    }
+    if (opt('downloads')) {
+      const dir = opt('downloads');
+      fs.mkdirSync(dir, { recursive: true });
+      const cdp = await p.createCDPSession();
+      await cdp.send('Browser.setDownloadBehavior', { behavior: 'allow', downloadPath: dir });
+      // The frame as RVG drew it: with the HUD off and a plain look, the
+      // canvas shows exactly that (the page's screenshot also has the
+      // page's own help line, which is not the canvas).
+      const drawn = await p.evaluate(async () => Array.from((await window.gigawalk.readFrame()).colour));
+      await p.keyboard.press('KeyP');
+      await p.keyboard.press('KeyR');
+      await until((x) => x.recording !== null);
+      await p.keyboard.down('KeyW');
+      await sleep(1000);
+      await p.keyboard.up('KeyW');
+      await p.keyboard.press('KeyR');
+      r.recorded = await until((x) => x.recording === null && x.downloads.length >= 2);
+      const done = () => fs.readdirSync(dir).filter((f) => !f.endsWith('.crdownload'));
+      const t0 = Date.now();
+      while (done().length < 2 && Date.now() - t0 < 20000) await sleep(100);
+      r.downloads = done();
+      const png = r.downloads.find((f) => f.endsWith('.png'));
+      if (png) {
+        r.screenshot_vs_drawn = await p.evaluate(async (data, want) => {
+          const { d, width, height } = await window.gigawalkPngPixels(data);
+          if (d.length !== want.length) return { pixels: -1, max: 255, width, height };
+          let n = 0; let max = 0;
+          for (let i = 0; i < d.length; i += 4) {
+            let m = 0;
+            for (let k = 0; k < 3; k++) m = Math.max(m, Math.abs(d[i + k] - want[i + k]));
+            if (m > 0) n++;
+            max = Math.max(max, m);
+          }
+          return { pixels: n, max, width, height };
+        }, fs.readFileSync(path.join(dir, png)).toString('base64'), drawn);
+      }
+    }
     // A finger dragged across the canvas looks around, as the mouse does.
     const viewBefore = await p.evaluate(() => window.gigawalk.view());
     await p.touchscreen.touchStart(200, 180);
@@ -292,6 +352,60 @@ try {
     return r;
   }
 
+  /// Each look pass alone at `pose`: see the header.
+  async function lookWalk(p, pose) {
+    await p.evaluate(() => window.gigawalk.setHud(false));
+    await p.evaluate((i) => window.gigawalk.showPose(i), pose);
+    const out = { before: await settle() };
+    const plain = await shot('look-plain');
+    const frame = () => p.evaluate(async () => {
+      const f = await window.gigawalk.readFrame();
+      let h = 0;
+      for (const v of f.colour) h = (Math.imul(h, 31) + v) >>> 0;
+      return { sum: h, depth: Array.from(f.depth, (d) => (d > 0 ? 1 : 0)), width: f.width };
+    });
+    const drawn = await frame();
+    for (const [name, key] of [['edges', 'KeyE'], ['ao', 'F2'], ['fxaa', 'F3']]) {
+      await p.keyboard.press(key);
+      out[`${name}_stats`] = await settle();
+      const png = await shot(`look-${name}`);
+      const f = await frame();
+      await p.keyboard.press(key);
+      await settle();
+      // Pixels changed, by half of the canvas; "inside": geometry at the
+      // pixel and at every pixel within 3 (no silhouette near).
+      out[name] = await p.evaluate(async (a, b, depth, w) => {
+        const da = (await window.gigawalkPngPixels(a)).d;
+        const db = (await window.gigawalkPngPixels(b)).d;
+        const h = depth.length / w;
+        const at = (x, y) => x >= 0 && y >= 0 && x < w && y < h && depth[y * w + x] === 1;
+        const r = { left: 0, right: 0, left_inside: 0, right_inside: 0, left_inside_pixels: 0, right_inside_pixels: 0, background: 0 };
+        for (let y = 0; y < h; y++) {
+          for (let x = 0; x < w; x++) {
+            const i = 4 * (y * w + x);
+            let d = 0;
+            for (let k = 0; k < 3; k++) d = Math.max(d, Math.abs(da[i + k] - db[i + k]));
+            const side = x < w / 2 ? 'left' : 'right';
+            let inside = at(x, y);
+            for (let dy = -3; inside && dy <= 3; dy++) for (let dx = -3; inside && dx <= 3; dx++) inside = at(x + dx, y + dy);
+            if (inside) r[`${side}_inside_pixels`]++;
+            if (d <= 8) continue;
+            if (!at(x, y)) r.background++;
+            else r[side]++;
+            if (inside) r[`${side}_inside`]++;
+          }
+        }
+        return r;
+      }, plain, png, drawn.depth, drawn.width);
+      out[name].readback_same = f.sum === drawn.sum;
+    }
+    return out;
+  }
+
+  if (opt('look-walk') && opt('path') && s.state === 'running') {
+    await page.evaluate((t) => window.gigawalk.loadPath(t), fs.readFileSync(opt('path'), 'utf8'));
+    report.look = await lookWalk(page, Number(opt('look-walk')));
+  }
   if (opt('path') && s.state === 'running') {
     const poses = (opt('poses') || '0').split(',').map(Number);
     report.path_poses = await page.evaluate((t) => window.gigawalk.loadPath(t), fs.readFileSync(opt('path'), 'utf8'));

@@ -60,6 +60,15 @@ pub struct GpuContext {
     pub(crate) caps: Capabilities,
 }
 
+/// Names of software rasterizers, as adapters report them (lower case).
+const CPU_RASTERIZERS: [&str; 5] = [
+    "llvmpipe",
+    "lavapipe",
+    "softpipe",
+    "swiftshader",
+    "basic render",
+];
+
 impl GpuContext {
     /// A name for messages, e.g. "A (llvmpipe, Vulkan)".
     pub fn name(&self) -> &str {
@@ -99,9 +108,13 @@ impl GpuContext {
         self.info.backend == wgpu::Backend::Noop
     }
 
-    /// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe, WARP).
+    /// Whether the adapter rasterizes on the CPU (lavapipe, llvmpipe,
+    /// WARP, SwiftShader). A browser's WebGPU adapter says only whether it
+    /// is a fallback, so a known software rasterizer's name counts too.
     pub fn is_cpu(&self) -> bool {
+        let name = self.info.name.to_ascii_lowercase();
         self.info.device_type == wgpu::DeviceType::Cpu
+            || CPU_RASTERIZERS.iter().any(|r| name.contains(r))
     }
 
     /// Whether the rasterizer clips by user planes (sections clip there

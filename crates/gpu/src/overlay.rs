@@ -52,6 +52,64 @@ pub struct OverlayFrame {
     pub text: Vec<OverlayText>,
 }
 
+/// Measurement colours: a yellow that reads over the shaded scene, on a
+/// dark outline.
+const MEASURE_COLOUR: [f32; 4] = [1.0, 0.85, 0.1, 1.0];
+const MEASURE_OUTLINE: [f32; 4] = [0.0, 0.0, 0.0, 0.8];
+
+impl OverlayFrame {
+    /// A measurement over a `size` image, in pixels (row 0 at the top):
+    /// a marker at each of `markers` (a short thick line on it), the
+    /// `segment` between the points and `label` (printable ASCII) at its
+    /// middle, `scale` times the font's size.
+    pub fn push_measurement(
+        &mut self,
+        markers: &[[f32; 2]],
+        segment: Option<([f32; 2], [f32; 2])>,
+        label: Option<String>,
+        size: (u32, u32),
+        scale: u32,
+    ) {
+        let s = scale as f32;
+        for a in markers {
+            for (width, colour) in [(9.0 * s, MEASURE_OUTLINE), (5.0 * s, MEASURE_COLOUR)] {
+                let half = width * 0.5;
+                self.lines.push(OverlayLine {
+                    from: [a[0] - half, a[1]],
+                    to: [a[0] + half, a[1]],
+                    width,
+                    colour,
+                });
+            }
+        }
+        let Some((from, to)) = segment else {
+            return;
+        };
+        for (width, colour) in [(4.0 * s, MEASURE_OUTLINE), (2.0 * s, MEASURE_COLOUR)] {
+            self.lines.push(OverlayLine {
+                from,
+                to,
+                width,
+                colour,
+            });
+        }
+        if let Some(label) = label {
+            let glyph = GLYPH as f32 * s;
+            let mid = [(from[0] + to[0]) * 0.5, (from[1] + to[1]) * 0.5];
+            let width = label.len() as f32 * glyph;
+            self.text.push(OverlayText {
+                // Centred on the middle, just above the line.
+                x: (mid[0] - width * 0.5).clamp(glyph, (size.0 as f32 - width - glyph).max(glyph)),
+                y: (mid[1] - 2.0 * glyph).clamp(glyph, (size.1 as f32 - 2.0 * glyph).max(glyph)),
+                scale,
+                lines: vec![label],
+                colour: MEASURE_COLOUR,
+                background: [0.0, 0.0, 0.0, 0.75],
+            });
+        }
+    }
+}
+
 /// Glyph cell size of the font atlas, in texels.
 pub const GLYPH: u32 = 8;
 /// Atlas: 16 x 8 cells of the 128 ASCII codes; code 127 (DEL) is a solid

@@ -282,6 +282,14 @@ impl WindowSurface {
             .find(|f| f.is_srgb())
             .or_else(|| self.caps.formats.first().copied())
             .unwrap_or(wgpu::TextureFormat::Bgra8UnormSrgb);
+        // A surface with no sRGB format (a browser's WebGPU canvas offers
+        // only bgra8unorm and rgba8unorm) is drawn through an sRGB view of
+        // its texture, so the blit encodes the linear image as the
+        // display expects, as on an sRGB surface.
+        let view_formats = match format.add_srgb_suffix() {
+            f if f != format => vec![f],
+            _ => vec![],
+        };
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             format,
@@ -298,7 +306,7 @@ impl WindowSurface {
                 .first()
                 .copied()
                 .unwrap_or(wgpu::CompositeAlphaMode::Auto),
-            view_formats: vec![],
+            view_formats,
         };
         self.surface.configure(&ctx.device, &config);
         self.config = Some(config);
@@ -352,13 +360,16 @@ impl WindowSurface {
         let format = self
             .config
             .as_ref()
-            .map(|c| c.format)
+            .map(|c| c.view_formats.first().copied().unwrap_or(c.format))
             .unwrap_or(frame.texture.format());
         let gpu = self.gpu.as_mut().expect("present_texture created it");
         gpu.blit_pipeline(ctx, format);
         let blit = &gpu.blit;
         let (_, bind_group) = gpu.composite.as_ref().expect("composite made this frame");
-        let view = frame.texture.create_view(&Default::default());
+        let view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(format),
+            ..Default::default()
+        });
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {

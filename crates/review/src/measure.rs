@@ -90,6 +90,22 @@ impl Measure {
         }
     }
 
+    /// Where the measurement shows on a `size` image of `camera`: a
+    /// marker at each point picked in front of the near plane, and the
+    /// segment between the two once both are ([`screen_segment`]).
+    pub fn on_screen(&self, camera: &Camera, size: (u32, u32)) -> OnScreen {
+        let points = self.points();
+        let markers = points
+            .iter()
+            .filter_map(|&p| screen_segment(camera, size, p, p).map(|(a, _)| a))
+            .collect();
+        let segment = match points.as_slice() {
+            [a, b] => screen_segment(camera, size, *a, *b),
+            _ => None,
+        };
+        OnScreen { markers, segment }
+    }
+
     /// The HUD's line while measuring.
     pub fn hud_line(&self, units: &Units) -> Option<String> {
         match self {
@@ -101,6 +117,14 @@ impl Measure {
                 .map(|l| format!("measured {l} (M or Esc clears)")),
         }
     }
+}
+
+/// A measurement in pixels of one image ([`Measure::on_screen`]), row 0
+/// at the top.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OnScreen {
+    pub markers: Vec<[f32; 2]>,
+    pub segment: Option<([f32; 2], [f32; 2])>,
 }
 
 /// The part of the segment `a`-`b` in front of `camera`'s near plane, in
@@ -222,6 +246,23 @@ mod tests {
             near(q, [200.0, 0.0]),
             "45 degrees right and up, the corner: {q:?}"
         );
+    }
+
+    #[test]
+    fn on_screen_marks_each_point_picked_and_the_segment_once_both_are() {
+        let cam = camera_at(DVec3::ZERO);
+        let mut m = Measure::default();
+        assert_eq!(m.on_screen(&cam, (200, 100)), OnScreen::default());
+        m.toggle();
+        m.click(Some(DVec3::new(0.0, 0.0, -5.0)), &Units::default());
+        let one = m.on_screen(&cam, (200, 100));
+        assert_eq!((one.markers.len(), one.segment), (1, None));
+        // The second point behind the eye: no marker for it, and the
+        // segment cut at the near plane.
+        m.click(Some(DVec3::new(0.0, 0.0, 5.0)), &Units::default());
+        let both = m.on_screen(&cam, (200, 100));
+        assert_eq!(both.markers, one.markers);
+        assert!(both.segment.is_some());
     }
 
     #[test]

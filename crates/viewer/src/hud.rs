@@ -83,11 +83,10 @@ pub struct ViewerState {
     pub prompt: Option<String>,
     /// The saved views' names, for the help.
     pub views: Vec<String>,
-    /// The measurement's points picked so far (world), and its label
-    /// once both are: the presenter projects them with each frame's own
-    /// camera.
-    pub measure_points: Vec<glam::DVec3>,
-    pub measure_label: Option<String>,
+    /// The measurement, and the units its label is in: the presenter
+    /// projects it with each frame's own camera.
+    pub measure: gigawalk_review::measure::Measure,
+    pub units: gigawalk_scene::units::Units,
 }
 
 pub fn hud_lines(fps: f64, n: &FrameNumbers, s: &Settings, v: &ViewerState) -> Vec<String> {

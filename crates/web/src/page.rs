@@ -29,17 +29,22 @@ use gigawalk_gpu::{
 use gigawalk_review::fly::{FlyController, Movement};
 use gigawalk_review::gestures::{Gesture, Pointers};
 use gigawalk_review::keys::{self, Action, Does};
+use gigawalk_review::measure::Measure;
+use gigawalk_review::objects::hud_text;
+use gigawalk_review::recorder::PathRecorder;
 use gigawalk_review::sections::Sections;
 use gigawalk_runtime::{
     CameraRequest, FrameReport, Presenter, Runtime, RuntimeOptions, Stepped, SteppedOptions,
 };
 use gigawalk_scene::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
+use gigawalk_scene::units::Units;
 use gigawalk_scene::SceneReader;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::{spawn_local, JsFuture};
 use web_sys::{
-    HtmlCanvasElement, KeyboardEvent, PointerEvent, Request, RequestInit, Response, WheelEvent,
+    Blob, HtmlAnchorElement, HtmlCanvasElement, KeyboardEvent, PointerEvent, Request, RequestInit,
+    Response, WheelEvent,
 };
 
 use crate::stream::{batches, Batch};
@@ -68,6 +73,10 @@ struct Stats {
     state: String,
     error: Option<String>,
     backend: String,
+    /// Whether the adapter rasterizes on the CPU (the default look then
+    /// leaves AO and FXAA off), and the look in words.
+    cpu_rasterizer: bool,
+    look: String,
     frames: u64,
     fps: f64,
     triangles: u64,
@@ -118,6 +127,12 @@ struct Stats {
     selected: Option<String>,
     section: Option<String>,
     message: Option<String>,
+    /// The measured distance once both points are picked (model units),
+    /// the poses of a path being recorded, and the files offered for
+    /// download (screenshots and recorded paths).
+    measured: Option<f64>,
+    recording: Option<usize>,
+    downloads: Vec<String>,
 }
 
 thread_local! {
@@ -288,6 +303,14 @@ struct App {
     look: Look,
     xray: bool,
     near: f64,
+    /// The measurement (M), in `?units=` (metres by default), and the
+    /// camera path being recorded (R) since `record_start` (ms).
+    measure: Measure,
+    units: Units,
+    recorder: PathRecorder,
+    record_start: f64,
+    /// P: the next frame drawn is offered as a PNG.
+    screenshot: bool,
     /// A camera path's poses (`load_path`), and the pose shown exactly
     /// (one of them, `show_pose`, or a link's) until the mouse or a key
     /// moves the camera.
@@ -308,6 +331,9 @@ type ScheduleKey = (u32, u32, Mode);
 struct PagePresenter {
     surface: WindowSurface,
     text: Vec<OverlayText>,
+    /// The measurement, projected with each frame's own camera.
+    measure: Measure,
+    label: Option<String>,
 }
 
 impl Presenter for PagePresenter {
@@ -317,12 +343,14 @@ impl Presenter for PagePresenter {
         pass: &VisiblePass,
         report: &FrameReport,
     ) -> Result<(), gigawalk_gpu::GpuError> {
-        let overlay = OverlayFrame {
+        let mut overlay = OverlayFrame {
             view_proj: report.camera.view_projection_rel(),
-            boxes: Vec::new(),
-            lines: Vec::new(),
             text: std::mem::take(&mut self.text),
+            ..OverlayFrame::default()
         };
+        let marks = self.measure.on_screen(&report.camera, pass.size());
+        let label = self.label.take();
+        overlay.push_measurement(&marks.markers, marks.segment, label, pass.size(), 1);
         self.surface
             .present(ctx, pass, &overlay, pass.size(), false)
             .map(|_| ())
@@ -473,14 +501,18 @@ impl App {
         self.last_ms = now;
         self.fly.update(dt, &self.held);
         self.refresh_visibility();
+        let camera = self.camera();
+        self.recorder.push((now - self.record_start) / 1e3, &camera);
         let request = CameraRequest {
             look: self.look,
             ghosts: self.review.ghosts.clone().filter(|_| self.xray),
             pixel_error: Some(self.pixel_error),
             visibility: self.review.visibility.clone(),
             section: self.review.sections.current(),
-            ..CameraRequest::new(self.camera(), false)
+            ..CameraRequest::new(camera, false)
         };
+        self.presenter.measure = self.measure;
+        self.presenter.label = self.measure.label(&self.units).map(|l| hud_text(&l));
         let (w, _) = self.size();
         self.presenter.text = if self.hud {
             self.hud_text(w)
@@ -500,7 +532,12 @@ impl App {
         self.fetch(&wanted);
         match report {
             None => set_stats(|s| s.hzb_waits += 1),
-            Some(r) => self.drawn(&r, now),
+            Some(r) => {
+                self.drawn(&r, now);
+                if std::mem::take(&mut self.screenshot) {
+                    self.offer_screenshot();
+                }
+            }
         }
         let cpu_ms = now_ms() - t0;
         set_stats(|s| s.cpu_ms = cpu_ms);
@@ -522,6 +559,7 @@ impl App {
         let in_flight = self.fetching.len();
         let mode = self.mode;
         let pixel_error = self.pixel_error;
+        let look = self.look.describe();
         set_stats(|s| {
             s.state = "running".into();
             s.frames = self.frame;
@@ -554,6 +592,7 @@ impl App {
                 && in_flight == 0
                 && (r.occlusion_used || !mode.occlusion());
             s.mode = mode.name().into();
+            s.look = look;
             s.pixel_error = pixel_error;
             s.selected = selected;
             s.section = section;
@@ -612,6 +651,12 @@ impl App {
             .into_iter()
             .chain(review.objects.hud_lines())
             .chain(review.sections.hud_line())
+            .chain(self.measure.hud_line(&self.units))
+            .chain(
+                self.recorder
+                    .is_recording()
+                    .then(|| format!("recording: {} poses (R stops)", self.recorder.pose_count())),
+            )
             .chain(review.message().map(gigawalk_review::objects::hud_text))
             .collect();
         vec![OverlayText {
@@ -622,6 +667,23 @@ impl App {
             colour: [1.0, 1.0, 1.0, 1.0],
             background: [0.0, 0.0, 0.0, 0.55],
         }]
+    }
+
+    /// P: the canvas as just drawn (the HUD and measurement included, as
+    /// the viewer's screenshot), as a PNG download. Taken in the task that
+    /// drew it, while the canvas still holds the frame.
+    fn offer_screenshot(&self) {
+        let f = Closure::once_into_js(|blob: Option<Blob>| {
+            let r = blob
+                .ok_or_else(|| "the canvas gave no image".to_string())
+                .and_then(|b| download(&b, "gigawalk-view.png"));
+            if let Err(e) = r {
+                web_sys::console::warn_1(&format!("screenshot: {e}").into());
+            }
+        });
+        if let Err(e) = self.canvas.to_blob(f.unchecked_ref()) {
+            web_sys::console::warn_1(&format!("screenshot: {}", js_err(e)).into());
+        }
     }
 
     /// Leaves a shown pose for the fly controller, at that pose.
@@ -912,12 +974,27 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
             .filter(|p| p.is_finite() && *p > 0.0)
             .ok_or_else(|| fail(format!("?pixel_error={v}: pixels, a positive number")))?,
     };
+    // The viewer's look for this device (`Look::auto`: on a CPU
+    // rasterizer such as SwiftShader, edges and the sky without AO and
+    // FXAA), or plain (`?look=plain`, what the tests compare).
+    let look = match query("look").as_deref() {
+        None | Some("auto") => Look::auto(ctx.is_cpu()),
+        Some("plain") => Look::PLAIN,
+        Some(v) => return Err(fail(format!("?look={v}: auto or plain"))),
+    };
+    let units = match query("units") {
+        None => Units::default(),
+        Some(v) => v
+            .parse::<Units>()
+            .map_err(|e| fail(format!("?units={v}: {e}")))?,
+    };
     set_stats(|s| {
         let api = if ctx.is_gl() { "WebGL2" } else { "WebGPU" };
         s.backend = match ctx.adapter_name() {
             "" => api.to_string(),
             name => format!("{api} ({name})"),
         };
+        s.cpu_rasterizer = ctx.is_cpu();
         s.file_bytes = sparse.len();
         s.fetched_bytes = fetched;
         s.requests = requests;
@@ -938,6 +1015,8 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         presenter: PagePresenter {
             surface,
             text: Vec::new(),
+            measure: Measure::Off,
+            label: None,
         },
         fetching: HashSet::new(),
         failed: HashSet::new(),
@@ -947,11 +1026,16 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         pointers: Pointers::default(),
         review: review::Review::new(),
         mode: Mode::Och,
-        look: Look::PLAIN,
+        look,
         xray: false,
         pixel_error,
         hud: true,
         near: default_near(&bounds),
+        measure: Measure::Off,
+        units,
+        recorder: PathRecorder::default(),
+        record_start: 0.0,
+        screenshot: false,
         path: Vec::new(),
         shown: None,
         frame: 0,
@@ -974,6 +1058,33 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
     }
     listen(&canvas, app.clone())?;
     run_frames(app);
+    Ok(())
+}
+
+/// Offers `blob` as a download named `name`, as a link the user clicked
+/// would (the browser numbers repeated names).
+fn download(blob: &Blob, name: &str) -> Result<(), String> {
+    let document = web_sys::window()
+        .and_then(|w| w.document())
+        .ok_or("no document")?;
+    let url = web_sys::Url::create_object_url_with_blob(blob).map_err(js_err)?;
+    let a: HtmlAnchorElement = document
+        .create_element("a")
+        .map_err(js_err)?
+        .unchecked_into();
+    a.set_href(&url);
+    a.set_download(name);
+    a.click();
+    set_stats(|s| s.downloads.push(name.to_string()));
+    // The browser has the blob once the click is handled; the URL goes
+    // after that.
+    let revoke = Closure::once_into_js(move || {
+        let _ = web_sys::Url::revoke_object_url(&url);
+    });
+    if let Some(w) = web_sys::window() {
+        let _ =
+            w.set_timeout_with_callback_and_timeout_and_arguments_0(revoke.unchecked_ref(), 60_000);
+    }
     Ok(())
 }
 

@@ -434,6 +434,18 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
         .map(|px| (px, native_pick(&gwk, &path, pose, px)))
         .find(|(_, n)| n["object"].is_object())
         .expect("pose 0 shows an object near the centre");
+    // A second surface pixel, for a measurement from the first.
+    let (second, native_second) = (1..12)
+        .flat_map(|r| [(1, 0), (-1, 0), (0, 1), (0, -1)].map(|(dx, dy)| (r, dx, dy)))
+        .map(|(r, dx, dy)| {
+            let x = (pixel.0 as i32 + 20 * r * dx).clamp(0, 639) as u32;
+            let y = (pixel.1 as i32 + 12 * r * dy).clamp(0, 359) as u32;
+            (x, y)
+        })
+        .map(|px| (px, native_pick(&gwk, &path, pose, px)))
+        .find(|(_, n)| n["point"].is_array() && n["point"] != native["point"])
+        .expect("pose 0 shows a second surface");
+    let downloads = dir.path().join("downloads");
     let served = serve(&gwk);
     let report = drive(&[
         "--url",
@@ -444,6 +456,10 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
         &pose.to_string(),
         "--pick",
         &format!("{},{}", pixel.0, pixel.1),
+        "--measure",
+        &format!("{},{}", second.0, second.1),
+        "--downloads",
+        s(&downloads),
         "--modes",
         "occ",
         "--poses",
@@ -509,6 +525,44 @@ fn the_page_picks_hides_cuts_and_links_views_as_a_reviewer_does() {
     // U and Delete: the first image again.
     assert_eq!(r["restored"]["hidden"], 0, "{}", r["restored"]);
     assert_eq!(num(&r["restored_vs_before"], "pixels"), 0.0, "{r}");
+    // M and two clicks: the distance between the points native pick
+    // finds, drawn over the frame; Esc clears it.
+    let point = |v: &Value| {
+        glam::DVec3::from_slice(&serde_json::from_value::<Vec<f64>>(v["point"].clone()).unwrap())
+    };
+    let want = point(&native).distance(point(&native_second));
+    let measured = num(&r["measure"], "measured");
+    assert!(
+        (measured - want).abs() <= 1e-6 * want,
+        "the page measured {measured}, native pick's points are {want} apart"
+    );
+    assert!(num(&r["measure_vs_restored"], "pixels") > 0.0, "{r}");
+    assert!(r["measure_cleared"]["measured"].is_null(), "{r}");
+    // P: the canvas as a PNG download, the frame drawn (the HUD off, the
+    // look plain); R, W held, R: a
+    // path download that replay walks.
+    let files: Vec<&str> = r["downloads"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{r}"))
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert!(files.iter().any(|f| f.ends_with(".png")), "{files:?}");
+    assert_eq!(num(&r["screenshot_vs_drawn"], "pixels"), 0.0, "{r}");
+    let recorded = downloads.join(
+        files
+            .iter()
+            .find(|f| f.ends_with(".path"))
+            .unwrap_or_else(|| panic!("no path in {files:?}")),
+    );
+    let text = std::fs::read_to_string(&recorded).unwrap();
+    let poses = text
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .count();
+    assert!(poses >= 5, "{poses} poses recorded in a second:\n{text}");
+    let frames = native_frames(&gwk, &recorded, &dir.path().join("recorded"), "vfc", &[]);
+    assert_eq!(frames.len(), poses, "replay walks every recorded pose");
     // A finger dragged sideways turns the camera.
     assert_ne!(r["touch"]["before"], r["touch"]["after"], "{}", r["touch"]);
     assert_eq!(report["last"]["failed_lods"], 0, "{report}");
@@ -761,4 +815,143 @@ fn the_page_says_what_is_wrong() {
     assert!(num(last, "failed_lods") > 0.0, "{report}");
     let e = last["lod_error"].as_str().unwrap_or_default();
     assert!(e.contains("checksum"), "{e:?}");
+}
+
+/// A smooth sphere (left) and a cube turned off its axes (right), side by
+/// side, seen from the front: `(path, gwk)`.
+fn shapes(dir: &Path) -> (PathBuf, PathBuf) {
+    use glam::{DQuat, DVec3};
+    let mut obj = String::from("o sphere\n");
+    let (rings, segments) = (32u32, 48u32);
+    let vertex = |i: u32| {
+        let (r, k) = (i / segments, i % segments);
+        let phi = std::f64::consts::PI * r as f64 / rings as f64;
+        let theta = 2.0 * std::f64::consts::PI * k as f64 / segments as f64;
+        DVec3::new(phi.sin() * theta.cos(), phi.cos(), phi.sin() * theta.sin())
+    };
+    for i in 0..(rings + 1) * segments {
+        let n = vertex(i);
+        let p = n + DVec3::new(-1.6, 0.0, 0.0);
+        obj += &format!("v {} {} {}\nvn {} {} {}\n", p.x, p.y, p.z, n.x, n.y, n.z);
+    }
+    let at = |r: u32, k: u32| r * segments + k % segments + 1;
+    for r in 0..rings {
+        for k in 0..segments {
+            let (a, b, c, d) = (at(r, k), at(r, k + 1), at(r + 1, k + 1), at(r + 1, k));
+            // Outward: a, b, c; the poles' rings have one triangle a quad.
+            if r > 0 {
+                obj += &format!("f {a}//{a} {b}//{b} {c}//{c}\n");
+            }
+            if r + 1 < rings {
+                obj += &format!("f {a}//{a} {c}//{c} {d}//{d}\n");
+            }
+        }
+    }
+    obj += "o cube\n";
+    let turn = DQuat::from_rotation_y(0.6) * DQuat::from_rotation_x(0.5);
+    let base = (rings + 1) * segments;
+    for i in 0..8 {
+        let c = |bit: u32| if i & bit == 0 { -0.8 } else { 0.8 };
+        let p = turn * DVec3::new(c(1), c(2), c(4)) + DVec3::new(1.6, 0.0, 0.0);
+        obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+    }
+    // Each face's corners counter-clockwise from outside, its normal.
+    for (corners, n) in [
+        ([0, 2, 3, 1], DVec3::NEG_Z),
+        ([4, 5, 7, 6], DVec3::Z),
+        ([0, 1, 5, 4], DVec3::NEG_Y),
+        ([2, 6, 7, 3], DVec3::Y),
+        ([0, 4, 6, 2], DVec3::NEG_X),
+        ([1, 3, 7, 5], DVec3::X),
+    ] {
+        let n = turn * n;
+        obj += &format!("vn {} {} {}\n", n.x, n.y, n.z);
+        let v = corners.map(|c| base + c + 1);
+        obj += &format!(
+            "f {}//-1 {}//-1 {}//-1\nf {}//-1 {}//-1 {}//-1\n",
+            v[0], v[1], v[2], v[0], v[2], v[3]
+        );
+    }
+    let (model, path, gwk) = (
+        dir.join("shapes.obj"),
+        dir.join("shapes.path"),
+        dir.join("shapes.gwk"),
+    );
+    std::fs::write(&model, obj).unwrap();
+    std::fs::write(&path, "0 0 0 5 0 0 0 1 60\n").unwrap();
+    gigawalk_ok(&["preprocess", s(&model), "-o", s(&gwk)]);
+    (path, gwk)
+}
+
+/// Each look pass alone on the shapes (`extra`: more driver arguments):
+/// the report's "look".
+fn look_walk(gwk: &Path, path: &Path, extra: &[&str]) -> Value {
+    let served = serve(gwk);
+    let mut args = vec![
+        "--url",
+        &served.url,
+        "--path",
+        s(path),
+        "--look-walk",
+        "0",
+        "--modes",
+        "vfc",
+    ];
+    args.extend_from_slice(extra);
+    let report = drive(&args);
+    assert_eq!(report["first"]["state"], "running", "{report}");
+    assert!(report["last"]["error"].is_null(), "{report}");
+    report["look"].clone()
+}
+
+/// The viewer's look in the page, on WebGPU and on WebGL2: edges draw
+/// the cube's creases and nothing inside the smooth sphere; FXAA blends
+/// silhouettes; AO runs; no pass changes the frame read back for
+/// accuracy. Opened without `?look=`, the page takes the viewer's
+/// default for its device.
+#[test]
+fn the_page_draws_the_viewers_look_on_webgpu_and_webgl2() {
+    if !can_run("the_page_draws_the_viewers_look_on_webgpu_and_webgl2") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (path, gwk) = shapes(dir.path());
+    for extra in [&[][..], &["--no-webgpu"][..]] {
+        let look = look_walk(&gwk, &path, extra);
+        let on = |pass: &str, key: &str| num(&look[pass], key);
+        // Both shapes fill much of their half.
+        assert!(
+            on("edges", "left_inside_pixels") > 2000.0,
+            "{extra:?} {look}"
+        );
+        assert!(
+            on("edges", "right_inside_pixels") > 2000.0,
+            "{extra:?} {look}"
+        );
+        // Crease lines inside the cube's outline, none inside the sphere's.
+        assert!(on("edges", "right_inside") > 100.0, "{extra:?} {look}");
+        assert_eq!(on("edges", "left_inside"), 0.0, "{extra:?} {look}");
+        // FXAA blends the silhouettes.
+        assert!(
+            on("fxaa", "left") + on("fxaa", "right") + on("fxaa", "background") > 50.0,
+            "{extra:?} {look}"
+        );
+        for pass in ["edges", "ao", "fxaa"] {
+            assert_eq!(
+                look[pass]["readback_same"], true,
+                "{extra:?} {pass}: {look}"
+            );
+            assert!(
+                look[format!("{pass}_stats")]["error"].is_null(),
+                "{extra:?} {look}"
+            );
+        }
+    }
+    // The default: the viewer's for the device (SwiftShader rasterizes on
+    // the CPU: edges and the sky, no AO or FXAA).
+    let served = serve(&gwk);
+    let report = drive(&["--url", &served.url, "--look", "auto", "--linger", "1"]);
+    let last = &report["last"];
+    assert_eq!(last["cpu_rasterizer"], true, "{last}");
+    assert_eq!(last["look"], "sky, edges over 30 degrees", "{last}");
 }

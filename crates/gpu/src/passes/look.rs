@@ -176,10 +176,13 @@ pub(crate) struct LookPass {
 #[derive(Clone, Copy)]
 enum Slot {
     Uniforms,
-    /// A texture read with `textureLoad` only (depth as unfilterable float).
+    /// A texture read with `textureLoad` or the nearest sampler only
+    /// (depth as unfilterable float).
     Unfiltered,
     Filtered,
     Sampler,
+    /// The nearest sampler depth is read through (`depth_at`).
+    Nearest,
 }
 
 fn layout(ctx: &GpuContext, label: &str, slots: &[(u32, Slot)]) -> wgpu::BindGroupLayout {
@@ -202,6 +205,7 @@ fn layout(ctx: &GpuContext, label: &str, slots: &[(u32, Slot)]) -> wgpu::BindGro
                     multisampled: false,
                 },
                 Slot::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                Slot::Nearest => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
             },
             count: None,
         })
@@ -238,11 +242,16 @@ impl LookPass {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        // Nearest is the default filter.
+        let nearest = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("look depth"),
+            ..Default::default()
+        });
         use Slot::*;
         let ao_layout = layout(
             ctx,
             "look occlusion",
-            &[(0, Uniforms), (1, Unfiltered), (2, Filtered)],
+            &[(0, Uniforms), (1, Unfiltered), (2, Filtered), (6, Nearest)],
         );
         let compose_layout = layout(
             ctx,
@@ -253,6 +262,7 @@ impl LookPass {
                 (2, Filtered),
                 (3, Filtered),
                 (4, Filtered),
+                (6, Nearest),
             ],
         );
         let fxaa_layout = layout(
@@ -262,7 +272,8 @@ impl LookPass {
         );
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         // A group of the uniforms, `textures` at their bindings and, for
-        // FXAA, the sampler at binding 5.
+        // FXAA, the sampler at binding 5; else the nearest one at 6 (depth
+        // is read through it).
         let group = |label,
                      layout: &wgpu::BindGroupLayout,
                      textures: &[(u32, &wgpu::Texture)],
@@ -276,12 +287,16 @@ impl LookPass {
                 binding: *b,
                 resource: wgpu::BindingResource::TextureView(v),
             }));
-            if sampled {
-                entries.push(wgpu::BindGroupEntry {
+            entries.push(match sampled {
+                true => wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::Sampler(&sampler),
-                });
-            }
+                },
+                false => wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::Sampler(&nearest),
+                },
+            });
             d.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(label),
                 layout,

@@ -316,8 +316,8 @@ impl LoopState {
             objects,
             prompt: app.prompt.clone(),
             views: self.view_names.clone(),
-            measure_points: self.measure.points(),
-            measure_label: self.measure.label(&self.units),
+            measure: self.measure,
+            units: self.units,
         };
         s.visibility = self.visibility.clone();
         s.ghosts = self.ghosts.clone();

@@ -5,19 +5,16 @@
 
 use std::sync::{Arc, Mutex};
 
-use gigawalk_gpu::{
-    GpuContext, GpuError, OverlayFrame, OverlayLine, OverlayText, VisiblePass, WindowSurface,
-};
+use gigawalk_gpu::{GpuContext, GpuError, OverlayFrame, OverlayText, VisiblePass, WindowSurface};
 use gigawalk_runtime::{CullReason, FrameReport, Presenter};
 use gigawalk_scene::Skeleton;
 
 use super::{Script, Shared};
 use crate::boxes::{overlay_boxes, CullSets};
 use crate::controls;
-use crate::hud::{hud_lines, FrameClock, FrameNumbers, ViewerState};
+use crate::hud::{hud_lines, FrameClock, FrameNumbers};
 use crate::image::write_png;
 use crate::objects::hud_text;
-use gigawalk_review::measure::screen_segment;
 
 /// How many times its 8-pixel glyphs the HUD text is drawn on a window
 /// `height` pixels tall: 1x below 600, 2x to 1440 (1080p: 16-pixel
@@ -105,7 +102,11 @@ impl Presenter for ViewerPresenter<'_> {
         let (w, h) = pass.size();
         let scale = hud_scale(h);
         let glyph = (8 * scale) as f32;
-        measure_overlay(&mut overlay, report, &viewer, (w, h), scale);
+        // The measurement, projected with the frame's own camera (the
+        // line stays on the points while the camera moves).
+        let marks = viewer.measure.on_screen(&report.camera, (w, h));
+        let label = viewer.measure.label(&viewer.units).map(|l| hud_text(&l));
+        overlay.push_measurement(&marks.markers, marks.segment, label, (w, h), scale);
         if settings.hud && !hud.is_empty() {
             overlay.text.push(OverlayText {
                 x: glyph,
@@ -168,68 +169,6 @@ impl Presenter for ViewerPresenter<'_> {
             }
         }
         Ok(())
-    }
-}
-
-/// Measurement colours: a yellow that reads over the shaded scene, on a
-/// dark outline.
-const MEASURE_COLOUR: [f32; 4] = [1.0, 0.85, 0.1, 1.0];
-const MEASURE_OUTLINE: [f32; 4] = [0.0, 0.0, 0.0, 0.8];
-
-/// The measurement over this frame, projected with the frame's own camera
-/// (the line stays on the points while the camera moves): a marker at
-/// each point, the line between them and the distance at its middle.
-fn measure_overlay(
-    overlay: &mut OverlayFrame,
-    report: &FrameReport,
-    viewer: &ViewerState,
-    size: (u32, u32),
-    scale: u32,
-) {
-    let points = &viewer.measure_points;
-    let camera = &report.camera;
-    let s = scale as f32;
-    for &p in points {
-        // A point's marker: a short thick line on it.
-        if let Some((a, _)) = screen_segment(camera, size, p, p) {
-            for (width, colour) in [(9.0 * s, MEASURE_OUTLINE), (5.0 * s, MEASURE_COLOUR)] {
-                let half = width * 0.5;
-                overlay.lines.push(OverlayLine {
-                    from: [a[0] - half, a[1]],
-                    to: [a[0] + half, a[1]],
-                    width,
-                    colour,
-                });
-            }
-        }
-    }
-    let [a, b] = points.as_slice() else {
-        return;
-    };
-    let Some((from, to)) = screen_segment(camera, size, *a, *b) else {
-        return;
-    };
-    for (width, colour) in [(4.0 * s, MEASURE_OUTLINE), (2.0 * s, MEASURE_COLOUR)] {
-        overlay.lines.push(OverlayLine {
-            from,
-            to,
-            width,
-            colour,
-        });
-    }
-    if let Some(label) = &viewer.measure_label {
-        let glyph = 8.0 * s;
-        let mid = [(from[0] + to[0]) * 0.5, (from[1] + to[1]) * 0.5];
-        let width = label.len() as f32 * glyph;
-        overlay.text.push(OverlayText {
-            // Centred on the middle, just above the line.
-            x: (mid[0] - width * 0.5).clamp(glyph, (size.0 as f32 - width - glyph).max(glyph)),
-            y: (mid[1] - 2.0 * glyph).clamp(glyph, (size.1 as f32 - 2.0 * glyph).max(glyph)),
-            scale,
-            lines: vec![hud_text(label)],
-            colour: MEASURE_COLOUR,
-            background: [0.0, 0.0, 0.0, 0.75],
-        });
     }
 }
 

@@ -5,7 +5,9 @@
 //! cursor (`X`, moved with `]` and `[`, flipped with `\`), a section box
 //! (`J`), sections on and off (`0`) and cleared (`Delete`), and `V`: the
 //! view (camera, selection, hidden objects, section) as a link in the
-//! address bar ([`gigawalk_review::link`]).
+//! address bar ([`gigawalk_review::link`]); `M` and two clicks measure
+//! a distance on full detail, `P` offers a screenshot and `R` records
+//! the camera as a path, both as downloads.
 //!
 //! What a pick or the object table needs from the scene is fetched on
 //! demand: the reader tries, a read of bytes not fetched yet names its
@@ -276,6 +278,15 @@ impl App {
                 let r = self.share_link();
                 self.review.say_either(r);
             }
+            // Esc clears a measurement, as in the viewer (a page does not
+            // quit).
+            Action::Measure => self.toggle_measure(),
+            Action::Quit if self.measure.is_active() => self.toggle_measure(),
+            Action::Screenshot => self.screenshot = true,
+            Action::ToggleRecord => {
+                let r = self.toggle_record();
+                self.review.say_either(r);
+            }
             _ => return false,
         }
         true
@@ -291,6 +302,38 @@ impl App {
             }
             Err(why) => self.review.say(why),
         }
+    }
+
+    /// `M`: starts a measurement, or clears the one there is.
+    fn toggle_measure(&mut self) {
+        let m = self.measure.toggle();
+        self.review.say(m);
+        set_stats(|s| s.measured = None);
+    }
+
+    /// `R`: starts recording the camera, or stops and offers the path
+    /// (docs/path-format.md, what `gigawalk replay --path` reads) as a
+    /// download.
+    fn toggle_record(&mut self) -> Result<String, String> {
+        let Some(path) = self.recorder.stop() else {
+            self.recorder.start();
+            self.record_start = now_ms();
+            set_stats(|s| s.recording = Some(0));
+            return Ok("recording the camera: R stops and saves the path".into());
+        };
+        set_stats(|s| s.recording = None);
+        if path.poses.is_empty() {
+            return Err("recording stopped before a frame: no path".into());
+        }
+        let parts = js_sys::Array::of1(&path.to_text().into());
+        let options = web_sys::BlobPropertyBag::new();
+        options.set_type("text/plain");
+        let blob = Blob::new_with_str_sequence_and_options(&parts, &options).map_err(js_err)?;
+        download(&blob, "gigawalk-view.path")?;
+        Ok(format!(
+            "path of {} poses saved (a download)",
+            path.poses.len()
+        ))
     }
 
     /// `V`: the view into the address bar (`#view=`), to copy and share.
@@ -361,7 +404,9 @@ pub(super) async fn pick_at(
 /// selection) and says what it is.
 pub(super) async fn click(app: Rc<RefCell<App>>, at: (f64, f64)) {
     ask_for_table(&app);
-    if let Err(why) = app.borrow().review.objects.table() {
+    // A measuring click needs a surface, not the object table.
+    let measuring = app.borrow().measure.wants_click();
+    if let (false, Err(why)) = (measuring, app.borrow().review.objects.table()) {
         app.borrow_mut().review.say(why);
         return;
     }
@@ -369,6 +414,16 @@ pub(super) async fn click(app: Rc<RefCell<App>>, at: (f64, f64)) {
     let mut a = app.borrow_mut();
     match hit {
         Err(e) => a.review.say(e),
+        Ok(hit) if measuring => {
+            let units = a.units;
+            let m = a.measure.click(hit.map(|h| h.point), &units);
+            let measured = match a.measure.points()[..] {
+                [p, q] if !a.measure.wants_click() => Some(p.distance(q)),
+                _ => None,
+            };
+            set_stats(|s| s.measured = measured);
+            a.review.say(m);
+        }
         Ok(hit) => {
             let had = a.review.objects.selection();
             a.review

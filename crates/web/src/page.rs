@@ -92,6 +92,14 @@ struct Stats {
     /// Bytes fetched when the first frame was drawn.
     first_frame_fetched: u64,
     failed_lods: u64,
+    /// Blob bytes of the LODs loaded, and the page's time taking them in
+    /// (into the sparse view, read into the device layout, uploaded), in
+    /// all: its cost per fetched byte.
+    loaded_bytes: u64,
+    load_ms: f64,
+    /// Blob bytes of the LODs asked for in range requests (what they
+    /// fetched beyond it is the gaps between blobs batched together).
+    asked_bytes: u64,
     /// The last LOD that failed to fetch or decode, and why.
     lod_error: Option<String>,
     in_flight: usize,
@@ -415,6 +423,8 @@ impl App {
     /// while the schedule reads it (checksum checked) for the device.
     fn take_arrivals(&mut self) -> Result<(), String> {
         let arrived: Vec<_> = self.arrivals.borrow_mut().drain(..).collect();
+        let t0 = now_ms();
+        let mut bytes = 0;
         for (lod, result) in arrived {
             self.fetching.remove(&lod);
             let info = self.reader.skeleton().lods()[lod as usize];
@@ -422,9 +432,10 @@ impl App {
             let sparse = self.sparse.clone();
             let loaded = match result {
                 Err(e) => Err(e),
-                Ok(bytes) => match sparse.insert(range.start, bytes) {
+                Ok(blob) => match sparse.insert(range.start, blob) {
                     Err(e) => Err(e),
                     Ok(()) => {
+                        bytes += info.len;
                         let r = self.schedule()?.load(lod).map_err(|e| e.to_string());
                         sparse.forget(range);
                         r
@@ -440,6 +451,11 @@ impl App {
                 });
             }
         }
+        let ms = now_ms() - t0;
+        set_stats(|s| {
+            s.loaded_bytes += bytes;
+            s.load_ms += ms;
+        });
         Ok(())
     }
 
@@ -464,7 +480,11 @@ impl App {
                     (l, i.offset - range.start..i.offset - range.start + i.len)
                 })
                 .collect();
-            set_stats(|s| s.requests += 1);
+            let asked: u64 = blobs.iter().map(|(_, r)| r.end - r.start).sum();
+            set_stats(|s| {
+                s.requests += 1;
+                s.asked_bytes += asked;
+            });
             spawn_local(async move {
                 let r = fetch_range(&url, range).await.map(|(b, _)| b);
                 let mut arrived = arrivals.borrow_mut();
@@ -1104,7 +1124,8 @@ fn listen(canvas: &HtmlCanvasElement, app: Rc<RefCell<App>>) -> Result<(), JsVal
             // stay the browser's; Ctrl alone is the viewer's "down".
             let code = e.code();
             let modified = e.meta_key() || e.alt_key() || (e.ctrl_key() && code != "ControlLeft");
-            if down && modified {
+            // F12 opens the browser's developer tools (P screenshots).
+            if (down && modified) || code == "F12" {
                 return;
             }
             let used = {

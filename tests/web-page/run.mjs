@@ -8,7 +8,7 @@
 //                [--settle S] [--linger S] [--no-hud] [--compare M:REF,...]
 //                [--serve DIR [--no-range]] [--no-webgpu [--no-webgl]]
 //                [--review POSE --pick X,Y [--measure X,Y] [--downloads DIR]]
-//                [--look-walk POSE] [--look auto|plain] [--frames DIR]
+//                [--look-walk POSE [--cap X,Y]] [--look auto|plain] [--frames DIR]
 //
 // --serve DIR serves DIR itself (ranges answered, or with --no-range
 // every request answered whole, as a server without range support
@@ -39,7 +39,9 @@
 // it changed among those the frame read back shows geometry at (its
 // depth), by region of the canvas (its left and right halves), and
 // whether the frame read back stayed the same. --look sets the page's
-// look (?look=, plain unless given). Exit status 0 whenever a
+// look (?look=, plain unless given). With --cap X,Y it then cuts at that
+// pixel (X, and ] four times) and reports the frame's row there before
+// and after ("cap_before", "cap"). Exit status 0 whenever a
 // report was written (tests judge it); 2 when Chromium or the page could
 // not be driven at all.
 import fs from 'node:fs';
@@ -398,6 +400,33 @@ try {
         return r;
       }, plain, png, drawn.depth, drawn.width);
       out[name].readback_same = f.sum === drawn.sum;
+    }
+    if (opt('cap')) {
+      // A section plane through the surface at X,Y, facing the eye (X),
+      // moved four steps deeper (]): along the frame's row there, the
+      // luma's low and high and how often it crosses their middle (a
+      // hatched cap's stripes cross it again and again).
+      const [cx, cy] = opt('cap').split(',').map(Number);
+      const row = () => p.evaluate(async (x0, y) => {
+        const f = await window.gigawalk.readFrame();
+        const l = [];
+        for (let x = x0 - 16; x <= x0 + 16; x++) {
+          const i = 4 * (y * f.width + x);
+          l.push(0.2126 * f.colour[i] + 0.7152 * f.colour[i + 1] + 0.0722 * f.colour[i + 2]);
+        }
+        const lo = Math.min(...l); const hi = Math.max(...l);
+        let crossings = 0;
+        for (let k = 1; k < l.length; k++) if ((l[k] > (lo + hi) / 2) !== (l[k - 1] > (lo + hi) / 2)) crossings++;
+        return { lo, hi, crossings };
+      }, cx, cy);
+      out.cap_before = await row();
+      await p.mouse.move(cx + 0.5, cy + 0.5);
+      await p.keyboard.press('KeyX');
+      await until((x) => x.section !== null);
+      for (let i = 0; i < 4; i++) await p.keyboard.press('BracketRight');
+      out.cap_stats = await settle();
+      await shot('look-cap');
+      out.cap = await row();
     }
     return out;
   }

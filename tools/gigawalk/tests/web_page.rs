@@ -887,6 +887,7 @@ fn shapes(dir: &Path) -> (PathBuf, PathBuf) {
 /// the report's "look".
 fn look_walk(gwk: &Path, path: &Path, extra: &[&str]) -> Value {
     let served = serve(gwk);
+    // The cube's middle is at pixel (420, 180).
     let mut args = vec![
         "--url",
         &served.url,
@@ -894,6 +895,8 @@ fn look_walk(gwk: &Path, path: &Path, extra: &[&str]) -> Value {
         s(path),
         "--look-walk",
         "0",
+        "--cap",
+        "420,180",
         "--modes",
         "vfc",
     ];
@@ -907,7 +910,7 @@ fn look_walk(gwk: &Path, path: &Path, extra: &[&str]) -> Value {
 /// The viewer's look in the page, on WebGPU and on WebGL2: edges draw
 /// the cube's creases and nothing inside the smooth sphere; FXAA blends
 /// silhouettes; AO runs; no pass changes the frame read back for
-/// accuracy. Opened without `?look=`, the page takes the viewer's
+/// accuracy; a section plane through the cube shows a hatched cap. Opened without `?look=`, the page takes the viewer's
 /// default for its device.
 #[test]
 fn the_page_draws_the_viewers_look_on_webgpu_and_webgl2() {
@@ -936,6 +939,14 @@ fn the_page_draws_the_viewers_look_on_webgpu_and_webgl2() {
             on("fxaa", "left") + on("fxaa", "right") + on("fxaa", "background") > 50.0,
             "{extra:?} {look}"
         );
+        // A plane cutting the cube shows its cap hatched: the row through
+        // it crosses from stripe to ground again and again, where the
+        // uncut faces crossed at most at their edges.
+        assert!(look["cap_stats"]["section"].is_string(), "{extra:?} {look}");
+        let (before, cap) = (&look["cap_before"], &look["cap"]);
+        assert!(num(before, "crossings") <= 2.0, "{extra:?} {before}");
+        assert!(num(cap, "crossings") >= 6.0, "{extra:?} {cap}");
+        assert!(num(cap, "lo") < 0.7 * num(cap, "hi"), "{extra:?} {cap}");
         for pass in ["edges", "ao", "fxaa"] {
             assert_eq!(
                 look[pass]["readback_same"], true,

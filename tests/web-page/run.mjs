@@ -38,7 +38,8 @@
 // edges, F2 AO, F3 FXAA): the report's "look" has, per pass, the pixels
 // it changed among those the frame read back shows geometry at (its
 // depth), by region of the canvas (its left and right halves), and
-// whether the frame read back stayed the same. --look sets the page's
+// whether the frame read back stayed the same ("readback_sum" is the
+// starting frame's checksum). --look sets the page's
 // look (?look=, plain unless given). With --cap X,Y it then cuts at that
 // pixel (X, and ] four times) and reports the frame's row there before
 // and after ("cap_before", "cap"). Exit status 0 whenever a
@@ -367,6 +368,7 @@ try {
       return { sum: h, depth: Array.from(f.depth, (d) => (d > 0 ? 1 : 0)), width: f.width };
     });
     const drawn = await frame();
+    out.readback_sum = drawn.sum;
     for (const [name, key] of [['edges', 'KeyE'], ['ao', 'F2'], ['fxaa', 'F3']]) {
       await p.keyboard.press(key);
       out[`${name}_stats`] = await settle();

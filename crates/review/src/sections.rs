@@ -310,6 +310,18 @@ pub fn view_box(camera: &Camera, depth: f64, bounds: &Aabb) -> Option<Aabb> {
     met.is_valid().then_some(met)
 }
 
+/// [`view_box`] for `J` with nothing selected, `hit` the distance of the
+/// surface under the screen's centre (`None`: nothing there, and the box
+/// reaches as deep as the scene goes); the message when the view shows
+/// none of the scene.
+pub fn box_in_view(camera: &Camera, hit: Option<f64>, bounds: &Aabb) -> Result<Aabb, String> {
+    let depth = hit.unwrap_or_else(|| {
+        ((bounds.center() - camera.position).length() + 0.5 * bounds.diagonal()) / VIEW_BOX_DEPTH
+    });
+    view_box(camera, depth, bounds)
+        .ok_or_else(|| "section box: the view shows none of the scene".to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -460,6 +472,10 @@ mod tests {
         let behind = Aabb::new(DVec3::splat(-9.0), DVec3::splat(-5.0));
         assert_eq!(view_box(&cam, 10.0, &behind), None);
         assert_eq!(view_box(&cam, f64::NAN, &scene), None);
+        // Nothing under the centre: as deep as the scene goes.
+        let deep = box_in_view(&cam, None, &scene).unwrap();
+        assert!(deep.max.x >= 100.0 - 1e-9, "{deep:?}");
+        assert!(box_in_view(&cam, Some(10.0), &behind).is_err());
     }
 
     #[test]

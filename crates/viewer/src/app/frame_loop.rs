@@ -25,7 +25,7 @@ use super::{aspect, Shared};
 use crate::controls::Action;
 use crate::hud::ViewerState;
 use crate::objects::{frame_box, save_view, view_names, Objects};
-use crate::sections::{view_box, Sections, VIEW_BOX_DEPTH};
+use crate::sections::{box_in_view, Sections};
 use crate::settings::Settings;
 use gigawalk_review::fly::FlyController;
 use gigawalk_review::measure::Measure;
@@ -490,20 +490,13 @@ impl LoopState {
         } else {
             let centre = (render.width as f64 * 0.5, render.height as f64 * 0.5);
             let camera = self.controller.camera(aspect(render), self.near);
-            let depth = match self.pick_at(scene, centre, render, render) {
-                Ok(Some(h)) => h.distance,
-                Ok(None) => {
-                    // Nothing under the centre: as deep as the scene goes.
-                    let b = &self.scene_bounds;
-                    ((b.center() - camera.position).length() + 0.5 * diagonal) / VIEW_BOX_DEPTH
-                }
+            let hit = match self.pick_at(scene, centre, render, render) {
+                Ok(h) => h.map(|h| h.distance),
                 Err(e) => return self.announce(e, now),
             };
-            match view_box(&camera, depth, &self.scene_bounds) {
-                Some(b) => b,
-                None => {
-                    return self.say("section box: the view shows none of the scene".into(), now)
-                }
+            match box_in_view(&camera, hit, &self.scene_bounds) {
+                Ok(b) => b,
+                Err(m) => return self.say(m, now),
             }
         };
         match self.sections.box_around(&around, diagonal) {

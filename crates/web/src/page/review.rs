@@ -21,7 +21,7 @@ use std::sync::Arc;
 use gigawalk_cull::{NodeShow, PickHit, Visibility};
 use gigawalk_review::actions::act;
 use gigawalk_review::objects::{frame_box, Objects, NO_IDENTITY};
-use gigawalk_review::sections::{view_box, VIEW_BOX_DEPTH};
+use gigawalk_review::sections::box_in_view;
 use gigawalk_scene::views::SavedView;
 
 use super::*;
@@ -472,18 +472,7 @@ async fn section_box(app: Rc<RefCell<App>>) {
     } else {
         match pick_at(&app, centre).await {
             Err(e) => Err(e),
-            Ok(hit) => {
-                let depth = hit.map_or_else(
-                    // Nothing under the centre: as deep as the scene goes.
-                    || {
-                        ((bounds.center() - camera.position).length() + 0.5 * diagonal)
-                            / VIEW_BOX_DEPTH
-                    },
-                    |h| h.distance,
-                );
-                view_box(&camera, depth, &bounds)
-                    .ok_or_else(|| "section box: the view shows none of the scene".to_string())
-            }
+            Ok(hit) => box_in_view(&camera, hit.map(|h| h.distance), &bounds),
         }
     };
     let mut a = app.borrow_mut();

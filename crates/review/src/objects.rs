@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use crate::select::HiddenSet;
 use gigawalk_cull::Visibility;
-use gigawalk_scene::objects::{ObjectTable, Pattern};
+use gigawalk_scene::objects::{ObjectRecord, ObjectTable, Pattern};
 use gigawalk_scene::path::Pose;
 use gigawalk_scene::views::{self, ObjectRef, SavedView, Views};
 use gigawalk_scene::{Aabb, Skeleton};
@@ -403,6 +403,21 @@ pub fn point_text(p: DVec3) -> String {
     // + 0.0 turns -0 into 0: "-0.000000" reads as a sign that is not there.
     let p = p + DVec3::ZERO;
     format!("{:.6}, {:.6}, {:.6}", p.x, p.y, p.z)
+}
+
+/// An object as `gigawalk pick --json`, `find --json` and the page's
+/// `pick` give it: its index, name, file, path, metadata (its JSON),
+/// triangles and box.
+pub fn object_json(id: u32, o: &ObjectRecord) -> serde_json::Value {
+    serde_json::json!({
+        "id": id,
+        "name": o.name,
+        "file": o.file,
+        "path": o.path,
+        "metadata": o.metadata.as_deref().and_then(|m| serde_json::from_str::<serde_json::Value>(m).ok()),
+        "triangles": o.triangles,
+        "bounds": {"min": o.bounds.min.to_array(), "max": o.bounds.max.to_array()},
+    })
 }
 
 /// HUD text: the HUD's font is ASCII, so anything else shows as `?`,

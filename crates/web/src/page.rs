@@ -841,9 +841,7 @@ pub async fn pick(x: f64, y: f64) -> Result<String, JsValue> {
     let a = app.borrow();
     let object = hit.and_then(|h| h.object).and_then(|o| {
         let r = a.review.objects.table().ok()?.object(o)?;
-        Some(serde_json::json!({
-            "id": o, "name": r.name, "file": r.file, "path": r.path, "metadata": r.metadata,
-        }))
+        Some(gigawalk_review::objects::object_json(o, r))
     });
     Ok(serde_json::json!({
         "object": object,

@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
+use gigawalk_review::objects::object_json;
 use gigawalk_review::select::{self, PickRequest, Picked};
-use gigawalk_scene::objects::ObjectRecord;
 
 #[derive(clap::Args)]
 pub struct PickArgs {
@@ -210,17 +210,4 @@ pub fn find(a: FindArgs) -> anyhow::Result<()> {
         eprintln!("{} object(s) match", found.len());
     }
     Ok(())
-}
-
-/// An object as `pick --json` and `find --json` print it.
-fn object_json(id: u32, o: &ObjectRecord) -> serde_json::Value {
-    serde_json::json!({
-        "id": id,
-        "name": o.name,
-        "file": o.file,
-        "path": o.path,
-        "metadata": o.metadata.as_deref().and_then(|m| serde_json::from_str::<serde_json::Value>(m).ok()),
-        "triangles": o.triangles,
-        "bounds": {"min": o.bounds.min.to_array(), "max": o.bounds.max.to_array()},
-    })
 }

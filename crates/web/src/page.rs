@@ -34,7 +34,8 @@ use gigawalk_review::objects::hud_text;
 use gigawalk_review::recorder::PathRecorder;
 use gigawalk_review::sections::Sections;
 use gigawalk_runtime::{
-    CameraRequest, FrameReport, Presenter, Runtime, RuntimeOptions, Stepped, SteppedOptions,
+    CameraRequest, FrameReport, OccluderBudget, Presenter, Runtime, RuntimeOptions, Stepped,
+    SteppedOptions,
 };
 use gigawalk_scene::sparse::{open_step, OpenStep, Sparse, OPEN_CHUNK};
 use gigawalk_scene::units::Units;
@@ -305,6 +306,8 @@ struct App {
     review: review::Review,
     mode: Mode,
     pixel_error: f64,
+    /// How many occluder triangles OR draws (`?occluders=`).
+    occluders: OccluderBudget,
     hud: bool,
     /// What the shown image adds (the viewer's E, F2 and F3), and x-ray:
     /// hidden objects drawn as faint ghosts (F4).
@@ -400,6 +403,7 @@ impl App {
                     let o = RuntimeOptions {
                         width: w,
                         height: h,
+                        occluder_budget: self.occluders,
                         traversal: self.mode.traversal(self.pixel_error),
                         ..RuntimeOptions::default()
                     };
@@ -1000,6 +1004,12 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         Some("plain") => Look::PLAIN,
         Some(v) => return Err(fail(format!("?look={v}: auto or plain"))),
     };
+    let occluders = match query("occluders") {
+        None => OccluderBudget::All,
+        Some(v) => v
+            .parse::<OccluderBudget>()
+            .map_err(|e| fail(format!("?occluders={v}: {e}")))?,
+    };
     let units = match query("units") {
         None => Units::default(),
         Some(v) => v
@@ -1044,6 +1054,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
         pointers: Pointers::default(),
         review: review::Review::new(),
         mode: Mode::Och,
+        occluders,
         look,
         xray: false,
         pixel_error,

@@ -803,10 +803,14 @@ fn the_page_says_what_is_wrong() {
         &["neither WebGPU nor WebGL2"],
     );
 
-    says(
-        &drive(&["--serve", s(&site), "--query", "budget=lots"]),
-        &["?budget=lots"],
-    );
+    for (flag, value, said) in [
+        ("--query", "budget=lots", "?budget=lots"),
+        ("--query", "units=furlong", "?units=furlong"),
+        ("--look", "shiny", "?look=shiny"),
+        ("--query", "occluders=many", "?occluders=many"),
+    ] {
+        says(&drive(&["--serve", s(&site), flag, value]), &[said]);
+    }
 
     // A link whose view is cut short or made up: the page says so and
     // shows the overview.

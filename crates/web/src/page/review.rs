@@ -404,9 +404,11 @@ pub(super) async fn pick_at(
 /// selection) and says what it is.
 pub(super) async fn click(app: Rc<RefCell<App>>, at: (f64, f64)) {
     ask_for_table(&app);
-    // A measuring click needs a surface, not the object table.
+    // A measuring click needs a surface, not the object table. (The
+    // borrow ends with the `let`: saying why borrows the page mutably.)
     let measuring = app.borrow().measure.wants_click();
-    if let (false, Err(why)) = (measuring, app.borrow().review.objects.table()) {
+    let refused = app.borrow().review.objects.table().err();
+    if let (false, Some(why)) = (measuring, refused) {
         app.borrow_mut().review.say(why);
         return;
     }

@@ -147,23 +147,25 @@ try {
       g.drawImage(img, 0, 0);
       return { d: g.getImageData(0, 0, c.width, c.height).data, width: c.width, height: c.height };
     };
+    // Pixels of two RGBA arrays with any colour channel different, and
+    // the largest difference of a channel.
+    window.gigawalkPixelDiff = (da, db) => {
+      if (da.length !== db.length) return { pixels: -1, max: 255 };
+      let n = 0; let max = 0;
+      for (let i = 0; i < da.length; i += 4) {
+        let d = 0;
+        for (let k = 0; k < 3; k++) d = Math.max(d, Math.abs(da[i + k] - db[i + k]));
+        if (d > 0) n++;
+        max = Math.max(max, d);
+      }
+      return { pixels: n, max };
+    };
   });
 
   /// How two screenshots (base64 PNGs of one size) differ: pixels with
   /// any channel different, and the largest difference of a channel.
-  const diff = (a, b) => page.evaluate(async (pa, pb) => {
-    const da = (await window.gigawalkPngPixels(pa)).d;
-    const db = (await window.gigawalkPngPixels(pb)).d;
-    if (da.length !== db.length) return { pixels: -1, max: 255 };
-    let n = 0; let max = 0;
-    for (let i = 0; i < da.length; i += 4) {
-      let d = 0;
-      for (let k = 0; k < 3; k++) d = Math.max(d, Math.abs(da[i + k] - db[i + k]));
-      if (d > 0) n++;
-      max = Math.max(max, d);
-    }
-    return { pixels: n, max };
-  }, a, b);
+  const diff = (a, b) => page.evaluate(async (pa, pb) => window.gigawalkPixelDiff(
+    (await window.gigawalkPngPixels(pa)).d, (await window.gigawalkPngPixels(pb)).d), a, b);
 
   /// The page as a PNG (base64), kept under --shots as NAME.png.
   async function shot(name) {
@@ -331,15 +333,7 @@ try {
       if (png) {
         r.screenshot_vs_drawn = await p.evaluate(async (data, want) => {
           const { d, width, height } = await window.gigawalkPngPixels(data);
-          if (d.length !== want.length) return { pixels: -1, max: 255, width, height };
-          let n = 0; let max = 0;
-          for (let i = 0; i < d.length; i += 4) {
-            let m = 0;
-            for (let k = 0; k < 3; k++) m = Math.max(m, Math.abs(d[i + k] - want[i + k]));
-            if (m > 0) n++;
-            max = Math.max(max, m);
-          }
-          return { pixels: n, max, width, height };
+          return { ...window.gigawalkPixelDiff(d, want), width, height };
         }, fs.readFileSync(path.join(dir, png)).toString('base64'), drawn);
       }
     }

@@ -73,12 +73,17 @@ impl Measure {
         }
     }
 
-    /// The label at the line's middle, once both points are picked.
-    pub fn label(&self, units: &Units) -> Option<String> {
+    /// The distance measured (model units), once both points are picked.
+    pub fn distance(&self) -> Option<f64> {
         match self {
-            Measure::Done(a, b) => Some(units.format(a.distance(*b))),
+            Measure::Done(a, b) => Some(a.distance(*b)),
             _ => None,
         }
+    }
+
+    /// The label at the line's middle, once both points are picked.
+    pub fn label(&self, units: &Units) -> Option<String> {
+        self.distance().map(|d| units.format(d))
     }
 
     /// The points picked so far.

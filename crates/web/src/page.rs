@@ -137,8 +137,9 @@ struct Stats {
     section: Option<String>,
     message: Option<String>,
     /// The measured distance once both points are picked (model units),
-    /// the poses of a path being recorded, and the files offered for
-    /// download (screenshots and recorded paths).
+    /// the poses of a path being recorded (as of the last frame drawn),
+    /// and the files offered for download (screenshots and recorded
+    /// paths).
     measured: Option<f64>,
     recording: Option<usize>,
     downloads: Vec<String>,
@@ -584,6 +585,11 @@ impl App {
         let mode = self.mode;
         let pixel_error = self.pixel_error;
         let look = self.look.describe();
+        let measured = self.measure.distance();
+        let recording = self
+            .recorder
+            .is_recording()
+            .then(|| self.recorder.pose_count());
         set_stats(|s| {
             s.state = "running".into();
             s.frames = self.frame;
@@ -617,6 +623,8 @@ impl App {
                 && (r.occlusion_used || !mode.occlusion());
             s.mode = mode.name().into();
             s.look = look;
+            s.measured = measured;
+            s.recording = recording;
             s.pixel_error = pixel_error;
             s.selected = selected;
             s.section = section;

@@ -308,7 +308,6 @@ impl App {
     fn toggle_measure(&mut self) {
         let m = self.measure.toggle();
         self.review.say(m);
-        set_stats(|s| s.measured = None);
     }
 
     /// `R`: starts recording the camera, or stops and offers the path
@@ -318,10 +317,8 @@ impl App {
         let Some(path) = self.recorder.stop() else {
             self.recorder.start();
             self.record_start = now_ms();
-            set_stats(|s| s.recording = Some(0));
             return Ok("recording the camera: R stops and saves the path".into());
         };
-        set_stats(|s| s.recording = None);
         if path.poses.is_empty() {
             return Err("recording stopped before a frame: no path".into());
         }
@@ -419,11 +416,6 @@ pub(super) async fn click(app: Rc<RefCell<App>>, at: (f64, f64)) {
         Ok(hit) if measuring => {
             let units = a.units;
             let m = a.measure.click(hit.map(|h| h.point), &units);
-            let measured = match a.measure.points()[..] {
-                [p, q] if !a.measure.wants_click() => Some(p.distance(q)),
-                _ => None,
-            };
-            set_stats(|s| s.measured = measured);
             a.review.say(m);
         }
         Ok(hit) => {

@@ -343,9 +343,10 @@ type ScheduleKey = (u32, u32, Mode);
 struct PagePresenter {
     surface: WindowSurface,
     text: Vec<OverlayText>,
-    /// The measurement, projected with each frame's own camera.
+    /// The measurement, projected with each frame's own camera, and the
+    /// units its label is in.
     measure: Measure,
-    label: Option<String>,
+    units: Units,
 }
 
 impl Presenter for PagePresenter {
@@ -361,7 +362,7 @@ impl Presenter for PagePresenter {
             ..OverlayFrame::default()
         };
         let marks = self.measure.on_screen(&report.camera, pass.size());
-        let label = self.label.take();
+        let label = self.measure.label(&self.units).map(|l| hud_text(&l));
         overlay.push_measurement(&marks.markers, marks.segment, label, pass.size(), 1);
         self.surface
             .present(ctx, pass, &overlay, pass.size(), false)
@@ -537,7 +538,6 @@ impl App {
             ..CameraRequest::new(camera, false)
         };
         self.presenter.measure = self.measure;
-        self.presenter.label = self.measure.label(&self.units).map(|l| hud_text(&l));
         let (w, _) = self.size();
         self.presenter.text = if self.hud {
             self.hud_text(w)
@@ -1052,7 +1052,7 @@ pub async fn start(canvas: HtmlCanvasElement, scene_url: String) -> Result<(), J
             surface,
             text: Vec::new(),
             measure: Measure::Off,
-            label: None,
+            units,
         },
         fetching: HashSet::new(),
         failed: HashSet::new(),

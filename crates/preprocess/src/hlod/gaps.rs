@@ -361,25 +361,36 @@ impl Gaps {
         // Cell coordinates saturate (`as` from f64), so a far vertex
         // cannot overflow its neighbours' keys.
         let cell = |p: DVec3| [p.x, p.y, p.z].map(|c| (c * inv).floor() as i64);
-        let used: Vec<usize> = (0..self.pos.len()).filter(|&v| self.in_use(v)).collect();
-        let mut grid: FxHashMap<[i64; 3], Vec<u32>> = FxHashMap::default();
-        for &v in &used {
-            grid.entry(cell(self.pos[v])).or_default().push(v as u32);
+        // The vertices in use by cell, ascending within each (a cell's
+        // first vertices are what a crowded cell is sampled by), and
+        // where each cell's run starts: one sort, no list per cell.
+        let mut keyed: Vec<([i64; 3], u32)> = (0..self.pos.len())
+            .filter(|&v| self.in_use(v))
+            .map(|v| (cell(self.pos[v]), v as u32))
+            .collect();
+        keyed.sort_unstable();
+        let mut runs: FxHashMap<[i64; 3], (u32, u32)> = FxHashMap::default();
+        let mut start = 0;
+        while start < keyed.len() {
+            let key = keyed[start].0;
+            let end = start + keyed[start..].partition_point(|e| e.0 == key);
+            runs.insert(key, (start as u32, end as u32));
+            start = end;
         }
         let gap2 = gap * gap;
-        let mut near: Vec<(f64, u32)> = Vec::new();
+        // The nearest partners so far, nearest first (ties by index).
+        let mut near: Vec<(f64, u32)> = Vec::with_capacity(VIRTUAL_PER_VERTEX + 1);
         let mut neighbours: Vec<u32> = Vec::new();
-        for v in used {
-            let p = self.pos[v];
-            let c = cell(p);
-            neighbours.clear();
-            for &t in &self.vtris[v] {
-                if self.tri_alive[t as usize] {
-                    neighbours.extend_from_slice(&self.tris[t as usize]);
-                }
-            }
-            neighbours.extend_from_slice(&self.virtual_pairs[v]);
-            near.clear();
+        // A cell's neighbourhood, its 27 cells' first vertices, found once
+        // for all the cell's vertices. Which vertex goes first does not
+        // change what any finds: each looks only at higher indices, and
+        // a lower vertex's new partners are lower than it.
+        let mut around: Vec<u32> = Vec::new();
+        let mut i = 0;
+        while i < keyed.len() {
+            let c = keyed[i].0;
+            let (_, end) = runs[&c];
+            around.clear();
             for dx in -1..=1i64 {
                 for dy in -1..=1i64 {
                     for dz in -1..=1i64 {
@@ -388,29 +399,52 @@ impl Gaps {
                             c[1].saturating_add(dy),
                             c[2].saturating_add(dz),
                         ];
-                        let Some(list) = grid.get(&key) else { continue };
+                        let Some(&(a, b)) = runs.get(&key) else { continue };
                         // A crowded cell is sampled, not scanned: its
                         // first vertices stand for it (the gap is then
                         // far above the mesh's spacing, and any partner
                         // closes it).
-                        for &u in list.iter().take(MAX_SCANNED_PER_CELL) {
-                            if u as usize <= v {
-                                continue;
-                            }
-                            let d2 = self.pos[u as usize].distance_squared(p);
-                            if d2 <= gap2 && !neighbours.contains(&u) {
-                                near.push((d2, u));
-                            }
-                        }
+                        let b = b.min(a + MAX_SCANNED_PER_CELL as u32);
+                        around.extend(keyed[a as usize..b as usize].iter().map(|e| e.1));
                     }
                 }
             }
-            near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            for &(_, u) in near.iter().take(VIRTUAL_PER_VERTEX) {
-                self.virtual_pairs[v].push(u);
-                self.virtual_pairs[u as usize].push(v as u32);
-                added.push((v as u32, u));
+            for k in i..end as usize {
+                let v = keyed[k].1 as usize;
+                let p = self.pos[v];
+                neighbours.clear();
+                for &t in &self.vtris[v] {
+                    if self.tri_alive[t as usize] {
+                        neighbours.extend_from_slice(&self.tris[t as usize]);
+                    }
+                }
+                neighbours.extend_from_slice(&self.virtual_pairs[v]);
+                near.clear();
+                for &u in &around {
+                    if u as usize <= v {
+                        continue;
+                    }
+                    let d2 = self.pos[u as usize].distance_squared(p);
+                    // Only a pair that would be among the nearest kept is
+                    // checked against the neighbours (the costly test).
+                    let better = near.len() < VIRTUAL_PER_VERTEX || {
+                        let (e, w) = near[VIRTUAL_PER_VERTEX - 1];
+                        e.total_cmp(&d2).then(w.cmp(&u)).is_gt()
+                    };
+                    if d2 <= gap2 && better && !neighbours.contains(&u) {
+                        let at = near
+                            .partition_point(|&(e, w)| e.total_cmp(&d2).then(w.cmp(&u)).is_lt());
+                        near.insert(at, (d2, u));
+                        near.truncate(VIRTUAL_PER_VERTEX);
+                    }
+                }
+                for &(_, u) in &near {
+                    self.virtual_pairs[v].push(u);
+                    self.virtual_pairs[u as usize].push(v as u32);
+                    added.push((v as u32, u));
+                }
             }
+            i = end as usize;
         }
         added
     }

@@ -361,15 +361,32 @@ impl Gaps {
         // Cell coordinates saturate (`as` from f64), so a far vertex
         // cannot overflow its neighbours' keys.
         let cell = |p: DVec3| [p.x, p.y, p.z].map(|c| (c * inv).floor() as i64);
+        // A cell as one number: its place from the box's lowest cell, 21
+        // bits an axis (the box spans about 1,000 cells an axis at most:
+        // `History::new`'s first gap is a thousandth of its extent, and
+        // the gap only grows). A cell beyond that is none: its vertex
+        // would get no partner this time.
+        let low = cell(self.bounds.0);
+        let pack = |c: [i64; 3]| -> Option<u64> {
+            let mut key = 0u64;
+            for (c, low) in c.into_iter().zip(low) {
+                let d = c.checked_sub(low)?;
+                if !(0..1 << 21).contains(&d) {
+                    return None;
+                }
+                key = key << 21 | d as u64;
+            }
+            Some(key)
+        };
         // The vertices in use by cell, ascending within each (a cell's
         // first vertices are what a crowded cell is sampled by), and
         // where each cell's run starts: one sort, no list per cell.
-        let mut keyed: Vec<([i64; 3], u32)> = (0..self.pos.len())
+        let mut keyed: Vec<(u64, u32)> = (0..self.pos.len())
             .filter(|&v| self.in_use(v))
-            .map(|v| (cell(self.pos[v]), v as u32))
+            .filter_map(|v| Some((pack(cell(self.pos[v]))?, v as u32)))
             .collect();
         keyed.sort_unstable();
-        let mut runs: FxHashMap<[i64; 3], (u32, u32)> = FxHashMap::default();
+        let mut runs: FxHashMap<u64, (u32, u32)> = FxHashMap::default();
         let mut start = 0;
         while start < keyed.len() {
             let key = keyed[start].0;
@@ -385,11 +402,11 @@ impl Gaps {
         // for all the cell's vertices. Which vertex goes first does not
         // change what any finds: each looks only at higher indices, and
         // a lower vertex's new partners are lower than it.
-        let mut around: Vec<u32> = Vec::new();
+        let mut around: Vec<(DVec3, u32)> = Vec::new();
         let mut i = 0;
         while i < keyed.len() {
-            let c = keyed[i].0;
-            let (_, end) = runs[&c];
+            let (_, end) = runs[&keyed[i].0];
+            let c = cell(self.pos[keyed[i].1 as usize]);
             around.clear();
             for dx in -1..=1i64 {
                 for dy in -1..=1i64 {
@@ -399,13 +416,19 @@ impl Gaps {
                             c[1].saturating_add(dy),
                             c[2].saturating_add(dz),
                         ];
-                        let Some(&(a, b)) = runs.get(&key) else { continue };
+                        let Some(&(a, b)) = pack(key).and_then(|k| runs.get(&k)) else {
+                            continue;
+                        };
                         // A crowded cell is sampled, not scanned: its
                         // first vertices stand for it (the gap is then
                         // far above the mesh's spacing, and any partner
                         // closes it).
                         let b = b.min(a + MAX_SCANNED_PER_CELL as u32);
-                        around.extend(keyed[a as usize..b as usize].iter().map(|e| e.1));
+                        around.extend(
+                            keyed[a as usize..b as usize]
+                                .iter()
+                                .map(|e| (self.pos[e.1 as usize], e.1)),
+                        );
                     }
                 }
             }
@@ -420,18 +443,20 @@ impl Gaps {
                 }
                 neighbours.extend_from_slice(&self.virtual_pairs[v]);
                 near.clear();
-                for &u in &around {
+                for &(q, u) in &around {
                     if u as usize <= v {
                         continue;
                     }
-                    let d2 = self.pos[u as usize].distance_squared(p);
+                    let d2 = q.distance_squared(p);
                     // Only a pair that would be among the nearest kept is
                     // checked against the neighbours (the costly test).
-                    let better = near.len() < VIRTUAL_PER_VERTEX || {
-                        let (e, w) = near[VIRTUAL_PER_VERTEX - 1];
-                        e.total_cmp(&d2).then(w.cmp(&u)).is_gt()
+                    let better = || {
+                        near.len() < VIRTUAL_PER_VERTEX || {
+                            let (e, w) = near[VIRTUAL_PER_VERTEX - 1];
+                            e.total_cmp(&d2).then(w.cmp(&u)).is_gt()
+                        }
                     };
-                    if d2 <= gap2 && better && !neighbours.contains(&u) {
+                    if d2 <= gap2 && better() && !neighbours.contains(&u) {
                         let at = near
                             .partition_point(|&(e, w)| e.total_cmp(&d2).then(w.cmp(&u)).is_lt());
                         near.insert(at, (d2, u));

@@ -6,10 +6,12 @@
 # benches/scene-diff.py says in which sections).
 #
 #   BASE=<rev> SIZES="10M 20M" ROUNDS=2 benches/preprocess-speed.sh [OUT]
+#   BASE=flags BASE_FLAGS="--gaps off" MODELS=floor.glb ROUNDS=2 benches/preprocess-speed.sh
 #
 # BASE defaults to origin/main's merge base with HEAD (BASE=none: no base
-# run),
-# SIZES to 10M, ROUNDS to 1, OUT to target/preprocess-speed. Prints one
+# run; BASE=flags: the base is this checkout's build run with BASE_FLAGS,
+# a knob's cost), SIZES to 10M, ROUNDS to 1, OUT to target/preprocess-speed;
+# MODELS (.glb files) replaces the generated plants. Prints one
 # line per run (wall, CPU, peak memory, the HLOD phase's cores busy and
 # its predicted speed-up on 16 cores from --stats) and writes each run's
 # log and stats JSON under OUT. Needs python3 for the summary.
@@ -26,7 +28,11 @@ OUT=$(cd "$OUT" && pwd)
 cargo build --release -p gigawalk
 cp target/release/gigawalk "$OUT/gw-new"
 builds=(new)
-if [ -n "$BASE" ] && [ "$BASE" != none ] && [ "$(git rev-parse "$BASE")" != "$(git rev-parse HEAD)" ]; then
+BASE_FLAGS=${BASE_FLAGS:-}
+if [ "$BASE" = flags ]; then
+  cp "$OUT/gw-new" "$OUT/gw-base"
+  builds=(base new)
+elif [ -n "$BASE" ] && [ "$BASE" != none ] && [ "$(git rev-parse "$BASE")" != "$(git rev-parse HEAD)" ]; then
   rm -rf "$OUT/base-src"
   git worktree prune
   git worktree add --detach "$OUT/base-src" "$BASE"
@@ -52,9 +58,15 @@ print(f"hlod {phase.get('hlod', 0):.1f} s at {cores.get('hlod', float('nan')):.2
 EOF
 }
 
+models=()
 for size in $SIZES; do
-  model="$OUT/plant-$size-seed$SEED.glb"
-  [ -f "$model" ] || "$OUT/gw-new" generate plant --triangles "$size" --seed "$SEED" -o "$model"
+  models+=("$OUT/plant-$size-seed$SEED.glb")
+  [ -n "${MODELS:-}" ] || [ -f "${models[-1]}" ] ||
+    "$OUT/gw-new" generate plant --triangles "$size" --seed "$SEED" -o "${models[-1]}"
+done
+[ -z "${MODELS:-}" ] || read -r -a models <<< "$MODELS"
+for model in "${models[@]}"; do
+  size=$(basename "$model" .glb)
   for round in $(seq 1 "$ROUNDS"); do
     order=("${builds[@]}")
     if [ $((round % 2)) -eq 0 ]; then
@@ -62,8 +74,10 @@ for size in $SIZES; do
     fi
     for b in "${order[@]}"; do
       tag="$size-$b-$round"
+      flags=()
+      [ "$b" = base ] && [ "$BASE" = flags ] && read -r -a flags <<< "$BASE_FLAGS"
       /usr/bin/time -f "%e s wall, %U s user, %M KB peak" \
-        "$OUT/gw-$b" preprocess "$model" -o "$OUT/$tag.gwk" --stats "$OUT/$tag.json" \
+        "$OUT/gw-$b" preprocess "$model" -o "$OUT/$tag.gwk" --stats "$OUT/$tag.json" "${flags[@]}" \
         > "$OUT/$tag.log" 2>&1
       echo "$tag: $(tail -1 "$OUT/$tag.log"); $(summary "$OUT/$tag.json")"
     done

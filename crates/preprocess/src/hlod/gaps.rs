@@ -432,8 +432,8 @@ impl Gaps {
                     }
                 }
             }
-            for k in i..end as usize {
-                let v = keyed[k].1 as usize;
+            for &(_, v) in &keyed[i..end as usize] {
+                let v = v as usize;
                 let p = self.pos[v];
                 neighbours.clear();
                 for &t in &self.vtris[v] {

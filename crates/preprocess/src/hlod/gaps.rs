@@ -869,4 +869,63 @@ mod tests {
         let c = contract(&p, &i, 60, f32::MAX);
         assert!(live(&c) <= 60 && live(&c) >= 50, "{}", live(&c));
     }
+
+    /// The virtual pairs' grid search finds what a search of every pair
+    /// finds: each vertex's nearest (ties by index) higher vertices
+    /// within the gap that share no triangle and are not its partners
+    /// yet, at most [`VIRTUAL_PER_VERTEX`]; also on a second, wider pass.
+    #[test]
+    fn the_grid_finds_the_nearest_partners_a_full_search_finds() {
+        // 300 scattered triangles in a box of 10 (a fixed sequence).
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut p, mut i) = (Vec::new(), Vec::new());
+        for t in 0..300u32 {
+            let c = [10.0 * next(), 10.0 * next(), 10.0 * next()];
+            for _ in 0..3 {
+                p.push([
+                    c[0] + 0.2 * next(),
+                    c[1] + 0.2 * next(),
+                    c[2] + 0.2 * next(),
+                ]);
+            }
+            i.extend([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        let mut g = Gaps::new(&p, &i);
+        for gap in [0.5, 1.0] {
+            // Every cell holds few enough vertices to be scanned whole.
+            let mut cells: FxHashMap<[i64; 3], usize> = FxHashMap::default();
+            for q in &g.pos {
+                *cells
+                    .entry([q.x, q.y, q.z].map(|c| (c / gap).floor() as i64))
+                    .or_default() += 1;
+            }
+            assert!(cells.values().all(|&n| n <= MAX_SCANNED_PER_CELL));
+            let mut want = Vec::new();
+            for v in 0..g.pos.len() {
+                let mut near: Vec<(f64, u32)> = (v + 1..g.pos.len())
+                    .map(|u| (g.pos[u].distance_squared(g.pos[v]), u as u32))
+                    .filter(|&(d2, u)| {
+                        d2 <= gap * gap && u / 3 != v as u32 / 3 && !g.virtual_pairs[v].contains(&u)
+                    })
+                    .collect();
+                near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                want.extend(
+                    near.iter()
+                        .take(VIRTUAL_PER_VERTEX)
+                        .map(|&(_, u)| (v as u32, u)),
+                );
+            }
+            let mut got = g.add_virtual_pairs(gap);
+            got.sort_unstable();
+            want.sort_unstable();
+            assert!(!want.is_empty());
+            assert_eq!(got, want, "gap {gap}");
+        }
+    }
 }
